@@ -1,0 +1,565 @@
+"""The scene description: load a TOML scene file, validate it once, hash it.
+
+A scene file (format: reference/scenes/FORMAT.md) becomes a frozen
+:class:`Scene`. Both renderers are built from this object and nothing else:
+:meth:`Scene.surfaces` gives every flat surface as triangles with its
+material, so the standalone tracer and the Mitsuba scene share one geometry.
+
+Every problem in a file is reported as a :class:`SceneError` whose message
+names the file and the field, for example
+``canonical.toml: objects[0].material.albedo: must be in [0, 1], got -0.1``.
+"""
+
+from __future__ import annotations
+
+import difflib
+import hashlib
+import json
+import math
+import tomllib
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+Vec2 = tuple[float, float]
+Vec3 = tuple[float, float, float]
+
+SCENE_DIR = Path(__file__).resolve().parent.parent / "reference" / "scenes"
+CANONICAL = SCENE_DIR / "canonical.toml"
+
+# Relative tolerance for "touching is allowed" checks (object on the floor,
+# light against a wall), scaled by the size of the room.
+_TOUCH = 1e-6
+
+
+class SceneError(ValueError):
+    """A scene file that cannot be used; the message names file and field."""
+
+
+# --------------------------------------------------------------------------
+# Typed description
+# --------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Lambertian:
+    """Ideal diffuse reflector, f = albedo / pi, two-sided."""
+
+    albedo: Vec3
+    type: str = "lambertian"
+
+
+@dataclass(frozen=True)
+class Mirror:
+    """Perfect specular reflector: reflects along 2 (n.wo) n - wo, times reflectance."""
+
+    reflectance: Vec3 = (1.0, 1.0, 1.0)
+    type: str = "mirror"
+
+
+Material = Lambertian | Mirror
+
+
+@dataclass(frozen=True)
+class Wall:
+    corners: tuple[str, str]
+    albedo: Vec3
+
+
+@dataclass(frozen=True)
+class Room:
+    """A convex polygonal prism: corners counter-clockwise seen from above."""
+
+    floor_z: float
+    ceiling_z: float
+    floor_albedo: Vec3
+    ceiling_albedo: Vec3
+    corners: dict[str, Vec2]
+    walls: tuple[Wall, ...]  # in counter-clockwise order
+
+    def polygon(self) -> np.ndarray:
+        """Corner positions (n, 2), counter-clockwise, in wall order."""
+        return np.array([self.corners[w.corners[0]] for w in self.walls], dtype=np.float64)
+
+    def planes(self) -> np.ndarray:
+        """Bounding planes (n_walls + 2, 4) as (outward normal, offset): inside is n.p <= offset."""
+        poly = self.polygon()
+        out = []
+        for a, b in zip(poly, np.roll(poly, -1, axis=0)):
+            e = b - a
+            n = np.array([e[1], -e[0], 0.0]) / np.hypot(*e)  # right of a CCW edge = outside
+            out.append([*n, n[:2] @ a])
+        out.append([0.0, 0.0, -1.0, -self.floor_z])
+        out.append([0.0, 0.0, 1.0, self.ceiling_z])
+        return np.array(out)
+
+    def contains(self, p, margin: float = 0.0) -> bool:
+        """Whether point p lies inside the room, at least ``margin`` from every face."""
+        pl = self.planes()
+        return bool(np.all(pl[:, :3] @ np.asarray(p, float) <= pl[:, 3] - margin))
+
+    def size(self) -> float:
+        poly = self.polygon()
+        return float(max(np.ptp(poly[:, 0]), np.ptp(poly[:, 1]), self.ceiling_z - self.floor_z))
+
+
+@dataclass(frozen=True)
+class Tetrahedron:
+    name: str
+    vertices: tuple[Vec3, Vec3, Vec3, Vec3]
+    material: Material
+    type: str = "tetrahedron"
+
+    def triangles(self) -> np.ndarray:
+        """The four faces (4, 3, 3), wound so that their normals point outwards."""
+        v = np.array(self.vertices)
+        faces = []
+        for i in range(4):
+            tri = [v[j] for j in range(4) if j != i]
+            n = np.cross(tri[1] - tri[0], tri[2] - tri[0])
+            if n @ (v[i] - tri[0]) > 0:  # normal towards the opposite vertex: flip
+                tri = [tri[0], tri[2], tri[1]]
+            faces.append(tri)
+        return np.array(faces)
+
+
+@dataclass(frozen=True)
+class Sphere:
+    name: str
+    center: Vec3
+    radius: float
+    material: Material
+    type: str = "sphere"
+
+
+Object = Tetrahedron | Sphere
+
+
+@dataclass(frozen=True)
+class Light:
+    """A horizontal rectangle emitting uniform radiance from the side its normal points to."""
+
+    center: Vec3
+    size: Vec2
+    normal: Vec3
+    radiance: Vec3
+
+    @property
+    def area(self) -> float:
+        return self.size[0] * self.size[1]
+
+    def corners(self) -> np.ndarray:
+        """The four corners (4, 3), counter-clockwise seen from the emitting side."""
+        cx, cy, cz = self.center
+        hx, hy = self.size[0] / 2, self.size[1] / 2
+        c = np.array([[cx - hx, cy - hy, cz], [cx + hx, cy - hy, cz], [cx + hx, cy + hy, cz], [cx - hx, cy + hy, cz]])
+        return c if self.normal[2] > 0 else c[::-1].copy()
+
+    def power(self) -> np.ndarray:
+        """Emitted flux per channel, Phi = pi * A * Le (Lambertian emitter)."""
+        return math.pi * self.area * np.array(self.radiance)
+
+
+@dataclass(frozen=True)
+class Camera:
+    """A pinhole looking along ``forward``; the image plane is 1 unit in front of the eye."""
+
+    name: str
+    eye: Vec3
+    forward: Vec3
+    up: Vec3
+    fov_x_deg: float
+
+    def frame(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Orthonormal (right, up, forward); the image's right is forward x up."""
+        f = np.array(self.forward, float)
+        f /= np.linalg.norm(f)
+        r = np.cross(f, np.array(self.up, float))
+        r /= np.linalg.norm(r)
+        return r, np.cross(r, f), f
+
+
+@dataclass(frozen=True)
+class RenderSettings:
+    camera: str = "near"
+    width: int = 256
+    height: int = 256
+    spp: int = 64
+    max_depth: int = 8
+    light_samples: int = 1
+    rr_depth: int = 5
+    seed: int = 0
+
+
+@dataclass(frozen=True)
+class Surface:
+    """A flat piece of the scene as triangles, for both renderers."""
+
+    name: str
+    triangles: np.ndarray  # (n, 3, 3); room faces wound towards the inside, objects outwards
+    material: Material | None  # None: the light's black surface
+
+
+@dataclass(frozen=True)
+class Scene:
+    name: str
+    description: str
+    room: Room
+    objects: tuple[Object, ...]
+    light: Light
+    cameras: dict[str, Camera]
+    render: RenderSettings
+    presets: dict[str, dict[str, Any]] = field(default_factory=dict)
+    path: str = "<memory>"
+
+    # -- derived geometry ---------------------------------------------------
+
+    def surfaces(self) -> list[Surface]:
+        """Walls, floor, ceiling, flat objects and the light as triangle lists."""
+        room = self.room
+        poly = room.polygon()
+        z0, z1 = room.floor_z, room.ceiling_z
+        out = []
+        for w, a, b in zip(room.walls, poly, np.roll(poly, -1, axis=0)):
+            p = [np.array([*a, z0]), np.array([*b, z0]), np.array([*b, z1]), np.array([*a, z1])]
+            # a->b is counter-clockwise from above, so (b-a) x up points outwards:
+            # wind the quad a,top_a,top_b,b for an inward normal.
+            tris = np.array([[p[0], p[3], p[2]], [p[0], p[2], p[1]]])
+            out.append(Surface(f"wall_{w.corners[0]}{w.corners[1]}", tris, Lambertian(w.albedo)))
+        n = len(poly)
+        fan = [(0, i, i + 1) for i in range(1, n - 1)]
+        floor = np.array([[[*poly[i], z0], [*poly[j], z0], [*poly[k], z0]] for i, j, k in fan])  # CCW: normal +z
+        ceil = np.array([[[*poly[i], z1], [*poly[k], z1], [*poly[j], z1]] for i, j, k in fan])  # CW: normal -z
+        out.append(Surface("floor", floor, Lambertian(room.floor_albedo)))
+        out.append(Surface("ceiling", ceil, Lambertian(room.ceiling_albedo)))
+        for o in self.objects:
+            if isinstance(o, Tetrahedron):
+                out.append(Surface(o.name, o.triangles(), o.material))
+        c = self.light.corners()
+        out.append(Surface("light", np.array([[c[0], c[1], c[2]], [c[0], c[2], c[3]]]), None))
+        return out
+
+    def spheres(self) -> list[Sphere]:
+        return [o for o in self.objects if isinstance(o, Sphere)]
+
+    def camera(self, name: str | None = None) -> Camera:
+        name = name or self.render.camera
+        if name not in self.cameras:
+            raise SceneError(f"{self.path}: cameras: no camera named {name!r} (have {', '.join(self.cameras)})")
+        return self.cameras[name]
+
+    def settings(self, preset: str | None = None, **overrides: Any) -> RenderSettings:
+        """Render settings: file defaults, then a named preset, then explicit overrides (None = keep)."""
+        s = self.render
+        if preset is not None:
+            if preset not in self.presets:
+                raise SceneError(f"{self.path}: presets: no preset named {preset!r} (have {', '.join(self.presets) or 'none'})")
+            s = replace(s, **self.presets[preset])
+        s = replace(s, **{k: v for k, v in overrides.items() if v is not None})
+        _check_settings(s, f"{self.path}: render")
+        return s
+
+    def scaled(self, factor: float, offset: Vec3 = (0.0, 0.0, 0.0)) -> "Scene":
+        """The scene (cameras included) scaled about the origin, then moved by ``offset``."""
+        t = lambda p: tuple(float(factor * x + o) for x, o in zip(p, offset))  # noqa: E731
+        t2 = lambda p: tuple(float(factor * x + o) for x, o in zip(p, offset[:2]))  # noqa: E731
+        room = replace(
+            self.room,
+            floor_z=factor * self.room.floor_z + offset[2],
+            ceiling_z=factor * self.room.ceiling_z + offset[2],
+            corners={k: t2(v) for k, v in self.room.corners.items()},
+        )
+        objs = []
+        for o in self.objects:
+            if isinstance(o, Sphere):
+                objs.append(replace(o, center=t(o.center), radius=factor * o.radius))
+            else:
+                objs.append(replace(o, vertices=tuple(t(v) for v in o.vertices)))
+        light = replace(self.light, center=t(self.light.center), size=tuple(factor * s for s in self.light.size))
+        cams = {k: replace(c, eye=t(c.eye)) for k, c in self.cameras.items()}
+        return replace(self, room=room, objects=tuple(objs), light=light, cameras=cams, name=f"{self.name}-x{factor:g}")
+
+    # -- identity -----------------------------------------------------------
+
+    def canonical_dict(self) -> dict[str, Any]:
+        """What the scene hash covers: geometry, materials, light, cameras (not render defaults)."""
+
+        def mat(m):
+            return {"type": m.type, **({"albedo": m.albedo} if isinstance(m, Lambertian) else {"reflectance": m.reflectance})}
+
+        def obj(o):
+            d = {"name": o.name, "type": o.type, "material": mat(o.material)}
+            if isinstance(o, Sphere):
+                d.update(center=o.center, radius=o.radius)
+            else:
+                d.update(vertices=o.vertices)
+            return d
+
+        r = self.room
+        return {
+            "room": {
+                "floor_z": r.floor_z,
+                "ceiling_z": r.ceiling_z,
+                "floor_albedo": r.floor_albedo,
+                "ceiling_albedo": r.ceiling_albedo,
+                "walls": [{"from": r.corners[w.corners[0]], "to": r.corners[w.corners[1]], "albedo": w.albedo} for w in r.walls],
+            },
+            "objects": [obj(o) for o in self.objects],
+            "light": {k: getattr(self.light, k) for k in ("center", "size", "normal", "radiance")},
+            "cameras": {k: {"eye": c.eye, "forward": c.forward, "up": c.up, "fov_x_deg": c.fov_x_deg} for k, c in sorted(self.cameras.items())},
+        }
+
+    def content_hash(self) -> str:
+        """A stable hash of the scene's content: formatting, comments and order of tables do not matter."""
+        text = json.dumps(self.canonical_dict(), sort_keys=True, separators=(",", ":"), default=float)
+        return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
+# --------------------------------------------------------------------------
+# Loading and validation
+# --------------------------------------------------------------------------
+
+
+class _Reader:
+    """Walks the parsed TOML, checking fields and naming them in errors."""
+
+    def __init__(self, path: str):
+        self.path = path
+
+    def fail(self, where: str, problem: str) -> SceneError:
+        return SceneError(f"{self.path}: {where}: {problem}")
+
+    def table(self, d: Any, where: str, required: set[str], optional: set[str] = frozenset()) -> dict:
+        if not isinstance(d, dict):
+            raise self.fail(where, f"must be a table, got {type(d).__name__}")
+        allowed = required | optional
+        for k in d:
+            if k not in allowed:
+                near = difflib.get_close_matches(k, sorted(allowed), n=1)
+                hint = f" (did you mean {near[0]!r}?)" if near else f" (allowed: {', '.join(sorted(allowed))})"
+                raise self.fail(f"{where}.{k}" if where else k, f"unknown field{hint}")
+        for k in sorted(required):
+            if k not in d:
+                raise self.fail(f"{where}.{k}" if where else k, "missing required field")
+        return d
+
+    def number(self, v: Any, where: str, *, lo: float | None = None, hi: float | None = None, positive: bool = False) -> float:
+        if isinstance(v, bool) or not isinstance(v, (int, float)):
+            raise self.fail(where, f"must be a number, got {v!r}")
+        v = float(v)
+        if not math.isfinite(v):
+            raise self.fail(where, f"must be finite, got {v}")
+        if positive and v <= 0:
+            raise self.fail(where, f"must be positive, got {v}")
+        if lo is not None and v < lo or hi is not None and v > hi:
+            raise self.fail(where, f"must be in [{lo if lo is not None else '-inf'}, {hi if hi is not None else 'inf'}], got {v}")
+        return v
+
+    def vec(self, v: Any, where: str, n: int, **kw) -> tuple[float, ...]:
+        if not isinstance(v, list) or len(v) != n:
+            raise self.fail(where, f"must be a list of {n} numbers, got {v!r}")
+        return tuple(self.number(x, f"{where}[{i}]", **kw) for i, x in enumerate(v))
+
+    def integer(self, v: Any, where: str, lo: int) -> int:
+        if isinstance(v, bool) or not isinstance(v, int) or v < lo:
+            raise self.fail(where, f"must be an integer >= {lo}, got {v!r}")
+        return v
+
+    def albedo(self, v: Any, where: str) -> Vec3:
+        return self.vec(v, where, 3, lo=0.0, hi=1.0)
+
+    def material(self, d: Any, where: str) -> Material:
+        if not isinstance(d, dict) or "type" not in d:
+            raise self.fail(f"{where}.type", "missing required field (lambertian or mirror)")
+        if d["type"] == "lambertian":
+            self.table(d, where, {"type", "albedo"})
+            return Lambertian(self.albedo(d["albedo"], f"{where}.albedo"))
+        if d["type"] == "mirror":
+            self.table(d, where, {"type"}, {"reflectance"})
+            return Mirror(self.albedo(d.get("reflectance", [1.0, 1.0, 1.0]), f"{where}.reflectance"))
+        raise self.fail(f"{where}.type", f"unknown material {d['type']!r} (lambertian or mirror)")
+
+
+def _check_settings(s: RenderSettings, where: str) -> None:
+    r = _Reader(where.split(": ")[0])
+    field_where = where.split(": ", 1)[1] if ": " in where else where
+    for name in ("width", "height", "spp", "light_samples", "rr_depth"):
+        r.integer(getattr(s, name), f"{field_where}.{name}", 1)
+    r.integer(s.seed, f"{field_where}.seed", 0)
+    if isinstance(s.max_depth, bool) or not isinstance(s.max_depth, int) or (s.max_depth < 1 and s.max_depth != -1):
+        raise r.fail(f"{field_where}.max_depth", f"must be -1 (unbounded) or an integer >= 1, got {s.max_depth!r}")
+
+
+def load_scene(path: str | Path = CANONICAL) -> Scene:
+    """Load and validate a scene file; raise :class:`SceneError` naming file and field."""
+    path = Path(path)
+    try:
+        text = path.read_text()
+    except OSError as e:
+        raise SceneError(f"{path}: cannot read: {e.strerror or e}") from None
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as e:
+        raise SceneError(f"{path}: not valid TOML: {e}") from None
+    return scene_from_dict(data, str(path))
+
+
+def scene_from_dict(data: dict, path: str = "<memory>") -> Scene:
+    """Validate a parsed scene description (the TOML file's tables) into a :class:`Scene`."""
+    r = _Reader(path)
+    r.table(data, "", {"format", "room", "light", "cameras"}, {"name", "description", "objects", "render", "presets"})
+    if data["format"] != 1:
+        raise r.fail("format", f"unsupported format {data['format']!r} (this mcrt reads format 1)")
+    room = _room(r, data["room"])
+    objects = tuple(_object(r, o, f"objects[{i}]", room) for i, o in enumerate(_list(r, data.get("objects", []), "objects")))
+    names = [o.name for o in objects]
+    for n in names:
+        if names.count(n) > 1:
+            raise r.fail("objects", f"two objects are named {n!r}")
+    light = _light(r, data["light"], room)
+    cams = r.table(data["cameras"], "cameras", set(), set(data["cameras"]) if isinstance(data["cameras"], dict) else set())
+    if not cams:
+        raise r.fail("cameras", "at least one camera is required")
+    cameras = {k: _camera(r, v, f"cameras.{k}", k, room) for k, v in cams.items()}
+    render = data.get("render", {})
+    r.table(render, "render", set(), set(RenderSettings.__dataclass_fields__))
+    settings = RenderSettings(**render)
+    _check_settings(settings, f"{path}: render")
+    if settings.camera not in cameras:
+        raise r.fail("render.camera", f"no camera named {settings.camera!r} (have {', '.join(cameras)})")
+    presets = r.table(data.get("presets", {}), "presets", set(), set(data.get("presets", {})) if isinstance(data.get("presets", {}), dict) else set())
+    for k, p in presets.items():
+        r.table(p, f"presets.{k}", set(), set(RenderSettings.__dataclass_fields__))
+        _check_settings(replace(settings, **p), f"{path}: presets.{k}")
+    return Scene(
+        name=str(data.get("name", Path(path).stem)),
+        description=str(data.get("description", "")),
+        room=room,
+        objects=objects,
+        light=light,
+        cameras=cameras,
+        render=settings,
+        presets={k: dict(v) for k, v in presets.items()},
+        path=path,
+    )
+
+
+def _list(r: _Reader, v: Any, where: str) -> list:
+    if not isinstance(v, list):
+        raise r.fail(where, f"must be an array of tables, got {type(v).__name__}")
+    return v
+
+
+def _room(r: _Reader, d: Any) -> Room:
+    r.table(d, "room", {"floor_z", "ceiling_z", "floor_albedo", "ceiling_albedo", "corners", "walls"})
+    z0 = r.number(d["floor_z"], "room.floor_z")
+    z1 = r.number(d["ceiling_z"], "room.ceiling_z")
+    if z1 <= z0:
+        raise r.fail("room.ceiling_z", f"must be above floor_z ({z0}), got {z1}")
+    corners_d = r.table(d["corners"], "room.corners", set(), set(d["corners"]) if isinstance(d["corners"], dict) else set())
+    corners = {k: r.vec(v, f"room.corners.{k}", 2) for k, v in corners_d.items()}
+    if len(corners) < 3:
+        raise r.fail("room.corners", f"a room needs at least 3 corners, got {len(corners)}")
+    walls = []
+    for i, w in enumerate(_list(r, d["walls"], "room.walls")):
+        where = f"room.walls[{i}]"
+        r.table(w, where, {"corners", "albedo"})
+        c = w["corners"]
+        if not (isinstance(c, list) and len(c) == 2 and all(isinstance(x, str) for x in c)):
+            raise r.fail(f"{where}.corners", f"must be two corner names, got {c!r}")
+        for x in c:
+            if x not in corners:
+                raise r.fail(f"{where}.corners", f"unknown corner {x!r} (have {', '.join(corners)})")
+        if c[0] == c[1] or np.allclose(corners[c[0]], corners[c[1]]):
+            raise r.fail(f"{where}.corners", f"degenerate wall: corners {c[0]} and {c[1]} coincide")
+        walls.append(Wall((c[0], c[1]), r.albedo(w["albedo"], f"{where}.albedo")))
+    # Closed: the walls chain into one loop through every corner.
+    start = {w.corners[0]: w for w in walls}
+    if len(start) != len(walls) or len({w.corners[1] for w in walls}) != len(walls) or len(walls) != len(corners):
+        raise r.fail("room.walls", "the room is open: every corner must start exactly one wall and end exactly one")
+    loop, w = [], walls[0]
+    while w not in loop:
+        loop.append(w)
+        w = start.get(w.corners[1])
+        if w is None:
+            raise r.fail("room.walls", f"the room is open: no wall starts at corner {loop[-1].corners[1]}")
+    if len(loop) != len(walls):
+        raise r.fail("room.walls", "the room is open: the walls form more than one loop")
+    poly = np.array([corners[w.corners[0]] for w in loop])
+    cross = [np.cross(b - a, c - b) for a, b, c in zip(poly, np.roll(poly, -1, 0), np.roll(poly, -2, 0))]
+    if all(x < 0 for x in cross):
+        loop = [Wall((w.corners[1], w.corners[0]), w.albedo) for w in reversed(loop)]
+    elif not all(x > 0 for x in cross):
+        raise r.fail("room.walls", "the room must be a convex polygon (no straight or reflex corners)")
+    return Room(z0, z1, r.albedo(d["floor_albedo"], "room.floor_albedo"), r.albedo(d["ceiling_albedo"], "room.ceiling_albedo"), corners, tuple(loop))
+
+
+def _object(r: _Reader, d: Any, where: str, room: Room) -> Object:
+    if not isinstance(d, dict) or "type" not in d:
+        raise r.fail(f"{where}.type", "missing required field (tetrahedron or sphere)")
+    tol = _TOUCH * room.size()
+    if d["type"] == "tetrahedron":
+        r.table(d, where, {"name", "type", "vertices", "material"})
+        v = d["vertices"]
+        if not isinstance(v, list) or len(v) != 4:
+            raise r.fail(f"{where}.vertices", f"a tetrahedron needs 4 vertices, got {v!r}")
+        verts = tuple(r.vec(x, f"{where}.vertices[{i}]", 3) for i, x in enumerate(v))
+        obj = Tetrahedron(str(d["name"]), verts, r.material(d["material"], f"{where}.material"))
+        for k, tri in enumerate(obj.triangles()):
+            area = 0.5 * np.linalg.norm(np.cross(tri[1] - tri[0], tri[2] - tri[0]))
+            edge = max(np.linalg.norm(tri[i] - tri[j]) for i, j in ((0, 1), (1, 2), (2, 0)))
+            if area <= 1e-7 * edge * edge:
+                raise r.fail(f"{where}.vertices", f"degenerate triangle: face {k} has zero area (collinear or coincident vertices)")
+        for i, p in enumerate(verts):
+            if not room.contains(p, -tol):
+                raise r.fail(f"{where}.vertices[{i}]", f"object outside the room: {p}")
+        return obj
+    if d["type"] == "sphere":
+        r.table(d, where, {"name", "type", "center", "radius", "material"})
+        c = r.vec(d["center"], f"{where}.center", 3)
+        rad = r.number(d["radius"], f"{where}.radius", positive=True)
+        if not room.contains(c, rad - tol):
+            raise r.fail(where, f"object outside the room: sphere at {c} with radius {rad} crosses a wall, the floor or the ceiling")
+        return Sphere(str(d["name"]), c, rad, r.material(d["material"], f"{where}.material"))
+    raise r.fail(f"{where}.type", f"unknown object type {d['type']!r} (tetrahedron or sphere)")
+
+
+def _light(r: _Reader, d: Any, room: Room) -> Light:
+    r.table(d, "light", {"center", "size", "normal", "radiance"})
+    light = Light(
+        center=r.vec(d["center"], "light.center", 3),
+        size=r.vec(d["size"], "light.size", 2, positive=True),
+        normal=r.vec(d["normal"], "light.normal", 3),
+        radiance=r.vec(d["radiance"], "light.radiance", 3, lo=0.0),
+    )
+    if light.normal not in ((0.0, 0.0, 1.0), (0.0, 0.0, -1.0)):
+        raise r.fail("light.normal", f"must be [0, 0, -1] (down) or [0, 0, 1] (up): only horizontal lights are supported, got {list(light.normal)}")
+    tol = _TOUCH * room.size()
+    for c in light.corners():
+        if not room.contains(c, -tol):
+            raise r.fail("light", f"light outside the room: corner {tuple(float(x) for x in c)}")
+    inside = (light.center[2] - room.floor_z) if light.normal[2] < 0 else (room.ceiling_z - light.center[2])
+    if inside <= tol:
+        raise r.fail("light.normal", f"the light faces away from the room (normal {list(light.normal)} at z = {light.center[2]})")
+    return light
+
+
+def _camera(r: _Reader, d: Any, where: str, name: str, room: Room) -> Camera:
+    r.table(d, where, {"eye", "forward", "up", "fov_x_deg"})
+    cam = Camera(
+        name=name,
+        eye=r.vec(d["eye"], f"{where}.eye", 3),
+        forward=r.vec(d["forward"], f"{where}.forward", 3),
+        up=r.vec(d["up"], f"{where}.up", 3),
+        fov_x_deg=r.number(d["fov_x_deg"], f"{where}.fov_x_deg", lo=1e-3, hi=179.0),
+    )
+    f, u = np.array(cam.forward), np.array(cam.up)
+    if np.linalg.norm(f) == 0:
+        raise r.fail(f"{where}.forward", "must be a non-zero vector")
+    if np.linalg.norm(np.cross(f, u)) <= 1e-6 * np.linalg.norm(f) * np.linalg.norm(u):
+        raise r.fail(f"{where}.up", "must not be parallel to forward")
+    if not room.contains(cam.eye, 0.0):
+        raise r.fail(f"{where}.eye", f"the eye {cam.eye} is outside the room")
+    return cam
