@@ -1,0 +1,290 @@
+"""Ray intersection with the scene, specialised to what the scene holds.
+
+Two intersectors are built from the same :class:`mcrt.scene.Scene`:
+
+``convex`` (default)
+    The room is a convex prism, so a ray from inside leaves it through the
+    nearest of its bounding planes n.p = h whose normal faces along the ray:
+
+        t_room = min over {k : n_k . d > 0} of (h_k - n_k . o) / (n_k . d).
+
+    A tetrahedron is the intersection of four half-spaces; the ray enters at
+    t_in = max over faces with n.d < 0 and leaves at t_out = min over faces
+    with n.d > 0, and hits when t_in <= t_out. Neither test has edges a ray
+    could slip through (no leaks), and a ray leaving a face never meets that
+    face again (its plane is behind it). Shadow rays test only the objects:
+    the segment between two points of a convex room never meets its walls.
+
+``triangles``
+    Every flat surface as triangles, each tested with the watertight
+    ray-triangle test of Woop, Benthin and Wald (JCGT 2013): the ray is
+    sheared so that it runs along +z through the origin, and the 2D edge
+    functions U, V, W of the projected triangle decide the hit. A shared edge
+    is evaluated from the same two projected vertices by both triangles, so
+    no ray passes between them. The brute-force cross-check of ``convex``.
+
+Spheres use the quadratic with Hearn and Baker's form of the discriminant,
+r^2 - |o' - (o'.d) d|^2 for unit d and o' = o - c, which keeps its precision
+when the ray starts far from the sphere.
+
+The light is a horizontal rectangle hit at t = (z_l - o_z) / d_z. A hit at the
+same t as the ceiling goes to the light (a light coplanar with the ceiling).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import drjit as dr
+import numpy as np
+
+from mcrt.scene import Lambertian, Mirror, Scene, Sphere, Tetrahedron
+
+INTERSECTORS = ("convex", "triangles")
+
+# Spawned rays start this far (relative to the position's magnitude plus the
+# scene's size) off the surface, along the side they leave from.
+OFFSET_SCALE = 2.0**-17
+# Shadow rays stop this fraction short of the light.
+SHADOW_TMAX_SCALE = 1.0 - 2.0**-12
+
+KIND_LAMBERTIAN, KIND_MIRROR, KIND_LIGHT = 0, 1, 2
+
+
+def const3(m, v):
+    """A constant Array3f from any 3-sequence (NumPy scalars included)."""
+    return m.Array3f(float(v[0]), float(v[1]), float(v[2]))
+
+
+@dataclass(frozen=True)
+class SurfaceInfo:
+    """One intersectable surface id: its name, material kind and colour."""
+
+    name: str
+    kind: int
+    color: tuple[float, float, float]  # albedo, reflectance, or radiance for the light
+
+
+class Geometry:
+    """The scene's surfaces as constants baked into the kernel.
+
+    ``surface_ids`` lists every surface; a hit reports the index into it.
+    """
+
+    def __init__(self, scene: Scene, m, intersector: str = "convex"):
+        if intersector not in INTERSECTORS:
+            raise ValueError(f"unknown intersector {intersector!r} (one of {', '.join(INTERSECTORS)})")
+        self.m = m  # the Dr.Jit backend module (drjit.llvm or drjit.cuda)
+        self.scene = scene
+        self.intersector = intersector
+        self.surfaces: list[SurfaceInfo] = []
+        self.scale = scene.room.size()
+        self.room_planes: list[tuple[np.ndarray, float, int]] = []
+        self.convex_objects: list[tuple[list[tuple[np.ndarray, float]], int]] = []
+        self.triangles: list[tuple[np.ndarray, int]] = []
+        self.spheres: list[tuple[np.ndarray, float, int]] = []
+
+        def add(name, material):
+            kind = KIND_MIRROR if isinstance(material, Mirror) else KIND_LAMBERTIAN
+            color = material.reflectance if isinstance(material, Mirror) else material.albedo
+            self.surfaces.append(SurfaceInfo(name, kind, tuple(color)))
+            return len(self.surfaces) - 1
+
+        surfaces = scene.surfaces()
+        for surf in surfaces:
+            if surf.material is not None:
+                sid = add(surf.name, surf.material)
+                if intersector == "triangles":
+                    self.triangles += [(tri, sid) for tri in surf.triangles]
+        self.light_id = len(self.surfaces)
+        self.surfaces.append(SurfaceInfo("light", KIND_LIGHT, tuple(scene.light.radiance)))
+        if intersector == "triangles":
+            light_tris = next(s for s in surfaces if s.name == "light").triangles
+            self.triangles += [(tri, self.light_id) for tri in light_tris]
+        else:
+            names = [s.name for s in self.surfaces]
+            for k, (plane, wall_name) in enumerate(zip(scene.room.planes(), [f"wall_{w.corners[0]}{w.corners[1]}" for w in scene.room.walls] + ["floor", "ceiling"])):
+                self.room_planes.append((plane[:3].tolist(), float(plane[3]), names.index(wall_name)))
+            for o in scene.objects:
+                if isinstance(o, Tetrahedron):
+                    faces = []
+                    for tri in o.triangles():
+                        n = np.cross(tri[1] - tri[0], tri[2] - tri[0])
+                        n /= np.linalg.norm(n)
+                        faces.append((n.tolist(), float(n @ tri[0])))
+                    self.convex_objects.append((faces, names.index(o.name)))
+        for o in scene.objects:
+            if isinstance(o, Sphere):
+                self.spheres.append((tuple(o.center), float(o.radius), add(o.name, o.material)))
+        light = scene.light
+        self.light_center = tuple(float(x) for x in light.center)
+        self.light_half = (light.size[0] / 2, light.size[1] / 2)
+        self.light_normal_z = light.normal[2]
+
+    # -- helpers -------------------------------------------------------------
+
+    def has(self, kind: int) -> bool:
+        return any(s.kind == kind for s in self.surfaces)
+
+    def surface_colors(self):
+        """An Array3f table of the per-surface colours, gathered by surface id."""
+        m = self.m
+        c = np.array([s.color for s in self.surfaces], dtype=np.float32)
+        return m.Array3f(m.Float(c[:, 0]), m.Float(c[:, 1]), m.Float(c[:, 2]))
+
+    def offset(self, p):
+        """The spawn offset at p: OFFSET_SCALE (max |p_i| + scene size)."""
+        return OFFSET_SCALE * (dr.max(dr.abs(p)) + self.scale)
+
+    # -- closest hit ---------------------------------------------------------
+
+    def intersect(self, o, d, mutant_triangles_everywhere=False):
+        """Closest hit of rays (o, d) with unit d: (t, surface id, unit geometric normal).
+
+        Every ray from inside the closed room hits something.
+        """
+        m = self.m
+        t = m.Float(dr.inf)
+        sid = m.UInt32(0)
+        n = m.Array3f(0.0, 0.0, 1.0)
+        if self.intersector == "convex":
+            for normal, h, k in self.room_planes:
+                denom = normal[0] * d.x + normal[1] * d.y + normal[2] * d.z
+                tk = (h - (normal[0] * o.x + normal[1] * o.y + normal[2] * o.z)) / denom
+                hit = (denom > 0) & (tk < t)
+                t = dr.select(hit, tk, t)
+                sid = dr.select(hit, k, sid)
+                n = dr.select(hit, const3(m, [-x for x in normal]), n)
+            for faces, k in self.convex_objects:
+                t_in, n_in, ok = self._convex_entry(o, d, faces)
+                hit = ok & (t_in > 0) & (t_in < t)
+                t = dr.select(hit, t_in, t)
+                sid = dr.select(hit, k, sid)
+                n = dr.select(hit, n_in, n)
+        else:
+            for tri, k in self.triangles:
+                tk = self._triangle(o, d, tri)
+                hit = tk < t
+                tri_n = np.cross(tri[1] - tri[0], tri[2] - tri[0])
+                tri_n /= np.linalg.norm(tri_n)
+                t = dr.select(hit, tk, t)
+                sid = dr.select(hit, k, sid)
+                n = dr.select(hit, const3(m, tri_n), n)
+        for c, r, k in self.spheres:
+            tk = self._sphere(o, d, c, r)
+            hit = tk < t
+            t = dr.select(hit, tk, t)
+            sid = dr.select(hit, k, sid)
+            p = o + tk * d
+            n = dr.select(hit, (p - const3(m, c)) / r, n)
+        if self.intersector == "convex":
+            tl = self._light(o, d)
+            hit = tl <= t  # ties with the ceiling go to the light
+            t = dr.select(hit, tl, t)
+            sid = dr.select(hit, self.light_id, sid)
+            n = dr.select(hit, m.Array3f(0.0, 0.0, self.light_normal_z), n)
+        return t, sid, n
+
+    def occluded(self, o, d, tmax, include_room=False):
+        """Whether anything blocks the segment o + t d, 0 < t < tmax (the light excluded)."""
+        m = self.m
+        blocked = m.Bool(False)
+        if self.intersector == "convex":
+            for faces, _ in self.convex_objects:
+                t_in, _, ok = self._convex_entry(o, d, faces)
+                blocked |= ok & (t_in > 0) & (t_in < tmax)
+            if include_room:
+                for normal, h, _ in self.room_planes:
+                    denom = normal[0] * d.x + normal[1] * d.y + normal[2] * d.z
+                    tk = (h - (normal[0] * o.x + normal[1] * o.y + normal[2] * o.z)) / denom
+                    blocked |= (denom > 0) & (tk < tmax)
+        else:
+            for tri, k in self.triangles:
+                if k != self.light_id:
+                    blocked |= self._triangle(o, d, tri) < tmax
+        for c, r, _ in self.spheres:
+            blocked |= self._sphere(o, d, c, r) < tmax
+        return blocked
+
+    # -- primitives ------------------------------------------------------------
+
+    def _convex_entry(self, o, d, faces):
+        """Entry distance, entry normal and hit mask of a convex polytope (outward face planes)."""
+        m = self.m
+        t_in = m.Float(-dr.inf)
+        t_out = m.Float(dr.inf)
+        n_in = m.Array3f(0.0, 0.0, 1.0)
+        ok = m.Bool(True)
+        for normal, h in faces:
+            denom = normal[0] * d.x + normal[1] * d.y + normal[2] * d.z
+            num = h - (normal[0] * o.x + normal[1] * o.y + normal[2] * o.z)
+            tk = num / denom
+            entering = denom < 0
+            better = entering & (tk > t_in)
+            t_in = dr.select(better, tk, t_in)
+            n_in = dr.select(better, const3(m, normal), n_in)
+            t_out = dr.select((denom > 0) & (tk < t_out), tk, t_out)
+            ok &= (denom != 0) | (num >= 0)  # parallel to a face: inside its slab or a miss
+        return t_in, n_in, ok & (t_in <= t_out)
+
+    def _sphere(self, o, d, c, r):
+        """Nearest t > 0 of |o + t d - c| = r, or inf."""
+        m = self.m
+        oc = o - const3(m, c)
+        b = dr.dot(oc, d)
+        q = oc - b * d
+        disc = r * r - dr.dot(q, q)
+        cc = dr.dot(oc, oc) - r * r
+        # Stable roots: t0 t1 = cc, t0 + t1 = -2b.
+        h = -b - dr.copysign(dr.safe_sqrt(disc), b)
+        t0 = cc / h
+        t1 = h
+        near = dr.minimum(t0, t1)
+        far = dr.maximum(t0, t1)
+        t = dr.select(near > 0, near, far)
+        return dr.select((disc >= 0) & (t > 0), t, dr.inf)
+
+    def _light(self, o, d):
+        """t of the light rectangle, or inf."""
+        cx, cy, cz = self.light_center
+        hx, hy = self.light_half
+        t = (cz - o.z) / d.z
+        x = o.x + t * d.x
+        y = o.y + t * d.y
+        hit = (t > 0) & (dr.abs(x - cx) <= hx) & (dr.abs(y - cy) <= hy)
+        return dr.select(hit, t, dr.inf)
+
+    def _triangle(self, o, d, tri):
+        """Watertight ray-triangle distance (Woop et al. 2013), or inf."""
+        m = self.m
+        ax, ay, az = dr.abs(d.x), dr.abs(d.y), dr.abs(d.z)
+        # kz: the dominant axis of d; (kx, ky) the next two, swapped when d_kz < 0
+        # to keep the winding (which only the sign convention of U, V, W uses).
+        kz = dr.select((ax >= ay) & (ax >= az), 0, dr.select(ay >= az, 1, 2))
+        kz = m.UInt32(kz)
+        kx = dr.select(kz == 2, 0, kz + 1)
+        ky = dr.select(kx == 2, 0, kx + 1)
+
+        def comp(v, k):
+            return dr.select(k == 0, v[0], dr.select(k == 1, v[1], v[2]))
+
+        dkz = comp(d, kz)
+        kx, ky = dr.select(dkz < 0, ky, kx), dr.select(dkz < 0, kx, ky)
+        sz = 1.0 / dkz
+        sx = comp(d, kx) * sz
+        sy = comp(d, ky) * sz
+        verts = []
+        for v in tri:
+            rel = m.Array3f(float(v[0]) - o.x, float(v[1]) - o.y, float(v[2]) - o.z)
+            vz = comp(rel, kz)
+            verts.append((comp(rel, kx) - sx * vz, comp(rel, ky) - sy * vz, vz))
+        (Ax, Ay, Az), (Bx, By, Bz), (Cx, Cy, Cz) = verts
+        U = Cx * By - Cy * Bx
+        V = Ax * Cy - Ay * Cx
+        W = Bx * Ay - By * Ax
+        miss = ((U < 0) | (V < 0) | (W < 0)) & ((U > 0) | (V > 0) | (W > 0))
+        det = U + V + W
+        miss |= det == 0
+        T = U * sz * Az + V * sz * Bz + W * sz * Cz
+        t = T / det
+        return dr.select(~miss & (t > 0), t, dr.inf)

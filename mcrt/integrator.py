@@ -1,0 +1,214 @@
+"""The path-tracing estimator with next-event estimation to the area light.
+
+For a camera ray the estimator returns an unbiased sample of the pixel's
+radiance, the measurement of
+
+    L(x, wo) = Le(x, wo) + int_H f(x, wi, wo) L(x', -wi) cos(theta_i) dwi
+
+truncated to paths of at most ``max_depth`` segments (Mitsuba's convention:
+1 sees emitters only, 2 adds direct light). At a Lambertian vertex the
+integral is split into
+
+- direct light, by sampling K points y_k uniformly on the light (pdf_area = 1/A):
+
+      L_direct = (1/K) sum_k (albedo/pi) Le V(x, y_k) cos(theta_x) cos(theta_y) / |x - y_k|^2 * A
+
+- indirect light, by one cosine-weighted direction (pdf = cos/pi), whose weight
+  f cos / pdf is the albedo; emission found by that ray is not counted (the
+  direct term already has it).
+
+A mirror reflects along d - 2 (d.n) n with weight equal to its reflectance;
+emission seen from the camera or after a mirror is counted, because no light
+sample could have produced it. Russian roulette from ``rr_depth`` on keeps a
+path with probability q = min(max(throughput), 0.95) and divides the
+throughput by q, so the estimate stays unbiased.
+"""
+
+from __future__ import annotations
+
+import math
+
+import drjit as dr
+
+from mcrt.geometry import KIND_LAMBERTIAN, KIND_MIRROR, SHADOW_TMAX_SCALE, Geometry
+from mcrt.sampling import (
+    INV_PI,
+    coordinate_frame,
+    square_to_cosine_hemisphere,
+    square_to_uniform_ball,
+    square_to_uniform_hemisphere,
+    to_world,
+)
+
+UNBOUNDED = 2**32 - 1
+
+
+class PathIntegrator:
+    """Lambertian + mirror path tracer with K light samples per diffuse vertex.
+
+    Only what the scene holds is traced into the kernel: no mirror code
+    without a mirror, no light-sampling loop when K = 1.
+    """
+
+    def __init__(self, geometry: Geometry, *, max_depth: int, light_samples: int = 1, rr_depth: int = 5, mutants=frozenset()):
+        self.geo = geometry
+        self.m = geometry.m
+        self.mutants = frozenset(mutants)
+        depth = max_depth if max_depth > 0 else UNBOUNDED
+        if "depth_off_by_one" in self.mutants and depth != UNBOUNDED:
+            depth += 1
+        self.max_depth = depth
+        self.light_samples = light_samples
+        self.rr_depth = rr_depth
+        light = geometry.scene.light
+        self.light_area = light.area
+        self.light_radiance = light.radiance
+        self.has_mirror = geometry.has(KIND_MIRROR)
+        self.has_diffuse = geometry.has(KIND_LAMBERTIAN)
+
+    # ------------------------------------------------------------------
+    @dr.syntax
+    def radiance(self, o, d, rng):
+        """One radiance sample along each camera ray (o, d); d is unit length."""
+        m, geo = self.m, self.geo
+        colors = geo.surface_colors()
+        kinds = m.UInt32([s.kind for s in geo.surfaces])
+
+        L = m.Array3f(0.0)  # radiance gathered so far
+        beta = m.Array3f(1.0)  # path throughput: product of f cos / pdf so far
+        depth = m.UInt32(0)  # path segments traced so far
+        specular = m.Bool(True)  # the last vertex was the eye or a mirror: count emission
+        active = m.Bool(True)
+
+        while dr.hint(active, label="mcrt_path"):
+            t, sid, n = geo.intersect(o, d)
+            depth += 1
+            p = dr.fma(d, t, o)
+            color = dr.gather(m.Array3f, colors, sid)
+            kind = dr.gather(m.UInt32, kinds, sid)
+            is_light = sid == geo.light_id
+
+            # ---- Emission seen from the eye or through mirrors.
+            L += beta * self.emitted(d, n, color, is_light, specular)
+
+            # ---- Stop at the light (black on both sides) and at the depth limit.
+            active &= ~is_light & (depth < self.max_depth)
+            n_f = dr.select(dr.dot(d, n) < 0, n, -n)  # normal on the arriving side (two-sided)
+            origin = self.spawn_origin(p, n_f)
+            diffuse = active & (kind == KIND_LAMBERTIAN)
+
+            # ---- Next-event estimation at diffuse vertices (depth + 1 <= max_depth holds here).
+            L += beta * color * self.direct_light(origin, n_f, rng, diffuse)
+
+            # ---- Continue: cosine-weighted Lambertian direction or mirror reflection.
+            d, weight, specular = self.scatter(d, n_f, color, kind, active, rng)
+            beta *= weight
+            o = origin
+
+            # ---- Russian roulette.
+            beta, active = self.roulette(beta, depth, diffuse, active, rng)
+        return L
+
+    # ------------------------------------------------------------------
+    def emitted(self, d, n, radiance, is_light, specular):
+        """Le towards -d where a ray meets the light's emitting side and no light sample could have."""
+        m, mut = self.m, self.mutants
+        faces_ray = dr.dot(d, n) < 0
+        if "light_two_sided" in mut:
+            faces_ray = m.Bool(True)
+        counted = specular
+        if "double_count" in mut:
+            counted = m.Bool(True)
+        return dr.select(is_light & faces_ray & counted, radiance, 0.0)
+
+    def spawn_origin(self, p, n):
+        """The origin of rays leaving p on the side of n, offset against self-intersection."""
+        if "no_offset" in self.mutants:
+            return p
+        return dr.fma(n, self.geo.offset(p), p)
+
+    def scatter(self, d, n, color, kind, active, rng):
+        """Next direction, weight f cos / pdf, and whether the bounce was specular."""
+        m = self.m
+        d_next, weight = self.sample_lambertian(n, color, rng)
+        if not self.has_mirror:
+            return d_next, weight, m.Bool(False)
+        mirror = active & (kind == KIND_MIRROR)
+        r = d - 2.0 * dr.dot(d, n) * n  # perfect reflection about n
+        if "mirror_wrong_sign" in self.mutants:
+            r = -r
+        return dr.select(mirror, r, d_next), dr.select(mirror, color, weight), mirror
+
+    def roulette(self, beta, depth, diffuse, active, rng):
+        """Unbiased Russian roulette: survive with q = min(max beta, 0.95), then beta /= q."""
+        if "rr_no_divide" in self.mutants:
+            survive = rng.next_float32() >= 0.75
+            return dr.select(diffuse, beta * 0.8, beta), active & (~diffuse | survive)
+        q = dr.minimum(dr.max(beta), 0.95)
+        roulette = active & (depth >= self.rr_depth)
+        survive = rng.next_float32() < q
+        return dr.select(roulette, beta * dr.rcp(q), beta), active & (~roulette | survive)
+
+    def sample_lambertian(self, n, albedo, rng):
+        """A direction about n and its weight f cos / pdf (= albedo for the cosine warp)."""
+        m, mut = self.m, self.mutants
+        u1, u2 = rng.next_float32(), rng.next_float32()
+        weight = albedo * math.pi if "brdf_no_inv_pi" in mut else albedo
+        if "ball_plus_normal" in mut:
+            b = square_to_uniform_ball(u1, u2, rng.next_float32())
+            return dr.normalize(m.Array3f(*b) + n), weight
+        if "uniform_as_cosine" in mut:
+            local = square_to_uniform_hemisphere(u1, u2)
+        else:
+            local = square_to_cosine_hemisphere(u1, u2)
+        s, t = coordinate_frame(n.x, n.y, n.z)
+        return m.Array3f(*to_world(local, s, t, (n.x, n.y, n.z))), weight
+
+    # ------------------------------------------------------------------
+    def direct_light(self, origin, n, rng, active):
+        """(1/pi) (1/K) sum_k Le V cos_x cos_y / d^2 * A: the direct light over the albedo.
+
+        Points y_k are uniform on the light (pdf_area 1/A); the shadow ray
+        stops just short of y_k. K = 1 traces no loop.
+        """
+        if not self.has_diffuse:
+            return self.m.Array3f(0.0)
+        f = 1.0 if "brdf_no_inv_pi" in self.mutants else INV_PI
+        if self.light_samples == 1:
+            return self.light_sample(origin, n, rng, active) * f
+        return self._light_sample_loop(origin, n, rng, active) * (f / self.light_samples)
+
+    @dr.syntax
+    def _light_sample_loop(self, origin, n, rng, active):
+        acc = self.m.Array3f(0.0)
+        k = self.m.UInt32(0)
+        while dr.hint(active & (k < self.light_samples), label="mcrt_light_samples"):
+            acc += self.light_sample(origin, n, rng, active)
+            k += 1
+        return acc
+
+    def light_sample(self, origin, n, rng, active):
+        """One light sample: Le V cos_x cos_y / d^2 / pdf_area, with pdf_area = 1/A."""
+        m, geo, mut = self.m, self.geo, self.mutants
+        cx, cy, cz = geo.light_center
+        hx, hy = geo.light_half
+        u1, u2 = rng.next_float32(), rng.next_float32()
+        y = m.Array3f(cx + (2.0 * u1 - 1.0) * hx, cy + (2.0 * u2 - 1.0) * hy, cz)
+        wi = y - origin
+        dist2 = dr.squared_norm(wi)
+        dist = dr.sqrt(dist2)
+        wi /= dist
+        cos_x = dr.dot(n, wi)
+        cos_y = -wi.z * geo.light_normal_z
+        if "light_two_sided" in mut:
+            cos_y = dr.abs(cos_y)
+        valid = active & (cos_x > 0) & (cos_y > 0)
+        g = (1.0 if "nee_no_cos_surface" in mut else cos_x) * (1.0 if "nee_no_cos_light" in mut else cos_y)
+        if "nee_no_inv_dist2" not in mut:
+            g = g / dist2
+        if "shadow_unbounded" in mut:
+            blocked = geo.occluded(origin, wi, m.Float(dr.inf), include_room=True)
+        else:
+            blocked = geo.occluded(origin, wi, dist * SHADOW_TMAX_SCALE)
+        area = 1.0 if "nee_no_area" in mut else self.light_area
+        return dr.select(valid & ~blocked, m.Array3f(*self.light_radiance) * (g * area), 0.0)

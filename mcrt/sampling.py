@@ -1,0 +1,67 @@
+"""Warps from [0, 1)^2 to directions and points, with their densities.
+
+Each warp is written over plain arithmetic on Dr.Jit arrays; the same
+formulas run on NumPy arrays, which the chi-square tests use.
+
+- Cosine-weighted hemisphere (Malley's method): a uniform point on the unit
+  disk, r = sqrt(u1), phi = 2 pi u2, lifted to the hemisphere,
+  w = (r cos phi, r sin phi, sqrt(1 - r^2)); pdf_solid_angle = cos(theta) / pi.
+- Uniform hemisphere: cos(theta) = u1; pdf_solid_angle = 1 / (2 pi).
+- Uniform rectangle of area A: pdf_area = 1 / A.
+"""
+
+from __future__ import annotations
+
+import math
+
+import drjit as dr
+
+INV_PI = 1.0 / math.pi
+
+
+def square_to_cosine_hemisphere(u1, u2):
+    """Local (x, y, z) of a cosine-distributed direction about +z."""
+    r = dr.sqrt(u1)
+    phi = 2.0 * math.pi * u2
+    s, c = dr.sincos(phi)
+    return r * c, r * s, dr.safe_sqrt(1.0 - u1)
+
+
+def cosine_hemisphere_pdf(cos_theta):
+    """pdf_solid_angle of the cosine warp: cos(theta) / pi (0 below the horizon)."""
+    return dr.maximum(cos_theta, 0.0) * INV_PI
+
+
+def square_to_uniform_hemisphere(u1, u2):
+    """Local (x, y, z) of a uniformly distributed direction about +z."""
+    z = u1
+    r = dr.safe_sqrt(1.0 - z * z)
+    s, c = dr.sincos(2.0 * math.pi * u2)
+    return r * c, r * s, z
+
+
+def square_to_uniform_ball(u1, u2, u3):
+    """A uniform point inside the unit ball: radius u1^(1/3), uniform direction."""
+    z = 1.0 - 2.0 * u2
+    rr = dr.safe_sqrt(1.0 - z * z)
+    s, c = dr.sincos(2.0 * math.pi * u3)
+    r = dr.cbrt(u1)
+    return r * rr * c, r * rr * s, r * z
+
+
+def coordinate_frame(nx, ny, nz):
+    """Two unit tangents (s, t) with (s, t, n) right-handed and orthonormal.
+
+    Branchless construction of Duff et al. (JCGT 2017), stable for every unit n.
+    """
+    sign = dr.select(nz >= 0, 1.0, -1.0)
+    a = -1.0 / (sign + nz)
+    b = nx * ny * a
+    s = (1.0 + sign * nx * nx * a, sign * b, -sign * nx)
+    t = (b, sign + ny * ny * a, -ny)
+    return s, t
+
+
+def to_world(local, s, t, n):
+    """local[0] s + local[1] t + local[2] n, component-wise tuples."""
+    return tuple(local[0] * s[k] + local[1] * t[k] + local[2] * n[k] for k in range(3))
