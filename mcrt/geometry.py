@@ -63,6 +63,7 @@ class SurfaceInfo:
     name: str
     kind: int
     color: tuple[float, float, float]  # albedo, reflectance, or radiance for the light
+    emission: tuple[float, float, float] = (0.0, 0.0, 0.0)  # of Lambertian surfaces (furnace tests)
 
 
 class Geometry:
@@ -87,7 +88,8 @@ class Geometry:
         def add(name, material):
             kind = KIND_MIRROR if isinstance(material, Mirror) else KIND_LAMBERTIAN
             color = material.reflectance if isinstance(material, Mirror) else material.albedo
-            self.surfaces.append(SurfaceInfo(name, kind, tuple(color)))
+            emission = (0.0, 0.0, 0.0) if isinstance(material, Mirror) else material.emission
+            self.surfaces.append(SurfaceInfo(name, kind, tuple(color), tuple(emission)))
             return len(self.surfaces) - 1
 
         surfaces = scene.surfaces()
@@ -126,10 +128,13 @@ class Geometry:
     def has(self, kind: int) -> bool:
         return any(s.kind == kind for s in self.surfaces)
 
-    def surface_colors(self):
-        """An Array3f table of the per-surface colours, gathered by surface id."""
+    def has_surface_emission(self) -> bool:
+        return any(any(s.emission) for s in self.surfaces)
+
+    def surface_table(self, attribute: str = "color"):
+        """An Array3f table of a per-surface colour ('color' or 'emission'), gathered by surface id."""
         m = self.m
-        c = np.array([s.color for s in self.surfaces], dtype=np.float32)
+        c = np.array([getattr(s, attribute) for s in self.surfaces], dtype=np.float32)
         return m.Array3f(m.Float(c[:, 0]), m.Float(c[:, 1]), m.Float(c[:, 2]))
 
     def offset(self, p):

@@ -71,7 +71,8 @@ class PathIntegrator:
     def radiance(self, o, d, rng):
         """One radiance sample along each camera ray (o, d); d is unit length."""
         m, geo = self.m, self.geo
-        colors = geo.surface_colors()
+        colors = geo.surface_table("color")
+        emissions = geo.surface_table("emission") if geo.has_surface_emission() else None
         kinds = m.UInt32([s.kind for s in geo.surfaces])
 
         L = m.Array3f(0.0)  # radiance gathered so far
@@ -90,6 +91,7 @@ class PathIntegrator:
 
             # ---- Emission seen from the eye or through mirrors.
             L += beta * self.emitted(d, n, color, is_light, specular)
+            L += beta * self.surface_emitted(d, n, sid, emissions)
 
             # ---- Stop at the light (black on both sides) and at the depth limit.
             active &= ~is_light & (depth < self.max_depth)
@@ -120,6 +122,15 @@ class PathIntegrator:
         if "double_count" in mut:
             counted = m.Bool(True)
         return dr.select(is_light & faces_ray & counted, radiance, 0.0)
+
+    def surface_emitted(self, d, n, sid, emissions):
+        """Emission of Lambertian surfaces (furnace scenes), on the side their normal faces.
+
+        No light sample ever reaches these surfaces, so every hit counts it.
+        """
+        if emissions is None:
+            return self.m.Array3f(0.0)
+        return dr.select(dr.dot(d, n) < 0, dr.gather(self.m.Array3f, emissions, sid), 0.0)
 
     def spawn_origin(self, p, n):
         """The origin of rays leaving p on the side of n, offset against self-intersection."""

@@ -45,10 +45,17 @@ class SceneError(ValueError):
 
 @dataclass(frozen=True)
 class Lambertian:
-    """Ideal diffuse reflector, f = albedo / pi, two-sided."""
+    """Ideal diffuse reflector, f = albedo / pi, two-sided.
+
+    ``emission`` is a uniform radiance leaving the surface on the side its
+    normal faces (into the room for the room's faces, outwards for objects).
+    Only closed-form tests use it (the furnace); it is found by BSDF-sampled
+    rays alone, never by light sampling.
+    """
 
     albedo: Vec3
     type: str = "lambertian"
+    emission: Vec3 = (0.0, 0.0, 0.0)
 
 
 @dataclass(frozen=True)
@@ -66,6 +73,7 @@ Material = Lambertian | Mirror
 class Wall:
     corners: tuple[str, str]
     albedo: Vec3
+    emission: Vec3 = (0.0, 0.0, 0.0)
 
 
 @dataclass(frozen=True)
@@ -78,6 +86,8 @@ class Room:
     ceiling_albedo: Vec3
     corners: dict[str, Vec2]
     walls: tuple[Wall, ...]  # in counter-clockwise order
+    floor_emission: Vec3 = (0.0, 0.0, 0.0)
+    ceiling_emission: Vec3 = (0.0, 0.0, 0.0)
 
     def polygon(self) -> np.ndarray:
         """Corner positions (n, 2), counter-clockwise, in wall order."""
@@ -227,13 +237,13 @@ class Scene:
             # a->b is counter-clockwise from above, so (b-a) x up points outwards:
             # wind the quad a,top_a,top_b,b for an inward normal.
             tris = np.array([[p[0], p[3], p[2]], [p[0], p[2], p[1]]])
-            out.append(Surface(f"wall_{w.corners[0]}{w.corners[1]}", tris, Lambertian(w.albedo)))
+            out.append(Surface(f"wall_{w.corners[0]}{w.corners[1]}", tris, Lambertian(w.albedo, emission=w.emission)))
         n = len(poly)
         fan = [(0, i, i + 1) for i in range(1, n - 1)]
         floor = np.array([[[*poly[i], z0], [*poly[j], z0], [*poly[k], z0]] for i, j, k in fan])  # CCW: normal +z
         ceil = np.array([[[*poly[i], z1], [*poly[k], z1], [*poly[j], z1]] for i, j, k in fan])  # CW: normal -z
-        out.append(Surface("floor", floor, Lambertian(room.floor_albedo)))
-        out.append(Surface("ceiling", ceil, Lambertian(room.ceiling_albedo)))
+        out.append(Surface("floor", floor, Lambertian(room.floor_albedo, emission=room.floor_emission)))
+        out.append(Surface("ceiling", ceil, Lambertian(room.ceiling_albedo, emission=room.ceiling_emission)))
         for o in self.objects:
             if isinstance(o, Tetrahedron):
                 out.append(Surface(o.name, o.triangles(), o.material))
@@ -287,7 +297,9 @@ class Scene:
         """What the scene hash covers: geometry, materials, light, cameras (not render defaults)."""
 
         def mat(m):
-            return {"type": m.type, **({"albedo": m.albedo} if isinstance(m, Lambertian) else {"reflectance": m.reflectance})}
+            if isinstance(m, Mirror):
+                return {"type": m.type, "reflectance": m.reflectance}
+            return {"type": m.type, "albedo": m.albedo, **({"emission": m.emission} if any(m.emission) else {})}
 
         def obj(o):
             d = {"name": o.name, "type": o.type, "material": mat(o.material)}
@@ -304,7 +316,12 @@ class Scene:
                 "ceiling_z": r.ceiling_z,
                 "floor_albedo": r.floor_albedo,
                 "ceiling_albedo": r.ceiling_albedo,
-                "walls": [{"from": r.corners[w.corners[0]], "to": r.corners[w.corners[1]], "albedo": w.albedo} for w in r.walls],
+                "walls": [
+                    {"from": r.corners[w.corners[0]], "to": r.corners[w.corners[1]], "albedo": w.albedo, **({"emission": w.emission} if any(w.emission) else {})}
+                    for w in r.walls
+                ],
+                **({"floor_emission": r.floor_emission} if any(r.floor_emission) else {}),
+                **({"ceiling_emission": r.ceiling_emission} if any(r.ceiling_emission) else {}),
             },
             "objects": [obj(o) for o in self.objects],
             "light": {k: getattr(self.light, k) for k in ("center", "size", "normal", "radiance")},
@@ -370,12 +387,15 @@ class _Reader:
     def albedo(self, v: Any, where: str) -> Vec3:
         return self.vec(v, where, 3, lo=0.0, hi=1.0)
 
+    def radiance(self, v: Any, where: str) -> Vec3:
+        return self.vec(v, where, 3, lo=0.0)
+
     def material(self, d: Any, where: str) -> Material:
         if not isinstance(d, dict) or "type" not in d:
             raise self.fail(f"{where}.type", "missing required field (lambertian or mirror)")
         if d["type"] == "lambertian":
-            self.table(d, where, {"type", "albedo"})
-            return Lambertian(self.albedo(d["albedo"], f"{where}.albedo"))
+            self.table(d, where, {"type", "albedo"}, {"emission"})
+            return Lambertian(self.albedo(d["albedo"], f"{where}.albedo"), emission=self.radiance(d.get("emission", [0, 0, 0]), f"{where}.emission"))
         if d["type"] == "mirror":
             self.table(d, where, {"type"}, {"reflectance"})
             return Mirror(self.albedo(d.get("reflectance", [1.0, 1.0, 1.0]), f"{where}.reflectance"))
@@ -453,7 +473,7 @@ def _list(r: _Reader, v: Any, where: str) -> list:
 
 
 def _room(r: _Reader, d: Any) -> Room:
-    r.table(d, "room", {"floor_z", "ceiling_z", "floor_albedo", "ceiling_albedo", "corners", "walls"})
+    r.table(d, "room", {"floor_z", "ceiling_z", "floor_albedo", "ceiling_albedo", "corners", "walls"}, {"floor_emission", "ceiling_emission"})
     z0 = r.number(d["floor_z"], "room.floor_z")
     z1 = r.number(d["ceiling_z"], "room.ceiling_z")
     if z1 <= z0:
@@ -465,7 +485,7 @@ def _room(r: _Reader, d: Any) -> Room:
     walls = []
     for i, w in enumerate(_list(r, d["walls"], "room.walls")):
         where = f"room.walls[{i}]"
-        r.table(w, where, {"corners", "albedo"})
+        r.table(w, where, {"corners", "albedo"}, {"emission"})
         c = w["corners"]
         if not (isinstance(c, list) and len(c) == 2 and all(isinstance(x, str) for x in c)):
             raise r.fail(f"{where}.corners", f"must be two corner names, got {c!r}")
@@ -474,7 +494,7 @@ def _room(r: _Reader, d: Any) -> Room:
                 raise r.fail(f"{where}.corners", f"unknown corner {x!r} (have {', '.join(corners)})")
         if c[0] == c[1] or np.allclose(corners[c[0]], corners[c[1]]):
             raise r.fail(f"{where}.corners", f"degenerate wall: corners {c[0]} and {c[1]} coincide")
-        walls.append(Wall((c[0], c[1]), r.albedo(w["albedo"], f"{where}.albedo")))
+        walls.append(Wall((c[0], c[1]), r.albedo(w["albedo"], f"{where}.albedo"), r.radiance(w.get("emission", [0, 0, 0]), f"{where}.emission")))
     # Closed: the walls chain into one loop through every corner.
     start = {w.corners[0]: w for w in walls}
     if len(start) != len(walls) or len({w.corners[1] for w in walls}) != len(walls) or len(walls) != len(corners):
@@ -488,12 +508,15 @@ def _room(r: _Reader, d: Any) -> Room:
     if len(loop) != len(walls):
         raise r.fail("room.walls", "the room is open: the walls form more than one loop")
     poly = np.array([corners[w.corners[0]] for w in loop])
-    cross = [np.cross(b - a, c - b) for a, b, c in zip(poly, np.roll(poly, -1, 0), np.roll(poly, -2, 0))]
+    cross = [(b - a)[0] * (c - b)[1] - (b - a)[1] * (c - b)[0] for a, b, c in zip(poly, np.roll(poly, -1, 0), np.roll(poly, -2, 0))]
     if all(x < 0 for x in cross):
-        loop = [Wall((w.corners[1], w.corners[0]), w.albedo) for w in reversed(loop)]
+        loop = [Wall((w.corners[1], w.corners[0]), w.albedo, w.emission) for w in reversed(loop)]
     elif not all(x > 0 for x in cross):
         raise r.fail("room.walls", "the room must be a convex polygon (no straight or reflex corners)")
-    return Room(z0, z1, r.albedo(d["floor_albedo"], "room.floor_albedo"), r.albedo(d["ceiling_albedo"], "room.ceiling_albedo"), corners, tuple(loop))
+    return Room(
+        z0, z1, r.albedo(d["floor_albedo"], "room.floor_albedo"), r.albedo(d["ceiling_albedo"], "room.ceiling_albedo"), corners, tuple(loop),
+        r.radiance(d.get("floor_emission", [0, 0, 0]), "room.floor_emission"), r.radiance(d.get("ceiling_emission", [0, 0, 0]), "room.ceiling_emission"),
+    )
 
 
 def _object(r: _Reader, d: Any, where: str, room: Room) -> Object:
@@ -532,7 +555,7 @@ def _light(r: _Reader, d: Any, room: Room) -> Light:
         center=r.vec(d["center"], "light.center", 3),
         size=r.vec(d["size"], "light.size", 2, positive=True),
         normal=r.vec(d["normal"], "light.normal", 3),
-        radiance=r.vec(d["radiance"], "light.radiance", 3, lo=0.0),
+        radiance=r.radiance(d["radiance"], "light.radiance"),
     )
     if light.normal not in ((0.0, 0.0, 1.0), (0.0, 0.0, -1.0)):
         raise r.fail("light.normal", f"must be [0, 0, -1] (down) or [0, 0, 1] (up): only horizontal lights are supported, got {list(light.normal)}")
@@ -540,8 +563,9 @@ def _light(r: _Reader, d: Any, room: Room) -> Light:
     for c in light.corners():
         if not room.contains(c, -tol):
             raise r.fail("light", f"light outside the room: corner {tuple(float(x) for x in c)}")
-    inside = (light.center[2] - room.floor_z) if light.normal[2] < 0 else (room.ceiling_z - light.center[2])
-    if inside <= tol:
+    # It must face the room: the middle of the room lies on its emitting side.
+    middle_z = 0.5 * (room.floor_z + room.ceiling_z)
+    if light.normal[2] * (middle_z - light.center[2]) <= 0:
         raise r.fail("light.normal", f"the light faces away from the room (normal {list(light.normal)} at z = {light.center[2]})")
     return light
 

@@ -1,0 +1,206 @@
+"""The ``mcrt`` command line: a thin layer over the library.
+
+Exit codes: 0 ok (or images consistent), 1 a check failed (images differ),
+2 unusable input (a bad scene file, an unreadable image, a bad option).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+EXIT_OK, EXIT_FAILED, EXIT_UNUSABLE = 0, 1, 2
+
+
+def _add_render_options(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--scene", default=None, help="scene file (default: reference/scenes/canonical.toml)")
+    p.add_argument("--camera", default=None, help="camera name from the scene file (near, far)")
+    p.add_argument("--res", type=int, default=None, help="square resolution N (N x N)")
+    p.add_argument("--width", type=int, default=None)
+    p.add_argument("--height", type=int, default=None)
+    p.add_argument("--spp", type=int, default=None, help="samples per pixel")
+    p.add_argument("--seed", type=int, default=None)
+    p.add_argument("--max-depth", type=int, default=None, help="longest path in segments (1: emitters only, 2: direct light, -1: unbounded)")
+    p.add_argument("--preset", default=None, help="named settings from the scene file (e.g. course2023)")
+    p.add_argument("--backend", choices=("llvm", "cuda"), default="llvm")
+
+
+def _settings(args, scene):
+    w = args.width or args.res
+    h = args.height or args.res
+    return scene.settings(
+        args.preset,
+        camera=args.camera,
+        width=w,
+        height=h,
+        spp=args.spp,
+        seed=args.seed,
+        max_depth=args.max_depth,
+        light_samples=getattr(args, "light_samples", None),
+    )
+
+
+def _load(args):
+    from mcrt.scene import CANONICAL, load_scene
+
+    return load_scene(args.scene or CANONICAL)
+
+
+def render_to_files(result, out: Path, exposure: float = 0.0) -> tuple[Path, Path]:
+    """Write ``out`` (EXR with mean and variance) and the PNG preview beside it."""
+    from mcrt.imageio import write_exr, write_png
+
+    out = Path(out)
+    if out.suffix.lower() != ".exr":
+        out = out.with_suffix(".exr")
+    out.parent.mkdir(parents=True, exist_ok=True)
+    write_exr(out, result)
+    png = out.with_suffix(".png")
+    write_png(png, result.mean, exposure=exposure)
+    return out, png
+
+
+def render_scene(renderer: str, scene, s, *, backend="llvm", mutants=(), intersector="convex", progress=True):
+    """Render with one renderer ('mcrt' or 'mitsuba') at settings ``s``."""
+    if renderer == "mcrt":
+        from mcrt.tracer import render
+
+        return render(
+            scene, s.camera, s.spp, s.seed, s.max_depth, s.light_samples, backend,
+            width=s.width, height=s.height, rr_depth=s.rr_depth, mutants=mutants, intersector=intersector, progress=progress,
+        )
+    if renderer == "mitsuba":
+        if mutants:
+            raise ValueError("mutants exist only in the mcrt renderer")
+        from mcrt.mitsuba import render_mitsuba
+
+        return render_mitsuba(scene, s.camera, s.width, s.height, s.spp, s.seed, s.max_depth, backend=backend, progress=progress)
+    raise ValueError(f"unknown renderer {renderer!r} (mcrt or mitsuba)")
+
+
+def cmd_render(args) -> int:
+    scene = _load(args)
+    s = _settings(args, scene)
+    result = render_scene(args.renderer, scene, s, backend=args.backend, mutants=args.mutant or (), intersector=args.intersector)
+    exr, png = render_to_files(result, Path(args.output), args.exposure)
+    compile_note = f", of which JIT compilation {result.compile_time:.2f} s" if result.compile_time else ""
+    paths = s.width * s.height * s.spp
+    print(f"{args.renderer}: {s.width}x{s.height}, {s.spp} spp, camera {s.camera}, max depth {s.max_depth}: "
+          f"{result.wall_time:.2f} s{compile_note}; {paths / max(result.wall_time, 1e-9) / 1e6:.2f} M paths/s")
+    print(f"wrote {exr} and {png}")
+    return EXIT_OK
+
+
+def cmd_compare(args) -> int:
+    from mcrt.stats import compare_files
+
+    return compare_files(args.a, args.b, alpha=args.alpha, tile=args.tile, heatmap=args.heatmap)
+
+
+def cmd_scene(args) -> int:
+    scene = _load(args)
+    print(f"{scene.path}: valid; scene hash {scene.content_hash()}")
+    print(f"  {len(scene.room.walls)} walls, {len(scene.objects)} objects ({', '.join(o.name for o in scene.objects)}), "
+          f"light {scene.light.size[0]:g} x {scene.light.size[1]:g} at {scene.light.center}, cameras {', '.join(scene.cameras)}")
+    print(f"  render defaults: {scene.render}")
+    return EXIT_OK
+
+
+def cmd_mutants(args) -> int:
+    from mcrt.mutants import MUTANTS
+
+    for name, text in MUTANTS.items():
+        print(f"{name:20s} {text}")
+    return EXIT_OK
+
+
+def cmd_main(args) -> int:
+    """The main job: the canonical scene by both renderers, compared, into reports/canonical/."""
+    import numpy as np
+
+    from mcrt.imageio import side_by_side
+    from mcrt.stats import compare_images
+
+    scene = _load(args)
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    s = scene.settings(camera=args.camera, width=args.res, height=args.res, spp=args.spp, seed=args.seed)
+    results = {}
+    for name in ("mcrt", "mitsuba"):
+        r = render_scene(name, scene, s, backend=args.backend)
+        render_to_files(r, out / f"{name}_{s.camera}.exr")
+        results[name] = r
+        print(f"{name}: {r.wall_time:.2f} s ({(r.compile_time or 0):.2f} s JIT), "
+              f"{s.width * s.height * s.spp / r.wall_time / 1e6:.2f} M paths/s")
+    cmp = compare_images(results["mcrt"], results["mitsuba"], alpha=args.alpha)
+    side_by_side(out / f"side_by_side_{s.camera}.png", [results["mcrt"].mean, results["mitsuba"].mean], ["mcrt", "Mitsuba 3 (path)"])
+    cmp.heatmap(out / f"difference_{s.camera}.png")
+    print(cmp.summary())
+    print(f"wrote {out}/")
+    diff = np.abs(results["mcrt"].mean.mean() - results["mitsuba"].mean.mean())
+    print(f"image means: mcrt {results['mcrt'].mean.mean():.5f}, mitsuba {results['mitsuba'].mean.mean():.5f} (|diff| {diff:.5f})")
+    return EXIT_OK if cmp.passed else EXIT_FAILED
+
+
+def build_parser() -> argparse.ArgumentParser:
+    ap = argparse.ArgumentParser(prog="mcrt", description="Monte-Carlo path tracer for the hexagonal room, validated against Mitsuba 3.")
+    sub = ap.add_subparsers(dest="command", required=True)
+
+    p = sub.add_parser("render", help="render a scene to EXR (mean + per-sample variance) and a PNG preview")
+    _add_render_options(p)
+    p.add_argument("--renderer", choices=("mcrt", "mitsuba"), default="mcrt")
+    p.add_argument("--light-samples", type=int, default=None, help="shadow rays per diffuse vertex (mcrt)")
+    p.add_argument("--mutant", action="append", metavar="NAME", help="switch on a catalogued bug (mcrt; repeatable; see `mcrt mutants`)")
+    p.add_argument("--intersector", choices=("convex", "triangles"), default="convex", help="mcrt's intersection code (triangles: brute-force cross-check)")
+    p.add_argument("--exposure", type=float, default=0.0, help="PNG preview exposure in stops")
+    p.add_argument("-o", "--output", default="out.exr", help="output EXR (the PNG preview goes beside it)")
+    p.set_defaults(func=cmd_render)
+
+    p = sub.add_parser("compare", help="two-sample test of two renders (exit 0 consistent, 1 different, 2 unusable)")
+    p.add_argument("a")
+    p.add_argument("b")
+    p.add_argument("--alpha", type=float, default=0.01, help="family-wise error rate (Holm)")
+    p.add_argument("--tile", type=int, default=8, help="tile size in pixels")
+    p.add_argument("--heatmap", default=None, help="write a PNG of the per-tile statistic here")
+    p.set_defaults(func=cmd_compare)
+
+    p = sub.add_parser("main", help="the main job: render the canonical scene with both renderers and compare them")
+    p.add_argument("--scene", default=None)
+    p.add_argument("--camera", default="near")
+    p.add_argument("--res", type=int, default=128)
+    p.add_argument("--spp", type=int, default=256)
+    p.add_argument("--seed", type=int, default=1)
+    p.add_argument("--alpha", type=float, default=0.01)
+    p.add_argument("--backend", choices=("llvm", "cuda"), default="llvm")
+    p.add_argument("--out", default="reports/canonical")
+    p.set_defaults(func=cmd_main)
+
+    p = sub.add_parser("scene", help="validate a scene file and print its hash")
+    p.add_argument("scene", nargs="?", default=None)
+    p.set_defaults(func=cmd_scene)
+
+    p = sub.add_parser("mutants", help="list the bug catalogue")
+    p.set_defaults(func=cmd_mutants)
+    return ap
+
+
+def main(argv=None) -> int:
+    args = build_parser().parse_args(argv)
+    from mcrt.scene import SceneError
+
+    try:
+        return args.func(args)
+    except SceneError as e:
+        print(f"mcrt: {e}", file=sys.stderr)
+        return EXIT_UNUSABLE
+    except (ValueError, RuntimeError, OSError) as e:
+        print(f"mcrt: {e}", file=sys.stderr)
+        return EXIT_UNUSABLE
+    except KeyboardInterrupt:
+        print("mcrt: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,860 @@
+"""Images in and out: OpenEXR renders with provenance, PFM, Radiance HDR, PNG.
+
+Our own format is a single-part scanline OpenEXR file (float32, ZIP
+compressed) holding
+
+* the mean as channels ``R``, ``G``, ``B``;
+* the per-sample variance as ``variance.R``, ``variance.G``, ``variance.B``
+  (left out when the render has none);
+* the provenance of :class:`~mcrt.render.RenderResult` as header attributes
+  ``spp``, ``seed``, ``max_depth`` (int), ``renderer``, ``scene_hash``,
+  ``camera`` (string), ``wall_time`` and ``compile_time`` (double), and every
+  entry of ``extra`` as a string attribute ``mcrt.<key>``. An integer that
+  does not fit an EXR int (32 bits, for example a 64-bit seed) is stored as
+  its decimal string and read back as an int.
+
+:func:`read_exr` reads these back bit-exactly, and also plain RGB/RGBA EXRs
+from other tools (half or float; alpha ignored; ``spp = 0`` marks a file
+without our attributes). :func:`read_image` reads any supported format into
+a :class:`RenderResult`; files from other formats get ``variance=None``,
+``spp=0`` and ``renderer='unknown'``.
+
+All arrays are (height, width, 3) float32 linear RGB, top row first. Every
+problem with a file is an :class:`ImageError` whose one-line message names
+the file, e.g. ``sub/alice.exr: truncated or corrupt OpenEXR file (...)``.
+Writers are atomic: the image goes to a temporary file in the target folder
+which then replaces the target, so a failed write never leaves a half-written
+file where a good one stood.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import math
+import os
+import re
+import secrets
+import struct
+import sys
+import tempfile
+import threading
+import zlib
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+from mcrt.render import RenderResult
+
+PathLike = str | os.PathLike
+
+EXR_MAGIC = b"\x76\x2f\x31\x01"
+PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
+
+# Header attributes of our EXR files; extra entries get this prefix.
+EXTRA_PREFIX = "mcrt."
+_INT_ATTRS = ("spp", "seed", "max_depth")
+_STR_ATTRS = ("renderer", "scene_hash", "camera")
+_INT32 = (-(2**31), 2**31 - 1)
+
+MAGENTA = (255, 0, 255)
+
+
+class ImageError(ValueError):
+    """A file that cannot be read or written; the one-line message names it."""
+
+
+# --------------------------------------------------------------------------
+# Helpers: messages, reading bytes, atomic writes, array checks
+# --------------------------------------------------------------------------
+
+
+def _one_line(text: object, limit: int = 200) -> str:
+    s = " ".join(str(text).split())
+    return s if len(s) <= limit else s[: limit - 3] + "..."
+
+
+def _read_bytes(path: PathLike) -> bytes:
+    try:
+        with open(path, "rb") as f:
+            return f.read()
+    except FileNotFoundError:
+        raise ImageError(f"{os.fspath(path)}: no such file") from None
+    except IsADirectoryError:
+        raise ImageError(f"{os.fspath(path)}: is a directory, not an image") from None
+    except OSError as e:
+        raise ImageError(f"{os.fspath(path)}: cannot read ({_one_line(e.strerror or e)})") from None
+
+
+def _atomic_write(path: PathLike, write: Callable[[str], None]) -> None:
+    """Run ``write(tmp)`` on a fresh file beside ``path``, then move it over ``path``.
+
+    The temporary file is hidden (``.name.<pid>.<random>.tmp``) and removed on
+    any failure, so ``path`` is either the old file or the complete new one.
+    """
+    path = os.fspath(path)
+    folder, name = os.path.split(path)
+    tmp = os.path.join(folder, f".{name}.{os.getpid()}.{secrets.token_hex(4)}.tmp")
+    try:
+        os.close(os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666))
+    except OSError as e:
+        raise ImageError(f"{path}: cannot write ({_one_line(e.strerror or e)})") from None
+    try:
+        write(tmp)
+        with open(tmp, "rb+") as f:
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+    except BaseException as e:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+        if isinstance(e, ImageError) or not isinstance(e, Exception):
+            raise
+        raise ImageError(f"{path}: cannot write ({_one_line(e)})") from e
+
+
+def _write_bytes(path: PathLike, data: bytes) -> None:
+    def write(tmp: str) -> None:
+        with open(tmp, "wb") as f:
+            f.write(data)
+
+    _atomic_write(path, write)
+
+
+def _rgb_array(path: PathLike, rgb: np.ndarray, what: str = "image", grey: bool = False) -> np.ndarray:
+    """``rgb`` as a float32 array of shape (H, W, 3) (or (H, W) if ``grey`` allows it)."""
+    a = np.asarray(rgb)
+    ok = a.ndim == 3 and a.shape[2] == 3
+    if grey and (a.ndim == 2 or (a.ndim == 3 and a.shape[2] == 1)):
+        a, ok = a.reshape(a.shape[:2]), True
+    if not ok or a.shape[0] == 0 or a.shape[1] == 0:
+        want = "(height, width, 3) or (height, width)" if grey else "(height, width, 3)"
+        raise ImageError(f"{os.fspath(path)}: {what} has shape {a.shape}, expected {want}")
+    if not (np.issubdtype(a.dtype, np.floating) or np.issubdtype(a.dtype, np.integer)):
+        raise ImageError(f"{os.fspath(path)}: {what} has dtype {a.dtype}, expected floats")
+    return np.ascontiguousarray(a, dtype=np.float32)
+
+
+# --------------------------------------------------------------------------
+# OpenEXR
+# --------------------------------------------------------------------------
+
+_capture_lock = threading.Lock()
+
+
+@contextlib.contextmanager
+def _captured_library_output():
+    """Collect what OpenEXR prints while reading, so it can go into an ImageError.
+
+    The C library reports errors on file descriptor 2 and the Python binding
+    prints warnings to ``sys.stdout``; both are captured here. The caller
+    puts the text back on stderr if the read succeeds (``log['ok'] = True``).
+    """
+    log: dict = {"text": "", "ok": False}
+    out = io.StringIO()
+    with _capture_lock, contextlib.redirect_stdout(out):
+        saved = None
+        tmp = tempfile.TemporaryFile()
+        try:
+            sys.stderr.flush()
+            saved = os.dup(2)
+            os.dup2(tmp.fileno(), 2)
+        except (OSError, ValueError, AttributeError):
+            saved = None
+        try:
+            yield log
+        finally:
+            if saved is not None:
+                os.dup2(saved, 2)
+                os.close(saved)
+            tmp.seek(0)
+            native = tmp.read().decode("utf-8", "replace")
+            tmp.close()
+            log["text"] = native + out.getvalue()
+            if log["ok"] and native and saved is not None:
+                os.write(2, native.encode())
+
+
+def _library_detail(text: str, path: str) -> str:
+    """The most telling line of OpenEXR's output, without the repeated file name."""
+    lines = [ln.strip() for ln in text.splitlines() if ln.strip()]
+    if not lines:
+        return ""
+    line = lines[-1]
+    name = os.path.basename(path)
+    for prefix in (path + ":", name + ":"):
+        if line.startswith(prefix):
+            line = line[len(prefix):].strip()
+    return _one_line(line, 160)
+
+
+def write_exr(path: PathLike, result: RenderResult) -> None:
+    """Write a render as a float32 OpenEXR file (ZIP compressed), atomically.
+
+    Channels ``R, G, B`` hold the mean, ``variance.R, variance.G,
+    variance.B`` the per-sample variance (omitted if ``result.variance`` is
+    None); the provenance fields become header attributes as described in the
+    module docstring. :func:`read_exr` returns an equal RenderResult.
+    """
+    import OpenEXR
+
+    path = os.fspath(path)
+    mean = _rgb_array(path, result.mean, "mean")
+    channels = {c: np.ascontiguousarray(mean[..., i]) for i, c in enumerate("RGB")}
+    if result.variance is not None:
+        var = _rgb_array(path, result.variance, "variance")
+        if var.shape != mean.shape:
+            raise ImageError(f"{path}: variance has shape {var.shape}, mean has {mean.shape}")
+        channels.update({f"variance.{c}": np.ascontiguousarray(var[..., i]) for i, c in enumerate("RGB")})
+
+    header: dict = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
+    for name in _INT_ATTRS:
+        v = int(getattr(result, name))
+        header[name] = v if _INT32[0] <= v <= _INT32[1] else str(v)
+    for name in _STR_ATTRS:
+        header[name] = str(getattr(result, name))
+    # A 1-element float64 array is how the binding writes a double attribute;
+    # a Python float would become a 32-bit float attribute.
+    header["wall_time"] = np.array([float(result.wall_time)], np.float64)
+    if result.compile_time is not None:
+        header["compile_time"] = np.array([float(result.compile_time)], np.float64)
+    for key, value in result.extra.items():
+        header[EXTRA_PREFIX + str(key)] = str(value)
+
+    _atomic_write(path, lambda tmp: _write_exr_file(tmp, header, channels))
+
+
+def _write_exr_file(tmp: str, header: dict, channels: dict) -> None:
+    import OpenEXR
+
+    OpenEXR.File(header, channels).write(tmp)
+
+
+def read_exr(path: PathLike) -> RenderResult:
+    """Read an OpenEXR file written by :func:`write_exr` or by another tool.
+
+    The first part must hold channels ``R, G, B`` (half or float); ``A`` is
+    ignored, ``variance.R/G/B`` become the variance, other channels are
+    ignored and listed in ``extra['exr.ignored_channels']``. Missing
+    attributes read as ``spp=0`` (unknown), ``seed=0``, ``max_depth=0``,
+    ``renderer='unknown'``, empty strings, ``wall_time=0`` and
+    ``compile_time=None``.
+
+    Raises
+    ------
+    ImageError
+        Missing, truncated or corrupt file, or a channel layout without
+        R, G, B (the message lists the channels found).
+    """
+    import OpenEXR
+
+    path = os.fspath(path)
+    head = _read_bytes(path)[:4]
+    if head != EXR_MAGIC:
+        raise ImageError(f"{path}: not an OpenEXR file (bad magic number)")
+    log = {"text": ""}
+    try:
+        with _captured_library_output() as log:
+            f = OpenEXR.File(path, separate_channels=True)
+            parts = len(f.parts)
+            if parts:
+                header = dict(f.header(0))
+                channels = dict(f.channels(0))
+            log["ok"] = parts > 0
+    except Exception as e:
+        detail = _library_detail(log["text"], path) or _one_line(e, 160)
+        raise ImageError(f"{path}: truncated or corrupt OpenEXR file ({detail})") from None
+    if not parts:
+        detail = _library_detail(log["text"], path) or "no readable part"
+        raise ImageError(f"{path}: truncated or corrupt OpenEXR file ({detail})")
+
+    names = sorted(channels)
+    if not {"R", "G", "B"} <= set(names):
+        raise ImageError(f"{path}: expected channels R, G, B (optionally A), found {', '.join(names) or 'none'}")
+    shape = _exr_shape(path, header)
+    mean = _exr_stack(path, channels, ("R", "G", "B"), shape)
+    var_names = ("variance.R", "variance.G", "variance.B")
+    present = [n for n in var_names if n in channels]
+    if present and len(present) < 3:
+        raise ImageError(f"{path}: incomplete variance channels, found {', '.join(present)}")
+    variance = _exr_stack(path, channels, var_names, shape) if present else None
+
+    extra = {k[len(EXTRA_PREFIX):]: _attr_str(v) for k, v in header.items() if k.startswith(EXTRA_PREFIX)}
+    ignored = [n for n in names if n not in ("R", "G", "B", "A") and n not in var_names]
+    if ignored:
+        extra["exr.ignored_channels"] = ",".join(ignored)
+    compile_time = _attr_float(path, header, "compile_time", None)
+    return RenderResult(
+        mean=mean,
+        variance=variance,
+        spp=_attr_int(path, header, "spp"),
+        seed=_attr_int(path, header, "seed"),
+        max_depth=_attr_int(path, header, "max_depth"),
+        renderer=_attr_str(header.get("renderer", "unknown")),
+        scene_hash=_attr_str(header.get("scene_hash", "")),
+        camera=_attr_str(header.get("camera", "")),
+        wall_time=_attr_float(path, header, "wall_time", 0.0),
+        compile_time=compile_time,
+        extra=extra,
+    )
+
+
+def _exr_shape(path: str, header: dict) -> tuple[int, int]:
+    try:
+        lo, hi = header["dataWindow"]
+        return int(hi[1] - lo[1] + 1), int(hi[0] - lo[0] + 1)
+    except (KeyError, TypeError, ValueError, IndexError):
+        raise ImageError(f"{path}: OpenEXR header has no usable dataWindow") from None
+
+
+def _exr_stack(path: str, channels: dict, names: tuple[str, ...], shape: tuple[int, int]) -> np.ndarray:
+    planes = []
+    for n in names:
+        px = channels[n].pixels
+        if px is None or px.shape != shape:
+            got = None if px is None else px.shape
+            raise ImageError(f"{path}: channel {n} has shape {got}, expected {shape} (subsampled channels are not supported)")
+        if px.dtype not in (np.float16, np.float32):
+            raise ImageError(f"{path}: channel {n} holds {px.dtype}, expected half or float")
+        planes.append(px.astype(np.float32))
+    return np.stack(planes, axis=-1)
+
+
+def _attr_str(value: object) -> str:
+    return value if isinstance(value, str) else str(value)
+
+
+def _attr_int(path: str, header: dict, name: str) -> int:
+    if name not in header:
+        return 0
+    v = header[name]
+    try:
+        if isinstance(v, (int, np.integer)):
+            return int(v)
+        if isinstance(v, str):
+            return int(v.strip())
+        f = float(np.asarray(v, dtype=np.float64).reshape(-1)[0]) if np.size(v) == 1 else math.nan
+        if f.is_integer():
+            return int(f)
+    except (ValueError, TypeError, OverflowError):
+        pass
+    raise ImageError(f"{path}: attribute {name}: expected an integer, got {_one_line(repr(v), 60)}")
+
+
+def _attr_float(path: str, header: dict, name: str, default: float | None) -> float | None:
+    if name not in header:
+        return default
+    v = header[name]
+    try:
+        if isinstance(v, str):
+            return float(v.strip())
+        if np.size(v) == 1:
+            return float(np.asarray(v, dtype=np.float64).reshape(-1)[0])
+    except (ValueError, TypeError):
+        pass
+    raise ImageError(f"{path}: attribute {name}: expected a number, got {_one_line(repr(v), 60)}")
+
+
+# --------------------------------------------------------------------------
+# PFM: Portable Float Map
+# --------------------------------------------------------------------------
+
+_PFM_HEADER = re.compile(rb"(PF|Pf)\s+(\d+)\s+(\d+)\s+([-+0-9.eE]+)\s")
+
+
+def read_pfm(path: PathLike) -> np.ndarray:
+    """Read a Portable Float Map: (H, W, 3) float32, top row first.
+
+    ``PF`` is colour, ``Pf`` greyscale (replicated to three channels). A
+    negative scale means little-endian data, a positive one big-endian; rows
+    are stored bottom to top. A scale magnitude other than 1 multiplies the
+    data (as pbrt does).
+    """
+    path = os.fspath(path)
+    data = _read_bytes(path)
+    m = _PFM_HEADER.match(data)
+    if not m:
+        raise ImageError(f"{path}: not a PFM file (expected 'PF' or 'Pf', width, height, scale)")
+    colour = m.group(1) == b"PF"
+    w, h = int(m.group(2)), int(m.group(3))
+    try:
+        scale = float(m.group(4))
+    except ValueError:
+        raise ImageError(f"{path}: PFM scale {m.group(4).decode()!r} is not a number") from None
+    if w == 0 or h == 0 or scale == 0 or not math.isfinite(scale):
+        raise ImageError(f"{path}: PFM header gives {w}x{h} pixels and scale {scale}")
+    c = 3 if colour else 1
+    n = w * h * c * 4
+    body = data[m.end(): m.end() + n]
+    if len(body) < n:
+        raise ImageError(f"{path}: truncated PFM file ({len(body)} of {n} data bytes)")
+    a = np.frombuffer(body, dtype="<f4" if scale < 0 else ">f4").reshape(h, w, c)
+    a = a[::-1].astype(np.float32)
+    if abs(scale) != 1.0:
+        a *= np.float32(abs(scale))
+    return np.ascontiguousarray(np.repeat(a, 3, axis=2) if c == 1 else a)
+
+
+def write_pfm(path: PathLike, rgb: np.ndarray, *, little_endian: bool = True) -> None:
+    """Write a Portable Float Map atomically: ``PF`` for (H, W, 3), ``Pf`` for (H, W).
+
+    Scale -1 (little-endian) by default, +1 (big-endian) with
+    ``little_endian=False``; rows bottom to top as the format requires.
+    """
+    a = _rgb_array(path, rgb, grey=True)
+    h, w = a.shape[:2]
+    magic = "PF" if a.ndim == 3 else "Pf"
+    head = f"{magic}\n{w} {h}\n{-1.0 if little_endian else 1.0}\n".encode()
+    body = np.ascontiguousarray(a[::-1], dtype="<f4" if little_endian else ">f4").tobytes()
+    _write_bytes(path, head + body)
+
+
+# --------------------------------------------------------------------------
+# Radiance RGBE (.hdr, .pic)
+# --------------------------------------------------------------------------
+
+_HDR_RES = re.compile(rb"([-+])([XY])\s+(\d+)\s+([-+])([XY])\s+(\d+)")
+
+
+def read_hdr(path: PathLike) -> np.ndarray:
+    """Read a Radiance RGBE picture: (H, W, 3) float32, top row first.
+
+    Scanlines may be flat, new-style run-length encoded, or use old-style
+    repeat runs. A pixel (r, g, b, e) with e > 0 decodes to
+    ``(r, g, b) * 2**(e - 136)`` (the convention of rgbe.c, stb_image and
+    OpenImageIO; e = 0 is black). ``EXPOSURE=`` lines, which record a factor
+    already applied to the pixels, are divided out. All eight orientations of
+    the resolution line are honoured.
+    """
+    path = os.fspath(path)
+    data = _read_bytes(path)
+    if not data.startswith(b"#?"):
+        raise ImageError(f"{path}: not a Radiance HDR file (no '#?' signature)")
+    end = data.find(b"\n\n", 0, 1 << 16)
+    if end < 0:
+        raise ImageError(f"{path}: Radiance header has no end (blank line)")
+    exposure = 1.0
+    for line in data[:end].split(b"\n")[1:]:
+        line = line.strip()
+        if line.startswith(b"FORMAT="):
+            fmt = line[7:].strip()
+            if fmt != b"32-bit_rle_rgbe":
+                raise ImageError(f"{path}: unsupported Radiance format {fmt.decode(errors='replace')!r} (only 32-bit_rle_rgbe)")
+        elif line.startswith(b"EXPOSURE="):
+            try:
+                exposure *= float(line[9:])
+            except ValueError:
+                raise ImageError(f"{path}: bad EXPOSURE line {line.decode(errors='replace')!r}") from None
+    nl = data.find(b"\n", end + 2)
+    m = _HDR_RES.fullmatch(data[end + 2: nl].strip()) if nl >= 0 else None
+    if not m or m.group(2) == m.group(5):
+        raise ImageError(f"{path}: bad Radiance resolution line")
+    n1, n2 = int(m.group(3)), int(m.group(6))
+    if n1 == 0 or n2 == 0:
+        raise ImageError(f"{path}: Radiance picture has no pixels ({n1}x{n2})")
+    rgbe = _hdr_scanlines(path, data, nl + 1, n1, n2)  # (n1, n2, 4): rows along the first axis
+
+    e = rgbe[..., 3].astype(np.int32)
+    scale = np.where(e > 0, np.ldexp(1.0, e - 136), 0.0)
+    img = rgbe[..., :3] * scale[..., None]
+    if exposure != 1.0 and exposure > 0:
+        img /= exposure
+    # Y axis: '-' means the first index is the top row; X axis: '+' means left first.
+    if m.group(1 if m.group(2) == b"Y" else 4) == b"+":
+        img = img[::-1] if m.group(2) == b"Y" else img[:, ::-1]
+    if m.group(4 if m.group(5) == b"X" else 1) == b"-":
+        img = img[:, ::-1] if m.group(5) == b"X" else img[::-1]
+    if m.group(2) == b"X":
+        img = img.transpose(1, 0, 2)
+    return np.ascontiguousarray(img, dtype=np.float32)
+
+
+def _hdr_scanlines(path: str, data: bytes, pos: int, rows: int, width: int) -> np.ndarray:
+    out = np.empty((rows, width, 4), np.uint8)
+    n = len(data)
+
+    def truncated() -> ImageError:
+        return ImageError(f"{path}: truncated Radiance HDR file (scanline {y} of {rows})")
+
+    for y in range(rows):
+        if 8 <= width <= 32767 and data[pos: pos + 2] == b"\x02\x02" and pos + 4 <= n and data[pos + 2] < 128:
+            if (data[pos + 2] << 8 | data[pos + 3]) != width:
+                raise ImageError(f"{path}: scanline {y} has run-length width {data[pos + 2] << 8 | data[pos + 3]}, expected {width}")
+            pos += 4
+            for c in range(4):
+                chan = bytearray()
+                while len(chan) < width:
+                    if pos >= n:
+                        raise truncated()
+                    count = data[pos]
+                    if count > 128:
+                        if pos + 1 >= n:
+                            raise truncated()
+                        chan += data[pos + 1: pos + 2] * (count - 128)
+                        pos += 2
+                    else:
+                        if pos + 1 + count > n:
+                            raise truncated()
+                        if count == 0:
+                            raise ImageError(f"{path}: bad run-length data in scanline {y}")
+                        chan += data[pos + 1: pos + 1 + count]
+                        pos += 1 + count
+                if len(chan) != width:
+                    raise ImageError(f"{path}: run-length data overruns scanline {y}")
+                out[y, :, c] = np.frombuffer(bytes(chan), np.uint8)
+            continue
+        # Flat pixels, possibly with old-style runs (1, 1, 1, k): repeat the last pixel.
+        chunk = data[pos: pos + 4 * width]
+        if len(chunk) < 4 * width:
+            raise truncated()
+        px = np.frombuffer(chunk, np.uint8).reshape(width, 4)
+        if not np.any(np.all(px[:, :3] == 1, axis=1)):
+            out[y] = px
+            pos += 4 * width
+        else:
+            pos = _hdr_old_rle(path, data, pos, out[y], y)
+    return out
+
+
+def _hdr_old_rle(path: str, data: bytes, pos: int, row: np.ndarray, y: int) -> int:
+    x, shift, width = 0, 0, row.shape[0]
+    while x < width:
+        p = data[pos: pos + 4]
+        if len(p) < 4:
+            raise ImageError(f"{path}: truncated Radiance HDR file (scanline {y})")
+        pos += 4
+        if p[0] == 1 and p[1] == 1 and p[2] == 1:
+            count = p[3] << shift
+            if x == 0 or x + count > width:
+                raise ImageError(f"{path}: bad old-style run in scanline {y}")
+            row[x: x + count] = row[x - 1]
+            x += count
+            shift += 8
+        else:
+            row[x] = np.frombuffer(p, np.uint8)
+            x += 1
+            shift = 0
+    return pos
+
+
+def _rgbe_encode(path: PathLike, a: np.ndarray) -> np.ndarray:
+    a = a.astype(np.float64)
+    if not np.all(np.isfinite(a)):
+        raise ImageError(f"{os.fspath(path)}: cannot store NaN or infinite values in RGBE")
+    a = np.maximum(a, 0.0)
+    mx = a.max(axis=2)
+    _, e = np.frexp(mx)  # mx = f * 2**e, f in [0.5, 1)
+    e = e.astype(np.int64)
+    top = np.floor(mx * np.ldexp(1.0, 8 - e) + 0.5)
+    e = np.where(top >= 256, e + 1, e)  # rounding up reached 2**e
+    if np.any((mx > 0) & (e > 127)):
+        raise ImageError(f"{os.fspath(path)}: value too large for RGBE ({mx.max():g})")
+    m = np.floor(a * np.ldexp(1.0, 8 - e)[..., None] + 0.5)
+    out = np.zeros(a.shape[:2] + (4,), np.uint8)
+    keep = (mx >= 1e-32) & (e >= -127)
+    out[..., :3] = np.where(keep[..., None], np.clip(m, 0, 255), 0).astype(np.uint8)
+    out[..., 3] = np.where(keep, e + 128, 0).astype(np.uint8)
+    return out
+
+
+def _rle_channel(row: np.ndarray) -> bytes:
+    """New-style run-length encoding of one channel of one scanline."""
+    out = bytearray()
+    n = row.shape[0]
+    starts = np.concatenate(([0], np.flatnonzero(row[1:] != row[:-1]) + 1))
+    lengths = np.diff(np.concatenate((starts, [n])))
+    lit = 0  # start of the pending literal span
+
+    def literal(a: int, b: int) -> None:
+        for s in range(a, b, 128):
+            k = min(128, b - s)
+            out.append(k)
+            out.extend(row[s: s + k].tobytes())
+
+    for s, k in zip(starts[lengths >= 4].tolist(), lengths[lengths >= 4].tolist()):
+        literal(lit, s)
+        while k > 0:
+            r = min(127, k)
+            out += bytes((128 + r, int(row[s])))
+            s += r
+            k -= r
+        lit = s
+    literal(lit, n)
+    return bytes(out)
+
+
+def write_hdr(path: PathLike, rgb: np.ndarray, *, rle: bool = True) -> None:
+    """Write a Radiance RGBE picture atomically (``-Y H +X W``, top row first).
+
+    Mantissas are rounded to nearest, so decoding with ``m * 2**(e - 136)``
+    is within 1/256 of each pixel's largest channel. Negative values are
+    stored as 0; NaN or infinity raises ImageError. With ``rle`` (default)
+    scanlines of 8 to 32767 pixels are new-style run-length encoded,
+    otherwise written flat.
+    """
+    a = _rgb_array(path, rgb)
+    h, w = a.shape[:2]
+    rgbe = _rgbe_encode(path, a)
+    parts = [f"#?RADIANCE\n# written by mcrt\nFORMAT=32-bit_rle_rgbe\n\n-Y {h} +X {w}\n".encode()]
+    if rle and 8 <= w <= 32767:
+        marker = bytes((2, 2, w >> 8, w & 255))
+        for y in range(h):
+            parts.append(marker)
+            parts.extend(_rle_channel(rgbe[y, :, c]) for c in range(4))
+    else:
+        parts.append(rgbe.tobytes())
+    _write_bytes(path, b"".join(parts))
+
+
+# --------------------------------------------------------------------------
+# PNG
+# --------------------------------------------------------------------------
+
+
+def srgb_eotf(v: np.ndarray) -> np.ndarray:
+    """sRGB decoding (IEC 61966-2-1): v / 12.92 for v <= 0.04045, else ((v + 0.055) / 1.055)**2.4."""
+    v = np.asarray(v, dtype=np.float64)
+    return np.where(v <= 0.04045, v / 12.92, ((v + 0.055) / 1.055) ** 2.4)
+
+
+def srgb_oetf(x: np.ndarray) -> np.ndarray:
+    """sRGB encoding: 12.92 x for x <= 0.0031308, else 1.055 x**(1/2.4) - 0.055."""
+    x = np.asarray(x, dtype=np.float64)
+    return np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(np.maximum(x, 0.0031308), 1 / 2.4) - 0.055)
+
+
+def read_png(path: PathLike, linear: bool = False) -> np.ndarray:
+    """Read an 8- or 16-bit PNG as (H, W, 3) float32 linear RGB.
+
+    Grey is replicated and alpha dropped. Code values are divided by 255 (or
+    65535) and, unless ``linear``, decoded with the exact sRGB EOTF
+    (:func:`srgb_eotf`; colour-space chunks such as gAMA or iCCP are not
+    consulted). 8-bit files are decoded by pillow; 16-bit files by the
+    decoder here, because pillow reduces 16-bit RGB(A) and grey+alpha to 8
+    bits.
+    """
+    path = os.fspath(path)
+    data = _read_bytes(path)
+    if not data.startswith(PNG_MAGIC):
+        raise ImageError(f"{path}: not a PNG file (bad signature)")
+    if len(data) < 33 or data[12:16] != b"IHDR":
+        raise ImageError(f"{path}: truncated or corrupt PNG file (no IHDR chunk)")
+    depth = data[24]
+    if depth == 16:
+        codes = _png16_decode(path, data)
+        scale = 65535
+    else:
+        codes = _png8_decode(path, data)
+        scale = 255
+    lut = np.arange(scale + 1, dtype=np.float64) / scale
+    if not linear:
+        lut = srgb_eotf(lut)
+    return lut.astype(np.float32)[codes]
+
+
+def _png8_decode(path: str, data: bytes) -> np.ndarray:
+    from PIL import Image
+
+    try:
+        with Image.open(io.BytesIO(data)) as im:
+            im.load()
+            if im.mode not in ("1", "L", "LA", "P", "PA", "RGB", "RGBA"):
+                raise ImageError(f"{path}: unsupported PNG pixel mode {im.mode}")
+            rgb = im if im.mode == "RGB" else im.convert("RGB")
+            return np.asarray(rgb, dtype=np.uint8)
+    except ImageError:
+        raise
+    except Exception as e:
+        raise ImageError(f"{path}: truncated or corrupt PNG file ({_one_line(e, 160)})") from None
+
+
+_ADAM7 = ((0, 0, 8, 8), (4, 0, 8, 8), (0, 4, 4, 8), (2, 0, 4, 4), (0, 2, 2, 4), (1, 0, 2, 2), (0, 1, 1, 2))
+
+
+def _png16_decode(path: str, data: bytes) -> np.ndarray:
+    """Decode a 16-bit PNG to (H, W, 3) uint16 code values (alpha dropped)."""
+    bad = lambda why: ImageError(f"{path}: {why}")  # noqa: E731
+    pos, idat, ihdr, done = 8, [], None, False
+    while pos + 8 <= len(data):
+        length, ctype = struct.unpack(">I4s", data[pos: pos + 8])
+        body = data[pos + 8: pos + 8 + length]
+        crc = data[pos + 8 + length: pos + 12 + length]
+        if len(body) < length or len(crc) < 4:
+            raise bad("truncated PNG file")
+        if zlib.crc32(ctype + body) != struct.unpack(">I", crc)[0]:
+            raise bad(f"corrupt PNG file (bad CRC in {ctype.decode(errors='replace')} chunk)")
+        if ctype == b"IHDR":
+            ihdr = struct.unpack(">IIBBBBB", body[:13]) if length == 13 else None
+        elif ctype == b"IDAT":
+            idat.append(body)
+        elif ctype == b"IEND":
+            done = True
+            break
+        pos += 12 + length
+    if ihdr is None:
+        raise bad("corrupt PNG file (bad IHDR chunk)")
+    if not done:
+        raise bad("truncated PNG file (no IEND chunk)")
+    w, h, _, ctype_, comp, filt, interlace = ihdr
+    nchan = {0: 1, 2: 3, 4: 2, 6: 4}.get(ctype_)
+    if nchan is None:
+        raise bad(f"16-bit PNG with colour type {ctype_} is not valid")
+    if comp != 0 or filt != 0 or interlace not in (0, 1) or w == 0 or h == 0:
+        raise bad("corrupt PNG file (bad IHDR fields)")
+    d = zlib.decompressobj()
+    try:
+        raw = d.decompress(b"".join(idat))
+    except zlib.error as e:
+        raise bad(f"corrupt PNG file ({_one_line(e, 120)})") from None
+    if not d.eof:
+        raise bad("truncated PNG file (image data ends early)")
+
+    bpp = 2 * nchan
+    if interlace == 0:
+        passes = [(0, 0, 1, 1, w, h)]
+    else:
+        passes = [(xs, ys, dx, dy, (w - xs + dx - 1) // dx, (h - ys + dy - 1) // dy) for xs, ys, dx, dy in _ADAM7]
+    need = sum(ph * (1 + pw * bpp) for *_, pw, ph in passes if pw > 0 and ph > 0)
+    if len(raw) < need:
+        raise bad(f"truncated PNG file ({len(raw)} of {need} image bytes)")
+    samples = np.empty((h, w, nchan), np.uint16)
+    off = 0
+    for xs, ys, dx, dy, pw, ph in passes:
+        if pw <= 0 or ph <= 0:
+            continue
+        size = ph * (1 + pw * bpp)
+        rows = _png_unfilter(path, raw[off: off + size], ph, pw * bpp, bpp)
+        off += size
+        samples[ys::dy, xs::dx] = rows.view(">u2").reshape(ph, pw, nchan)
+    if nchan <= 2:
+        return np.repeat(samples[..., :1], 3, axis=2)
+    return np.ascontiguousarray(samples[..., :3])
+
+
+def _png_unfilter(path: str, data: bytes, h: int, rowbytes: int, bpp: int) -> np.ndarray:
+    """Undo PNG's per-row filters (None, Sub, Up, Average, Paeth)."""
+    raw = np.frombuffer(data, np.uint8).reshape(h, rowbytes + 1)
+    out = np.empty((h, rowbytes), np.uint8)
+    prev = np.zeros(rowbytes, np.uint8)
+    for y in range(h):
+        f, r = raw[y, 0], raw[y, 1:]
+        if f == 0:
+            cur = r
+        elif f == 1:
+            cur = np.cumsum(r.reshape(-1, bpp), axis=0, dtype=np.uint8).reshape(-1)
+        elif f == 2:
+            cur = r + prev
+        elif f in (3, 4):
+            rl, up, c = r.tolist(), prev.tolist(), [0] * rowbytes
+            for i in range(rowbytes):
+                a = c[i - bpp] if i >= bpp else 0
+                if f == 3:
+                    c[i] = (rl[i] + ((a + up[i]) >> 1)) & 255
+                else:
+                    b = up[i]
+                    ul = up[i - bpp] if i >= bpp else 0
+                    pa, pb, pc = abs(b - ul), abs(a - ul), abs(a + b - 2 * ul)
+                    pred = a if pa <= pb and pa <= pc else (b if pb <= pc else ul)
+                    c[i] = (rl[i] + pred) & 255
+            cur = np.array(c, np.uint8)
+        else:
+            raise ImageError(f"{path}: corrupt PNG file (filter type {f} in row {y})")
+        out[y] = cur
+        prev = out[y]
+    return out
+
+
+# --------------------------------------------------------------------------
+# Any format
+# --------------------------------------------------------------------------
+
+_READERS = {".pfm": read_pfm, ".hdr": read_hdr, ".pic": read_hdr, ".rgbe": read_hdr}
+
+
+def read_image(path: PathLike, linear_png: bool = False) -> RenderResult:
+    """Read .exr, .pfm, .hdr/.pic or .png (by extension) as a RenderResult.
+
+    EXR files keep their variance and attributes (:func:`read_exr`); the
+    others give ``variance=None``, ``spp=0``, ``seed=0``, ``max_depth=0``
+    and ``renderer='unknown'``. PNGs are sRGB-decoded unless ``linear_png``.
+    """
+    p = os.fspath(path)
+    ext = Path(p).suffix.lower()
+    if ext == ".exr":
+        return read_exr(p)
+    if ext == ".png":
+        rgb = read_png(p, linear=linear_png)
+    elif ext in _READERS:
+        rgb = _READERS[ext](p)
+    else:
+        raise ImageError(f"{p}: unknown image type {ext or '(no extension)'!r}; expected .exr, .pfm, .hdr, .pic or .png")
+    return RenderResult(mean=rgb, variance=None, spp=0, seed=0, max_depth=0, renderer="unknown")
+
+
+# --------------------------------------------------------------------------
+# Previews
+# --------------------------------------------------------------------------
+
+
+def tonemap(rgb: np.ndarray, exposure: float = 0.0) -> np.ndarray:
+    """Linear RGB to 8-bit sRGB for viewing; (H, W, 3) uint8.
+
+    Each value is multiplied by ``2**exposure``, clipped to [0, 1], encoded
+    with the sRGB OETF (12.92 x for x <= 0.0031308, else
+    1.055 x**(1/2.4) - 0.055) and rounded to the nearest of 0..255 (so
+    linear 0.5 gives 188). A pixel with any NaN channel is shown magenta
+    (255, 0, 255) so a broken pixel is visible; +inf shows as 255. A
+    (H, W) array is treated as grey.
+    """
+    a = np.asarray(rgb, dtype=np.float64)
+    if a.ndim == 2:
+        a = np.repeat(a[..., None], 3, axis=2)
+    if a.ndim != 3 or a.shape[2] != 3:
+        raise ValueError(f"tonemap: expected a (height, width, 3) image, got shape {a.shape}")
+    nan = np.isnan(a).any(axis=2)
+    x = np.clip(np.nan_to_num(a * 2.0**exposure, nan=0.0), 0.0, 1.0)
+    out = np.floor(srgb_oetf(x) * 255.0 + 0.5).astype(np.uint8)
+    out[nan] = MAGENTA
+    return out
+
+
+def write_png(path: PathLike, rgb: np.ndarray, exposure: float = 0.0) -> None:
+    """Write an 8-bit sRGB PNG preview of a linear image (:func:`tonemap`), atomically."""
+    _save_png(path, tonemap(_rgb_array(path, rgb, grey=True), exposure))
+
+
+def _save_png(path: PathLike, pixels: np.ndarray) -> None:
+    from PIL import Image
+
+    im = Image.fromarray(pixels, "RGB")
+    _atomic_write(path, lambda tmp: im.save(tmp, format="PNG"))
+
+
+def side_by_side(path: PathLike, images: list[np.ndarray], labels: list[str], exposure: float = 0.0, gap: int = 4) -> None:
+    """Write a PNG strip of tone-mapped images left to right, each under its label.
+
+    Labels are drawn in pillow's default font, white on black, centred above
+    their image; columns are as wide as the wider of image and label and are
+    separated by ``gap`` black pixels. Images of different heights are
+    top-aligned.
+    """
+    from PIL import Image, ImageDraw, ImageFont
+
+    if not images or len(images) != len(labels):
+        raise ValueError(f"side_by_side: need one label per image, got {len(images)} images and {len(labels)} labels")
+    tiles = [tonemap(_rgb_array(path, im, f"image {i}", grey=True), exposure) for i, im in enumerate(images)]
+    font = ImageFont.load_default()
+    draw = ImageDraw.Draw(Image.new("RGB", (1, 1)))
+    boxes = [draw.textbbox((0, 0), str(s), font=font) for s in labels]
+    text_h = max(b[3] for b in boxes)
+    band = text_h + 2 * gap
+    widths = [max(t.shape[1], b[2] - b[0] + 2 * gap) for t, b in zip(tiles, boxes)]
+    total_w = sum(widths) + gap * (len(tiles) - 1)
+    canvas = Image.new("RGB", (total_w, band + max(t.shape[0] for t in tiles)), (0, 0, 0))
+    draw = ImageDraw.Draw(canvas)
+    x = 0
+    for tile, label, box, cw in zip(tiles, labels, boxes, widths):
+        draw.text((x + (cw - (box[2] - box[0])) // 2 - box[0], gap), str(label), fill=(255, 255, 255), font=font)
+        canvas.paste(Image.fromarray(tile, "RGB"), (x + (cw - tile.shape[1]) // 2, band))
+        x += cw + gap
+    _save_png(path, np.asarray(canvas))
