@@ -44,6 +44,8 @@ from pathlib import Path
 from typing import Callable
 
 import numpy as np
+import OpenEXR
+from PIL import Image, ImageDraw, ImageFont
 
 from mcrt.render import RenderResult
 
@@ -75,10 +77,10 @@ def _one_line(text: object, limit: int = 200) -> str:
     return s if len(s) <= limit else s[: limit - 3] + "..."
 
 
-def _read_bytes(path: PathLike) -> bytes:
+def _read_bytes(path: PathLike, size: int = -1) -> bytes:
     try:
         with open(path, "rb") as f:
-            return f.read()
+            return f.read(size)
     except FileNotFoundError:
         raise ImageError(f"{os.fspath(path)}: no such file") from None
     except IsADirectoryError:
@@ -152,27 +154,33 @@ def _captured_library_output():
     """
     log: dict = {"text": "", "ok": False}
     out = io.StringIO()
-    with _capture_lock, contextlib.redirect_stdout(out):
-        saved = None
-        tmp = tempfile.TemporaryFile()
-        try:
+    with _capture_lock, tempfile.TemporaryFile() as tmp:
+        with contextlib.suppress(OSError, ValueError, AttributeError):
             sys.stderr.flush()
-            saved = os.dup(2)
-            os.dup2(tmp.fileno(), 2)
-        except (OSError, ValueError, AttributeError):
-            saved = None
         try:
-            yield log
+            saved = os.dup(2)
+        except OSError:  # no stderr to capture
+            saved = None
+        if saved is not None:
+            try:
+                os.dup2(tmp.fileno(), 2)
+            except OSError:
+                os.close(saved)
+                saved = None
+        try:
+            with contextlib.redirect_stdout(out):
+                yield log
         finally:
             if saved is not None:
                 os.dup2(saved, 2)
                 os.close(saved)
             tmp.seek(0)
             native = tmp.read().decode("utf-8", "replace")
-            tmp.close()
-            log["text"] = native + out.getvalue()
-            if log["ok"] and native and saved is not None:
-                os.write(2, native.encode())
+            log["text"] = out.getvalue() + native
+            if log["ok"]:  # nothing went wrong: pass the output on
+                sys.stdout.write(out.getvalue())
+                if native and saved is not None:
+                    os.write(2, native.encode())
 
 
 def _library_detail(text: str, path: str) -> str:
@@ -196,8 +204,6 @@ def write_exr(path: PathLike, result: RenderResult) -> None:
     None); the provenance fields become header attributes as described in the
     module docstring. :func:`read_exr` returns an equal RenderResult.
     """
-    import OpenEXR
-
     path = os.fspath(path)
     mean = _rgb_array(path, result.mean, "mean")
     channels = {c: np.ascontiguousarray(mean[..., i]) for i, c in enumerate("RGB")}
@@ -225,8 +231,6 @@ def write_exr(path: PathLike, result: RenderResult) -> None:
 
 
 def _write_exr_file(tmp: str, header: dict, channels: dict) -> None:
-    import OpenEXR
-
     OpenEXR.File(header, channels).write(tmp)
 
 
@@ -246,10 +250,8 @@ def read_exr(path: PathLike) -> RenderResult:
         Missing, truncated or corrupt file, or a channel layout without
         R, G, B (the message lists the channels found).
     """
-    import OpenEXR
-
     path = os.fspath(path)
-    head = _read_bytes(path)[:4]
+    head = _read_bytes(path, 4)
     if head != EXR_MAGIC:
         raise ImageError(f"{path}: not an OpenEXR file (bad magic number)")
     log = {"text": ""}
@@ -279,7 +281,7 @@ def read_exr(path: PathLike) -> RenderResult:
         raise ImageError(f"{path}: incomplete variance channels, found {', '.join(present)}")
     variance = _exr_stack(path, channels, var_names, shape) if present else None
 
-    extra = {k[len(EXTRA_PREFIX):]: _attr_str(v) for k, v in header.items() if k.startswith(EXTRA_PREFIX)}
+    extra = {k[len(EXTRA_PREFIX):]: _attr_str(path, header, k, "") for k in header if k.startswith(EXTRA_PREFIX)}
     ignored = [n for n in names if n not in ("R", "G", "B", "A") and n not in var_names]
     if ignored:
         extra["exr.ignored_channels"] = ",".join(ignored)
@@ -290,9 +292,9 @@ def read_exr(path: PathLike) -> RenderResult:
         spp=_attr_int(path, header, "spp"),
         seed=_attr_int(path, header, "seed"),
         max_depth=_attr_int(path, header, "max_depth"),
-        renderer=_attr_str(header.get("renderer", "unknown")),
-        scene_hash=_attr_str(header.get("scene_hash", "")),
-        camera=_attr_str(header.get("camera", "")),
+        renderer=_attr_str(path, header, "renderer", "unknown"),
+        scene_hash=_attr_str(path, header, "scene_hash", ""),
+        camera=_attr_str(path, header, "camera", ""),
         wall_time=_attr_float(path, header, "wall_time", 0.0),
         compile_time=compile_time,
         extra=extra,
@@ -320,8 +322,21 @@ def _exr_stack(path: str, channels: dict, names: tuple[str, ...], shape: tuple[i
     return np.stack(planes, axis=-1)
 
 
-def _attr_str(value: object) -> str:
-    return value if isinstance(value, str) else str(value)
+def _safe_repr(v: object) -> str:
+    try:
+        return _one_line(repr(v), 60)
+    except Exception:  # opaque attributes with undecodable type names
+        return f"a {type(v).__name__}"
+
+
+def _attr_str(path: str, header: dict, name: str, default: str) -> str:
+    v = header.get(name, default)
+    if isinstance(v, str):
+        return v
+    try:
+        return str(v)
+    except Exception:  # e.g. an opaque attribute of unknown type
+        raise ImageError(f"{path}: attribute {name} cannot be read as text") from None
 
 
 def _attr_int(path: str, header: dict, name: str) -> int:
@@ -338,7 +353,7 @@ def _attr_int(path: str, header: dict, name: str) -> int:
             return int(f)
     except (ValueError, TypeError, OverflowError):
         pass
-    raise ImageError(f"{path}: attribute {name}: expected an integer, got {_one_line(repr(v), 60)}")
+    raise ImageError(f"{path}: attribute {name}: expected an integer, got {_safe_repr(v)}")
 
 
 def _attr_float(path: str, header: dict, name: str, default: float | None) -> float | None:
@@ -352,7 +367,7 @@ def _attr_float(path: str, header: dict, name: str, default: float | None) -> fl
             return float(np.asarray(v, dtype=np.float64).reshape(-1)[0])
     except (ValueError, TypeError):
         pass
-    raise ImageError(f"{path}: attribute {name}: expected a number, got {_one_line(repr(v), 60)}")
+    raise ImageError(f"{path}: attribute {name}: expected a number, got {_safe_repr(v)}")
 
 
 # --------------------------------------------------------------------------
@@ -391,7 +406,8 @@ def read_pfm(path: PathLike) -> np.ndarray:
     a = np.frombuffer(body, dtype="<f4" if scale < 0 else ">f4").reshape(h, w, c)
     a = a[::-1].astype(np.float32)
     if abs(scale) != 1.0:
-        a *= np.float32(abs(scale))
+        with np.errstate(over="ignore", invalid="ignore"):
+            a *= np.float32(abs(scale))
     return np.ascontiguousarray(np.repeat(a, 3, axis=2) if c == 1 else a)
 
 
@@ -452,6 +468,8 @@ def read_hdr(path: PathLike) -> np.ndarray:
     n1, n2 = int(m.group(3)), int(m.group(6))
     if n1 == 0 or n2 == 0:
         raise ImageError(f"{path}: Radiance picture has no pixels ({n1}x{n2})")
+    if n1 * n2 > 64 * len(data) + (1 << 20):  # more than run-length coding can pack in
+        raise ImageError(f"{path}: truncated or corrupt Radiance HDR file ({n1}x{n2} pixels in {len(data)} bytes)")
     rgbe = _hdr_scanlines(path, data, nl + 1, n1, n2)  # (n1, n2, 4): rows along the first axis
 
     e = rgbe[..., 3].astype(np.int32)
@@ -653,8 +671,6 @@ def read_png(path: PathLike, linear: bool = False) -> np.ndarray:
 
 
 def _png8_decode(path: str, data: bytes) -> np.ndarray:
-    from PIL import Image
-
     try:
         with Image.open(io.BytesIO(data)) as im:
             im.load()
@@ -824,8 +840,6 @@ def write_png(path: PathLike, rgb: np.ndarray, exposure: float = 0.0) -> None:
 
 
 def _save_png(path: PathLike, pixels: np.ndarray) -> None:
-    from PIL import Image
-
     im = Image.fromarray(pixels, "RGB")
     _atomic_write(path, lambda tmp: im.save(tmp, format="PNG"))
 
@@ -838,8 +852,6 @@ def side_by_side(path: PathLike, images: list[np.ndarray], labels: list[str], ex
     separated by ``gap`` black pixels. Images of different heights are
     top-aligned.
     """
-    from PIL import Image, ImageDraw, ImageFont
-
     if not images or len(images) != len(labels):
         raise ValueError(f"side_by_side: need one label per image, got {len(images)} images and {len(labels)} labels")
     tiles = [tonemap(_rgb_array(path, im, f"image {i}", grey=True), exposure) for i, im in enumerate(images)]

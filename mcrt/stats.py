@@ -41,7 +41,7 @@ from typing import IO, NamedTuple
 import numpy as np
 from scipy import stats as _sps
 
-from mcrt.render import RenderResult
+from mcrt.film import RenderResult
 
 __all__ = [
     "CONSISTENT",
@@ -82,10 +82,11 @@ CORRECTIONS = {
 }
 
 # A pixel counts as deterministic (zero variance) when its per-sample
-# standard deviation is at most this fraction of its mean. Accumulating x and
-# x^2 in float64 leaves a constant pixel with a relative sd of about 1e-8
-# instead of exactly zero; real Monte Carlo noise is many orders larger.
-_ZERO_SD_RTOL = 1e-6
+# standard deviation is at most this fraction of its mean. Moments kept in
+# float32 (Mitsuba's 'moment' integrator, var = m2 - m1^2) leave a constant
+# pixel with a relative sd of up to a few 1e-4 after cancellation instead of
+# zero; real Monte Carlo noise is orders of magnitude larger.
+_ZERO_SD_RTOL = 1e-3
 
 # Saturation of the heat map's colour scale, in units of t.
 _HEATMAP_T_MAX = 5.0
@@ -167,7 +168,7 @@ def adjust_p_values(p_values, method: str = "holm") -> np.ndarray:
     ps = flat[order]
     rank = np.arange(1, m + 1, dtype=np.float64)
     if method == "holm":
-        adj = np.maximum.accumulate(np.minimum(1.0, ps))
+        adj = np.maximum.accumulate(np.minimum(1.0, (m - rank + 1) * ps))
     else:  # bh
         adj = np.minimum.accumulate((m * ps / rank)[::-1])[::-1]
         adj = np.minimum(1.0, adj)
@@ -257,7 +258,7 @@ def _check_side(r: RenderResult, name: str, min_spp: int) -> None:
             raise StatsError(f"image {name}: {bad} non-finite values (NaN or inf) in its {what}")
 
 
-@dataclass
+@dataclass(repr=False)
 class Comparison:
     """Outcome of :func:`compare_images`.
 
@@ -335,6 +336,9 @@ class Comparison:
     largest_effect: TileResult | None = None
     max_abs_t: TileResult | None = None
     min_p: float = 1.0
+
+    def __repr__(self) -> str:
+        return f"Comparison({self.summary()!r})"
 
     @property
     def n_rejected(self) -> int:
@@ -514,8 +518,9 @@ def compare_images(
     rejected at ``alpha``.
 
     Zero variance: a pixel is deterministic when its per-sample standard
-    deviation is at most 1e-6 of its mean (float64 accumulation leaves
-    constant pixels at ~1e-8, not exactly 0). Where every pixel of a tile is
+    deviation is at most 1e-3 of its mean (moments stored in float32 leave
+    constant pixels at a relative sd of up to a few 1e-4 after cancellation,
+    not exactly 0). Where every pixel of a tile is
     deterministic on *both* sides (pixels that see only the light, or black
     ones), the tile means are compared for equality:
     ``|m_A - m_B| <= rtol * max(|m_A|, |m_B|)`` gives p = 1 and t = 0,

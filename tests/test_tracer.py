@@ -1,0 +1,167 @@
+"""The standalone tracer: reproducibility, closed forms, and agreement with Mitsuba.
+
+Statistical tests state their level and seeds; every render is a pure
+function of its seed, so each test always passes or always fails.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from mcrt.closed_form import furnace_radiance, furnace_scene, lit_floor_image, lit_floor_scene
+from mcrt.mitsuba import render_mitsuba
+from mcrt.scene import load_scene
+from mcrt.stats import compare_images
+from mcrt.tracer import render
+
+ALPHA = 0.01  # family-wise error rate of every image comparison here (Holm over tiles and channels)
+
+
+@pytest.fixture(scope="module")
+def scene():
+    return load_scene()
+
+
+def _render(scene, **kw):
+    args = dict(camera="near", spp=64, seed=1, max_depth=8, width=32, height=32, progress=False)
+    args.update(kw)
+    return render(scene, **args)
+
+
+def test_same_seed_same_image_bit_for_bit(scene):
+    a, b = _render(scene, seed=7), _render(scene, seed=7)
+    assert np.array_equal(a.mean, b.mean) and np.array_equal(a.variance, b.variance)
+    c = _render(scene, seed=8)
+    assert not np.array_equal(a.mean, c.mean)
+
+
+def test_passes_do_not_reuse_samples(scene):
+    """One sample per pass: if passes shared seeds, every pixel's variance would be 0."""
+    r = _render(scene, spp=8, spp_per_pass=1)
+    assert np.mean(r.variance > 0) > 0.9
+
+
+def test_finite_and_non_negative(scene):
+    for cam in ("near", "far"):
+        r = _render(scene, camera=cam, max_depth=-1)
+        assert np.isfinite(r.mean).all() and np.isfinite(r.variance).all()
+        assert (r.mean >= 0).all() and (r.variance >= 0).all()
+        assert r.mean.mean() > 0.05
+
+
+def test_image_orientation(scene):
+    """scene.md: wall EF (green) on the left of the image, wall BC (purple) on the right, light at the top."""
+    r = _render(scene, max_depth=2, spp=32)
+    left, right = r.mean[12:20, 0:3].mean(axis=(0, 1)), r.mean[12:20, -3:].mean(axis=(0, 1))
+    assert left[1] > left[0] and left[1] > left[2]  # green
+    assert right[2] > right[1] and right[0] > right[1]  # purple
+    top = r.mean[0:6].max()
+    assert top == pytest.approx(20.0)  # the light, seen directly at the top
+
+
+def test_convex_and_triangle_intersectors_agree(scene):
+    """The brute-force watertight triangles give the same image as the convex fast path."""
+    a = _render(scene, spp=256, intersector="convex")
+    b = _render(scene, spp=256, intersector="triangles")
+    # Same seed and the same surfaces: paths only diverge where rounding differs.
+    assert np.mean(np.isclose(a.mean, b.mean, rtol=1e-3, atol=1e-4)) > 0.95
+    c = _render(scene, spp=256, seed=2, intersector="triangles")
+    assert compare_images(a, c, alpha=ALPHA).passed
+
+
+@pytest.mark.parametrize("camera", ["near", "far"])
+@pytest.mark.parametrize("max_depth", [1, 2, 8, -1])
+def test_agrees_with_mitsuba(scene, camera, max_depth):
+    """Acceptance of the tracer: 64x64, 1024 spp each side, 8x8 tiles, Welch, Holm at 0.01.
+
+    Seeds: mcrt 11, Mitsuba 12.
+    """
+    a = render(scene, camera, 1024, 11, max_depth, width=64, height=64, progress=False)
+    b = render_mitsuba(scene, camera, 64, 64, 1024, 12, max_depth, progress=False)
+    c = compare_images(a, b, alpha=ALPHA, tile=8)
+    assert c.passed, c.summary()
+
+
+def test_light_samples_do_not_change_the_expectation(scene):
+    """K = 4 shadow rays per vertex against K = 1: same image in expectation (seeds 3 and 4)."""
+    a = _render(scene, spp=512, seed=3, light_samples=4)
+    b = _render(scene, spp=512, seed=4, light_samples=1)
+    c = compare_images(a, b, alpha=ALPHA)
+    assert c.passed, c.summary()
+    # ...and K = 4 has less variance where direct light dominates (the floor).
+    assert a.variance[-8:].mean() < b.variance[-8:].mean()
+
+
+def test_russian_roulette_is_unbiased(scene):
+    """Roulette from the first bounce against none before depth 8 (seeds 5 and 6)."""
+    a = _render(scene, spp=512, seed=5, rr_depth=1)
+    b = _render(scene, spp=512, seed=6, rr_depth=8)
+    c = compare_images(a, b, alpha=ALPHA)
+    assert c.passed, c.summary()
+
+
+# ---- closed forms ----------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("max_depth", [1, 2, 3, 8, -1])
+def test_furnace(max_depth):
+    """Every surface emits 1 with albedo 0.5: each pixel is (1 - 0.5^D) / (1 - 0.5).
+
+    Level 0.01: the image mean (262k samples, so the central limit theorem
+    holds although single pixels are heavy-tailed: roulette survivors are
+    rare and heavy) by a z-test with its standard error. Below the Russian-roulette depth (5) every path carries the same weights,
+    so the image must be exact there.
+    """
+    from scipy.stats import norm
+
+    scene = furnace_scene(albedo=0.5, emission=1.0)
+    r = render(scene, "near", 256, 21, max_depth, width=32, height=32, progress=False)
+    expected = furnace_radiance(0.5, 1.0, max_depth)
+    se = np.sqrt(r.variance / r.spp)
+    if max_depth != -1 and max_depth <= 5:
+        assert np.allclose(r.mean, expected, rtol=1e-5) and se.max() < 1e-5 * expected
+        return
+    z_mean = (r.mean.mean() - expected) / np.sqrt((se**2).sum()) * se.size
+    assert abs(z_mean) < norm.isf(ALPHA / 2), z_mean
+
+
+def test_furnace_with_mirror_unbounded():
+    """A perfect mirror leaves the unbounded furnace unchanged: every pixel 1 / (1 - 0.5)."""
+    from scipy.stats import norm
+
+    scene = furnace_scene(albedo=0.5, emission=1.0, mirror=True)
+    r = render(scene, "near", 256, 22, -1, width=32, height=32, progress=False)
+    se = np.sqrt(r.variance / r.spp)
+    z_mean = (r.mean.mean() - 2.0) / np.sqrt((se**2).sum()) * se.size
+    assert abs(z_mean) < norm.isf(ALPHA / 2), z_mean
+
+
+@pytest.mark.parametrize("max_depth", [2, 8])
+def test_direct_light_on_the_floor_matches_lamberts_formula(max_depth):
+    """Everything black but the floor: floor pixels are (albedo/pi) E(x), E from Lambert's polygon formula.
+
+    Seed 31, 256 spp at 64x64; level 0.01 with Bonferroni over the floor pixels,
+    plus a z-test on the floor's mean (power against a small global bias).
+    """
+    from scipy.stats import norm
+
+    scene = lit_floor_scene(0.5)
+    expected, floor = lit_floor_image(scene, "near", 64, 64)
+    assert floor.sum() > 500
+    r = render(scene, "near", 256, 31, max_depth, width=64, height=64, progress=False)
+    got, var = r.mean[..., 0][floor], r.variance[..., 0][floor] / r.spp
+    z = (got - expected[floor]) / np.sqrt(var)
+    assert np.abs(z).max() < norm.isf(ALPHA / 2 / z.size), np.abs(z).max()
+    z_mean = (got - expected[floor]).sum() / np.sqrt(var.sum())
+    assert abs(z_mean) < norm.isf(ALPHA / 2), z_mean
+    assert np.array_equal(r.mean[..., 0], r.mean[..., 1])  # grey scene stays grey
+
+
+@pytest.mark.parametrize("factor", [1e-3, 1e3])
+def test_scale_invariance(scene, factor):
+    """Scaling the whole scene and camera leaves the expected image unchanged (seeds 41, 42; level 0.01)."""
+    a = _render(scene, spp=512, seed=41)
+    b = _render(scene.scaled(factor), spp=512, seed=42)
+    c = compare_images(a, b, alpha=ALPHA)
+    assert c.passed, c.summary()
