@@ -6,7 +6,7 @@ compressed) holding
 * the mean as channels ``R``, ``G``, ``B``;
 * the per-sample variance as ``variance.R``, ``variance.G``, ``variance.B``
   (left out when the render has none);
-* the provenance of :class:`~mcrt.render.RenderResult` as header attributes
+* the provenance of :class:`~mcrt.film.RenderResult` as header attributes
   ``spp``, ``seed``, ``max_depth`` (int), ``renderer``, ``scene_hash``,
   ``camera`` (string), ``wall_time`` and ``compile_time`` (double), and every
   entry of ``extra`` as a string attribute ``mcrt.<key>``. An integer that
@@ -47,7 +47,7 @@ import numpy as np
 import OpenEXR
 from PIL import Image, ImageDraw, ImageFont
 
-from mcrt.render import RenderResult
+from mcrt.film import RenderResult
 
 PathLike = str | os.PathLike
 
