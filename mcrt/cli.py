@@ -182,6 +182,10 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("mutants", help="list the bug catalogue")
     p.set_defaults(func=cmd_mutants)
+
+    from mcrt import bench
+
+    bench.register(sub)
     return ap
 
 

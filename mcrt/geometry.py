@@ -141,6 +141,14 @@ class Geometry:
         """The spawn offset at p: OFFSET_SCALE (max |p_i| + scene size)."""
         return OFFSET_SCALE * (dr.max(dr.abs(p)) + self.scale)
 
+    def _room_normals(self):
+        """Inward unit normals of the room's faces, indexed by surface id (zero elsewhere)."""
+        m = self.m
+        table = np.zeros((len(self.surfaces), 3), np.float32)
+        for normal, _, k in self.room_planes:
+            table[k] = [-x for x in normal]
+        return m.Array3f(m.Float(table[:, 0]), m.Float(table[:, 1]), m.Float(table[:, 2]))
+
     # -- closest hit ---------------------------------------------------------
 
     def intersect(self, o, d, mutant_triangles_everywhere=False):
@@ -153,13 +161,18 @@ class Geometry:
         sid = m.UInt32(0)
         n = m.Array3f(0.0, 0.0, 1.0)
         if self.intersector == "convex":
+            # Exit plane of the room: compare fractions num/denom without dividing
+            # (denom > 0 for exit planes), and divide once at the end.
+            best_num, best_den = m.Float(1.0), m.Float(0.0)
             for normal, h, k in self.room_planes:
                 denom = normal[0] * d.x + normal[1] * d.y + normal[2] * d.z
-                tk = (h - (normal[0] * o.x + normal[1] * o.y + normal[2] * o.z)) / denom
-                hit = (denom > 0) & (tk < t)
-                t = dr.select(hit, tk, t)
+                num = h - (normal[0] * o.x + normal[1] * o.y + normal[2] * o.z)
+                hit = (denom > 0) & (num * best_den < best_num * denom)
+                best_num = dr.select(hit, num, best_num)
+                best_den = dr.select(hit, denom, best_den)
                 sid = dr.select(hit, k, sid)
-                n = dr.select(hit, const3(m, [-x for x in normal]), n)
+            t = best_num / best_den
+            n = dr.gather(m.Array3f, self._room_normals(), sid)
             for faces, k in self.convex_objects:
                 t_in, n_in, ok = self._convex_entry(o, d, faces)
                 hit = ok & (t_in > 0) & (t_in < t)

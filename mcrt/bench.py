@@ -1,0 +1,184 @@
+"""Throughput of mcrt against Mitsuba on the same scene, measured in one run.
+
+Renderers alternate within every repetition (mcrt, Mitsuba, mcrt, ...), so a
+machine whose speed drifts slows both alike; the figures are medians over the
+repetitions after one warm-up render each, which also takes the JIT
+compilation out of the timing (reported apart, from Dr.Jit's kernel history).
+Speed is paths per second (one path per pixel sample, whatever its length).
+"""
+
+from __future__ import annotations
+
+import json
+import platform
+import resource
+import statistics
+import sys
+import time
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+
+@dataclass
+class BenchCase:
+    camera: str
+    width: int
+    height: int
+    spp: int
+    max_depth: int
+    light_samples: int = 1
+
+
+@dataclass
+class BenchRow:
+    case: BenchCase
+    renderer: str
+    times: list[float]
+    compile_time: float | None
+    paths_per_second: float = 0.0
+
+
+def _renderers(names, scene, backend, intersector):
+    """Callables (case, seed) -> seconds for each renderer; setup and loading are outside the clock."""
+    import drjit as dr
+
+    from mcrt.tracer import render
+
+    def mcrt_time(c, seed):
+        t0 = time.perf_counter()
+        render(scene, c.camera, c.spp, seed, c.max_depth, c.light_samples, backend,
+               width=c.width, height=c.height, intersector=intersector, progress=False)
+        return time.perf_counter() - t0, None
+
+    loaded = {}
+
+    def mitsuba_time(c, seed):
+        # Mitsuba's own entry point, mi.render, on a scene loaded once per case: its best case.
+        import mitsuba as mi
+
+        from mcrt.mitsuba import load_mitsuba_scene
+
+        key = (c.camera, c.width, c.height, c.max_depth)
+        if key not in loaded:
+            loaded.clear()
+            loaded[key] = load_mitsuba_scene(scene, c.camera, c.width, c.height, c.max_depth, backend=backend)
+        dr.sync_thread()
+        dr.kernel_history()
+        t0 = time.perf_counter()
+        img = mi.render(loaded[key], spp=c.spp, seed=seed)
+        dr.eval(img)
+        dr.sync_thread()
+        elapsed = time.perf_counter() - t0
+        compile_s = sum(h.get("codegen_time", 0.0) + h.get("backend_time", 0.0) for h in dr.kernel_history()) / 1000
+        return elapsed, compile_s
+
+    table = {"mcrt": mcrt_time, "mitsuba": mitsuba_time}
+    unknown = set(names) - set(table)
+    if unknown:
+        raise ValueError(f"unknown renderer(s) {', '.join(sorted(unknown))} (mcrt, mitsuba)")
+    return {n: table[n] for n in names}
+
+
+def run_bench(scene, cases: list[BenchCase], *, renderers=("mcrt", "mitsuba"), repeats: int = 5, backend: str = "llvm",
+              intersector: str = "convex", progress: bool = True) -> list[BenchRow]:
+    """Median paths per second of each renderer on each case, renderers alternating."""
+    import drjit as dr
+
+    fns = _renderers(renderers, scene, backend, intersector)
+    dr.set_flag(dr.JitFlag.KernelHistory, True)
+    rows = []
+    for case in cases:
+        times = {n: [] for n in fns}
+        compile_time = {}
+        for n, fn in fns.items():  # warm-up: the first call compiles the kernels
+            dr.kernel_history()
+            elapsed, compile_s = fn(case, 1000)
+            history = dr.kernel_history()
+            compile_time[n] = compile_s if compile_s is not None else sum(
+                h.get("codegen_time", 0.0) + h.get("backend_time", 0.0) for h in history) / 1000
+        for k in range(repeats):
+            for n, fn in fns.items():
+                times[n].append(fn(case, k)[0])
+            if progress:
+                print(f"  {case.camera} {case.width}x{case.height} {case.spp} spp depth {case.max_depth}: repetition {k + 1}/{repeats}",
+                      file=sys.stderr, flush=True)
+        paths = case.width * case.height * case.spp
+        for n in fns:
+            rows.append(BenchRow(case, n, times[n], compile_time[n], paths / statistics.median(times[n])))
+    return rows
+
+
+def format_table(rows: list[BenchRow]) -> str:
+    lines = ["| camera | resolution | spp | depth | K | renderer | median s | M paths/s | JIT s | speed-up |", "|---|---|---|---|---|---|---|---|---|---|"]
+    base = {}
+    for r in rows:
+        if r.renderer == "mitsuba":
+            base[json.dumps(asdict(r.case))] = r.paths_per_second
+    for r in rows:
+        c = r.case
+        ref = base.get(json.dumps(asdict(c)))
+        ratio = f"{r.paths_per_second / ref:.1f}x" if ref else ""
+        jit = f"{r.compile_time:.2f}" if r.compile_time is not None else "-"
+        lines.append(f"| {c.camera} | {c.width}x{c.height} | {c.spp} | {c.max_depth} | {c.light_samples} | {r.renderer} | "
+                     f"{statistics.median(r.times):.3f} | {r.paths_per_second / 1e6:.2f} | {jit} | {ratio} |")
+    return "\n".join(lines)
+
+
+def environment() -> dict:
+    import drjit as dr
+    import mitsuba as mi
+
+    import mcrt
+
+    cpu = platform.processor()
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                cpu = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    return {"mcrt": mcrt.__version__, "mitsuba": mi.__version__, "drjit": dr.__version__, "cpu": cpu,
+            "threads": dr.thread_count(), "python": platform.python_version(), "date": time.strftime("%Y-%m-%d %H:%M:%S")}
+
+
+def peak_memory_mib() -> float:
+    """Peak resident memory of this process (Linux reports KiB)."""
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+
+
+def register(sub) -> None:
+    p = sub.add_parser("bench", help="paths per second of mcrt and Mitsuba on the same scene, in one run")
+    p.add_argument("--scene", default=None)
+    p.add_argument("--camera", action="append", help="camera(s) (default: near and far)")
+    p.add_argument("--res", type=int, action="append", help="square resolution(s) (default 256)")
+    p.add_argument("--spp", type=int, default=16)
+    p.add_argument("--max-depth", type=int, action="append", help="max depth(s) (default 8)")
+    p.add_argument("--light-samples", type=int, default=1)
+    p.add_argument("--repeats", type=int, default=5, help="timed repetitions per renderer (after one warm-up)")
+    p.add_argument("--renderers", default="mcrt,mitsuba")
+    p.add_argument("--intersector", choices=("convex", "triangles"), default="convex")
+    p.add_argument("--backend", choices=("llvm", "cuda"), default="llvm")
+    p.add_argument("--json", default=None, help="also write the measurements to this JSON file")
+    p.set_defaults(func=cmd_bench)
+
+
+def cmd_bench(args) -> int:
+    from mcrt.scene import CANONICAL, load_scene
+
+    scene = load_scene(args.scene or CANONICAL)
+    cases = [BenchCase(cam, res, res, args.spp, depth, args.light_samples)
+             for cam in (args.camera or ["near", "far"]) for res in (args.res or [256]) for depth in (args.max_depth or [8])]
+    rows = run_bench(scene, cases, renderers=args.renderers.split(","), repeats=args.repeats, backend=args.backend,
+                     intersector=args.intersector)
+    env = environment()
+    print(f"mcrt {env['mcrt']}, Mitsuba {env['mitsuba']}, Dr.Jit {env['drjit']}, {env['threads']} threads, {env['cpu']}")
+    print(format_table(rows))
+    print(f"peak memory of this process: {peak_memory_mib():.0f} MiB")
+    if args.json:
+        out = {"command": " ".join(sys.argv), "environment": env, "backend": args.backend, "intersector": args.intersector,
+               "rows": [dict(asdict(r), median_time=statistics.median(r.times)) for r in rows], "peak_memory_mib": peak_memory_mib()}
+        Path(args.json).parent.mkdir(parents=True, exist_ok=True)
+        Path(args.json).write_text(json.dumps(out, indent=2))
+        print(f"wrote {args.json}")
+    return 0
