@@ -38,7 +38,7 @@ from dataclasses import dataclass
 import drjit as dr
 import numpy as np
 
-from mcrt.scene import Lambertian, Mirror, Scene, Sphere, Tetrahedron
+from mcrt.scene import Mirror, Scene, Sphere, Tetrahedron
 
 INTERSECTORS = ("convex", "triangles")
 

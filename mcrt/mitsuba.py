@@ -159,7 +159,7 @@ def scene_dict(
     width: int,
     height: int,
     max_depth: int,
-    integrator: str = "path",
+    integrator: str | dict[str, Any] = "path",
     rr_depth: int = 5,
     *,
     spp: int | None = None,
@@ -171,12 +171,16 @@ def scene_dict(
     this selects the variant of ``backend``. ``spp`` (default
     ``scene.render.spp``) only sets the sampler's sample count, used when the
     scene is given to ``mi.render``; :func:`render_mitsuba` ignores it.
+    ``integrator`` is a plugin name, or a dictionary whose entries (``type``
+    included) extend and override ``max_depth``, ``rr_depth`` and
+    ``hide_emitters``.
     """
     _use(backend)
     camera = scene.camera(camera_name)
+    spec = {"type": integrator} if isinstance(integrator, str) else dict(integrator)
     d: dict[str, Any] = {
         "type": "scene",
-        "integrator": {"type": integrator, "max_depth": int(max_depth), "rr_depth": int(rr_depth), "hide_emitters": False},
+        "integrator": {"type": "path", "max_depth": int(max_depth), "rr_depth": int(rr_depth), "hide_emitters": False, **spec},
         "sensor": sensor_dict(camera, width, height, scene.render.spp if spp is None else spp),
     }
     light = scene.light
@@ -208,10 +212,13 @@ def load_mitsuba_scene(
     max_depth: int | None = None,
     rr_depth: int | None = None,
     backend: str = "llvm",
+    integrator: str | dict[str, Any] = "path",
 ) -> "mi.Scene":
     """``mi.load_dict(scene_dict(...))`` with defaults from ``scene.render``."""
     s = scene.settings(camera=camera_name, width=width, height=height, max_depth=max_depth, rr_depth=rr_depth)
-    return mi.load_dict(scene_dict(scene, s.camera, s.width, s.height, s.max_depth, rr_depth=s.rr_depth, spp=s.spp, backend=backend))
+    return mi.load_dict(
+        scene_dict(scene, s.camera, s.width, s.height, s.max_depth, integrator, rr_depth=s.rr_depth, spp=s.spp, backend=backend)
+    )
 
 
 # --------------------------------------------------------------------------
@@ -263,8 +270,13 @@ def render_mitsuba(
     backend: str = "llvm",
     progress: bool = True,
     spp_per_pass: int | None = None,
+    integrator: str | dict[str, Any] = "path",
 ) -> RenderResult:
     """Render ``scene`` with Mitsuba's ``path`` integrator: mean and per-sample variance images.
+
+    ``integrator`` replaces ``path`` by another plugin (a name, or a
+    dictionary as in :func:`scene_dict`; :func:`mcrt.plugins.render_plugin`
+    uses it for mcrt's estimator).
 
     None takes the value from ``scene.render``. The result is identical bit
     for bit for the same arguments on the same machine and backend.
@@ -286,9 +298,10 @@ def render_mitsuba(
 
     variant = _use(backend)
     t_load = time.perf_counter()
-    mscene = mi.load_dict(scene_dict(scene, s.camera, W, H, s.max_depth, rr_depth=s.rr_depth, spp=n_total, backend=backend))
+    mscene = mi.load_dict(scene_dict(scene, s.camera, W, H, s.max_depth, integrator, rr_depth=s.rr_depth, spp=n_total, backend=backend))
     load_time = time.perf_counter() - t_load
     sensor = mscene.sensors()[0]
+    integrator_name = integrator if isinstance(integrator, str) else str(integrator.get("type", "path"))
     integrator = mscene.integrator()
     sampler = sensor.sampler().clone()
 
@@ -342,7 +355,7 @@ def render_mitsuba(
             "variant": variant,
             "mitsuba_version": mi.__version__,
             "drjit_version": dr.__version__,
-            "integrator": "path",
+            "integrator": integrator_name,
             "rr_depth": str(s.rr_depth),
             "spp_per_pass": str(per_pass),
             "load_time": f"{load_time:.3f}",

@@ -15,7 +15,6 @@ import numpy as np
 import pytest
 
 import mcrt  # noqa: F401  (libLLVM before drjit)
-import drjit as dr
 from mcrt.camera import image_plane_basis
 from mcrt.sampling import (
     cosine_hemisphere_pdf,
