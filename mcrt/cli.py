@@ -62,7 +62,8 @@ def render_to_files(result, out: Path, exposure: float = 0.0) -> tuple[Path, Pat
 
 
 def render_scene(renderer: str, scene, s, *, backend="llvm", mutants=(), intersector="convex", progress=True):
-    """Render with one renderer ('mcrt' or 'mitsuba') at settings ``s``."""
+    """Render with one renderer at settings ``s``: 'mcrt' (the standalone tracer), 'mitsuba'
+    (Mitsuba's path integrator) or 'plugin' (mcrt's estimator inside Mitsuba)."""
     if renderer == "mcrt":
         from mcrt.tracer import render
 
@@ -72,11 +73,16 @@ def render_scene(renderer: str, scene, s, *, backend="llvm", mutants=(), interse
         )
     if renderer == "mitsuba":
         if mutants:
-            raise ValueError("mutants exist only in the mcrt renderer")
+            raise ValueError("mutants exist in the mcrt renderer and the plugin, not in Mitsuba's path integrator")
         from mcrt.mitsuba import render_mitsuba
 
         return render_mitsuba(scene, s.camera, s.width, s.height, s.spp, s.seed, s.max_depth, backend=backend, progress=progress)
-    raise ValueError(f"unknown renderer {renderer!r} (mcrt or mitsuba)")
+    if renderer == "plugin":
+        from mcrt.plugins import render_plugin
+
+        return render_plugin(scene, s.camera, s.width, s.height, s.spp, s.seed, s.max_depth, s.light_samples, backend=backend,
+                             progress=progress, mutants=mutants)
+    raise ValueError(f"unknown renderer {renderer!r} (mcrt, mitsuba or plugin)")
 
 
 def cmd_render(args) -> int:
@@ -149,9 +155,10 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("render", help="render a scene to EXR (mean + per-sample variance) and a PNG preview")
     _add_render_options(p)
-    p.add_argument("--renderer", choices=("mcrt", "mitsuba"), default="mcrt")
-    p.add_argument("--light-samples", type=int, default=None, help="shadow rays per diffuse vertex (mcrt)")
-    p.add_argument("--mutant", action="append", metavar="NAME", help="switch on a catalogued bug (mcrt; repeatable; see `mcrt mutants`)")
+    p.add_argument("--renderer", choices=("mcrt", "mitsuba", "plugin"), default="mcrt",
+                   help="mcrt: the standalone tracer; mitsuba: Mitsuba's path integrator; plugin: mcrt's estimator inside Mitsuba")
+    p.add_argument("--light-samples", type=int, default=None, help="shadow rays per diffuse vertex (mcrt, plugin)")
+    p.add_argument("--mutant", action="append", metavar="NAME", help="switch on a catalogued bug (mcrt, plugin; repeatable; see `mcrt mutants`)")
     p.add_argument("--intersector", choices=("convex", "triangles"), default="convex", help="mcrt's intersection code (triangles: brute-force cross-check)")
     p.add_argument("--exposure", type=float, default=0.0, help="PNG preview exposure in stops")
     p.add_argument("-o", "--output", default="out.exr", help="output EXR (the PNG preview goes beside it)")
