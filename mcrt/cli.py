@@ -190,9 +190,10 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("mutants", help="list the bug catalogue")
     p.set_defaults(func=cmd_mutants)
 
-    from mcrt import bench
+    from mcrt import bench, threeway
 
     bench.register(sub)
+    threeway.register(sub)
     return ap
 
 
