@@ -73,7 +73,6 @@ class PathIntegrator:
         m, geo = self.m, self.geo
         colors = geo.surface_table("color")
         emissions = geo.surface_table("emission") if geo.has_surface_emission() else None
-        kinds = m.UInt32([s.kind for s in geo.surfaces])
 
         L = m.Array3f(0.0)  # radiance gathered so far
         beta = m.Array3f(1.0)  # path throughput: product of f cos / pdf so far
@@ -86,7 +85,6 @@ class PathIntegrator:
             depth += 1
             p = dr.fma(d, t, o)
             color = dr.gather(m.Array3f, colors, sid)
-            kind = dr.gather(m.UInt32, kinds, sid)
             is_light = sid == geo.light_id
 
             # ---- Emission seen from the eye or through mirrors.
@@ -97,13 +95,14 @@ class PathIntegrator:
             active &= ~is_light & (depth < self.max_depth)
             n_f = dr.select(dr.dot(d, n) < 0, n, -n)  # normal on the arriving side (two-sided)
             origin = self.spawn_origin(p, n_f)
-            diffuse = active & (kind == KIND_LAMBERTIAN)
+            mirror = self.is_mirror(sid)
+            diffuse = active & ~mirror  # the light has stopped the path already
 
             # ---- Next-event estimation at diffuse vertices (depth + 1 <= max_depth holds here).
             L += beta * color * self.direct_light(origin, n_f, rng, diffuse)
 
             # ---- Continue: cosine-weighted Lambertian direction or mirror reflection.
-            d, weight, specular = self.scatter(d, n_f, color, kind, active, rng)
+            d, weight, specular = self.scatter(d, n_f, color, active & mirror, rng)
             beta *= weight
             o = origin
 
@@ -138,13 +137,20 @@ class PathIntegrator:
             return p
         return dr.fma(n, self.geo.offset(p), p)
 
-    def scatter(self, d, n, color, kind, active, rng):
-        """Next direction, weight f cos / pdf, and whether the bounce was specular."""
+    def is_mirror(self, sid):
+        """Whether surface ``sid`` is a mirror: a comparison per mirror surface (none without mirrors)."""
+        mirror = self.m.Bool(False)
+        for k, s in enumerate(self.geo.surfaces):
+            if s.kind == KIND_MIRROR:
+                mirror |= sid == k
+        return mirror
+
+    def scatter(self, d, n, color, mirror, rng):
+        """Next direction, weight f cos / pdf, and whether the bounce was specular (at a mirror)."""
         m = self.m
         d_next, weight = self.sample_lambertian(n, color, rng)
         if not self.has_mirror:
             return d_next, weight, m.Bool(False)
-        mirror = active & (kind == KIND_MIRROR)
         r = d - 2.0 * dr.dot(d, n) * n  # perfect reflection about n
         if "mirror_wrong_sign" in self.mutants:
             r = -r
