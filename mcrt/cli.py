@@ -190,8 +190,9 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("mutants", help="list the bug catalogue")
     p.set_defaults(func=cmd_mutants)
 
-    from mcrt import bench, threeway
+    from mcrt import bench, reference, threeway
 
+    reference.register(sub)
     bench.register(sub)
     threeway.register(sub)
     return ap
