@@ -190,9 +190,10 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("mutants", help="list the bug catalogue")
     p.set_defaults(func=cmd_mutants)
 
-    from mcrt import bench, reference, threeway
+    from mcrt import bench, hardcases, reference, threeway
 
     reference.register(sub)
+    hardcases.register(sub)
     bench.register(sub)
     threeway.register(sub)
     return ap

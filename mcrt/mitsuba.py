@@ -133,14 +133,20 @@ def _light_surface(surface: Surface, normal) -> Surface:
     return Surface(surface.name, tris, surface.material)
 
 
-def sensor_dict(camera: Camera, width: int, height: int, spp: int = 4) -> dict[str, Any]:
-    """``perspective`` sensor with the scene.md pixel mapping (box filter, independent sampler)."""
+def sensor_dict(camera: Camera, width: int, height: int, spp: int = 4, scene_size: float = 1.0) -> dict[str, Any]:
+    """``perspective`` sensor with the scene.md pixel mapping (box filter, independent sampler).
+
+    The clip planes scale with the scene (1e-6 and 1e3 times its size):
+    Mitsuba's absolute defaults (0.01, 1e4) cut a scene scaled by 1e-3 or 1e3.
+    """
     eye = np.asarray(camera.eye, dtype=np.float64)
     target = eye + np.asarray(camera.forward, dtype=np.float64)
     return {
         "type": "perspective",
         "fov_axis": "x",
         "fov": float(camera.fov_x_deg),
+        "near_clip": 1e-6 * scene_size,
+        "far_clip": 1e3 * scene_size,
         "to_world": mi.ScalarTransform4f().look_at(origin=eye.tolist(), target=target.tolist(), up=[float(x) for x in camera.up]),
         "film": {
             "type": "hdrfilm",
@@ -181,7 +187,7 @@ def scene_dict(
     d: dict[str, Any] = {
         "type": "scene",
         "integrator": {"type": "path", "max_depth": int(max_depth), "rr_depth": int(rr_depth), "hide_emitters": False, **spec},
-        "sensor": sensor_dict(camera, width, height, scene.render.spp if spp is None else spp),
+        "sensor": sensor_dict(camera, width, height, scene.render.spp if spp is None else spp, scene.room.size()),
     }
     light = scene.light
     for s in scene.surfaces():
@@ -239,7 +245,7 @@ def sensor_rays(scene: Scene, camera_name: str | None, width: int, height: int, 
     origin is eye + t d with a small t > 0, not the eye itself.
     """
     _use(backend)
-    sensor = mi.load_dict(sensor_dict(scene.camera(camera_name), width, height))
+    sensor = mi.load_dict(sensor_dict(scene.camera(camera_name), width, height, scene_size=scene.room.size()))
     i, j, u, v = (a.ravel().astype(np.float32) for a in np.broadcast_arrays(i, j, u, v))
     pos = _film_positions(width, height, mi.Float(i), mi.Float(j), mi.Float(u), mi.Float(v))
     ray, _ = sensor.sample_ray(time=0.0, sample1=0.0, sample2=pos, sample3=mi.Point2f(0.5))

@@ -238,18 +238,28 @@ class Scene:
             # wind the quad a,top_a,top_b,b for an inward normal.
             tris = np.array([[p[0], p[3], p[2]], [p[0], p[2], p[1]]])
             out.append(Surface(f"wall_{w.corners[0]}{w.corners[1]}", tris, Lambertian(w.albedo, emission=w.emission)))
-        n = len(poly)
-        fan = [(0, i, i + 1) for i in range(1, n - 1)]
-        floor = np.array([[[*poly[i], z0], [*poly[j], z0], [*poly[k], z0]] for i, j, k in fan])  # CCW: normal +z
-        ceil = np.array([[[*poly[i], z1], [*poly[k], z1], [*poly[j], z1]] for i, j, k in fan])  # CW: normal -z
-        out.append(Surface("floor", floor, Lambertian(room.floor_albedo, emission=room.floor_emission)))
-        out.append(Surface("ceiling", ceil, Lambertian(room.ceiling_albedo, emission=room.ceiling_emission)))
+        # A light lying in the floor's or ceiling's plane is cut out of it, so that no
+        # renderer has two coplanar surfaces to choose between (z-fighting).
+        light = self.light
+        tol = 1e-9 * room.size()
+        hole_floor = abs(light.center[2] - z0) <= tol
+        hole_ceiling = abs(light.center[2] - z1) <= tol
+        floor = np.array([[[*a, z0], [*b, z0], [*c, z0]] for a, b, c in _fan(poly, self._hole() if hole_floor else None)])
+        ceil = np.array([[[*a, z1], [*c, z1], [*b, z1]] for a, b, c in _fan(poly, self._hole() if hole_ceiling else None)])
+        out.append(Surface("floor", floor, Lambertian(room.floor_albedo, emission=room.floor_emission)))  # normal +z
+        out.append(Surface("ceiling", ceil, Lambertian(room.ceiling_albedo, emission=room.ceiling_emission)))  # normal -z
         for o in self.objects:
             if isinstance(o, Tetrahedron):
                 out.append(Surface(o.name, o.triangles(), o.material))
         c = self.light.corners()
         out.append(Surface("light", np.array([[c[0], c[1], c[2]], [c[0], c[2], c[3]]]), None))
         return out
+
+    def _hole(self) -> tuple[float, float, float, float]:
+        """The light's footprint (x0, x1, y0, y1) seen from above."""
+        cx, cy, _ = self.light.center
+        hx, hy = self.light.size[0] / 2, self.light.size[1] / 2
+        return cx - hx, cx + hx, cy - hy, cy + hy
 
     def spheres(self) -> list[Sphere]:
         return [o for o in self.objects if isinstance(o, Sphere)]
@@ -332,6 +342,44 @@ class Scene:
         """A stable hash of the scene's content: formatting, comments and order of tables do not matter."""
         text = json.dumps(self.canonical_dict(), sort_keys=True, separators=(",", ":"), default=float)
         return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
+def _clip(poly: list, axis: int, value: float, keep_below: bool) -> list:
+    """Clip a convex polygon (list of 2D points) to coordinate[axis] <= value (or >=)."""
+    out = []
+    sign = 1.0 if keep_below else -1.0
+    for a, b in zip(poly, poly[1:] + poly[:1]):
+        da, db = sign * (a[axis] - value), sign * (b[axis] - value)
+        if da <= 0:
+            out.append(a)
+        if da * db < 0:
+            t = da / (da - db)
+            out.append((a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])))
+    return out
+
+
+def _fan(poly: np.ndarray, hole: tuple[float, float, float, float] | None):
+    """Counter-clockwise triangles covering a convex polygon, minus an axis-aligned rectangle inside it.
+
+    Without a hole, a fan from the first corner. With one, the polygon is cut
+    into the convex pieces above, below, left and right of the rectangle.
+    """
+    pts = [tuple(map(float, p)) for p in poly]
+    if hole is None:
+        pieces = [pts]
+    else:
+        x0, x1, y0, y1 = hole
+        below = _clip(pts, 1, y0, True)
+        above = _clip(pts, 1, y1, False)
+        band = _clip(_clip(pts, 1, y0, False), 1, y1, True)
+        pieces = [below, above, _clip(band, 0, x0, True), _clip(band, 0, x1, False)]
+    tris = []
+    for piece in pieces:
+        for i in range(1, len(piece) - 1):
+            a, b, c = np.array(piece[0]), np.array(piece[i]), np.array(piece[i + 1])
+            if (b - a)[0] * (c - a)[1] - (b - a)[1] * (c - a)[0] > 1e-12 * max(1.0, float(np.abs(poly).max())) ** 2:
+                tris.append((a, b, c))
+    return tris
 
 
 # --------------------------------------------------------------------------

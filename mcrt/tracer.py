@@ -20,6 +20,7 @@ from mcrt.geometry import const3
 from mcrt.film import Moments, Progress, RenderResult, run_passes, samples_per_pass
 from mcrt.llvm import require_llvm
 from mcrt.mutants import check_mutants, mutate_scene
+from mcrt.precision import check_precision
 from mcrt.scene import Scene
 
 BACKENDS = ("llvm", "cuda")
@@ -71,6 +72,7 @@ class Tracer:
     backend: str = "llvm"
     intersector: str = "convex"
     mutants: frozenset = frozenset()
+    precision_guard: bool = True
 
     def __post_init__(self):
         from mcrt.geometry import Geometry
@@ -79,6 +81,8 @@ class Tracer:
         self.mutants = check_mutants(self.mutants)
         self.m = backend_module(self.backend)
         scene = mutate_scene(self.scene, self.mutants)
+        if self.precision_guard:
+            check_precision(scene)  # refuse scenes where float32 would silently give a wrong image
         self.geometry = Geometry(scene, self.m, self.intersector)
         self.integrator = PathIntegrator(
             self.geometry, max_depth=self.max_depth, light_samples=self.light_samples, rr_depth=self.rr_depth, mutants=self.mutants
@@ -142,15 +146,19 @@ def render(
     intersector: str = "convex",
     spp_per_pass: int | None = None,
     progress: bool = True,
+    precision_guard: bool = True,
 ) -> RenderResult:
     """Render ``scene`` with the standalone tracer: mean and per-sample variance.
 
     Arguments left as None take the scene file's render defaults.
+    ``precision_guard=False`` renders scenes that :func:`mcrt.precision.check_precision`
+    would refuse (only to measure where float32 breaks).
     """
     import drjit as dr
 
     s = scene.settings(camera=camera, spp=spp, seed=seed, max_depth=max_depth, light_samples=light_samples, width=width, height=height, rr_depth=rr_depth)
-    tracer = Tracer(scene, s.camera, s.width, s.height, s.max_depth, s.light_samples, s.rr_depth, backend, intersector, frozenset(mutants))
+    tracer = Tracer(scene, s.camera, s.width, s.height, s.max_depth, s.light_samples, s.rr_depth, backend, intersector,
+                    frozenset(mutants), precision_guard)
     per_pass = spp_per_pass or samples_per_pass(s.width, s.height, s.spp)
     bar = Progress(s.spp, label="mcrt", enabled=progress)
     flag = dr.flag(dr.JitFlag.KernelHistory)
