@@ -112,18 +112,11 @@ def _file_case(name: str, camera: str, **kw) -> HardCase:
     return HardCase(name, load_scene(HARD_DIR / f"{name}.toml").description, f"{name}.toml", camera, **kw)
 
 
-KNOWN_TOUCHING_LIGHT = (
-    "mcrt samples the light by area only: at wall points within e of a light edge that touches the wall, the "
-    "weight Le A cos_x cos_y / d^2 has a second moment ~ 1/e^2, and a pixel integrates that over e down to 0, so "
-    "the per-sample variance is infinite; independent 1024-spp mcrt renders come out low (rare huge samples "
-    "missing) and fail against Mitsuba, whose MIS with BSDF sampling bounds the weight; fix: sample the light by "
-    "solid angle (spherical rectangles, Urena et al. 2013) or add MIS"
-)
 
 CATALOGUE: tuple[HardCase, ...] = (
     _file_case("light_on_ceiling", "near"),
     _file_case("light_on_wall", "wall"),
-    _file_case("light_low", "under", known_issue=KNOWN_TOUCHING_LIGHT),
+    _file_case("light_low", "under"),
     _file_case("sphere_tangent", "near"),
     _file_case("sphere_tiny", "zoom"),
     _file_case("tetra_on_floor", "edge_on"),

@@ -43,15 +43,43 @@ from mcrt.sampling import (
 UNBOUNDED = 2**32 - 1
 
 
+def needs_mis(scene) -> bool:
+    """Whether a surface comes closer to the light than the light's larger side.
+
+    Light sampling by area has a weight ~ 1/d^2 that is unbounded where a
+    lit surface meets the light (a light touching a wall, a light just above
+    the floor); there the estimator switches on MIS with cosine sampling,
+    which bounds it. Faces behind the light (the ceiling above a light that
+    faces down) receive none of its light and do not count.
+    """
+    import numpy as np
+
+    light = scene.light
+    corners = light.corners()
+    reach = max(light.size)
+    for plane in scene.room.planes():
+        n, h = plane[:3], plane[3]
+        if abs(n[2]) > 0.5 and n[2] * light.normal[2] < 0:  # outward normal against the light normal
+            continue  # the face behind the light
+        if np.min(h - corners @ n) < reach:
+            return True
+    return False
+
+
 class PathIntegrator:
     """Lambertian + mirror path tracer with K light samples per diffuse vertex.
 
     Only what the scene holds is traced into the kernel: no mirror code
-    without a mirror, no light-sampling loop when K = 1.
+    without a mirror, no light-sampling loop when K = 1, and multiple
+    importance sampling (``mis``) only where the scene needs it: a light
+    touching or nearly touching a surface, where area sampling alone has
+    unbounded variance (see :func:`needs_mis`).
     """
 
-    def __init__(self, geometry: Geometry, *, max_depth: int, light_samples: int = 1, rr_depth: int = 5, mutants=frozenset()):
+    def __init__(self, geometry: Geometry, *, max_depth: int, light_samples: int = 1, rr_depth: int = 5, mutants=frozenset(),
+                 mis: bool = False):
         self.geo = geometry
+        self.mis = mis
         self.m = geometry.m
         self.mutants = frozenset(mutants)
         depth = max_depth if max_depth > 0 else UNBOUNDED
@@ -78,6 +106,7 @@ class PathIntegrator:
         beta = m.Array3f(1.0)  # path throughput: product of f cos / pdf so far
         depth = m.UInt32(0)  # path segments traced so far
         specular = m.Bool(True)  # the last vertex was the eye or a mirror: count emission
+        pdf_bsdf = m.Float(0.0)  # solid-angle pdf of the last diffuse direction (for MIS)
         active = m.Bool(True)
 
         while dr.hint(active, label="mcrt_path"):
@@ -88,7 +117,7 @@ class PathIntegrator:
             is_light = sid == geo.light_id
 
             # ---- Emission seen from the eye or through mirrors.
-            L += beta * self.emitted(d, n, color, is_light, specular)
+            L += beta * self.emitted(d, n, t, color, is_light, specular, pdf_bsdf)
             L += beta * self.surface_emitted(d, n, sid, emissions)
 
             # ---- Stop at the light (black on both sides) and at the depth limit.
@@ -103,6 +132,7 @@ class PathIntegrator:
 
             # ---- Continue: cosine-weighted Lambertian direction or mirror reflection.
             d, weight, specular = self.scatter(d, n_f, color, active & mirror, rng)
+            pdf_bsdf = dr.maximum(dr.dot(n_f, d), 0.0) * INV_PI
             beta *= weight
             o = origin
 
@@ -111,16 +141,27 @@ class PathIntegrator:
         return L
 
     # ------------------------------------------------------------------
-    def emitted(self, d, n, radiance, is_light, specular):
-        """Le towards -d where a ray meets the light's emitting side and no light sample could have."""
+    def emitted(self, d, n, t, radiance, is_light, specular, pdf_bsdf):
+        """Le towards -d where a ray meets the light's emitting side, weighted for light sampling.
+
+        Without MIS: counted only where no light sample could have found it
+        (from the eye, after a mirror). With MIS, a hit after a diffuse bounce
+        counts too, with the balance weight of BSDF sampling against K light
+        samples, w_b = p_b / (K p_l + p_b), p_l = t^2 / (A cos_y).
+        """
         m, mut = self.m, self.mutants
-        faces_ray = dr.dot(d, n) < 0
+        cos_y = -dr.dot(d, n)
+        faces_ray = cos_y > 0
         if "light_two_sided" in mut:
             faces_ray = m.Bool(True)
-        counted = specular
+            cos_y = dr.abs(cos_y)
         if "double_count" in mut:
-            counted = m.Bool(True)
-        return dr.select(is_light & faces_ray & counted, radiance, 0.0)
+            return dr.select(is_light & faces_ray, radiance, 0.0)
+        if not self.mis:
+            return dr.select(is_light & faces_ray & specular, radiance, 0.0)
+        a = pdf_bsdf * self.light_area * cos_y
+        w_bsdf = dr.select(specular, 1.0, a / (self.light_samples * t * t + a))
+        return dr.select(is_light & faces_ray, radiance * w_bsdf, 0.0)
 
     def surface_emitted(self, d, n, sid, emissions):
         """Emission of Lambertian surfaces (furnace scenes), on the side their normal faces.
@@ -228,4 +269,9 @@ class PathIntegrator:
         else:
             blocked = geo.occluded(origin, wi, dist * SHADOW_TMAX_SCALE)
         area = 1.0 if "nee_no_area" in mut else self.light_area
+        if self.mis:
+            # Balance weight of K light samples against the cosine BSDF sample:
+            # w_l = K p_l / (K p_l + p_b), p_l = d^2 / (A cos_y), p_b = cos_x / pi.
+            k_d2 = self.light_samples * dist2
+            g = g * (k_d2 / (k_d2 + cos_x * INV_PI * self.light_area * cos_y))
         return dr.select(valid & ~blocked, m.Array3f(*self.light_radiance) * (g * area), 0.0)

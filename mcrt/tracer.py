@@ -73,10 +73,11 @@ class Tracer:
     intersector: str = "convex"
     mutants: frozenset = frozenset()
     precision_guard: bool = True
+    mis: bool | None = None  # None: where the scene needs it (mcrt.integrator.needs_mis)
 
     def __post_init__(self):
         from mcrt.geometry import Geometry
-        from mcrt.integrator import PathIntegrator
+        from mcrt.integrator import PathIntegrator, needs_mis
 
         self.mutants = check_mutants(self.mutants)
         self.m = backend_module(self.backend)
@@ -85,7 +86,8 @@ class Tracer:
             check_precision(scene)  # refuse scenes where float32 would silently give a wrong image
         self.geometry = Geometry(scene, self.m, self.intersector)
         self.integrator = PathIntegrator(
-            self.geometry, max_depth=self.max_depth, light_samples=self.light_samples, rr_depth=self.rr_depth, mutants=self.mutants
+            self.geometry, max_depth=self.max_depth, light_samples=self.light_samples, rr_depth=self.rr_depth, mutants=self.mutants,
+            mis=needs_mis(scene) if self.mis is None else self.mis,
         )
         self.cam = scene.camera(self.camera)
 
@@ -147,18 +149,20 @@ def render(
     spp_per_pass: int | None = None,
     progress: bool = True,
     precision_guard: bool = True,
+    mis: bool | None = None,
 ) -> RenderResult:
     """Render ``scene`` with the standalone tracer: mean and per-sample variance.
 
     Arguments left as None take the scene file's render defaults.
-    ``precision_guard=False`` renders scenes that :func:`mcrt.precision.check_precision`
+    ``mis`` forces multiple importance sampling on or off (default: where
+    the scene needs it). ``precision_guard=False`` renders scenes that :func:`mcrt.precision.check_precision`
     would refuse (only to measure where float32 breaks).
     """
     import drjit as dr
 
     s = scene.settings(camera=camera, spp=spp, seed=seed, max_depth=max_depth, light_samples=light_samples, width=width, height=height, rr_depth=rr_depth)
     tracer = Tracer(scene, s.camera, s.width, s.height, s.max_depth, s.light_samples, s.rr_depth, backend, intersector,
-                    frozenset(mutants), precision_guard)
+                    frozenset(mutants), precision_guard, mis)
     per_pass = spp_per_pass or samples_per_pass(s.width, s.height, s.spp)
     bar = Progress(s.spp, label="mcrt", enabled=progress)
     flag = dr.flag(dr.JitFlag.KernelHistory)
@@ -194,6 +198,7 @@ def render(
             "backend": backend,
             "intersector": intersector,
             "light_samples": str(s.light_samples),
+            "mis": str(tracer.integrator.mis).lower(),
             "rr_depth": str(s.rr_depth),
             "mutants": ",".join(sorted(tracer.mutants)),
             "drjit_version": dr.__version__,
