@@ -191,8 +191,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_mutants)
 
     from mcrt import bench, hardcases, reference, threeway
+    from mcrt.grade.cli import register as register_grade
 
     reference.register(sub)
+    register_grade(sub)
     hardcases.register(sub)
     bench.register(sub)
     threeway.register(sub)

@@ -1,0 +1,366 @@
+"""Checks before scoring: can the file be read, and is it the image that was asked for?
+
+Each function looks at one way a hand-in goes wrong before any physics is
+judged, and returns what it found with a message a student can act on.
+Where a mistake can be undone exactly (a flip, the other camera, a gamma
+curve, a constant exposure factor, a resolution that is an integer multiple)
+it is detected and undone, so that the rest of the grading still says
+whether the tracer itself is right; the check's own points are lost.
+Nothing here raises on bad student data.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from scipy import stats as _sps
+
+from mcrt.grade.score import LUMINANCE, tile_sum
+
+MAX_FILE_BYTES = 1 << 30
+
+
+# --------------------------------------------------------------------------
+# Reading
+# --------------------------------------------------------------------------
+
+
+@dataclass
+class Loaded:
+    """The renders of one hand-in at their own resolution (float64, (H, W, 3))."""
+
+    images: list[np.ndarray]
+    files: list[str]
+    fmt: str  # float, half, rgbe, png8, png16 (+ '-linear' for PNGs declared linear)
+    spp_file: int | None = None  # from our EXR attributes
+    camera_file: str | None = None
+    notes: list[str] = field(default_factory=list)
+
+
+def _short(msg: str, path: str) -> str:
+    """An ImageError message with the file's folder removed (students see their file name)."""
+    return msg.replace(os.fspath(path), Path(path).name)
+
+
+def _format(path: str, img: np.ndarray, linear_png: bool) -> str:
+    ext = Path(path).suffix.lower()
+    if ext == ".exr":
+        finite = np.isfinite(img)
+        x = img[finite]
+        return "half" if x.size and np.array_equal(x.astype(np.float16).astype(np.float32), x) else "float"
+    if ext == ".pfm":
+        return "float"
+    if ext in (".hdr", ".pic", ".rgbe"):
+        return "rgbe"
+    if ext == ".png":
+        try:
+            with open(path, "rb") as f:
+                head = f.read(25)
+            depth = head[24] if len(head) >= 25 else 8
+        except OSError:
+            depth = 8
+        return ("png16" if depth == 16 else "png8") + ("-linear" if linear_png else "")
+    return "float"
+
+
+def read_renders(paths: list[str], linear_png: bool) -> tuple[Loaded | None, str | None]:
+    """Read one or two renders; (None, message) when the first cannot be used."""
+    from mcrt.imageio import ImageError, read_image
+
+    images, files, notes = [], [], []
+    fmt, spp, cam = "float", None, None
+    for k, p in enumerate(paths[:2]):
+        name = Path(p).name
+        try:
+            size = os.path.getsize(p)
+        except OSError as e:
+            msg = f"{name}: cannot read ({e.strerror or e})"
+            if k == 0:
+                return None, msg
+            notes.append(f"second render {msg}; graded the first alone")
+            continue
+        if size > MAX_FILE_BYTES:
+            msg = f"{name}: {size / 2**20:.0f} MiB is larger than the {MAX_FILE_BYTES >> 20} MiB limit"
+            if k == 0:
+                return None, msg
+            notes.append(f"second render {msg}; graded the first alone")
+            continue
+        if size == 0:
+            msg = f"{name}: the file is empty"
+            if k == 0:
+                return None, msg
+            notes.append(f"second render {msg}; graded the first alone")
+            continue
+        try:
+            r = read_image(p, linear_png=linear_png)
+        except ImageError as e:
+            msg = _short(str(e), p)
+            if k == 0:
+                return None, msg
+            notes.append(f"second render {msg}; graded the first alone")
+            continue
+        except (OSError, ValueError, MemoryError) as e:
+            msg = f"{name}: cannot be read ({' '.join(str(e).split())[:160]})"
+            if k == 0:
+                return None, msg
+            notes.append(f"second render {msg}; graded the first alone")
+            continue
+        img = np.asarray(r.mean, dtype=np.float64)
+        if k == 0:
+            fmt = _format(p, r.mean, linear_png)
+            spp = r.spp or None
+            cam = r.camera or None
+        elif img.shape != images[0].shape:
+            notes.append(f"second render {name} is {img.shape[1]}x{img.shape[0]}, the first "
+                         f"{images[0].shape[1]}x{images[0].shape[0]}; graded the first alone")
+            continue
+        elif np.array_equal(np.nan_to_num(img), np.nan_to_num(images[0])):
+            notes.append(f"second render {name} is identical to the first, so it is not an independent render "
+                         "(same seed?); graded the first alone")
+            continue
+        images.append(img)
+        files.append(p)
+    return Loaded(images, files, fmt, spp, cam, notes), None
+
+
+# --------------------------------------------------------------------------
+# Resolution
+# --------------------------------------------------------------------------
+
+
+@dataclass
+class ResolutionPlan:
+    ok: bool  # the asked-for resolution
+    gradeable: bool
+    down: int = 1  # box-filter the hand-in by this factor
+    coarsen: int = 1  # box-filter the expected images by this factor
+    message: str = ""
+
+
+def plan_resolution(h: int, w: int, height: int, width: int, gh: int, gw: int) -> ResolutionPlan:
+    """How an image of (h, w) pixels is compared at the grade resolution (gh, gw)."""
+    if (h, w) == (height, width):
+        return ResolutionPlan(True, True, height // gh, 1, f"{w}x{h} as asked")
+    asked = f"the assignment asks for {width}x{height}"
+    if h % gh == 0 and w % gw == 0 and h // gh == w // gw:
+        k = h // gh
+        return ResolutionPlan(False, True, k, 1, f"the image is {w}x{h}, {asked}; it was box-filtered to "
+                              f"{gw}x{gh} for grading, which is exact for a box pixel filter")
+    if gh % h == 0 and gw % w == 0 and gh // h == gw // w:
+        k = gh // h
+        return ResolutionPlan(False, True, 1, k, f"the image is {w}x{h}, {asked}; it was graded at {w}x{h} against "
+                              f"the reference box-filtered by {k}")
+    if (h, w) == (width, height):
+        return ResolutionPlan(False, False, message=f"the image is {w}x{h}, {asked}: width and height are swapped")
+    return ResolutionPlan(False, False, message=f"the image is {w}x{h}, {asked}; it cannot be compared "
+                          "(not an integer multiple or divisor of the grading resolution)")
+
+
+def box_down(x: np.ndarray, k: int) -> np.ndarray:
+    """Block means over k x k (NaN or inf in a block makes the block non-finite)."""
+    if k == 1:
+        return x
+    h, w = x.shape[:2]
+    with np.errstate(invalid="ignore", over="ignore"):
+        return x.reshape(h // k, k, w // k, k, *x.shape[2:]).mean(axis=(1, 3))
+
+
+# --------------------------------------------------------------------------
+# Values
+# --------------------------------------------------------------------------
+
+
+def _where(idx) -> str:
+    return f"row {int(idx[0])}, column {int(idx[1])}"
+
+
+def check_finite(img: np.ndarray) -> tuple[int, float, str]:
+    """(count of pixels with a NaN or infinite channel, their share, a message)."""
+    bad = ~np.isfinite(img).all(axis=2)
+    n = int(np.count_nonzero(bad))
+    if not n:
+        return 0, 0.0, "every value is finite"
+    frac = n / bad.size
+    nan = int(np.count_nonzero(np.isnan(img).any(axis=2)))
+    first = np.argwhere(bad)[0]
+    kinds = "NaN" if nan == n else "infinite" if nan == 0 else "NaN or infinite"
+    share = "all" if n == bad.size else f"{100 * frac:.2g} %" if frac < 0.1 else f"{100 * frac:.0f} %"
+    return n, frac, (f"{n} pixels ({share}) are {kinds}, the first at {_where(first)}; typical causes: "
+                     "0/0 in a pdf, sqrt or acos of a value just outside its domain, normalising a zero vector")
+
+
+def check_negative(img: np.ndarray, tolerance: float) -> tuple[int, str]:
+    """(count of values below -tolerance, message)."""
+    x = np.where(np.isfinite(img), img, 0.0)
+    neg = x < -tolerance
+    n = int(np.count_nonzero(neg))
+    if not n:
+        return 0, "no negative values"
+    i = np.unravel_index(int(np.argmin(x)), x.shape)
+    return n, (f"{n} values are negative (the smallest, {x[i]:.4g}, at {_where(i)}); radiance cannot be negative: "
+               "look for a cosine that is not clamped at 0 or a direction sampled below the surface")
+
+
+# --------------------------------------------------------------------------
+# Orientation and camera
+# --------------------------------------------------------------------------
+
+# name -> (applied to the reference, undoes it on the submission); all square-only ones last.
+TRANSFORMS = {
+    "identity": (lambda x: x, lambda x: x),
+    "flipped vertically (upside down)": (lambda x: x[::-1], lambda x: x[::-1]),
+    "mirrored horizontally (left and right swapped)": (lambda x: x[:, ::-1], lambda x: x[:, ::-1]),
+    "rotated by 180 degrees": (lambda x: x[::-1, ::-1], lambda x: x[::-1, ::-1]),
+    "transposed (rows and columns swapped)": (lambda x: x.swapaxes(0, 1), lambda x: x.swapaxes(0, 1)),
+    "rotated 90 degrees clockwise": (lambda x: np.rot90(x, -1), lambda x: np.rot90(x, 1)),
+    "rotated 90 degrees counter-clockwise": (lambda x: np.rot90(x, 1), lambda x: np.rot90(x, -1)),
+    "transposed across the anti-diagonal": (lambda x: x[::-1, ::-1].swapaxes(0, 1), lambda x: x[::-1, ::-1].swapaxes(0, 1)),
+}
+SQUARE_ONLY = 4  # the first four work for any shape
+
+
+@dataclass
+class Orientation:
+    camera: str
+    transform: str
+    correlations: dict  # "camera/transform" -> (luminance, chromaticity) rank correlations
+    resembles: bool  # the best luminance correlation is high enough to say anything
+
+
+def _ranks(x: np.ndarray) -> np.ndarray:
+    r = _sps.rankdata(x.ravel()).reshape(x.shape)
+    return (r - r.mean()) / max(r.std(), 1e-12)
+
+
+def _features(img: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Ranks of luminance and of two chromaticities (r and g over r + g + b)."""
+    x = np.maximum(np.nan_to_num(img, nan=0.0, posinf=0.0, neginf=0.0), 0.0)
+    s = x.sum(axis=2) + 1e-6 * max(float(x.mean()), 1e-12)
+    return _ranks(x @ LUMINANCE), _ranks(x[..., 0] / s), _ranks(x[..., 1] / s)
+
+
+def detect_orientation(img: np.ndarray, refs: dict[str, np.ndarray], camera: str, margin: float) -> Orientation:
+    """Which camera, and which flip or rotation of it, the image shows.
+
+    Two rank correlations (Spearman) with every candidate (each camera's
+    reference under each flip, rotation or transposition): of luminance, and
+    of chromaticity (the mean over r/(r+g+b) and g/(r+g+b)). Ranks are blind
+    to exposure and to any monotone tone curve, so the other checks do not
+    disturb this one. Luminance sees the light at the top and the objects at
+    the bottom; chromaticity sees which coloured wall is where, and does not
+    change when a bug moves brightness around (a BRDF pi times too bright
+    makes the floor brighter than the ceiling, which luminance alone takes
+    for an upside-down image). A candidate replaces (assigned camera, as
+    handed in) only when its luminance correlation is higher by ``margin``,
+    its chromaticity correlation is not lower, and its luminance correlation
+    exceeds 0.3; the best such candidate (sum of both) wins.
+    """
+    fl, fr, fg = _features(img)
+    square = img.shape[0] == img.shape[1]
+    names = list(TRANSFORMS)[: len(TRANSFORMS) if square else SQUARE_ONLY]
+    lum, chroma = {}, {}
+    for cam, ref in refs.items():
+        rl, rr, rg = _features(ref)
+        for name in names:
+            t = TRANSFORMS[name][0]
+            lum[(cam, name)] = float(np.mean(fl * t(rl)))
+            chroma[(cam, name)] = 0.5 * float(np.mean(fr * t(rr)) + np.mean(fg * t(rg)))
+    ident = (camera, "identity")
+    table = {f"{c}/{t}": (round(lum[(c, t)], 4), round(chroma[(c, t)], 4)) for (c, t) in lum}
+    eligible = [k for k in lum if k != ident and lum[k] >= lum[ident] + margin and chroma[k] >= chroma[ident]
+                and lum[k] > 0.3]
+    if eligible:
+        best = max(eligible, key=lambda k: lum[k] + chroma[k])
+        return Orientation(best[0], best[1], table, True)
+    return Orientation(camera, "identity", table, max(lum.values()) > 0.3)
+
+
+# --------------------------------------------------------------------------
+# Encoding and exposure
+# --------------------------------------------------------------------------
+
+
+def srgb_decode(v: np.ndarray) -> np.ndarray:
+    v = np.maximum(v, 0.0)
+    return np.where(v <= 0.04045, v / 12.92, ((v + 0.055) / 1.055) ** 2.4)
+
+
+def srgb_encode(x: np.ndarray) -> np.ndarray:
+    x = np.maximum(x, 0.0)
+    return np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(np.maximum(x, 0.0031308), 1 / 2.4) - 0.055)
+
+
+#: name -> (decoder applied to the submission, description)
+ENCODINGS = {
+    "linear": (lambda x: x, "linear"),
+    "srgb": (srgb_decode, "sRGB-encoded"),
+    "gamma2.2": (lambda x: np.maximum(x, 0.0) ** 2.2, "gamma-encoded (x^(1/2.2))"),
+    "png-linear": (srgb_encode, "linear values in an sRGB PNG"),
+}
+
+
+def _log_ratios(img: np.ndarray, ref: np.ndarray, mask: np.ndarray, tile: int) -> np.ndarray:
+    m = mask.astype(np.float64)
+    n = tile_sum(m, tile)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        s = tile_sum(np.where(mask, np.nan_to_num(img @ LUMINANCE), 0.0), tile) / np.maximum(n, 1)
+        r = tile_sum(np.where(mask, ref @ LUMINANCE, 0.0), tile) / np.maximum(n, 1)
+        ok = (n >= 2) & (r > 1e-3 * max(float(r.max()), 1e-12)) & (s > 0)
+        return np.log(s[ok] / r[ok])
+
+
+def _spread(lr: np.ndarray) -> float:
+    if lr.size < 3:
+        return float("inf")
+    return float(np.median(np.abs(lr - np.median(lr))))
+
+
+@dataclass
+class Encoding:
+    kind: str  # key of ENCODINGS
+    spreads: dict
+    message: str
+
+
+def detect_encoding(img: np.ndarray, ref: np.ndarray, mask: np.ndarray, fmt: str, tile: int) -> Encoding:
+    """Linear, or gamma-encoded data given as linear (or linear data in a PNG taken as sRGB)?
+
+    For each hypothesis the image is decoded and its tile luminances compared
+    with the reference's in log space; the spread (median absolute deviation
+    of the log ratios) is small for the right decoding, whatever the
+    exposure. Another decoding wins only if it halves the spread and brings
+    it below 0.15 (15 %).
+    """
+    kinds = ["linear", "srgb", "gamma2.2"]
+    if fmt.startswith("png") and not fmt.endswith("linear"):
+        kinds.append("png-linear")
+    spreads = {k: _spread(_log_ratios(ENCODINGS[k][0](img), ref, mask, tile)) for k in kinds}
+    best = min(spreads, key=spreads.get)
+    lin = spreads["linear"]
+    if best != "linear" and spreads[best] < 0.5 * lin and spreads[best] < 0.15:
+        if best == "png-linear":
+            msg = ("the PNG holds linear values but PNGs are read as sRGB-encoded: declare `linear = true` in your "
+                   "manifest, or encode with the sRGB curve before writing 8-bit files")
+        else:
+            msg = (f"the values look {ENCODINGS[best][1]}: decoded, they follow the reference's brightness "
+                   f"(spread {100 * spreads[best]:.0f} % instead of {100 * lin:.0f} %); HDR files (EXR, PFM, HDR) must "
+                   "hold linear radiance: write the values before any gamma or sRGB encoding")
+        return Encoding(best, spreads, msg)
+    return Encoding("linear", spreads, "linear radiance")
+
+
+def estimate_scale(img: np.ndarray, ref: np.ndarray, mask: np.ndarray, tile: int) -> float:
+    """Overall brightness ratio image / reference: median over tiles of the luminance ratio."""
+    lr = _log_ratios(img, ref, mask, tile)
+    return float(np.exp(np.median(lr))) if lr.size else 1.0
+
+
+def nice_scale(k: float) -> float:
+    """k snapped to a power of two when within 0.1 stops of one (an exposure setting), else k."""
+    if not np.isfinite(k) or k <= 0:
+        return 1.0
+    e = np.log2(k)
+    return float(2.0 ** round(e)) if abs(e - round(e)) < 0.1 else float(k)

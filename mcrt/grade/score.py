@@ -1,0 +1,344 @@
+r"""The noise-fair bias test, the noise estimate, and the error metrics.
+
+The question is whether a student's image S has the expected value of the
+reference R, when S is one Monte-Carlo render of unknown quality at a modest
+sample count. Pixels are pooled into tiles at several scales (the assignment's
+``tiles``, 0 = the whole image); for each tile t of n valid pixels and each
+channel the residuals r_i = s_i - R_i give
+
+.. math::
+
+    D_t = \frac{1}{n} \sum_i r_i, \qquad
+    V_t = \max\Big(V^{model}_t,\; V^{pair}_t,\; \frac{S_t^2}{n}\Big),
+    \qquad t = D_t / \sqrt{V_t}, \quad \nu = n - 1,
+
+three estimates of the variance of D_t, of which the largest is used:
+
+* model: :math:`\frac{1}{n^2}\sum_i (\sigma^2_i / spp + q_i^2/12 + \sigma^2_{R,i} / spp_R)`,
+  mcrt's per-sample variance sigma^2 at the student's sample count (the
+  declared one, or the one the noise suggests), the quantisation step q of
+  the file format, and the reference's own noise. It covers rare paths the
+  student's render happened to miss (a tile without its caustic sample is
+  too dark, and its own spread cannot show it);
+* pair (two renders a, b): :math:`\frac{1}{n^2}\sum_i ((a_i - b_i)^2/4 + \sigma^2_{R,i}/spp_R)`,
+  the noise the student's own estimator has, whatever it is;
+* spread: the sample variance S_t^2 of the residuals within the tile, which
+  holds every noise source of both images (and any variation of a bias,
+  which only makes the test more cautious). It keeps a firefly from looking
+  like a bias: a single huge sample inflates S_t^2 as much as D_t.
+
+Tiles where all three are 0 (pixels that see only the light) are compared
+for equality. The two-sided p-values of all tiles, scales and channels form
+one family, corrected by Holm (:func:`mcrt.stats.adjust_p_values`) at level
+``alpha``; a test is *penalised* only if it is rejected **and** its relative
+effect :math:`|D_t| / |\bar R_t|` is at least ``min_effect``: significant
+and relevant.
+
+Scoring of the ``unbiased`` criterion: no penalised test gives full points;
+otherwise the loss is ``min_loss`` plus the share of the image covered by
+penalised tests, each pixel weighted by min(1, |relative effect| /
+``full_effect``), capped at all the points.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy import stats as _sps
+
+from mcrt.stats import adjust_p_values
+
+LUMINANCE = np.array([0.2126, 0.7152, 0.0722])
+CHANNELS = ("R", "G", "B")
+
+
+# --------------------------------------------------------------------------
+# Tiles
+# --------------------------------------------------------------------------
+
+
+def _edges(n: int, tile: int) -> np.ndarray:
+    return np.arange(0, n, tile if tile > 0 else n)
+
+
+def tile_sum(x: np.ndarray, tile: int) -> np.ndarray:
+    """Sums over tile x tile blocks (tile 0: the whole image), partial edge tiles kept."""
+    h, w = x.shape[:2]
+    return np.add.reduceat(np.add.reduceat(x, _edges(h, tile), axis=0), _edges(w, tile), axis=1)
+
+
+def tile_boxes(h: int, w: int, tile: int) -> list[list[tuple[int, int, int, int]]]:
+    """Pixel bounds (y0, y1, x0, x1) of every tile, indexed [ty][tx]."""
+    ys, xs = _edges(h, tile), _edges(w, tile)
+    ys1 = list(ys[1:]) + [h]
+    xs1 = list(xs[1:]) + [w]
+    return [[(int(y0), int(y1), int(x0), int(x1)) for x0, x1 in zip(xs, xs1)] for y0, y1 in zip(ys, ys1)]
+
+
+@dataclass
+class Noise:
+    """Per-pixel variances (H, W, 3) of the student's pixel means, by source; None if absent."""
+
+    model: np.ndarray  # sigma^2 / spp + q^2 / 12
+    reference: np.ndarray  # sigma_R^2 / spp_R
+    pair: np.ndarray | None = None  # (a - b)^2 / 4
+
+
+@dataclass
+class ScaleResult:
+    """One scale of the bias test; arrays (tiles_y, tiles_x, 3)."""
+
+    tile: int  # 0: whole image
+    n: np.ndarray  # valid pixels per tile (tiles_y, tiles_x)
+    diff: np.ndarray  # D_t
+    ref: np.ndarray  # mean reference over the tile's valid pixels
+    var: np.ndarray  # V_t
+    var_model: np.ndarray
+    var_spread: np.ndarray
+    var_pair: np.ndarray | None
+    t: np.ndarray
+    p: np.ndarray
+    rel: np.ndarray  # D_t / |R_t|
+    valid: np.ndarray  # (tiles_y, tiles_x) tiles with n >= 2
+    p_adj: np.ndarray | None = None
+    rejected: np.ndarray | None = None
+    penalised: np.ndarray | None = None
+
+
+@dataclass
+class BiasTest:
+    scales: list[ScaleResult]
+    alpha: float
+    min_effect: float
+    n_tests: int
+    shape: tuple[int, int]
+    penalised_any: bool = False
+    severity: float = 0.0  # share of the image, weighted by min(1, |rel| / full_effect)
+    pixel_effect: np.ndarray | None = None  # (H, W) largest |rel| of a penalised test covering each pixel
+    excess_rms: float = 0.0  # bias RMS beyond noise at the first scale, relative to the mean reference
+    min_detectable: float = 0.0  # median relative effect a base tile must have to reach significance
+    worst: dict = field(default_factory=dict)
+
+    @property
+    def base(self) -> ScaleResult:
+        return self.scales[0]
+
+    def loss(self, min_loss: float) -> float:
+        """Share of the criterion's points lost (0 when nothing is penalised)."""
+        if not self.penalised_any:
+            return 0.0
+        return float(min(1.0, min_loss + (1.0 - min_loss) * self.severity))
+
+
+def scale_stats(resid: np.ndarray, ref: np.ndarray, mask: np.ndarray, noise: Noise, tile: int, min_n: int = 2) -> ScaleResult:
+    """Tile statistics of one scale (see the module docstring); ``mask`` (H, W) marks valid pixels.
+
+    Tiles with fewer than ``min_n`` valid pixels are marked invalid (1 for
+    single pixels, whose variance then comes from the model and pair only).
+    """
+    m = mask[..., None].astype(np.float64)
+    r = np.where(m > 0, resid, 0.0)
+    n = tile_sum(mask.astype(np.float64), tile)
+    n3 = n[..., None]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        safe = np.maximum(n3, 1.0)
+        d = tile_sum(r, tile) / safe
+        rm = tile_sum(np.where(m > 0, ref, 0.0), tile) / safe
+        vr = tile_sum(noise.reference * m, tile) / safe**2
+        vm = tile_sum(noise.model * m, tile) / safe**2 + vr
+        vp = tile_sum(noise.pair * m, tile) / safe**2 + vr if noise.pair is not None else None
+        ss = tile_sum(r * r, tile)
+        s2 = np.maximum(ss - safe * d * d, 0.0) / np.maximum(n3 - 1.0, 1.0)
+        vs = s2 / safe
+        v = np.maximum(vm, vs)
+        if vp is not None:
+            v = np.maximum(v, vp)
+        scale_ref = np.abs(rm)
+        zero_var = v <= 0
+        equal = np.abs(d) <= 1e-6 * np.maximum(scale_ref, 1e-12)
+        t = np.where(zero_var, np.where(equal, 0.0, np.copysign(np.inf, d)), d / np.sqrt(np.where(zero_var, 1.0, v)))
+        df = np.maximum(n3 - 1.0, 1.0) * np.ones_like(d)
+        p = np.where(np.isinf(t), 0.0, 2.0 * _sps.t.sf(np.abs(t), df))
+        p = np.where(zero_var & equal, 1.0, p)
+        floor = 1e-3 * max(float(np.mean(np.abs(ref[mask]))) if mask.any() else 0.0, 1e-12)
+        rel = d / np.maximum(scale_ref, floor)
+    valid = n >= min_n
+    return ScaleResult(tile, n, d, rm, v, vm, vs, vp, t, np.minimum(p, 1.0), rel, valid)
+
+
+def bias_test(resid: np.ndarray, ref: np.ndarray, mask: np.ndarray, noise: Noise, tiles, *, alpha: float,
+              min_effect: float, full_effect: float) -> BiasTest:
+    """Multi-scale tile test, Holm-corrected over every tile, scale and channel (module docstring)."""
+    h, w = resid.shape[:2]
+    scales = []
+    for tile in tiles:
+        if tile > 0 and tile >= max(h, w) and 0 in tiles:
+            continue  # the same test as the whole image
+        scales.append(scale_stats(resid, ref, mask, noise, tile))
+    ps = np.concatenate([s.p[s.valid].ravel() for s in scales]) if scales else np.zeros(0)
+    adj = adjust_p_values(ps, "holm") if ps.size else ps
+    k = 0
+    pix = np.zeros((h, w))
+    any_pen = False
+    worst = {}
+    for s in scales:
+        cnt = int(np.count_nonzero(s.valid)) * 3
+        pa = np.ones_like(s.p)
+        pa[s.valid] = adj[k:k + cnt].reshape(-1, 3)
+        k += cnt
+        s.p_adj = pa
+        s.rejected = (pa <= alpha) & s.valid[..., None]
+        s.penalised = s.rejected & (np.abs(s.rel) >= min_effect)
+        boxes = tile_boxes(h, w, s.tile)
+        for ty, tx in zip(*np.nonzero(s.penalised.any(axis=2))):
+            any_pen = True
+            y0, y1, x0, x1 = boxes[ty][tx]
+            e = float(np.max(np.abs(s.rel[ty, tx][s.penalised[ty, tx]])))
+            pix[y0:y1, x0:x1] = np.maximum(pix[y0:y1, x0:x1], e)
+            c = int(np.argmax(np.where(s.penalised[ty, tx], np.abs(s.t[ty, tx]), -1)))
+            if not worst or abs(s.t[ty, tx, c]) > abs(worst["t"]):
+                worst = {"tile": s.tile, "ty": int(ty), "tx": int(tx), "box": [y0, y1, x0, x1], "channel": CHANNELS[c],
+                         "t": float(s.t[ty, tx, c]), "p_adjusted": float(pa[ty, tx, c]), "rel": float(s.rel[ty, tx, c])}
+    bt = BiasTest(scales, alpha, min_effect, int(ps.size), (h, w), any_pen)
+    bt.pixel_effect = pix
+    bt.severity = float(np.mean(np.minimum(1.0, pix / full_effect))) if any_pen else 0.0
+    bt.worst = worst
+    b = scales[0]
+    ok = b.valid[..., None] & np.isfinite(b.var)
+    if ok.any():
+        excess = np.mean(np.where(ok, b.diff**2 - b.var, 0.0)) * b.diff.size / max(int(np.count_nonzero(ok)), 1)
+        mref = float(np.mean(np.abs(ref[mask]))) if mask.any() else 1.0
+        bt.excess_rms = float(np.sqrt(max(excess, 0.0)) / max(mref, 1e-12))
+        # Relative effect a single base tile needs to clear Holm's first threshold.
+        zcrit = float(_sps.norm.isf(alpha / max(ps.size, 1) / 2))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            need = zcrit * np.sqrt(b.var) / np.abs(b.ref)
+        need = need[ok & (np.abs(b.ref) > 0) & (b.var > 0)]
+        bt.min_detectable = float(np.median(need)) if need.size else 0.0
+    return bt
+
+
+# --------------------------------------------------------------------------
+# Noise level
+# --------------------------------------------------------------------------
+
+
+def noise_ratio(resid: np.ndarray, ref: np.ndarray, mask: np.ndarray, model_var_per_sample: np.ndarray,
+                ref_noise: np.ndarray, tile: int, pair: np.ndarray | None = None) -> float:
+    """Mean over tiles and channels of the student's relative noise over mcrt's per sample.
+
+    The measured variance is that of the graded image's pixel means: the
+    pair estimate ``(a - b)^2 / 4`` (two renders) or the spread of the
+    residuals in each tile less the reference's share. Both sides are taken
+    relative to their brightness (measured / mean(S)^2 against model /
+    mean(R)^2), so an image that is too bright or too dark is not called
+    noisy for it. The result is 1/spp_eff: mcrt with spp samples per pixel
+    has a ratio of 1/spp. A mean, not a median: per-pixel noise here is
+    heavy-tailed (rare bright paths), and the median tile of a correct
+    16-spp render looks like 150 spp, the mean like 16 to 30. NaN when no
+    tile has noise.
+    """
+    m = mask[..., None].astype(np.float64)
+    n = tile_sum(mask.astype(np.float64), tile)[..., None]
+    safe = np.maximum(n, 1.0)
+    r = np.where(m > 0, resid, 0.0)
+    d = tile_sum(r, tile) / safe
+    rm = tile_sum(np.where(m > 0, ref, 0.0), tile) / safe
+    sm = rm + d
+    if pair is not None:
+        meas = tile_sum(pair * m, tile) / safe
+    else:
+        # Residuals against the reference scaled to the tile's own brightness, so that an image
+        # brighter by a constant (or smoothly varying) factor keeps only its noise in the spread.
+        with np.errstate(divide="ignore", invalid="ignore"):
+            k = np.where(rm > 0, sm / np.where(rm > 0, rm, 1.0), 1.0)
+        h, w = resid.shape[:2]
+        kp = _expand_tiles(k, h, w, tile)
+        rr = np.where(m > 0, resid + ref - kp * ref, 0.0)
+        dd = tile_sum(rr, tile) / safe
+        meas = np.maximum(tile_sum(rr * rr, tile) - safe * dd * dd, 0.0) / np.maximum(n - 2, 1)
+        meas = np.maximum(meas - tile_sum(ref_noise * kp * kp * m, tile) / safe, 0.0)
+    model = tile_sum(model_var_per_sample * m, tile) / safe
+    ok = (n >= 4) & (model > 0) & (rm > 0) & (sm > 0.2 * rm)
+    if not ok.any():
+        return float("nan")
+    return float(np.mean((meas[ok] / sm[ok] ** 2) / (model[ok] / rm[ok] ** 2)))
+
+
+def _expand_tiles(t: np.ndarray, h: int, w: int, tile: int) -> np.ndarray:
+    size = tile if tile > 0 else max(h, w)
+    return np.repeat(np.repeat(t, size, axis=0), size, axis=1)[:h, :w]
+
+
+def quantisation_variance(image: np.ndarray, fmt: str) -> np.ndarray:
+    """Per-pixel variance q^2/12 of the rounding a file format applies (linear units)."""
+    x = np.abs(np.nan_to_num(image.astype(np.float64), nan=0.0, posinf=0.0, neginf=0.0))
+    if fmt == "half":
+        e = np.floor(np.log2(np.maximum(x, 2.0**-14)))
+        q = 2.0 ** (e - 10)
+    elif fmt == "rgbe":
+        mx = np.max(x, axis=-1, keepdims=True)
+        e = np.floor(np.log2(np.maximum(mx, 1e-30))) + 1
+        q = np.broadcast_to(2.0 ** (e - 8), x.shape)
+    elif fmt in ("png8", "png16", "png8-linear", "png16-linear"):
+        levels = 255.0 if fmt.startswith("png8") else 65535.0
+        if fmt.endswith("linear"):
+            q = np.full_like(x, 1.0 / levels)
+        else:
+            from mcrt.imageio import srgb_oetf
+
+            v = srgb_oetf(np.clip(x, 0.0, 1.0))
+            slope = np.where(v <= 0.04045, 1 / 12.92, 2.4 / 1.055 * ((v + 0.055) / 1.055) ** 1.4)
+            q = slope / levels
+    else:  # float32
+        q = x * 2.0**-23
+    return q * q / 12.0
+
+
+# --------------------------------------------------------------------------
+# Error metrics
+# --------------------------------------------------------------------------
+
+
+def metrics(image: np.ndarray, ref: np.ndarray, mask: np.ndarray, expected_noise_var: np.ndarray) -> dict:
+    """RMSE (absolute and relative), the RMSE noise alone would give, SSIM and FLIP.
+
+    SSIM (scikit-image) and FLIP (NVIDIA's ``flip_evaluator``, LDR mode)
+    compare the 8-bit sRGB previews (exposure 0, clipped): what a student
+    sees. (HDR-FLIP would tone-map at several exposures, 2 s per 64x64 image
+    here, too slow for a class.) Both grow with noise, so they are reported,
+    not graded.
+    """
+    out: dict = {}
+    img = np.nan_to_num(image.astype(np.float64), nan=0.0, posinf=0.0, neginf=0.0)
+    d = (img - ref)[mask]
+    mref = float(np.mean(np.abs(ref[mask]))) if mask.any() else 1.0
+    out["rmse"] = float(np.sqrt(np.mean(d**2))) if d.size else float("nan")
+    out["relative_rmse"] = out["rmse"] / max(mref, 1e-12)
+    out["noise_rmse"] = float(np.sqrt(np.mean(expected_noise_var[mask]))) if mask.any() else float("nan")
+    from mcrt.imageio import tonemap
+
+    a, b = tonemap(img) / 255.0, tonemap(ref) / 255.0
+    try:
+        from skimage.metrics import structural_similarity
+
+        win = min(7, *(s - (1 - s % 2) for s in img.shape[:2]))
+        out["ssim"] = float(structural_similarity(a, b, channel_axis=2, data_range=1.0, win_size=max(win, 3)))
+    except Exception as e:  # noqa: BLE001 - pragma: no cover - a metric library's trouble is not the student's
+        out["ssim"] = None
+        out["ssim_error"] = str(e)[:200]
+    try:
+        import contextlib
+        import io
+
+        import flip_evaluator
+
+        with contextlib.redirect_stdout(io.StringIO()):
+            fmap, fmean, _ = flip_evaluator.evaluate(b.astype(np.float32), a.astype(np.float32), "LDR", applyMagma=True)
+        out["flip"] = float(fmean)
+        out["_flip_map"] = fmap
+    except Exception as e:  # noqa: BLE001 - pragma: no cover - a metric library's trouble is not the student's
+        out["flip"] = None
+        out["flip_error"] = str(e)[:200]
+    return out
