@@ -402,6 +402,10 @@ def precision_sweep(scenes=SWEEP_SCENES, offsets=SWEEP_OFFSETS, factors=SWEEP_FA
             ok = True
         except ValueError:
             ok = False
+        if r is None:  # the renderer refused or failed on this scene
+            rows.append(SweepRow(name, cam, kind, value, renderer, g.ratio, ok, False, -1, -1, float("nan"), float("nan")))
+            say(f"  {name} {kind} {value:g} {renderer}: FAILED TO RENDER (guard ratio {g.ratio:.3g})")
+            return
         v = _compare(r, ref)
         rel = float((np.nanmean(r.mean) - ref.mean.mean()) / ref.mean.mean())
         nonfinite = int(np.count_nonzero(~np.isfinite(r.mean)))
@@ -411,11 +415,19 @@ def precision_sweep(scenes=SWEEP_SCENES, offsets=SWEEP_OFFSETS, factors=SWEEP_FA
 
     def mcrt_render(scene, cam, n, seed):
         # The sweep measures where float32 breaks, past the guard that would refuse these scenes.
-        return render(scene, cam, n, seed, None, width=res, height=res, progress=False, precision_guard=False)
+        try:
+            return render(scene, cam, n, seed, None, width=res, height=res, progress=False, precision_guard=False)
+        except (RuntimeError, ValueError) as e:
+            say(f"  mcrt failed: {str(e).splitlines()[0]}")
+            return None
 
     def mi_render(scene, cam, n, seed, default_clips=False):
-        with mitsuba_clips(0.01, 1e4) if default_clips else contextlib.nullcontext():
-            return render_mitsuba(scene, cam, res, res, n, seed, None, progress=False)
+        try:
+            with mitsuba_clips(0.01, 1e4) if default_clips else contextlib.nullcontext():
+                return render_mitsuba(scene, cam, res, res, n, seed, None, progress=False)
+        except (RuntimeError, ValueError) as e:
+            say(f"  Mitsuba failed: {str(e).splitlines()[0]}")
+            return None
 
     for i, (source, cam) in enumerate(scenes):
         base = load_scene(CANONICAL if source == "canonical.toml" else HARD_DIR / source)
@@ -645,7 +657,10 @@ def _sweep_tables(rows: list[SweepRow]) -> list[str]:
                     cells.append("accept" if sel[0].guard_ok else "refuse")
                 else:
                     s = sel[0]
-                    cells.append(("ok" if s.passed else "WRONG") + (f" {s.nonfinite} NaN/Inf" if s.nonfinite else f" {100 * s.mean_rel_diff:+.1f} %"))
+                    if s.nonfinite < 0:
+                        cells.append("failed to render")
+                    else:
+                        cells.append(("ok" if s.passed else "WRONG") + (f" {s.nonfinite} NaN/Inf" if s.nonfinite else f" {100 * s.mean_rel_diff:+.1f} %"))
             lines.append(f"| {scaled[0].scene} ({scaled[0].camera}) | {who} | " + " | ".join(cells) + " |")
         lines.append("")
     return lines
