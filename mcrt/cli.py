@@ -190,10 +190,11 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("mutants", help="list the bug catalogue")
     p.set_defaults(func=cmd_mutants)
 
-    from mcrt import bench, hardcases, reference, threeway
+    from mcrt import bench, hardcases, reference, threeway, validate
     from mcrt.grade.cli import register as register_grade
 
     reference.register(sub)
+    validate.register(sub)
     register_grade(sub)
     hardcases.register(sub)
     bench.register(sub)
