@@ -122,30 +122,24 @@ def cmd_mutants(args) -> int:
 
 
 def cmd_main(args) -> int:
-    """The main job: the canonical scene by both renderers, compared, into reports/canonical/."""
-    import numpy as np
-
+    """The main job: the convergence report of the canonical scene, and mcrt beside Mitsuba."""
     from mcrt.imageio import side_by_side
+    from mcrt.report import main_report
     from mcrt.stats import compare_images
 
-    scene = _load(args)
     out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
+    report = main_report(out, command="mcrt main")
+    print(f"convergence report: {report.folder / 'index.md'} and index.html")
+    scene = _load(args)
     s = scene.settings(camera=args.camera, width=args.res, height=args.res, spp=args.spp, seed=args.seed)
-    results = {}
-    for name in ("mcrt", "mitsuba"):
-        r = render_scene(name, scene, s, backend=args.backend)
-        render_to_files(r, out / f"{name}_{s.camera}.exr")
-        results[name] = r
-        print(f"{name}: {r.wall_time:.2f} s ({(r.compile_time or 0):.2f} s JIT), "
-              f"{s.width * s.height * s.spp / r.wall_time / 1e6:.2f} M paths/s")
+    results = {name: render_scene(name, scene, s, backend=args.backend) for name in ("mcrt", "mitsuba")}
     cmp = compare_images(results["mcrt"], results["mitsuba"], alpha=args.alpha)
     side_by_side(out / f"side_by_side_{s.camera}.png", [results["mcrt"].mean, results["mitsuba"].mean], ["mcrt", "Mitsuba 3 (path)"])
     cmp.heatmap(out / f"difference_{s.camera}.png")
-    print(cmp.summary())
+    for name, r in results.items():
+        print(f"{name}: {s.width}x{s.height}, {s.spp} spp: {r.wall_time:.2f} s, {s.width * s.height * s.spp / r.wall_time / 1e6:.2f} M paths/s")
+    print(f"mcrt against Mitsuba: {cmp.summary()}")
     print(f"wrote {out}/")
-    diff = np.abs(results["mcrt"].mean.mean() - results["mitsuba"].mean.mean())
-    print(f"image means: mcrt {results['mcrt'].mean.mean():.5f}, mitsuba {results['mitsuba'].mean.mean():.5f} (|diff| {diff:.5f})")
     return EXIT_OK if cmp.passed else EXIT_FAILED
 
 
@@ -172,7 +166,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--heatmap", default=None, help="write a PNG of the per-tile statistic here")
     p.set_defaults(func=cmd_compare)
 
-    p = sub.add_parser("main", help="the main job: render the canonical scene with both renderers and compare them")
+    p = sub.add_parser("main", help="the main job: the convergence report of the canonical scene, and mcrt beside Mitsuba")
     p.add_argument("--scene", default=None)
     p.add_argument("--camera", default="near")
     p.add_argument("--res", type=int, default=128)
@@ -190,9 +184,10 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("mutants", help="list the bug catalogue")
     p.set_defaults(func=cmd_mutants)
 
-    from mcrt import bench, hardcases, reference, threeway, validate
+    from mcrt import bench, hardcases, reference, report, threeway, validate
     from mcrt.grade.cli import register as register_grade
 
+    report.register(sub)
     reference.register(sub)
     validate.register(sub)
     register_grade(sub)

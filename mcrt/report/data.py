@@ -1,0 +1,77 @@
+"""data.json (every measurement and its provenance, versioned schema) and table.csv (one row per render)."""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+from dataclasses import asdict, fields
+from pathlib import Path
+from typing import Any
+
+from mcrt.report.metrics import CONVENTIONS, RELMSE_EPS, SlopeFit
+from mcrt.report.run import Measurement, ReportData
+from mcrt.report.summary import Summary
+
+#: Schema tag of data.json; bump the number when a field changes meaning or goes away.
+SCHEMA = "mcrt.report/1"
+
+#: Top-level keys every data.json has.
+TOP_KEYS = ("schema", "name", "config", "scene", "provenance", "reference", "conventions", "flip_parameters", "warmup",
+            "calibration", "ladders", "measurements", "summary", "runtime_s", "files")
+MEASUREMENT_KEYS = tuple(f.name for f in fields(Measurement))
+
+
+def clean(x: Any) -> Any:
+    """JSON-safe: NaN and infinities become None, tuples lists, paths strings, fits dicts."""
+    if isinstance(x, SlopeFit):
+        return clean(x.to_dict())
+    if isinstance(x, dict):
+        return {str(k): clean(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [clean(v) for v in x]
+    if isinstance(x, float):
+        return x if math.isfinite(x) else None
+    if isinstance(x, Path):
+        return str(x)
+    if hasattr(x, "item") and callable(x.item):  # numpy scalars
+        return clean(x.item())
+    return x
+
+
+def data_dict(data: ReportData, s: Summary, files: list[str]) -> dict[str, Any]:
+    cfg = data.config
+    return clean({
+        "schema": SCHEMA,
+        "name": cfg.name,
+        "config": cfg.to_dict(),
+        "scene": {"name": data.scene.name, "path": str(data.scene.path), "hash": data.scene.content_hash()},
+        "provenance": data.provenance,
+        "reference": dict(data.reference_info, floor=data.floor, width=cfg.width, height=cfg.height, max_depth=cfg.max_depth),
+        "conventions": dict(CONVENTIONS, relmse_eps=RELMSE_EPS),
+        "flip_parameters": data.flip_params,
+        "warmup": data.warmup,
+        "calibration": data.calibration,
+        "ladders": data.ladders,
+        "measurements": [asdict(m) for m in data.measurements],
+        "summary": {
+            "rows": s.rows, "fits": s.fits, "efficiency": s.efficiency, "ratios": s.ratios, "baseline": s.baseline,
+            "upper_rungs": s.upper_rungs, "equal_time": s.equal_time, "verdicts": s.verdicts,
+        },
+        "runtime_s": data.runtime,
+        "files": sorted(files),
+    })
+
+
+def write_json(path: Path, d: dict) -> Path:
+    Path(path).write_text(json.dumps(d, indent=1, allow_nan=False) + "\n", encoding="utf-8")
+    return Path(path)
+
+
+def write_csv(path: Path, data: ReportData) -> Path:
+    with open(path, "w", newline="", encoding="utf-8") as f:
+        w = csv.writer(f)
+        w.writerow(MEASUREMENT_KEYS)
+        for m in data.measurements:
+            w.writerow([repr(v) if isinstance(v, float) else v for v in asdict(m).values()])
+    return Path(path)
