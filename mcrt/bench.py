@@ -130,14 +130,9 @@ def environment() -> dict:
 
     import mcrt
 
-    cpu = platform.processor()
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                cpu = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
+    from mcrt.provenance import cpu_name
+
+    cpu = cpu_name()
     return {"mcrt": mcrt.__version__, "mitsuba": mi.__version__, "drjit": dr.__version__, "cpu": cpu,
             "threads": dr.thread_count(), "python": platform.python_version(), "date": time.strftime("%Y-%m-%d %H:%M:%S")}
 

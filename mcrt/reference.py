@@ -347,12 +347,9 @@ def _write_manifest(directory: Path, data: dict[str, Any]) -> None:
 
 def machine_info() -> dict[str, Any]:
     """Where this process runs: host, OS, CPU model, core count, Python."""
-    cpu = platform.processor() or ""
-    with contextlib.suppress(OSError):
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                cpu = line.split(":", 1)[1].strip()
-                break
+    from mcrt.provenance import cpu_name
+
+    cpu = cpu_name()
     return {
         "host": platform.node(),
         "platform": platform.platform(),

@@ -679,14 +679,9 @@ def versions() -> dict[str, str]:
 def _machine() -> dict[str, Any]:
     import os
 
-    cpu = platform.processor()
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                cpu = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
+    from mcrt.provenance import cpu_name
+
+    cpu = cpu_name()
     return {"platform": platform.platform(), "cpu": cpu, "cores": os.cpu_count()}
 
 

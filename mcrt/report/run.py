@@ -222,11 +222,9 @@ def reference_floor(ref: RenderResult) -> dict[str, float]:
 
 
 def _cpu() -> str:
-    with contextlib.suppress(OSError):
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    return platform.processor() or platform.machine()
+    from mcrt.provenance import cpu_name
+
+    return cpu_name()
 
 
 def _version(dist: str) -> str | None:
