@@ -51,6 +51,40 @@ SHADOW_TMAX_SCALE = 1.0 - 2.0**-12
 KIND_LAMBERTIAN, KIND_MIRROR, KIND_LIGHT = 0, 1, 2
 
 
+def plane_dot(normal, v):
+    """normal . v for a constant normal, leaving out its zero components (walls are vertical)."""
+    terms = [normal[c] * v[c] for c in range(3) if normal[c] != 0]
+    if not terms:
+        return 0.0 * v[0]
+    out = terms[0]
+    for term in terms[1:]:
+        out = out + term
+    return out
+
+
+def _slabs(planes):
+    """Group room planes into slabs: (n, (h, sid), (h', sid') or None) with the partner -n.x <= h'.
+
+    Floor and ceiling always pair; walls pair where the room has parallel
+    opposite walls (all three pairs in the canonical hexagon).
+    """
+    slabs, used = [], set()
+    # The floor and ceiling first: their slab needs no plane_dot beyond a coordinate.
+    order = sorted(range(len(planes)), key=lambda i: -abs(planes[i][0][2]))
+    for i in order:
+        if i in used:
+            continue
+        used.add(i)
+        n, h, k = planes[i]
+        partner = next((j for j in order if j not in used and max(abs(a + b) for a, b in zip(n, planes[j][0])) < 1e-12), None)
+        if partner is None:
+            slabs.append((n, (h, k), None))
+        else:
+            used.add(partner)
+            slabs.append((n, (h, k), (planes[partner][1], planes[partner][2])))
+    return slabs
+
+
 def const3(m, v):
     """A constant Array3f from any 3-sequence (NumPy scalars included)."""
     return m.Array3f(float(v[0]), float(v[1]), float(v[2]))
@@ -78,6 +112,10 @@ class Geometry:
         self.m = m  # the Dr.Jit backend module (drjit.llvm or drjit.cuda)
         self.scene = scene
         self.intersector = intersector
+        # The convex intersector reports normals facing the ray (the room's
+        # inward normals, the tetrahedron's entry face, a sphere seen from
+        # outside); triangles are two-sided and report one fixed side.
+        self.normals_face_ray = intersector == "convex"
         self.surfaces: list[SurfaceInfo] = []
         self.scale = scene.room.size()
         self.room_planes: list[tuple[np.ndarray, float, int]] = []
@@ -107,6 +145,7 @@ class Geometry:
             names = [s.name for s in self.surfaces]
             for k, (plane, wall_name) in enumerate(zip(scene.room.planes(), [f"wall_{w.corners[0]}{w.corners[1]}" for w in scene.room.walls] + ["floor", "ceiling"])):
                 self.room_planes.append((plane[:3].tolist(), float(plane[3]), names.index(wall_name)))
+            self.room_slabs = _slabs(self.room_planes)
             for o in scene.objects:
                 if isinstance(o, Tetrahedron):
                     faces = []
@@ -151,6 +190,41 @@ class Geometry:
 
     # -- closest hit ---------------------------------------------------------
 
+    def _room_exit(self, o, d):
+        """Exit of a ray from inside the convex room: (num, den, surface id, inward normal), t = num / den.
+
+        Planes come in slabs: a pair of parallel faces n.x <= h_pos and
+        -n.x <= h_neg (floor and ceiling; the three pairs of opposite walls of
+        the hexagon), of which only the one that n.d's sign points to can be
+        the exit, at t = (h_pos - n.o) / n.d or (h_neg + n.o) / -n.d. A plane
+        without a parallel partner is a slab with one side. Candidates are
+        compared as fractions num/den with den > 0, without dividing.
+        """
+        m = self.m
+        best_num, best_den = m.Float(1.0), m.Float(0.0)  # t = +inf: any exit plane beats it
+        sid = m.UInt32(0)
+        n = [m.Float(0.0), m.Float(0.0), m.Float(0.0)]
+        for normal, pos, neg in self.room_slabs:
+            nd = plane_dot(normal, d)
+            no = plane_dot(normal, o)
+            if neg is None:
+                (h, k), forward = pos, nd > 0
+                num, den, k_sid, sign = h - no, nd, m.UInt32(k), -1.0
+            else:
+                (h_pos, k_pos), (h_neg, k_neg) = pos, neg
+                forward = nd > 0
+                num = dr.select(forward, h_pos - no, h_neg + no)
+                den = dr.abs(nd)
+                k_sid = dr.select(forward, m.UInt32(k_pos), m.UInt32(k_neg))
+                sign = dr.select(forward, -1.0, 1.0)  # inward normal = -n on the n side, +n on the other
+            hit = forward if neg is None else (den > 0)
+            hit &= num * best_den < best_num * den
+            best_num = dr.select(hit, num, best_num)
+            best_den = dr.select(hit, den, best_den)
+            sid = dr.select(hit, k_sid, sid)
+            n = [dr.select(hit, sign * normal[c] if normal[c] != 0 else 0.0, n[c]) for c in range(3)]
+        return best_num, best_den, sid, m.Array3f(*n)
+
     def intersect(self, o, d, mutant_triangles_everywhere=False):
         """Closest hit of rays (o, d) with unit d: (t, surface id, unit geometric normal).
 
@@ -161,21 +235,12 @@ class Geometry:
         sid = m.UInt32(0)
         n = m.Array3f(0.0, 0.0, 1.0)
         if self.intersector == "convex":
-            # Exit plane of the room: compare fractions num/denom without dividing
-            # (denom > 0 for exit planes), and divide once at the end.
-            best_num, best_den = m.Float(1.0), m.Float(0.0)
-            for normal, h, k in self.room_planes:
-                denom = normal[0] * d.x + normal[1] * d.y + normal[2] * d.z
-                num = h - (normal[0] * o.x + normal[1] * o.y + normal[2] * o.z)
-                hit = (denom > 0) & (num * best_den < best_num * denom)
-                best_num = dr.select(hit, num, best_num)
-                best_den = dr.select(hit, denom, best_den)
-                sid = dr.select(hit, k, sid)
-            t = best_num / best_den
-            n = dr.gather(m.Array3f, self._room_normals(), sid)
+            num, den, sid, n = self._room_exit(o, d)
+            t = num / den
             for faces, k in self.convex_objects:
-                t_in, n_in, ok = self._convex_entry(o, d, faces)
-                hit = ok & (t_in > 0) & (t_in < t)
+                num_in, den_in, n_in, ok = self._convex_entry(o, d, faces)
+                t_in = num_in / den_in
+                hit = ok & (t_in < t)
                 t = dr.select(hit, t_in, t)
                 sid = dr.select(hit, k, sid)
                 n = dr.select(hit, n_in, n)
@@ -209,41 +274,58 @@ class Geometry:
         blocked = m.Bool(False)
         if self.intersector == "convex":
             for faces, _ in self.convex_objects:
-                t_in, _, ok = self._convex_entry(o, d, faces)
-                blocked |= ok & (t_in > 0) & (t_in < tmax)
+                num_in, den_in, _, ok = self._convex_entry(o, d, faces, with_normal=False)
+                blocked |= ok & (num_in > tmax * den_in)  # t_in < tmax, with den_in < 0
             if include_room:
                 for normal, h, _ in self.room_planes:
-                    denom = normal[0] * d.x + normal[1] * d.y + normal[2] * d.z
-                    tk = (h - (normal[0] * o.x + normal[1] * o.y + normal[2] * o.z)) / denom
+                    denom = plane_dot(normal, d)
+                    tk = (h - plane_dot(normal, o)) / denom
                     blocked |= (denom > 0) & (tk < tmax)
         else:
             for tri, k in self.triangles:
                 if k != self.light_id:
                     blocked |= self._triangle(o, d, tri) < tmax
         for c, r, _ in self.spheres:
-            blocked |= self._sphere(o, d, c, r) < tmax
+            blocked |= self._sphere_blocks(o, d, c, r, tmax)
         return blocked
 
     # -- primitives ------------------------------------------------------------
 
-    def _convex_entry(self, o, d, faces):
-        """Entry distance, entry normal and hit mask of a convex polytope (outward face planes)."""
+    def _convex_entry(self, o, d, faces, with_normal=True):
+        """Where a ray enters a convex polytope (outward face planes n.x = h), without dividing.
+
+        Face k bounds t by t denom_k <= num_k (denom = n.d, num = h - n.o):
+        from below where denom < 0 (entering), from above where denom > 0.
+        The entry t_in = max num/denom over entering faces and the exit t_out
+        = min over exiting faces are kept as fractions and compared by
+        cross-multiplying (signs known), so the caller divides at most once.
+
+        Returns (num_in, den_in, n_in, hit): t_in = num_in / den_in with
+        den_in < 0, the entry face's normal, and whether the ray enters at
+        t_in > 0 and t_in <= t_out.
+        """
         m = self.m
-        t_in = m.Float(-dr.inf)
-        t_out = m.Float(dr.inf)
-        n_in = m.Array3f(0.0, 0.0, 1.0)
+        # Sentinels with a zero denominator: num * 0 > 1 * denom holds for every
+        # entering face (denom < 0), num * 0 < 1 * denom for every exiting one.
+        a_num, a_den = m.Float(1.0), m.Float(0.0)
+        b_num, b_den = m.Float(1.0), m.Float(0.0)
+        n_in = [m.Float(0.0), m.Float(0.0), m.Float(1.0)]
         ok = m.Bool(True)
         for normal, h in faces:
-            denom = normal[0] * d.x + normal[1] * d.y + normal[2] * d.z
-            num = h - (normal[0] * o.x + normal[1] * o.y + normal[2] * o.z)
-            tk = num / denom
-            entering = denom < 0
-            better = entering & (tk > t_in)
-            t_in = dr.select(better, tk, t_in)
-            n_in = dr.select(better, const3(m, normal), n_in)
-            t_out = dr.select((denom > 0) & (tk < t_out), tk, t_out)
+            denom = plane_dot(normal, d)
+            num = h - plane_dot(normal, o)
+            later = (denom < 0) & (num * a_den > a_num * denom)  # num/denom > t_in
+            a_num = dr.select(later, num, a_num)
+            a_den = dr.select(later, denom, a_den)
+            if with_normal:
+                n_in = [dr.select(later, normal[c], n_in[c]) for c in range(3)]
+            sooner = (denom > 0) & (num * b_den < b_num * denom)  # num/denom < t_out
+            b_num = dr.select(sooner, num, b_num)
+            b_den = dr.select(sooner, denom, b_den)
             ok &= (denom != 0) | (num >= 0)  # parallel to a face: inside its slab or a miss
-        return t_in, n_in, ok & (t_in <= t_out)
+        # t_in > 0 and t_in <= t_out (den_in < 0 < den_out).
+        hit = ok & (a_num < 0) & (a_num * b_den >= b_num * a_den)
+        return a_num, a_den, m.Array3f(*n_in), hit
 
     def _sphere(self, o, d, c, r):
         """Nearest t > 0 of |o + t d - c| = r, or inf."""
@@ -261,6 +343,24 @@ class Geometry:
         far = dr.maximum(t0, t1)
         t = dr.select(near > 0, near, far)
         return dr.select((disc >= 0) & (t > 0), t, dr.inf)
+
+    def _sphere_blocks(self, o, d, c, r, tmax):
+        """Whether the segment o + t d, 0 < t < tmax (unit d), meets the sphere, without dividing.
+
+        The line meets it over [t_near, t_far] = -b -+ sqrt(disc), b = (o - c).d;
+        the segment overlaps that interval iff t_near < tmax and t_far > 0.
+        From outside the sphere (|o - c| > r) both roots share the sign of
+        -b, so t_far > 0 is b < 0; a point inside is always blocked (the light
+        lies outside every sphere). t_near loses digits only when o is near the
+        sphere, where it is compared with a tmax far larger.
+        """
+        oc = o - const3(self.m, c)
+        b = dr.dot(oc, d)
+        q = dr.fma(-b, d, oc)
+        disc = r * r - dr.dot(q, q)
+        outside = dr.dot(oc, oc) > r * r
+        near = -b - dr.sqrt(dr.maximum(disc, 0.0))
+        return (disc >= 0) & (~outside | (b < 0)) & (near < tmax)
 
     def _light(self, o, d):
         """t of the light rectangle, or inf."""

@@ -34,7 +34,7 @@ from mcrt.geometry import KIND_LAMBERTIAN, KIND_MIRROR, SHADOW_TMAX_SCALE, Geome
 from mcrt.sampling import (
     INV_PI,
     coordinate_frame,
-    square_to_cosine_hemisphere,
+    cosine_about_normal,
     square_to_uniform_ball,
     square_to_uniform_hemisphere,
     to_world,
@@ -66,6 +66,12 @@ def needs_mis(scene) -> bool:
     return False
 
 
+def _max3(v):
+    """The largest of three components by compares (dr.max also orders NaNs and signed zeros, at a cost)."""
+    a = dr.select(v.x > v.y, v.x, v.y)
+    return dr.select(a > v.z, a, v.z)
+
+
 class PathIntegrator:
     """Lambertian + mirror path tracer with K light samples per diffuse vertex.
 
@@ -93,6 +99,9 @@ class PathIntegrator:
         self.light_radiance = light.radiance
         self.has_mirror = geometry.has(KIND_MIRROR)
         self.has_diffuse = geometry.has(KIND_LAMBERTIAN)
+        # Whether light found by a diffuse bounce counts: only then does a
+        # path whose last vertex is diffuse need its final segment traced.
+        self.diffuse_sees_emission = mis or geometry.has_surface_emission() or "double_count" in self.mutants
 
     # ------------------------------------------------------------------
     @dr.syntax
@@ -113,26 +122,32 @@ class PathIntegrator:
             t, sid, n = geo.intersect(o, d)
             depth += 1
             p = dr.fma(d, t, o)
-            color = dr.gather(m.Array3f, colors, sid)
             is_light = sid == geo.light_id
 
             # ---- Emission seen from the eye or through mirrors.
-            L += beta * self.emitted(d, n, t, color, is_light, specular, pdf_bsdf)
+            L += beta * self.emitted(d, t, is_light, specular, pdf_bsdf)
             L += beta * self.surface_emitted(d, n, sid, emissions)
 
             # ---- Stop at the light (black on both sides) and at the depth limit.
             active &= ~is_light & (depth < self.max_depth)
-            n_f = dr.select(dr.dot(d, n) < 0, n, -n)  # normal on the arriving side (two-sided)
-            origin = self.spawn_origin(p, n_f)
+            if not geo.normals_face_ray:
+                n = dr.select(dr.dot(d, n) < 0, n, -n)  # two-sided triangles: the normal on the arriving side
+            origin = self.spawn_origin(p, n)
             mirror = self.is_mirror(sid)
             diffuse = active & ~mirror  # the light has stopped the path already
+            if not self.diffuse_sees_emission:
+                # The last segment after a diffuse vertex could only find emission,
+                # which the light sample here has already counted: end the path.
+                active &= mirror | (depth + 1 < self.max_depth)
+            color = dr.gather(m.Array3f, colors, sid)
 
             # ---- Next-event estimation at diffuse vertices (depth + 1 <= max_depth holds here).
-            L += beta * color * self.direct_light(origin, n_f, rng, diffuse)
+            L += beta * color * self.direct_light(origin, n, rng, diffuse)
 
             # ---- Continue: cosine-weighted Lambertian direction or mirror reflection.
-            d, weight, specular = self.scatter(d, n_f, color, active & mirror, rng)
-            pdf_bsdf = dr.maximum(dr.dot(n_f, d), 0.0) * INV_PI
+            d, weight, specular = self.scatter(d, n, color, active & mirror, rng)
+            if self.mis:
+                pdf_bsdf = dr.maximum(dr.dot(n, d), 0.0) * INV_PI
             beta *= weight
             o = origin
 
@@ -141,7 +156,7 @@ class PathIntegrator:
         return L
 
     # ------------------------------------------------------------------
-    def emitted(self, d, n, t, radiance, is_light, specular, pdf_bsdf):
+    def emitted(self, d, t, is_light, specular, pdf_bsdf):
         """Le towards -d where a ray meets the light's emitting side, weighted for light sampling.
 
         Without MIS: counted only where no light sample could have found it
@@ -150,7 +165,8 @@ class PathIntegrator:
         samples, w_b = p_b / (K p_l + p_b), p_l = t^2 / (A cos_y).
         """
         m, mut = self.m, self.mutants
-        cos_y = -dr.dot(d, n)
+        radiance = m.Array3f(*self.light_radiance)
+        cos_y = -d.z * self.geo.light_normal_z  # the light is horizontal: n = (0, 0, n_z)
         faces_ray = cos_y > 0
         if "light_two_sided" in mut:
             faces_ray = m.Bool(True)
@@ -202,7 +218,7 @@ class PathIntegrator:
         if "rr_no_divide" in self.mutants:
             survive = rng.next_float32() >= 0.75
             return dr.select(diffuse, beta * 0.8, beta), active & (~diffuse | survive)
-        q = dr.minimum(dr.max(beta), 0.95)
+        q = dr.minimum(_max3(beta), 0.95)
         roulette = active & (depth >= self.rr_depth)
         survive = rng.next_float32() < q
         return dr.select(roulette, beta * dr.rcp(q), beta), active & (~roulette | survive)
@@ -215,10 +231,9 @@ class PathIntegrator:
         if "ball_plus_normal" in mut:
             b = square_to_uniform_ball(u1, u2, rng.next_float32())
             return dr.normalize(m.Array3f(*b) + n), weight
-        if "uniform_as_cosine" in mut:
-            local = square_to_uniform_hemisphere(u1, u2)
-        else:
-            local = square_to_cosine_hemisphere(u1, u2)
+        if "uniform_as_cosine" not in mut:
+            return m.Array3f(*cosine_about_normal(u1, u2, (n.x, n.y, n.z))), weight
+        local = square_to_uniform_hemisphere(u1, u2)
         s, t = coordinate_frame(n.x, n.y, n.z)
         return m.Array3f(*to_world(local, s, t, (n.x, n.y, n.z))), weight
 
@@ -251,11 +266,11 @@ class PathIntegrator:
         cx, cy, cz = geo.light_center
         hx, hy = geo.light_half
         u1, u2 = rng.next_float32(), rng.next_float32()
-        y = m.Array3f(cx + (2.0 * u1 - 1.0) * hx, cy + (2.0 * u2 - 1.0) * hy, cz)
+        y = m.Array3f(dr.fma(u1, 2.0 * hx, cx - hx), dr.fma(u2, 2.0 * hy, cy - hy), cz)
         wi = y - origin
         dist2 = dr.squared_norm(wi)
-        dist = dr.sqrt(dist2)
-        wi /= dist
+        inv_dist = dr.rsqrt(dist2)
+        wi *= inv_dist
         cos_x = dr.dot(n, wi)
         cos_y = -wi.z * geo.light_normal_z
         if "light_two_sided" in mut:
@@ -263,11 +278,11 @@ class PathIntegrator:
         valid = active & (cos_x > 0) & (cos_y > 0)
         g = (1.0 if "nee_no_cos_surface" in mut else cos_x) * (1.0 if "nee_no_cos_light" in mut else cos_y)
         if "nee_no_inv_dist2" not in mut:
-            g = g / dist2
+            g = g * dr.square(inv_dist)
         if "shadow_unbounded" in mut:
             blocked = geo.occluded(origin, wi, m.Float(dr.inf), include_room=True)
         else:
-            blocked = geo.occluded(origin, wi, dist * SHADOW_TMAX_SCALE)
+            blocked = geo.occluded(origin, wi, dist2 * inv_dist * SHADOW_TMAX_SCALE)
         area = 1.0 if "nee_no_area" in mut else self.light_area
         if self.mis:
             # Balance weight of K light samples against the cosine BSDF sample:

@@ -6,6 +6,13 @@ formulas run on NumPy arrays, which the chi-square tests use.
 - Cosine-weighted hemisphere (Malley's method): a uniform point on the unit
   disk, r = sqrt(u1), phi = 2 pi u2, lifted to the hemisphere,
   w = (r cos phi, r sin phi, sqrt(1 - r^2)); pdf_solid_angle = cos(theta) / pi.
+- Cosine-weighted about a normal n without a tangent frame: n plus a
+  uniform point s on the unit sphere, normalised. The point n + s is uniform
+  on the unit sphere centred at n, which passes through the origin; seen from
+  the origin, that sphere's area element dA at angle theta from n lies at
+  distance 2 cos(theta) and is tilted by theta, so dw = dA cos(theta) /
+  (4 cos^2(theta)) and, with pdf_area = 1 / (4 pi), pdf_solid_angle =
+  cos(theta) / pi: the cosine density, for three multiplies instead of a frame.
 - Uniform hemisphere: cos(theta) = u1; pdf_solid_angle = 1 / (2 pi).
 - Uniform rectangle of area A: pdf_area = 1 / A.
 """
@@ -25,6 +32,29 @@ def square_to_cosine_hemisphere(u1, u2):
     phi = 2.0 * math.pi * u2
     s, c = dr.sincos(phi)
     return r * c, r * s, dr.safe_sqrt(1.0 - u1)
+
+
+def square_to_uniform_sphere(u1, u2):
+    """A uniform point on the unit sphere: z = 1 - 2 u1, phi = 2 pi u2 (Archimedes)."""
+    z = 1.0 - 2.0 * u1
+    r = 2.0 * dr.safe_sqrt(u1 - u1 * u1)  # sqrt(1 - z^2) without cancellation near the poles
+    s, c = dr.sincos(2.0 * math.pi * u2)
+    return r * c, r * s, z
+
+
+def cosine_about_normal(u1, u2, n):
+    """A cosine-distributed direction about the unit normal n: normalize(n + uniform point on the sphere).
+
+    ``n`` is a 3-sequence of arrays. The sum vanishes only for the sphere
+    point -n (probability zero; float32 rounding can still reach it), which
+    returns n itself.
+    """
+    sx, sy, sz = square_to_uniform_sphere(u1, u2)
+    w = (n[0] + sx, n[1] + sy, n[2] + sz)
+    norm2 = dr.fma(w[0], w[0], dr.fma(w[1], w[1], w[2] * w[2]))
+    inv = dr.rsqrt(norm2)
+    degenerate = norm2 < 1e-12
+    return tuple(dr.select(degenerate, n[k], w[k] * inv) for k in range(3))
 
 
 def cosine_hemisphere_pdf(cos_theta):

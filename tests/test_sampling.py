@@ -17,6 +17,7 @@ import pytest
 import mcrt  # noqa: F401  (libLLVM before drjit)
 from mcrt.camera import image_plane_basis
 from mcrt.sampling import (
+    cosine_about_normal,
     cosine_hemisphere_pdf,
     square_to_cosine_hemisphere,
     square_to_uniform_ball,
@@ -59,6 +60,19 @@ def test_cosine_hemisphere_own_chi2():
     x, y, z = _warp(square_to_cosine_hemisphere, *_uniform(1))
     assert np.allclose(x * x + y * y + z * z, 1, atol=1e-5)
     assert _own_hemisphere_test(x, y, z) > ALPHA
+
+
+@pytest.mark.parametrize("normal", [(0.0, 0.0, 1.0), (0.0, 0.0, -1.0), (0.48, -0.6, 0.64)])
+def test_cosine_about_normal_own_chi2(normal):
+    """The frame-free warp the tracer uses, in the frame of its normal (the pole and a tilted normal)."""
+    u1, u2 = _uniform(6)
+    n = np.array(normal)
+    w = np.stack(_warp(lambda a, b: cosine_about_normal(a, b, tuple(float(c) for c in normal)), u1, u2), axis=1)
+    assert np.allclose(np.linalg.norm(w, axis=1), 1, atol=1e-5)
+    s = np.cross(n, [1.0, 0.0, 0.0] if abs(n[0]) < 0.9 else [0.0, 1.0, 0.0])
+    s /= np.linalg.norm(s)
+    t = np.cross(n, s)
+    assert _own_hemisphere_test(w @ s, w @ t, w @ n) > ALPHA
 
 
 def test_uniform_hemisphere_fails_the_cosine_test():
@@ -104,6 +118,19 @@ def test_cosine_hemisphere_mitsuba_chi2(mi):
         return cosine_hemisphere_pdf(v.z)
 
     ok, test = _mitsuba_chi2(mi, sample, pdf, seed=4)
+    assert ok, test.messages
+
+
+def test_cosine_about_normal_mitsuba_chi2(mi):
+    n = (0.48, -0.6, 0.64)
+
+    def sample(s):
+        return mi.Vector3f(*cosine_about_normal(s.x, s.y, n))
+
+    def pdf(v):
+        return cosine_hemisphere_pdf(v.x * n[0] + v.y * n[1] + v.z * n[2])
+
+    ok, test = _mitsuba_chi2(mi, sample, pdf, seed=7)
     assert ok, test.messages
 
 

@@ -16,9 +16,10 @@ study's seeds (500000 + i) and are shared by the tests of this module.
   its nominal level the count K is Binomial(10, 0.01); P(K >= 2) = 0.43 %,
   so more than FA_BOUND = 1 false alarm fails the test.
 * The same comparison against the committed high-spp reference instead of
-  an equal-budget Mitsuba render false-alarms far more often than ALPHA
-  (measured in reports/validation/against_reference/): a strict xfail pins
-  that, so that a fix of the test shows up here.
+  an equal-budget Mitsuba render false-alarms more often than ALPHA
+  (measured over 200 seeds in reports/validation/against_reference/). Ten
+  seeds cannot pin a rate of that size either way (1 of these 10 renders
+  false-alarms), so it is not tested here.
 * Power: each mutant on two seeds (mcrt 20100, 20101) must be rejected on
   both. Where the power study found a mutant below the 95 % goal at the
   default configuration, it is tested where the study found it detected
@@ -91,14 +92,6 @@ def test_false_alarms_within_their_bound(scene, mitsuba):
     assert p["n"] == len(FA_SEEDS)
     failed = [t["summary"] for t in fa["trials"] if t["rejected"]]
     assert p["k"] <= FA_BOUND, f"{p['k']} false alarms in {p['n']} correct renders (bound {FA_BOUND}):\n" + "\n".join(failed)
-
-
-@pytest.mark.xfail(strict=True, reason="measured: the 1024-spp side of a comparison with a 32768-spp reference misses rare "
-                   "high-weight paths (ceiling - mirror sphere - light), so its tile means and its own variance are both "
-                   "low and the test false-alarms with negative t far above alpha (reports/validation/against_reference/)")
-def test_false_alarms_against_the_committed_reference_within_their_bound(scene):
-    fa = _fa(scene, validate.Opponent(scene, "reference"))
-    assert fa["primary"]["k"] <= FA_BOUND
 
 
 def _comparison(scene, other, mutant, seed, spp, max_depth):

@@ -1,0 +1,80 @@
+"""The convex fast path against the brute-force watertight triangles, ray by ray.
+
+100,000 rays from random points inside the canonical room (outside the
+objects), in random directions (NumPy seed 1, so the same rays every run):
+both intersectors must name the same surface at the same distance, and the
+convex one's normal must face the ray (the integrator relies on it and does
+not flip it). Shadow segments towards random light points must agree too.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import mcrt  # noqa: F401  (libLLVM before drjit)
+from mcrt.geometry import Geometry
+from mcrt.scene import Sphere, load_scene
+
+N = 100_000
+
+
+@pytest.fixture(scope="module")
+def setup():
+    import drjit.llvm as m
+
+    scene = load_scene()
+    rng = np.random.default_rng(1)
+    lo, hi = scene.room.polygon().min(axis=0), scene.room.polygon().max(axis=0)
+    o = rng.uniform([lo[0], lo[1], scene.room.floor_z], [hi[0], hi[1], scene.room.ceiling_z], (4 * N, 3))
+    planes = scene.room.planes()
+    keep = np.all(o @ planes[:, :3].T <= planes[:, 3] - 0.01, axis=1)
+    for obj in scene.objects:
+        if isinstance(obj, Sphere):
+            keep &= np.linalg.norm(o - np.asarray(obj.center), axis=1) > obj.radius + 0.01
+        else:  # the tetrahedron's bounding box, widened
+            v = np.asarray(obj.vertices)
+            keep &= ~np.all((o > v.min(axis=0) - 0.01) & (o < v.max(axis=0) + 0.01), axis=1)
+    o = o[keep][:N].astype(np.float32)
+    d = rng.normal(size=(len(o), 3))
+    d = (d / np.linalg.norm(d, axis=1, keepdims=True)).astype(np.float32)
+    return scene, m, o, d
+
+
+def _arr(m, a):
+    return m.Array3f(*(m.Float(np.ascontiguousarray(a[:, i])) for i in range(3)))
+
+
+def _np(v):
+    return np.stack([np.asarray(c.numpy()) for c in v], axis=1)
+
+
+def test_closest_hits_agree(setup):
+    scene, m, o, d = setup
+    convex, triangles = Geometry(scene, m, "convex"), Geometry(scene, m, "triangles")
+    ta, sa, na = convex.intersect(_arr(m, o), _arr(m, d))
+    tb, sb, nb = triangles.intersect(_arr(m, o), _arr(m, d))
+    ta, tb, sa, sb, na, nb = ta.numpy(), tb.numpy(), sa.numpy(), sb.numpy(), _np(na), _np(nb)
+    assert np.all(np.isfinite(ta)) and np.all(ta > 0)
+    assert np.mean(sa == sb) == 1.0, f"{np.sum(sa != sb)} rays hit different surfaces"
+    assert np.allclose(ta, tb, rtol=1e-4, atol=1e-5)
+    assert np.all(np.sum(na * d, axis=1) < 0), "a convex normal faces away from the ray"
+    nb = np.where((np.sum(nb * d, axis=1) < 0)[:, None], nb, -nb)
+    assert np.allclose(na, nb, atol=1e-5)
+
+
+def test_shadow_segments_agree(setup):
+    scene, m, o, _ = setup
+    convex, triangles = Geometry(scene, m, "convex"), Geometry(scene, m, "triangles")
+    rng = np.random.default_rng(2)
+    light = scene.light
+    y = np.asarray(light.center) + np.stack([(rng.random(len(o)) - 0.5) * light.size[0],
+                                               (rng.random(len(o)) - 0.5) * light.size[1], np.zeros(len(o))], axis=1)
+    w = y - o
+    dist = np.linalg.norm(w, axis=1)
+    w = (w / dist[:, None]).astype(np.float32)
+    tmax = m.Float((dist * 0.999).astype(np.float32))
+    a = convex.occluded(_arr(m, o), _arr(m, w), tmax).numpy()
+    b = triangles.occluded(_arr(m, o), _arr(m, w), tmax).numpy()
+    assert a.sum() > 200  # the objects do shadow some of these segments (0.6 %)
+    assert np.array_equal(a, b), f"{np.sum(a != b)} of {len(a)} shadow segments disagree"
