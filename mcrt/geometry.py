@@ -305,12 +305,15 @@ class Geometry:
         t_in > 0 and t_in <= t_out.
         """
         m = self.m
-        # Sentinels with a zero denominator: num * 0 > 1 * denom holds for every
-        # entering face (denom < 0), num * 0 < 1 * denom for every exiting one.
+        # t_in starts at a sentinel with a zero denominator: num * 0 > 1 * denom holds
+        # for every entering face (denom < 0). t_out starts at a finite 2^100
+        # (num < 2^100 denom for every exiting face the scene can have); a face
+        # parallel to the ray (denom = 0) counts as exiting, and from outside
+        # its slab (num < 0) it sets t_out = num / 0 = -inf: a miss, with no
+        # separate test.
         a_num, a_den = m.Float(1.0), m.Float(0.0)
-        b_num, b_den = m.Float(1.0), m.Float(0.0)
+        b_num, b_den = m.Float(2.0**100), m.Float(1.0)
         n_in = [m.Float(0.0), m.Float(0.0), m.Float(1.0)]
-        ok = m.Bool(True)
         for normal, h in faces:
             denom = plane_dot(normal, d)
             num = h - plane_dot(normal, o)
@@ -319,12 +322,11 @@ class Geometry:
             a_den = dr.select(later, denom, a_den)
             if with_normal:
                 n_in = [dr.select(later, normal[c], n_in[c]) for c in range(3)]
-            sooner = (denom > 0) & (num * b_den < b_num * denom)  # num/denom < t_out
+            sooner = (denom >= 0) & (num * b_den < b_num * denom)  # num/denom < t_out
             b_num = dr.select(sooner, num, b_num)
             b_den = dr.select(sooner, denom, b_den)
-            ok &= (denom != 0) | (num >= 0)  # parallel to a face: inside its slab or a miss
-        # t_in > 0 and t_in <= t_out (den_in < 0 < den_out).
-        hit = ok & (a_num < 0) & (a_num * b_den >= b_num * a_den)
+        # t_in > 0 and t_in <= t_out (den_in < 0 <= den_out).
+        hit = (a_num < 0) & (a_num * b_den >= b_num * a_den)
         return a_num, a_den, m.Array3f(*n_in), hit
 
     def _sphere(self, o, d, c, r):

@@ -92,15 +92,28 @@ class Tracer:
         self.cam = scene.camera(self.camera)
 
     def sample_pass(self, seed: int, pass_index: int, n: int) -> tuple[np.ndarray, np.ndarray]:
-        """Per-pixel sums of x and x^2 over ``n`` new samples per pixel (float64, H x W x 3)."""
+        """Per-pixel sums of x and x^2 over ``n`` new samples per pixel (float64, H x W x 3).
+
+        The sums are formed inside the path kernel: lanes add x and x^2 (as
+        float64) into slots of GROUP consecutive lanes of one pixel, each
+        packet first reducing its own lanes (ReduceMode.Local), so a slot
+        receives one addition per packet. With packets of GROUP lanes or more
+        that is one addition, and two when the packet is half a group wide:
+        float additions commute, so the sums do not depend on which thread
+        adds first and a seed gives the same image bit for bit. The slots of
+        a pixel are added in a second, ordered reduction.
+        """
         import drjit as dr
 
         m = self.m
         W, H = self.width, self.height
-        lanes = W * H * n
+        stride, group = pass_layout(n)
+        lanes = W * H * stride
         idx = dr.arange(m.UInt32, lanes)
-        n_op = dr.opaque(m.UInt32, n)
-        pixel = idx // n_op
+        # lane // stride in float64 (exact for lanes < 2^32): an integer division by an
+        # opaque value would be 16 scalar divides per packet.
+        pixel = m.UInt32((m.Float64(idx) + 0.5) * dr.opaque(m.Float64, 1.0 / stride))
+        sample = idx - pixel * dr.opaque(m.UInt32, stride)
         col = m.Float(pixel % W)
         row = m.Float(pixel // W)
         state, seq = stream_seeds(seed, pass_index)
@@ -115,16 +128,42 @@ class Tracer:
         d = dr.normalize(const3(m, center) + sx * const3(m, half_right) + sy * const3(m, half_up))
         o = const3(m, self.cam.eye)
         L = self.integrator.radiance(o, d, rng)
-        dr.eval(L)  # once, before the per-channel reductions
-        s1 = np.empty((H, W, 3))
-        s2 = np.empty((H, W, 3))
+
+        slots = stride // group  # per pixel
+        used = sample < dr.opaque(m.UInt32, n)  # lanes past n pad the pass to whole groups
+        # Layout (moment, channel, pixel, slot): each (moment, channel, pixel) is one block of ``slots``.
+        slot = pixel * slots + (sample >> dr.opaque(m.UInt32, group.bit_length() - 1))
+        acc = dr.zeros(m.Float64, 6 * W * H * slots)
         for c in range(3):
             x = m.Float64(L[c])
-            a, b = dr.block_sum(x, n), dr.block_sum(x * x, n)
-            dr.eval(a, b)
-            s1[..., c] = a.numpy().reshape(H, W)
-            s2[..., c] = b.numpy().reshape(H, W)
-        return s1, s2
+            dr.scatter_reduce(dr.ReduceOp.Add, acc, x, slot + c * (W * H * slots), used, mode=dr.ReduceMode.Local)
+            dr.scatter_reduce(dr.ReduceOp.Add, acc, x * x, slot + (3 + c) * (W * H * slots), used, mode=dr.ReduceMode.Local)
+        if slots > 1:
+            dr.eval(acc)
+            acc = dr.block_sum(acc, slots)
+        sums = acc.numpy().reshape(2, 3, H, W)
+        return np.moveaxis(sums[0], 0, -1), np.moveaxis(sums[1], 0, -1)
+
+
+#: Lanes summed into one slot inside the kernel (a power of two no wider than a packet of 16).
+GROUP = 16
+
+
+def pass_layout(n: int) -> tuple[int, int]:
+    """(lanes per pixel, lanes per slot) of a pass of ``n`` samples per pixel.
+
+    Up to GROUP samples: the next power of two, one slot; beyond: whole groups of GROUP.
+    """
+    if n <= GROUP:
+        stride = 1 << (n - 1).bit_length()
+        return stride, stride
+    return -(-n // GROUP) * GROUP, GROUP
+
+
+def pass_size(width: int, height: int, spp: int) -> int:
+    """Samples per pixel in one pass: the film's budget, rounded down to whole groups (no padded lanes)."""
+    n = samples_per_pass(width, height, spp)
+    return n if n <= GROUP else n // GROUP * GROUP
 
 
 def srgb_encode(x: np.ndarray) -> np.ndarray:
@@ -163,7 +202,7 @@ def render(
     s = scene.settings(camera=camera, spp=spp, seed=seed, max_depth=max_depth, light_samples=light_samples, width=width, height=height, rr_depth=rr_depth)
     tracer = Tracer(scene, s.camera, s.width, s.height, s.max_depth, s.light_samples, s.rr_depth, backend, intersector,
                     frozenset(mutants), precision_guard, mis)
-    per_pass = spp_per_pass or samples_per_pass(s.width, s.height, s.spp)
+    per_pass = spp_per_pass or pass_size(s.width, s.height, s.spp)
     bar = Progress(s.spp, label="mcrt", enabled=progress)
     flag = dr.flag(dr.JitFlag.KernelHistory)
     dr.set_flag(dr.JitFlag.KernelHistory, True)

@@ -42,6 +42,28 @@ def test_passes_do_not_reuse_samples(scene):
     assert np.mean(r.variance > 0) > 0.9
 
 
+def test_pass_layout():
+    """Lanes per pixel and per in-kernel slot: powers of two up to a group, then whole groups."""
+    from mcrt.tracer import GROUP, pass_layout, pass_size
+
+    assert [pass_layout(n) for n in (1, 3, 4, 16, 17, 36, 64)] == [(1, 1), (4, 4), (4, 4), (16, 16), (32, 16), (48, 16), (64, 16)]
+    assert pass_size(256, 256, 1000) % GROUP == 0 and pass_size(8, 8, 5) == 5
+
+
+@pytest.mark.parametrize("per_pass", [3, 36])
+def test_padded_lanes_are_not_counted(scene, per_pass):
+    """Passes of 3 and 36 samples run 4 and 48 lanes per pixel; the extra lanes must not enter the sums.
+
+    Counting them would brighten the image by 4/3 at the 3-sample layout and
+    by 48/36 at the 36-sample layout (seed 5 against seed 6, level ALPHA).
+    """
+    a = _render(scene, spp=72, spp_per_pass=per_pass, seed=5, width=16, height=16)
+    b = _render(scene, spp=256, seed=6, width=16, height=16)
+    assert a.spp == 72
+    c = compare_images(a, b, alpha=ALPHA)
+    assert c.passed, c.summary()
+
+
 def test_finite_and_non_negative(scene):
     for cam in ("near", "far"):
         r = _render(scene, camera=cam, max_depth=-1)
