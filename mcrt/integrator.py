@@ -108,7 +108,6 @@ class PathIntegrator:
     def radiance(self, o, d, rng):
         """One radiance sample along each camera ray (o, d); d is unit length."""
         m, geo = self.m, self.geo
-        colors = geo.surface_table("color")
         emissions = geo.surface_table("emission") if geo.has_surface_emission() else None
 
         L = m.Array3f(0.0)  # radiance gathered so far
@@ -139,7 +138,7 @@ class PathIntegrator:
                 # The last segment after a diffuse vertex could only find emission,
                 # which the light sample here has already counted: end the path.
                 active &= mirror | (depth + 1 < self.max_depth)
-            color = dr.gather(m.Array3f, colors, sid)
+            color = self.surface_color(sid)
 
             # ---- Next-event estimation at diffuse vertices (depth + 1 <= max_depth holds here).
             L += beta * color * self.direct_light(origin, n, rng, diffuse)
@@ -178,6 +177,19 @@ class PathIntegrator:
         a = pdf_bsdf * self.light_area * cos_y
         w_bsdf = dr.select(specular, 1.0, a / (self.light_samples * t * t + a))
         return dr.select(is_light & faces_ray, radiance * w_bsdf, 0.0)
+
+    def surface_color(self, sid):
+        """Albedo, reflectance or radiance of surface ``sid``.
+
+        A chain of selects over the scene's dozen surfaces: measured faster
+        here than three gathers from a table.
+        """
+        m = self.m
+        out = [m.Float(0.0), m.Float(0.0), m.Float(0.0)]
+        for k, srf in enumerate(self.geo.surfaces):
+            hit = sid == k
+            out = [dr.select(hit, float(srf.color[c]), out[c]) for c in range(3)]
+        return m.Array3f(*out)
 
     def surface_emitted(self, d, n, sid, emissions):
         """Emission of Lambertian surfaces (furnace scenes), on the side their normal faces.

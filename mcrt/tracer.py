@@ -131,18 +131,19 @@ class Tracer:
 
         slots = stride // group  # per pixel
         used = sample < dr.opaque(m.UInt32, n)  # lanes past n pad the pass to whole groups
-        # Layout (moment, channel, pixel, slot): each (moment, channel, pixel) is one block of ``slots``.
-        slot = pixel * slots + (sample >> dr.opaque(m.UInt32, group.bit_length() - 1))
-        acc = dr.zeros(m.Float64, 6 * W * H * slots)
+        # Layout (moment, pixel, channel, slot): the slots of one sum are one block of ``slots``.
+        base = (pixel * 3) * slots + (sample >> dr.opaque(m.UInt32, group.bit_length() - 1))
+        moment = 3 * W * H * slots
+        acc = dr.zeros(m.Float64, 2 * moment)
         for c in range(3):
             x = m.Float64(L[c])
-            dr.scatter_reduce(dr.ReduceOp.Add, acc, x, slot + c * (W * H * slots), used, mode=dr.ReduceMode.Local)
-            dr.scatter_reduce(dr.ReduceOp.Add, acc, x * x, slot + (3 + c) * (W * H * slots), used, mode=dr.ReduceMode.Local)
+            dr.scatter_reduce(dr.ReduceOp.Add, acc, x, base + c * slots, used, mode=dr.ReduceMode.Local)
+            dr.scatter_reduce(dr.ReduceOp.Add, acc, x * x, base + (c * slots + moment), used, mode=dr.ReduceMode.Local)
         if slots > 1:
             dr.eval(acc)
             acc = dr.block_sum(acc, slots)
-        sums = acc.numpy().reshape(2, 3, H, W)
-        return np.moveaxis(sums[0], 0, -1), np.moveaxis(sums[1], 0, -1)
+        sums = acc.numpy().reshape(2, H, W, 3)
+        return sums[0], sums[1]
 
 
 #: Lanes summed into one slot inside the kernel (a power of two no wider than a packet of 16).
@@ -164,6 +165,21 @@ def pass_size(width: int, height: int, spp: int) -> int:
     """Samples per pixel in one pass: the film's budget, rounded down to whole groups (no padded lanes)."""
     n = samples_per_pass(width, height, spp)
     return n if n <= GROUP else n // GROUP * GROUP
+
+
+_TRACERS: dict = {}
+
+
+def _tracer(scene: Scene, *args) -> Tracer:
+    """A Tracer for these settings, reused across renders of the same scene content (a few kept)."""
+    key = (scene.content_hash(), scene.path, *args)
+    tracer = _TRACERS.get(key)
+    if tracer is None:
+        tracer = Tracer(scene, *args)
+        if len(_TRACERS) >= 8:
+            _TRACERS.pop(next(iter(_TRACERS)))
+        _TRACERS[key] = tracer
+    return tracer
 
 
 def srgb_encode(x: np.ndarray) -> np.ndarray:
@@ -200,8 +216,8 @@ def render(
     import drjit as dr
 
     s = scene.settings(camera=camera, spp=spp, seed=seed, max_depth=max_depth, light_samples=light_samples, width=width, height=height, rr_depth=rr_depth)
-    tracer = Tracer(scene, s.camera, s.width, s.height, s.max_depth, s.light_samples, s.rr_depth, backend, intersector,
-                    frozenset(mutants), precision_guard, mis)
+    tracer = _tracer(scene, s.camera, s.width, s.height, s.max_depth, s.light_samples, s.rr_depth, backend, intersector,
+                     frozenset(mutants), precision_guard, mis)
     per_pass = spp_per_pass or pass_size(s.width, s.height, s.spp)
     bar = Progress(s.spp, label="mcrt", enabled=progress)
     flag = dr.flag(dr.JitFlag.KernelHistory)
