@@ -15,7 +15,7 @@ import resource
 import statistics
 import sys
 import time
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 
 
@@ -124,6 +124,71 @@ def format_table(rows: list[BenchRow]) -> str:
     return "\n".join(lines)
 
 
+@dataclass
+class ProfileRow:
+    variant: str
+    kernel_ms: float  # median execution time of the path kernel (Dr.Jit kernel history)
+
+
+def kernel_profile(scene, *, camera: str = "near", res: int = 256, spp: int = 16, max_depth: int = 8, repeats: int = 5,
+                   backend: str = "llvm") -> list[ProfileRow]:
+    """Where mcrt's kernel time goes: the path kernel of variants that each leave one part out.
+
+    Medians of ``repeats`` passes (after one warm-up pass) of the kernel alone,
+    from Dr.Jit's kernel history. A part's cost is the difference to the full
+    kernel; the variants render other images (no tetrahedron, fewer bounces),
+    so they time work, not correctness. The RNG row is a kernel that only
+    draws the path's random numbers (two for the pixel, five per bounce for
+    the bounces an average path makes here, about 5).
+    """
+    import drjit as dr
+
+    from mcrt.tracer import Tracer
+
+    objects = {type(o).__name__: o for o in scene.objects}
+    no = {name: replace(scene, objects=tuple(o for o in scene.objects if type(o).__name__ != name)) for name in objects}
+    variants = [("full kernel (depth %d)" % max_depth, scene, {}),
+                ("without the tetrahedron", no.get("Tetrahedron", scene), {}),
+                ("without the mirror sphere", no.get("Sphere", scene), {}),
+                ("depth 2 (camera ray, one light sample, one bounce)", scene, {"max_depth": 2}),
+                ("depth 1 (camera ray and its hit)", scene, {"max_depth": 1}),
+                ("K = 4 light samples", scene, {"light_samples": 4}),
+                ("triangles intersector", scene, {"intersector": "triangles"})]
+    rows = []
+    dr.set_flag(dr.JitFlag.KernelHistory, True)
+    for label, sc, kw in variants:
+        args = dict(max_depth=max_depth, light_samples=1, intersector="convex") | kw
+        tracer = Tracer(sc, camera, res, res, args["max_depth"], args["light_samples"], backend=backend, intersector=args["intersector"])
+        times = []
+        for k in range(repeats + 1):
+            dr.kernel_history()
+            tracer.sample_pass(1, k, spp)
+            dr.sync_thread()
+            times.append(max(h["execution_time"] for h in dr.kernel_history() if "execution_time" in h))
+        rows.append(ProfileRow(label, statistics.median(times[1:])))
+    m = Tracer(scene, camera, res, res, max_depth, backend=backend).m
+    times = []
+    for k in range(repeats + 1):
+        rng = m.PCG32(res * res * spp, dr.opaque(m.UInt64, k), dr.opaque(m.UInt64, 7))
+        acc = m.Float(0.0)
+        for _ in range(2 + 5 * 5):
+            acc += rng.next_float32()
+        dr.kernel_history()
+        dr.eval(acc)
+        dr.sync_thread()
+        times.append(max(h["execution_time"] for h in dr.kernel_history() if "execution_time" in h))
+    rows.append(ProfileRow("RNG alone (27 PCG32 draws per path)", statistics.median(times[1:])))
+    return rows
+
+
+def format_profile(rows: list[ProfileRow], paths: int) -> str:
+    full = rows[0].kernel_ms
+    lines = [f"| kernel ({paths:,} paths) | ms | share of the full kernel |", "|---|---|---|"]
+    for r in rows:
+        lines.append(f"| {r.variant} | {r.kernel_ms:.1f} | {100 * r.kernel_ms / full:.0f} % |")
+    return "\n".join(lines)
+
+
 def environment() -> dict:
     import drjit as dr
     import mitsuba as mi
@@ -155,6 +220,8 @@ def register(sub) -> None:
     p.add_argument("--intersector", choices=("convex", "triangles"), default="convex")
     p.add_argument("--backend", choices=("llvm", "cuda"), default="llvm")
     p.add_argument("--json", default=None, help="also write the measurements to this JSON file")
+    p.add_argument("--profile", action="store_true",
+                   help="also time mcrt's path kernel with one part left out at a time (where the time goes)")
     p.set_defaults(func=cmd_bench)
 
 
@@ -170,9 +237,16 @@ def cmd_bench(args) -> int:
     print(f"mcrt {env['mcrt']}, Mitsuba {env['mitsuba']}, Dr.Jit {env['drjit']}, {env['threads']} threads, {env['cpu']}")
     print(format_table(rows))
     print(f"peak memory of this process: {peak_memory_mib():.0f} MiB")
+    profile = []
+    if args.profile:
+        res, cam = (args.res or [256])[-1], (args.camera or ["near"])[0]
+        profile = kernel_profile(scene, camera=cam, res=res, spp=args.spp, max_depth=(args.max_depth or [8])[-1],
+                                 repeats=args.repeats, backend=args.backend)
+        print(format_profile(profile, res * res * args.spp))
     if args.json:
         out = {"command": " ".join(sys.argv), "environment": env, "backend": args.backend, "intersector": args.intersector,
-               "rows": [dict(asdict(r), median_time=statistics.median(r.times)) for r in rows], "peak_memory_mib": peak_memory_mib()}
+               "rows": [dict(asdict(r), median_time=statistics.median(r.times)) for r in rows], "peak_memory_mib": peak_memory_mib(),
+               "kernel_profile": [asdict(r) for r in profile]}
         Path(args.json).parent.mkdir(parents=True, exist_ok=True)
         Path(args.json).write_text(json.dumps(out, indent=2))
         print(f"wrote {args.json}")

@@ -52,13 +52,13 @@ KIND_LAMBERTIAN, KIND_MIRROR, KIND_LIGHT = 0, 1, 2
 
 
 def plane_dot(normal, v):
-    """normal . v for a constant normal, leaving out its zero components (walls are vertical)."""
-    terms = [normal[c] * v[c] for c in range(3) if normal[c] != 0]
+    """normal . v for a constant normal, as a chain of fmas that leaves out zero components (walls are vertical)."""
+    terms = [c for c in range(3) if normal[c] != 0]
     if not terms:
         return 0.0 * v[0]
-    out = terms[0]
-    for term in terms[1:]:
-        out = out + term
+    out = normal[terms[0]] * v[terms[0]]
+    for c in terms[1:]:
+        out = dr.fma(normal[c], v[c], out)
     return out
 
 
@@ -207,22 +207,24 @@ class Geometry:
         for normal, pos, neg in self.room_slabs:
             nd = plane_dot(normal, d)
             no = plane_dot(normal, o)
-            if neg is None:
-                (h, k), forward = pos, nd > 0
-                num, den, k_sid, sign = h - no, nd, m.UInt32(k), -1.0
-            else:
+            forward = nd > 0
+            if neg is None:  # one plane: the exit only where n.d > 0; inward normal -n
+                (h, k) = pos
+                num, den, k_sid = h - no, nd, m.UInt32(k)
+                inward = [-x for x in normal]
+                hit = forward
+            else:  # the n side where n.d > 0 (inward -n), else the -n side (inward +n)
                 (h_pos, k_pos), (h_neg, k_neg) = pos, neg
-                forward = nd > 0
                 num = dr.select(forward, h_pos - no, h_neg + no)
                 den = dr.abs(nd)
                 k_sid = dr.select(forward, m.UInt32(k_pos), m.UInt32(k_neg))
-                sign = dr.select(forward, -1.0, 1.0)  # inward normal = -n on the n side, +n on the other
-            hit = forward if neg is None else (den > 0)
+                inward = [dr.select(forward, -x, x) if x != 0 else 0.0 for x in normal]
+                hit = den > 0
             hit &= num * best_den < best_num * den
             best_num = dr.select(hit, num, best_num)
             best_den = dr.select(hit, den, best_den)
             sid = dr.select(hit, k_sid, sid)
-            n = [dr.select(hit, sign * normal[c] if normal[c] != 0 else 0.0, n[c]) for c in range(3)]
+            n = [dr.select(hit, inward[c], n[c]) for c in range(3)]
         return best_num, best_den, sid, m.Array3f(*n)
 
     def intersect(self, o, d, mutant_triangles_everywhere=False):

@@ -1,0 +1,32 @@
+"""The benchmark's library API on a tiny case: shapes of its results, not speeds (speed lives in reports/bench/)."""
+
+from __future__ import annotations
+
+import json
+
+from mcrt.bench import BenchCase, format_profile, format_table, kernel_profile, run_bench
+from mcrt.cli import main
+from mcrt.scene import load_scene
+
+
+def test_run_bench_times_both_renderers():
+    rows = run_bench(load_scene(), [BenchCase("near", 16, 16, 2, 2)], repeats=2, progress=False)
+    assert [r.renderer for r in rows] == ["mcrt", "mitsuba"]
+    assert all(len(r.times) == 2 and r.paths_per_second > 0 for r in rows)
+    assert "| near | 16x16 | 2 | 2 |" in format_table(rows)
+
+
+def test_kernel_profile_names_every_part():
+    rows = kernel_profile(load_scene(), res=16, spp=2, max_depth=3, repeats=1)
+    labels = [r.variant for r in rows]
+    assert labels[0].startswith("full kernel") and "without the tetrahedron" in labels and labels[-1].startswith("RNG")
+    assert all(r.kernel_ms > 0 for r in rows)
+    assert format_profile(rows, 16 * 16 * 2).count("\n") == len(rows) + 1
+
+
+def test_bench_command_writes_json(tmp_path, capsys):
+    out = tmp_path / "b.json"
+    assert main(["bench", "--res", "16", "--spp", "2", "--max-depth", "2", "--camera", "near", "--repeats", "1",
+                 "--json", str(out)]) == 0
+    data = json.loads(out.read_text())
+    assert {r["renderer"] for r in data["rows"]} == {"mcrt", "mitsuba"} and data["kernel_profile"] == []
