@@ -208,6 +208,43 @@ def rank_noise(spread: np.ndarray, n: np.ndarray, valid: np.ndarray, image_t: np
     return out, d0
 
 
+def variance_inflation(e, baseline, mask: np.ndarray) -> float:
+    """How many times a bug multiplies the image's relative variance: (sum var / sum mean^2) against the baseline's."""
+    def rel(x) -> float:
+        m, v = x.mean.astype(np.float64)[mask], x.var.astype(np.float64)[mask]
+        return float(np.sum(v) / max(np.sum(m * m), 1e-300))
+
+    return rel(e) / max(rel(baseline), 1e-300)
+
+
+def rank_noise_level(var_ratio: float, mutants: dict, baseline, mask: np.ndarray, texts: dict,
+                     hidden: set[str]) -> list[Candidate]:
+    r"""Candidates for an image with a right mean and far too much noise, by the *amount* of noise.
+
+    Some bugs leave the mean almost right and multiply the variance by a
+    large factor through rare, huge samples (a light emitting from both
+    sides 1 cm under the ceiling: a 1/d^2 singularity). Their noise is too
+    heavy-tailed for a tile-by-tile pattern (:func:`rank_noise`): most tiles
+    of a render hold no outlier. The image-wide factor is steadier: each
+    mutant's inflation :math:`I_m` (:func:`variance_inflation`, from its
+    catalogue image) is compared with the image's measured ratio ``var_ratio``
+    by :math:`|\ln(\mathrm{var\_ratio} / I_m)|`; the share explained is
+    :math:`1 - |\ln(\mathrm{var\_ratio}/I_m)| / \ln \mathrm{var\_ratio}`. Only
+    the mutants in ``hidden`` compete: those whose mean bias the bias test
+    could not have seen at the image's noise (it passed that test).
+    """
+    if not var_ratio > 1.0:
+        return []
+    out = []
+    for name in hidden:
+        infl = variance_inflation(mutants[name], baseline, mask)
+        dist = abs(np.log(var_ratio / infl)) if infl > 0 else np.inf
+        out.append(Candidate(name, texts.get(name, name), float(dist), float(dist), float(infl),
+                             float(1.0 - dist / np.log(var_ratio)), ""))
+    out.sort(key=lambda c: c.chi2)
+    return out
+
+
 def catalogue_power(ctx, spp: float | None = None) -> list[dict]:
     r"""Which catalogued bugs the bias test can see at ``spp`` (default: the assignment's).
 

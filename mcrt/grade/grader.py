@@ -357,6 +357,7 @@ class _Grader:
         spp_eff = (1.0 / ratio) / per if np.isfinite(ratio) and ratio > 0 else float("inf")
         self.details["noise"] = {"spp_declared": spp, "renders": n_r, "spp_effective": None if not np.isfinite(spp_eff) else spp_eff}
         # The verdict waits for the bias test: a biased image's noise says nothing about its sample count.
+        spp_nominal = spp or a.min_spp  # what the noise is judged against
         if spp:
             spp_model = spp
             var_ratio = spp / spp_eff if np.isfinite(spp_eff) else 0.0
@@ -494,6 +495,15 @@ class _Grader:
                 self.diagnosis = [c.to_dict() for c in nd[:5]]
                 self.details["diagnosis"] = {"level": "noise pattern"}
                 self.figures.pop("mutant_rel_tiles", None)
+            elif _conclusive(lv := self._diagnose_noise_level(var_ratio, resid, mask, model_ps / (spp_nominal * per) + ref_noise + q,
+                                                              spp_model * per)):
+                text += (f". The mean is right but the noise is not: {short_text(lv[0].text)} ({lv[0].name}) multiplies "
+                         f"the variance by about {lv[0].amplitude:.0f} with rare, very bright samples and leaves the mean "
+                         f"nearly unchanged")
+                self.headline = f"Right mean, far too much noise: consistent with {short_text(lv[0].text)}."
+                self.diagnosis = [dict(c.to_dict(), amplitude=None, variance_inflation=c.amplitude) for c in lv[:5]]
+                self.details["diagnosis"] = {"level": "noise level"}
+                self.figures.pop("mutant_rel_tiles", None)
             else:
                 self.diagnosis = []
                 self.figures.pop("mutant_rel_tiles", None)
@@ -575,6 +585,33 @@ class _Grader:
         cands, _ = rank_noise(spread, s.n, s.valid, s.ref + s.diff, ctx.mutants, ctx.baseline, mask, tile, samples,
                               ctx.mutant_texts)
         return cands[:2]
+
+    def _diagnose_noise_level(self, var_ratio, resid, mask, var_nominal, samples):
+        """Rank the catalogue by the amount of noise (:func:`mcrt.grade.diagnose.rank_noise_level`), among
+        the bugs whose mean bias would not show at this noise.
+
+        Only for noise in rare outliers: the median pixel's squared residual
+        against mcrt's variance at the nominal spp (``var_nominal``), over
+        the median of a chi-square with one degree of freedom, stays below
+        var_ratio^(1/4). A correct renderer with too few samples is noisier
+        in most pixels (measured: a median ratio of 3.8 at 2 spp declared as
+        64, var_ratio 22) and is not named a bug; light_two_sided at 4096 and
+        16384 spp had 1.4 and 1.6 (var_ratio 170 and 990).
+        """
+        from mcrt.grade.diagnose import catalogue_power, rank_noise_level
+
+        ctx = self.ctx
+        if not ctx.mutants or not np.isfinite(var_ratio) or var_ratio <= 1.0:
+            return []
+        with np.errstate(divide="ignore", invalid="ignore"):
+            z2 = resid**2 / var_nominal
+        z2 = z2[mask[..., None].repeat(3, axis=2) & np.isfinite(z2)]
+        bulk = float(np.median(z2)) / 0.4549 if z2.size else np.inf  # 0.4549: median of chi-square(1)
+        self.details.setdefault("noise", {})["bulk_ratio"] = bulk
+        if not bulk < var_ratio**0.25:
+            return []
+        hidden = {p["mutant"] for p in catalogue_power(ctx, samples) if not p["detectable"]}
+        return rank_noise_level(var_ratio, ctx.mutants, ctx.baseline, mask, ctx.mutant_texts, hidden)[:2]
 
     def _figures(self, img, R, bt, mask) -> None:
         s = bt.base
