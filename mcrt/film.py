@@ -126,7 +126,8 @@ class Progress:
         self.last = -1e9
         self.tty = sys.stderr.isatty()
 
-    def update(self, done: int) -> None:
+    def update(self, done: int, left: float | None = None) -> None:
+        """Report ``done`` of the total; ``left`` (seconds) overrides the linear estimate of the time left."""
         if not self.enabled:
             return
         now = time.perf_counter()
@@ -134,7 +135,8 @@ class Progress:
             return
         self.last = now
         el = now - self.start
-        left = el / done * (self.total - done) if done else float("nan")
+        if left is None:
+            left = el / done * (self.total - done) if done else float("nan")
         msg = f"{self.label}: {done}/{self.total} {self.unit} ({100 * done / self.total:.0f}%) {el:.1f} s, ~{left:.1f} s left"
         end = "\n" if (done >= self.total or not self.tty) else ""
         print(("\r" if self.tty else "") + msg.ljust(72), end=end, file=sys.stderr, flush=True)

@@ -306,24 +306,6 @@ class CostModel:
         return a + b * spp
 
 
-class LadderProgress(Progress):
-    """mcrt.film.Progress over the renders of the ladder, with the time left from a :class:`CostModel`."""
-
-    def update(self, done: int, left: float | None = None) -> None:  # type: ignore[override]
-        if not self.enabled:
-            return
-        now = time.perf_counter()
-        if done < self.total and not self.tty and now - self.last < self.every:
-            return
-        self.last = now
-        el = now - self.start
-        if left is None:
-            left = el / done * (self.total - done) if done else float("nan")
-        msg = f"{self.label}: {done}/{self.total} {self.unit} ({100 * done / self.total:.0f}%) {el:.1f} s, ~{left:.0f} s left"
-        end = "\n" if (done >= self.total or not self.tty) else ""
-        print(("\r" if self.tty else "") + msg.ljust(78), end=end, file=sys.stderr, flush=True)
-
-
 def run_ladder(cfg: ReportConfig, *, progress: bool = True, command: str | None = None, log=None) -> ReportData:
     """Render the whole ladder of ``cfg`` and measure every render; writes nothing."""
     cfg.check()
@@ -377,7 +359,7 @@ def run_ladder(cfg: ReportConfig, *, progress: bool = True, command: str | None 
 
     strip_rungs = _strip_rungs(cfg)
     jobs = [(rung, seed, spec) for rung in range(len(cfg.spp_ladder)) for seed in cfg.seeds for spec in specs]
-    bar = LadderProgress(len(jobs), label="report", unit="renders", enabled=progress)
+    bar = Progress(len(jobs), label="report", unit="renders", enabled=progress)
     measurements: list[Measurement] = []
     strip: dict[tuple[str, int], StripImage] = {}
     for i, (rung, seed, spec) in enumerate(jobs):
