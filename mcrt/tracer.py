@@ -1,8 +1,8 @@
 """The standalone tracer: camera samples, passes, moments -> RenderResult.
 
 One pass traces ``n`` samples for every pixel in one kernel launch (lane
-``pixel * n + s``); each lane has its own PCG32 stream, selected by a hash of
-(seed, pass), so a render is reproducible from its seed and renders with
+``pixel * n + s``); each lane has its own random stream (mcrt.rng), keyed by a
+hash of (seed, pass), so a render is reproducible from its seed and renders with
 different seeds are independent. The per-pass seed and sample count enter the
 kernel as opaque values: a new seed or spp does not recompile it.
 """
@@ -21,6 +21,7 @@ from mcrt.film import Moments, Progress, RenderResult, run_passes, samples_per_p
 from mcrt.llvm import require_llvm
 from mcrt.mutants import check_mutants, mutate_scene
 from mcrt.precision import check_precision
+from mcrt.rng import WeylRng
 from mcrt.scene import Scene
 
 BACKENDS = ("llvm", "cuda")
@@ -45,17 +46,17 @@ def backend_module(backend: str):
 
 
 def _mix64(x: int) -> int:
-    """SplitMix64 finaliser: decorrelates (seed, pass) before it seeds PCG32 streams."""
+    """SplitMix64 finaliser: decorrelates (seed, pass) before it keys the lanes' streams."""
     x &= 0xFFFFFFFFFFFFFFFF
     x = ((x ^ (x >> 30)) * 0xBF58476D1CE4E5B9) & 0xFFFFFFFFFFFFFFFF
     x = ((x ^ (x >> 27)) * 0x94D049BB133111EB) & 0xFFFFFFFFFFFFFFFF
     return x ^ (x >> 31)
 
 
-def stream_seeds(seed: int, pass_index: int) -> tuple[int, int]:
-    """(initstate, initseq) of PCG32 for one pass; lanes add their index to both."""
-    base = _mix64(seed * 0x9E3779B97F4A7C15 + pass_index)
-    return _mix64(base ^ 0x5851F42D4C957F2D), _mix64(base + 0x14057B7EF767814F)
+def stream_keys(seed: int, pass_index: int) -> tuple[int, int]:
+    """The two 32-bit keys of one pass's random streams (mcrt.rng.WeylRng.seeded)."""
+    key = _mix64(seed * 0x9E3779B97F4A7C15 + pass_index)
+    return key & 0xFFFFFFFF, key >> 32
 
 
 @dataclass
@@ -116,8 +117,8 @@ class Tracer:
         sample = idx - pixel * dr.opaque(m.UInt32, stride)
         col = m.Float(pixel % W)
         row = m.Float(pixel // W)
-        state, seq = stream_seeds(seed, pass_index)
-        rng = m.PCG32(lanes, dr.opaque(m.UInt64, state), dr.opaque(m.UInt64, seq))
+        key0, key1 = stream_keys(seed, pass_index)
+        rng = WeylRng.seeded(m, lanes, dr.opaque(m.UInt32, key0), dr.opaque(m.UInt32, key1))
         if "no_jitter" in self.mutants:
             u = v = m.Float(0.5)
         else:

@@ -53,7 +53,9 @@ from mcrt.scene import load_scene
 from mcrt.tracer import render
 
 RES = 32
-SUBTLE = {"depth_off_by_one": 16384, "albedo_1pct": 16384, "light_two_sided": 16384}  # spp where they show
+# spp where they show. no_offset darkens a few pixels at the sphere's rim by about
+# 8 sigma at 256 spp: found in 9 of seeds 200-209 there, in all 10 at 1024 spp.
+SUBTLE = {"depth_off_by_one": 16384, "albedo_1pct": 16384, "light_two_sided": 16384, "no_offset": 1024}
 ASSIGNMENT = """
 name = "test32"
 title = "Test class"
