@@ -326,3 +326,22 @@ def test_chromium_check_catches_a_broken_image(tmp_path):
                     '<img alt="missing" src="nowhere.png"></body></html>')
     result = browser_image_check(page, tmp_path)
     assert result["n"] == 2 and sorted(result["bad"]) == ["broken", "missing"]
+
+
+def test_cached_renders_are_keyed_by_the_source(tmp_path, monkeypatch):
+    """A change to mcrt's code changes the key of cached references and grading renders (not only a version bump)."""
+    import mcrt.provenance
+    from mcrt.grade.expected import _cache_key
+    from mcrt.report.run import _versions_key
+    from mcrt.scene import load_scene
+
+    (tmp_path / "a.py").write_text("x = 1\n")
+    before = mcrt.provenance.source_hash(tmp_path)
+    (tmp_path / "a.py").write_text("x = 2\n")
+    assert mcrt.provenance.source_hash.__wrapped__(tmp_path) != before
+
+    scene = load_scene()
+    keys = [_versions_key(), _cache_key(scene, "near", 8, 8, 8, 4, 1, "none")]
+    monkeypatch.setattr(mcrt.provenance, "source_hash", lambda: "0" * 16)
+    assert _versions_key() != keys[0]
+    assert _cache_key(scene, "near", 8, 8, 8, 4, 1, "none") != keys[1]

@@ -117,9 +117,10 @@ def downsample_result(r: RenderResult, k: int) -> RenderResult:
 
 def _cache_key(scene: Scene, camera: str, w: int, h: int, max_depth: int, spp: int, seed: int, mutant: str) -> str:
     import mcrt
+    from mcrt.provenance import source_hash
 
     desc = {"scene": scene.content_hash(), "camera": camera, "w": w, "h": h, "max_depth": max_depth, "spp": spp,
-            "seed": seed, "mutant": mutant, "mcrt": mcrt.__version__, "light_samples": 1, "rr_depth": 5}
+            "seed": seed, "mutant": mutant, "mcrt": mcrt.__version__, "source": source_hash(), "light_samples": 1, "rr_depth": 5}
     digest = hashlib.sha256(json.dumps(desc, sort_keys=True).encode()).hexdigest()[:12]
     return f"{scene.name}_{camera}_{w}x{h}_d{max_depth}_{mutant}_{spp}spp_s{seed}_{digest}"
 

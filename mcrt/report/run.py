@@ -129,7 +129,10 @@ def _versions_key() -> str:
     import drjit as dr
     import mitsuba as mi
 
-    return hashlib.blake2b(f"{mcrt.__version__}/{dr.__version__}/{mi.__version__}".encode(), digest_size=4).hexdigest()
+    from mcrt.provenance import source_hash
+
+    key = f"{mcrt.__version__}/{source_hash()}/{dr.__version__}/{mi.__version__}"
+    return hashlib.blake2b(key.encode(), digest_size=4).hexdigest()
 
 
 def obtain_reference(cfg: ReportConfig, scene: Scene, *, progress: bool = True, log=print) -> tuple[RenderResult, dict[str, Any]]:
