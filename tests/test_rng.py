@@ -85,7 +85,7 @@ def test_uniform_in_every_draw(draws):
 
 
 def test_successive_draws_independent(draws):
-    # 32 x 32 cells of (u_k, u_k+1): the test that sees lattice structure of a bare Weyl sequence.
+    # 32 x 32 cells of (u_k, u_k+1): draws on a line, as with one increment for all lanes, fail it.
     for k in range(DRAWS - 1):
         assert chi2_pairs_p(draws[:, k], draws[:, k + 1], 32) > ALPHA, f"draws {k}, {k + 1}"
 
