@@ -163,7 +163,7 @@ def kernel_profile(scene, *, camera: str = "near", res: int = 256, spp: int = 16
         times = []
         for k in range(repeats + 1):
             dr.kernel_history()
-            tracer.sample_pass(1, k, spp)
+            tracer.pass_sums(1, k, spp)
             dr.sync_thread()
             times.append(max(h["execution_time"] for h in dr.kernel_history() if "execution_time" in h))
         rows.append(ProfileRow(label, statistics.median(times[1:])))

@@ -42,6 +42,32 @@ def test_passes_do_not_reuse_samples(scene):
     assert np.mean(r.variance > 0) > 0.9
 
 
+def test_mean_and_variance_follow_the_film_formulas(scene):
+    """The tracer forms mean and variance in Dr.Jit; mcrt.film.Moments is the definition they must match.
+
+    Three passes (16, 16 and 5 samples) summed pass by pass, as render() does,
+    against the same sums taken out to NumPy: equal to the last bit.
+    """
+    import drjit as dr
+
+    from mcrt.film import Moments
+    from mcrt.tracer import Tracer
+
+    tracer = Tracer(scene, "near", 12, 10, 8)
+    moments, sums = Moments.zeros(10, 12), None
+    for k, n in enumerate((16, 16, 5)):
+        acc = tracer.pass_sums(3, k, n)
+        s = acc.numpy().reshape(2, 10, 12, 3).copy()
+        moments.add(s[0], s[1], n)
+        sums = acc if sums is None else sums + acc
+        dr.eval(sums)
+    mean, var = tracer.mean_variance(sums, moments.n)
+    assert np.array_equal(mean, moments.mean()) and np.array_equal(var, moments.variance())
+    assert np.all(var > 0) and mean.dtype == var.dtype == np.float32
+    one_mean, one_var = tracer.mean_variance(tracer.pass_sums(3, 9, 1), 1)
+    assert np.all(one_var == 0) and np.all(one_mean >= 0)
+
+
 def test_pass_layout():
     """Lanes per pixel and per in-kernel slot: powers of two up to a group, then whole groups."""
     from mcrt.tracer import GROUP, pass_layout, pass_size
