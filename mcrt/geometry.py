@@ -170,23 +170,9 @@ class Geometry:
     def has_surface_emission(self) -> bool:
         return any(any(s.emission) for s in self.surfaces)
 
-    def surface_table(self, attribute: str = "color"):
-        """An Array3f table of a per-surface colour ('color' or 'emission'), gathered by surface id."""
-        m = self.m
-        c = np.array([getattr(s, attribute) for s in self.surfaces], dtype=np.float32)
-        return m.Array3f(m.Float(c[:, 0]), m.Float(c[:, 1]), m.Float(c[:, 2]))
-
     def offset(self, p):
         """The spawn offset at p: OFFSET_SCALE (max |p_i| + scene size)."""
         return OFFSET_SCALE * (dr.max(dr.abs(p)) + self.scale)
-
-    def _room_normals(self):
-        """Inward unit normals of the room's faces, indexed by surface id (zero elsewhere)."""
-        m = self.m
-        table = np.zeros((len(self.surfaces), 3), np.float32)
-        for normal, _, k in self.room_planes:
-            table[k] = [-x for x in normal]
-        return m.Array3f(m.Float(table[:, 0]), m.Float(table[:, 1]), m.Float(table[:, 2]))
 
     # -- closest hit ---------------------------------------------------------
 

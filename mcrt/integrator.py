@@ -108,7 +108,6 @@ class PathIntegrator:
     def radiance(self, o, d, rng):
         """One radiance sample along each camera ray (o, d); d is unit length."""
         m, geo = self.m, self.geo
-        emissions = geo.surface_table("emission") if geo.has_surface_emission() else None
 
         L = m.Array3f(0.0)  # radiance gathered so far
         beta = m.Array3f(1.0)  # path throughput: product of f cos / pdf so far
@@ -125,7 +124,7 @@ class PathIntegrator:
 
             # ---- Emission seen from the eye or through mirrors.
             L += beta * self.emitted(d, t, is_light, specular, pdf_bsdf)
-            L += beta * self.surface_emitted(d, n, sid, emissions)
+            L += beta * self.surface_emitted(d, n, sid)
 
             # ---- Stop at the light (black on both sides) and at the depth limit.
             active &= ~is_light & (depth < self.max_depth)
@@ -191,14 +190,23 @@ class PathIntegrator:
             out = [dr.select(hit, float(srf.color[c]), out[c]) for c in range(3)]
         return m.Array3f(*out)
 
-    def surface_emitted(self, d, n, sid, emissions):
+    def surface_emitted(self, d, n, sid):
         """Emission of Lambertian surfaces (furnace scenes), on the side their normal faces.
 
         No light sample ever reaches these surfaces, so every hit counts it.
+        A select per emitting surface, like :meth:`surface_color`: a table
+        would be copied to the device inside the traced pass, which a frozen
+        pass (mcrt.tracer.Tracer.pass_sums) cannot record.
         """
-        if emissions is None:
-            return self.m.Array3f(0.0)
-        return dr.select(dr.dot(d, n) < 0, dr.gather(self.m.Array3f, emissions, sid), 0.0)
+        m = self.m
+        if not self.geo.has_surface_emission():
+            return m.Array3f(0.0)
+        out = [m.Float(0.0), m.Float(0.0), m.Float(0.0)]
+        for k, srf in enumerate(self.geo.surfaces):
+            if any(srf.emission):
+                hit = sid == k
+                out = [dr.select(hit, float(srf.emission[c]), out[c]) for c in range(3)]
+        return dr.select(dr.dot(d, n) < 0, m.Array3f(*out), 0.0)
 
     def spawn_origin(self, p, n):
         """The origin of rays leaving p on the side of n, offset against self-intersection."""
