@@ -160,6 +160,9 @@ def test_command_line_options():
     args = ap.parse_args(["report", "--renderers", "mcrt:k4,mitsuba", "--max-depth", "2", "--light-samples", "3"])
     cfg = config_from_args(args)
     assert cfg.renderers == ("mcrt:k4", "mitsuba") and cfg.max_depth == 2 and cfg.light_samples == 3
+    # The preset's own sentence ("64x64, spp 1 to 1024") no longer holds: the description says what changed.
+    assert cfg.description == "The canonical preset with --light-samples, --max-depth, --renderers given on the command line (settings below)."
+    assert config_from_args(ap.parse_args(["report", "--name", "x"])).description.startswith("The main job: the canonical scene")
     with pytest.raises(SystemExit):
         ap.parse_args(["report", "--spp-ladder", "0"])
     help_text = ap._subparsers._group_actions[0].choices["report"].format_help()

@@ -103,7 +103,19 @@ def config_from_args(args):
         over["svg"] = False
     if "spp_ladder" in over and "strip_spp" not in over and cfg.strip_spp and not set(cfg.strip_spp) <= set(over["spp_ladder"]):
         over["strip_spp"] = None
+    # The preset's sentence describes the preset's settings: once an option changes them, say so instead.
+    derived = {k for k in ("strip_spp", "baseline") if getattr(args, k) is None}  # follow from other options
+    changed = sorted({_OPTION_OF[k] for k, v in over.items() if k in _OPTION_OF and k not in derived and v != getattr(cfg, k)})
+    if changed and cfg.preset:
+        over["description"] = f"The {cfg.preset} preset with {', '.join(changed)} given on the command line (settings below)."
     return replace(cfg, **over).check()
+
+
+#: ReportConfig fields that change a report's settings, and the option that sets each.
+_OPTION_OF = {"scene": "--scene", "camera": "--camera", "width": "--res", "height": "--res", "spp_ladder": "--spp-ladder",
+              "seeds": "--seeds", "renderers": "--renderers", "max_depth": "--max-depth", "light_samples": "--light-samples",
+              "equal_time": "--equal-time", "baseline": "--baseline", "reference": "--reference",
+              "reference_renderer": "--reference-renderer", "reference_spp": "--reference-spp", "strip_spp": "--strip-spp"}
 
 
 def cmd_report(args) -> int:
