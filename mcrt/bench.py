@@ -213,7 +213,7 @@ def register(sub) -> None:
     p.add_argument("--scene", default=None)
     p.add_argument("--camera", action="append", help="camera(s) (default: near and far)")
     p.add_argument("--res", type=int, action="append", help="square resolution(s) (default 256)")
-    p.add_argument("--spp", type=int, default=16)
+    p.add_argument("--spp", type=int, action="append", help="samples per pixel of one render (repeatable; default 16)")
     p.add_argument("--max-depth", type=int, action="append", help="max depth(s) (default 8)")
     p.add_argument("--light-samples", type=int, default=1)
     p.add_argument("--repeats", type=int, default=5, help="timed repetitions per renderer (after one warm-up)")
@@ -230,8 +230,10 @@ def cmd_bench(args) -> int:
     from mcrt.scene import CANONICAL, load_scene
 
     scene = load_scene(args.scene or CANONICAL)
-    cases = [BenchCase(cam, res, res, args.spp, depth, args.light_samples)
-             for cam in (args.camera or ["near", "far"]) for res in (args.res or [256]) for depth in (args.max_depth or [8])]
+    spps = args.spp or [16]
+    cases = [BenchCase(cam, res, res, spp, depth, args.light_samples)
+             for cam in (args.camera or ["near", "far"]) for res in (args.res or [256]) for spp in spps
+             for depth in (args.max_depth or [8])]
     rows = run_bench(scene, cases, renderers=args.renderers.split(","), repeats=args.repeats, backend=args.backend,
                      intersector=args.intersector)
     env = environment()
@@ -241,9 +243,9 @@ def cmd_bench(args) -> int:
     profile = []
     if args.profile:
         res, cam = (args.res or [256])[-1], (args.camera or ["near"])[0]
-        profile = kernel_profile(scene, camera=cam, res=res, spp=args.spp, max_depth=(args.max_depth or [8])[-1],
+        profile = kernel_profile(scene, camera=cam, res=res, spp=spps[-1], max_depth=(args.max_depth or [8])[-1],
                                  repeats=args.repeats, backend=args.backend)
-        print(format_profile(profile, res * res * args.spp))
+        print(format_profile(profile, res * res * spps[-1]))
     if args.json:
         out = {"command": " ".join(sys.argv), "environment": env, "backend": args.backend, "intersector": args.intersector,
                "rows": [dict(asdict(r), median_time=statistics.median(r.times)) for r in rows], "peak_memory_mib": peak_memory_mib(),

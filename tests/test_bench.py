@@ -26,7 +26,8 @@ def test_kernel_profile_names_every_part():
 
 def test_bench_command_writes_json(tmp_path, capsys):
     out = tmp_path / "b.json"
-    assert main(["bench", "--res", "16", "--spp", "2", "--max-depth", "2", "--camera", "near", "--repeats", "1",
+    assert main(["bench", "--res", "16", "--spp", "2", "--spp", "4", "--max-depth", "2", "--camera", "near", "--repeats", "1",
                  "--json", str(out)]) == 0
     data = json.loads(out.read_text())
     assert {r["renderer"] for r in data["rows"]} == {"mcrt", "mitsuba"} and data["kernel_profile"] == []
+    assert sorted({r["case"]["spp"] for r in data["rows"]}) == [2, 4] and len(data["rows"]) == 4
