@@ -113,15 +113,14 @@ class Tracer:
     def _pass_kernel(self, key0, key1, n: int):
         """:meth:`pass_sums` for the pass keyed by the UInt32 arrays (key0, key1) (mcrt.rng.WeylRng.seeded).
 
-        The sums are formed inside the path kernel:
-        lanes add x and x^2 (as float64) into slots of GROUP consecutive
-        lanes of one pixel, each packet first reducing its own lanes
-        (ReduceMode.Local), so a slot receives one addition per packet. With
-        packets of GROUP lanes or more that is one addition, and two when the
-        packet is half a group wide: float additions commute, so the sums do
-        not depend on which thread adds first and a seed gives the same image
-        bit for bit. The slots of a pixel are added in a second, ordered
-        reduction.
+        The sums are formed inside the path kernel: lanes add x and x^2 (as
+        float64) into slots of GROUP consecutive lanes of one pixel, each
+        packet first reducing its own lanes (ReduceMode.Local), so a slot
+        receives one addition per packet. With packets of GROUP lanes or more
+        that is one addition, and two when the packet is half a group wide:
+        float additions commute, so the sums do not depend on which thread
+        adds first and a seed gives the same image bit for bit. The slots of
+        a pixel are added in a second, ordered reduction.
         """
         import drjit as dr
 
