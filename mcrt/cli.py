@@ -101,7 +101,9 @@ def cmd_render(args) -> int:
 def cmd_compare(args) -> int:
     from mcrt.stats import compare_files
 
-    return compare_files(args.a, args.b, alpha=args.alpha, tile=args.tile, heatmap=args.heatmap)
+    return compare_files(args.a, args.b, alpha=args.alpha, tile=args.tile, heatmap=args.heatmap, json_path=args.json,
+                         assume_variance_from_other=args.assume_variance_from == "other",
+                         floor_variance_from_b=args.reference_variance_floor, spp_a=args.spp_a, spp_b=args.spp_b)
 
 
 def cmd_scene(args) -> int:
@@ -164,6 +166,14 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--alpha", type=float, default=0.01, help="family-wise error rate (Holm)")
     p.add_argument("--tile", type=int, default=8, help="tile size in pixels")
     p.add_argument("--heatmap", default=None, help="write a PNG of the per-tile statistic here")
+    p.add_argument("--json", default=None, help="write the comparison (every tile's statistic) as JSON here")
+    p.add_argument("--reference-variance-floor", action="store_true",
+                   help="B is a high-spp reference of the same estimator: A's per-sample variance is raised to B's where "
+                        "lower (without it a modest render false-alarms against a reference; reports/validation/)")
+    p.add_argument("--assume-variance-from", choices=("other",), default=None,
+                   help="an image without per-sample variance borrows the other's (an approximation)")
+    p.add_argument("--spp-a", type=int, default=None, help="spp of image A, where its file does not record it")
+    p.add_argument("--spp-b", type=int, default=None, help="spp of image B, where its file does not record it")
     p.set_defaults(func=cmd_compare)
 
     p = sub.add_parser("main", help="the main job: the convergence report of the canonical scene, and mcrt beside Mitsuba")

@@ -974,7 +974,7 @@ def verify_references(
             fresh_seed = chunk_seed(seed, 1)
         res.fresh_spp, res.fresh_seed = n, fresh_seed
         from mcrt.mitsuba import render_mitsuba
-        from mcrt.stats import compare_images
+        from mcrt.stats import compare_images, floor_variance
 
         _log(f"verify {key}: rendering {w}x{h} at {n} spp (seed {fresh_seed})", progress)
         try:
@@ -986,7 +986,7 @@ def verify_references(
             continue
         # Both sides are the same estimator, so under "same image" they share one per-sample
         # variance per pixel; the fresh side takes the larger of the two estimates (see docstring).
-        tested = replace(fresh, variance=np.maximum(fresh.variance, ref.variance))
+        tested = floor_variance(fresh, ref)
         cmp = compare_images(tested, ref, alpha=alpha, tile=tile)
         res.comparison = cmp
         res.checks.append(f"agreement: {n} fresh spp vs {entry['spp']} reference spp: {cmp.summary()}")

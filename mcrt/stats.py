@@ -34,7 +34,7 @@ from __future__ import annotations
 import json
 import math
 import sys
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import IO, NamedTuple
 
@@ -479,6 +479,21 @@ class Comparison:
         return path
 
 
+def floor_variance(tested: RenderResult, reference: RenderResult) -> RenderResult:
+    """``tested`` with each pixel's per-sample variance raised to the reference's where it is lower.
+
+    For comparing a modest render with a high-spp reference of the same
+    estimator: under "same image" both share one per-sample variance per
+    pixel, and a small render that missed the rare high-weight paths
+    underestimates it together with its mean (mcrt.reference.verify_references
+    explains; reports/validation/against_reference_floor/ measures the
+    false-alarm rate and power of the comparison with this floor).
+    """
+    if tested.variance is None or reference.variance is None:
+        raise StatsError("a variance floor needs both renders' per-sample variance")
+    return replace(tested, variance=np.maximum(tested.variance, reference.variance))
+
+
 def compare_images(
     a: RenderResult,
     b: RenderResult,
@@ -823,6 +838,7 @@ def compare_files(
     heatmap_scale: int = 1,
     json_path=None,
     assume_variance_from_other: bool = False,
+    floor_variance_from_b: bool = False,
     spp_a: int | None = None,
     spp_b: int | None = None,
     out: IO[str] | None = None,
@@ -846,6 +862,12 @@ def compare_files(
     variance, and with heavy-tailed per-pixel estimates the borrowed variance
     can make the test false-alarm (see the design notes); rendering the image
     again with variance is the remedy.
+
+    ``floor_variance_from_b``: B is a high-spp reference of the same
+    estimator, and A takes B's per-sample variance where its own is lower
+    (:func:`floor_variance`). Without it a modest render compared with a
+    high-spp reference false-alarms on about 30 % of correct renders; with
+    it 0.5 % (reports/validation/against_reference_floor/).
 
     Returns
     -------
@@ -902,6 +924,11 @@ def compare_files(
         for name, (r, path, _) in sides.items():
             if not r.spp:
                 raise StatsError(f"image {name} ({path}) does not record its spp; give it with --spp-{name.lower()} N")
+        if floor_variance_from_b:
+            if a.mean.shape != b.mean.shape:
+                raise StatsError(f"images differ in shape: A is {a.mean.shape}, B is {b.mean.shape}")
+            a = floor_variance(a, b)
+            print("note: image A's per-sample variance is raised to image B's where lower (B taken as a reference)", file=out)
         c = compare_images(a, b, alpha=alpha, tile=tile, channels=channels, correction=correction, min_spp=min_spp)
     except StatsError as e:
         print(f"error: {e}", file=err)

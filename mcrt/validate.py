@@ -71,7 +71,7 @@ import mcrt
 from mcrt.film import Progress, RenderResult
 from mcrt.mutants import MUTANTS
 from mcrt.scene import Scene
-from mcrt.stats import binomial_interval, compare_images
+from mcrt.stats import binomial_interval, compare_images, floor_variance
 
 __all__ = [
     "EXIT_FAILED",
@@ -161,9 +161,12 @@ class Opponent:
     false-alarm and power studies of one process share them.
     ``kind='reference'``: every trial gets the committed reference of the
     budget's (camera, res, max depth) (:func:`mcrt.reference.load_reference`).
+    ``kind='reference-floor'``: the same reference, and the render under test
+    takes the reference's per-sample variance where its own is lower
+    (:func:`mcrt.stats.floor_variance`, the rule of ``mcrt reference verify``).
     """
 
-    KINDS = ("mitsuba", "reference")
+    KINDS = ("mitsuba", "reference", "reference-floor")
 
     def __init__(self, scene: Scene, kind: str = "mitsuba", *, backend: str = "llvm", reference_dir=None):
         if kind not in self.KINDS:
@@ -174,7 +177,7 @@ class Opponent:
 
     def get(self, b: Budget, k: int) -> RenderResult:
         """The opponent of trial ``k`` at budget ``b``."""
-        if self.kind == "reference":
+        if self.kind != "mitsuba":
             key = ("reference", b.camera, b.res, b.max_depth)
             if key not in self._cache:
                 from mcrt.reference import REFERENCE_DIR, load_reference
@@ -200,13 +203,23 @@ class Opponent:
         r = self.get(b, 0)
         from mcrt.reference import reference_key
 
-        return {"kind": "reference", "key": reference_key(self.scene.name, b.camera, b.res, b.max_depth), "spp": int(r.spp),
-                "mitsuba_version": r.extra.get("mitsuba_version", ""), "note": "one committed reference shared by all trials"}
+        floor = self.kind == "reference-floor"
+        return {"kind": self.kind, "key": reference_key(self.scene.name, b.camera, b.res, b.max_depth), "spp": int(r.spp),
+                "mitsuba_version": r.extra.get("mitsuba_version", ""),
+                "note": "one committed reference shared by all trials" + (
+                    "; the tested render's per-sample variance floored at the reference's" if floor else "")}
 
     def label(self, b: Budget) -> str:
         if self.kind == "mitsuba":
             return f"independent Mitsuba renders ({b.spp} spp, seed {MITSUBA_SEED_BASE} + k)"
-        return f"the committed reference ({self.describe(b)['key']}, {self.describe(b)['spp']} spp)"
+        d = self.describe(b)
+        floor = ("; the tested render's per-sample variance raised to the reference's where lower (mcrt.stats.floor_variance)"
+                 if self.kind == "reference-floor" else "")
+        return f"the committed reference ({d['key']}, {d['spp']} spp){floor}"
+
+    def compared(self, tested: RenderResult, other: RenderResult) -> RenderResult:
+        """The render under test as the comparison sees it (variance-floored against ``reference-floor``)."""
+        return floor_variance(tested, other) if self.kind == "reference-floor" else tested
 
     def forget(self, keep: Callable[[tuple], bool]) -> None:
         """Drop cached renders whose key fails ``keep`` (bounds memory between phases)."""
@@ -355,7 +368,7 @@ def false_alarm_study(
     seeds : int or sequence of int
         Number of trials (seeds ``FALSE_ALARM_SEED_BASE + k``), or the mcrt seeds themselves
         (trial i then uses Mitsuba seed ``MITSUBA_SEED_BASE + i``).
-    against : {'mitsuba', 'reference'} or Opponent
+    against : {'mitsuba', 'reference', 'reference-floor'} or Opponent
     progress : bool
         Print a progress line (seeds done, time left) to stderr.
 
@@ -380,6 +393,7 @@ def false_alarm_study(
         t1 = time.perf_counter()
         a = _render_mcrt(scene, b, s, backend=backend)
         t_mcrt += time.perf_counter() - t1
+        a = opp.compared(a, other)
         for t in tiles:
             c = compare_images(a, other, alpha=alpha, tile=t, channels=channels, correction=correction)
             trials[t].append(_trial(c, s, MITSUBA_SEED_BASE + i if opp.kind == "mitsuba" else None))
@@ -460,7 +474,7 @@ def _power_rows(
     for i, s in enumerate(seeds):
         other = opp.get(b, i)
         for n in names:
-            a = _render_mcrt(scene, b, s, (n,) if n else (), backend=backend)
+            a = opp.compared(_render_mcrt(scene, b, s, (n,) if n else (), backend=backend), other)
             for t in tiles:
                 c = compare_images(a, other, alpha=b.alpha, tile=t, channels=b.channels, correction=b.correction)
                 results[n or CONTROL][t].append(_trial(c, s, MITSUBA_SEED_BASE + i if opp.kind == "mitsuba" else None))
@@ -891,7 +905,7 @@ def power_markdown(pw: dict[str, Any], meta: dict[str, Any]) -> str:
     if pw["stated_budgets"]:
         lines += ["## Stated budgets", "",
                   (f"The smallest budget tried at which each mutant below the goal is detected on >= {100 * goal:.0f} % of seeds "
-                  f"with {b['tile']}x{b['tile']} tiles, against {'Mitsuba at the same spp' if pw['against']['kind'] == 'mitsuba' else 'the committed reference'}:"), ""]
+                  f"with {b['tile']}x{b['tile']} tiles, against {_against_words(pw['against']['kind'])}:"), ""]
         for n, s in pw["stated_budgets"].items():
             if s["spp"] is not None:
                 lines.append(f"- `{n}`: {s['spp']} spp per side ({_rate_cell_from(s)}, 95 % interval {_interval(s['interval'])})")
@@ -925,6 +939,11 @@ def power_markdown(pw: dict[str, Any], meta: dict[str, Any]) -> str:
         lines.append(f"- `{n}`: {r['description']}")
     lines += ["", "## Time", "", f"{pw['timing']['total_s']:.0f} s in all (shared machine; timings are indicative).", ""]
     return "\n".join(lines)
+
+
+def _against_words(kind: str) -> str:
+    return {"mitsuba": "Mitsuba at the same spp", "reference": "the committed reference",
+            "reference-floor": "the committed reference (variance floored at the reference's)"}[kind]
 
 
 def _rate_cell_from(s: dict[str, Any]) -> str:
@@ -1085,7 +1104,8 @@ def register(subparsers) -> None:
     p.add_argument("--alpha", type=float, default=0.01, help="family-wise error rate of one comparison (Holm)")
     p.add_argument("--tile", type=int, default=8, help="tile size in pixels of the test under study")
     p.add_argument("--against", choices=Opponent.KINDS, default="mitsuba",
-                   help="opponent: a fresh independent Mitsuba render per trial, or the committed reference")
+                   help="opponent: a fresh independent Mitsuba render per trial, the committed reference, or the committed "
+                        "reference with the tested render's variance floored at the reference's (as `mcrt reference verify` tests)")
     p.add_argument("--only", choices=("false-alarms", "power"), default=None, help="run one study only")
     p.add_argument("--mutant", action="append", metavar="NAME", default=None,
                    help="power study for this mutant only (repeatable; default: the whole catalogue, see `mcrt mutants`)")

@@ -32,6 +32,7 @@ from mcrt.stats import (
     chi2_gof,
     compare_files,
     compare_images,
+    floor_variance,
     reject,
 )
 
@@ -473,6 +474,25 @@ def test_compare_files_missing_variance(fake_imageio, capsys):
     assert "neither image" in capsys.readouterr().err
 
 
+def test_compare_reference_variance_floor_from_the_command_line(fake_imageio, capsys):
+    # alpha = 0.01, seeds 121 and 122. A is a 256-spp render whose variance estimate came out low (x0.05, as when it
+    # misses the rare high-weight paths), B a 16384-spp reference of the same image: only the floor keeps A honest.
+    from mcrt.cli import main
+
+    mu = mean_image(32, 32)
+    a = synth(121, mu, 256)
+    a.variance = a.variance * 0.05
+    fake_imageio.update({"a.exr": a, "ref.exr": synth(122, mu, 16384), "nospp.png": RenderResult(a.mean, None, 0, 0, 0, "")})
+    assert main(["compare", "a.exr", "ref.exr"]) == DIFFERENT
+    capsys.readouterr()
+    assert main(["compare", "a.exr", "ref.exr", "--reference-variance-floor"]) == CONSISTENT
+    assert "raised to image B's where lower" in capsys.readouterr().out
+    # The options the error messages name exist on the command line.
+    assert main(["compare", "nospp.png", "ref.exr", "--assume-variance-from", "other"]) == UNUSABLE
+    assert "--spp-a" in capsys.readouterr().err
+    assert main(["compare", "nospp.png", "ref.exr", "--assume-variance-from", "other", "--spp-a", "256"]) == CONSISTENT
+
+
 def test_assert_same_image(tmp_path):
     # alpha = 0.01.
     a, b = biased_pair()
@@ -502,3 +522,13 @@ def test_compare_files_with_real_exr_files(tmp_path, capsys):
     assert compare_files(tmp_path / "a.exr", tmp_path / "b0.exr", alpha=0.01) == UNUSABLE
     assert "--spp-b" in capsys.readouterr().err
     assert compare_files(tmp_path / "a.exr", tmp_path / "b0.exr", alpha=0.01, spp_b=512) == CONSISTENT
+
+
+def test_floor_variance_raises_only_lower_variances():
+    mu = mean_image(8, 8)
+    small, big = synth(1, mu, 16), synth(2, mu, 4096)
+    f = floor_variance(small, big)
+    assert np.array_equal(f.variance, np.maximum(small.variance, big.variance)) and np.array_equal(f.mean, small.mean)
+    assert (f.variance > small.variance).any() and (f.variance == small.variance).any() and f.spp == small.spp
+    with pytest.raises(StatsError):
+        floor_variance(small, RenderResult(mean=big.mean, variance=None, spp=1, seed=0, max_depth=0, renderer="x"))
