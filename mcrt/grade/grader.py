@@ -495,8 +495,8 @@ class _Grader:
                 self.diagnosis = [c.to_dict() for c in nd[:5]]
                 self.details["diagnosis"] = {"level": "noise pattern"}
                 self.figures.pop("mutant_rel_tiles", None)
-            elif _conclusive(lv := self._diagnose_noise_level(var_ratio, resid, mask, model_ps / (spp_nominal * per) + ref_noise + q,
-                                                              spp_model * per)):
+            elif _conclusive(lv := self._diagnose_noise_level(var_ratio, resid, R, mask, cam,
+                                                              model_ps / (spp_nominal * per) + ref_noise + q, spp_model * per)):
                 text += (f". The mean is right but the noise is not: {short_text(lv[0].text)} ({lv[0].name}) multiplies "
                          f"the variance by about {lv[0].amplitude:.0f} with rare, very bright samples and leaves the mean "
                          f"nearly unchanged")
@@ -586,29 +586,49 @@ class _Grader:
                               ctx.mutant_texts)
         return cands[:2]
 
-    def _diagnose_noise_level(self, var_ratio, resid, mask, var_nominal, samples):
+    def _diagnose_noise_level(self, var_ratio, resid, R, mask, cam, var_nominal, samples):
         """Rank the catalogue by the amount of noise (:func:`mcrt.grade.diagnose.rank_noise_level`), among
         the bugs whose mean bias would not show at this noise.
 
-        Only for noise in rare outliers: the median pixel's squared residual
-        against mcrt's variance at the nominal spp (``var_nominal``), over
-        the median of a chi-square with one degree of freedom, stays below
-        var_ratio^(1/4). A correct renderer with too few samples is noisier
-        in most pixels (measured: a median ratio of 3.8 at 2 spp declared as
-        64, var_ratio 22) and is not named a bug; light_two_sided at 4096 and
-        16384 spp had 1.4 and 1.6 (var_ratio 170 and 990).
+        Only for noise in rare outliers, where most pixels keep the noise of
+        the declared spp. The measure is the median pixel's squared residual
+        against mcrt's variance at the nominal spp (``var_nominal``), over the
+        median of a chi-square with one degree of freedom (``bulk``). A bug
+        is named only if ``bulk`` stays below var_ratio^(1/4) and below half
+        of what a correct renderer with the image's effective sample count
+        (``samples``) gives: a correct mcrt render at that count (at most 64
+        spp, scaled) is made and measured the same way. Too few samples
+        raise the median pixel's residual with the whole noise, though less
+        than the variance when a pixel's samples are heavy-tailed (measured
+        at 32x32: a 4-spp render declared as 64 had bulk 2.0 at var_ratio 17,
+        the simulated correct render 2.5; light_two_sided at 16384 spp had
+        bulk 1.7 at var_ratio 50, the simulation 6.3).
         """
         from mcrt.grade.diagnose import catalogue_power, rank_noise_level
+        from mcrt.tracer import render
 
         ctx = self.ctx
         if not ctx.mutants or not np.isfinite(var_ratio) or var_ratio <= 1.0:
             return []
-        with np.errstate(divide="ignore", invalid="ignore"):
-            z2 = resid**2 / var_nominal
-        z2 = z2[mask[..., None].repeat(3, axis=2) & np.isfinite(z2)]
-        bulk = float(np.median(z2)) / 0.4549 if z2.size else np.inf  # 0.4549: median of chi-square(1)
-        self.details.setdefault("noise", {})["bulk_ratio"] = bulk
+
+        def bulk_of(r):
+            with np.errstate(divide="ignore", invalid="ignore"):
+                z2 = r**2 / var_nominal
+            z2 = z2[mask[..., None].repeat(3, axis=2) & np.isfinite(z2)]
+            return float(np.median(z2)) / 0.4549 if z2.size else np.inf  # 0.4549: median of chi-square(1)
+
+        bulk = bulk_of(resid)
+        noise = self.details.setdefault("noise", {})
+        noise["bulk_ratio"] = bulk
         if not bulk < var_ratio**0.25:
+            return []
+        a = self.a
+        n_sim = int(min(max(round(samples), 1), 64))
+        sim = render(a.load_scene(), cam, n_sim, a.seed + 3, a.max_depth, width=R.shape[1], height=R.shape[0],
+                     progress=False)
+        bulk_few = bulk_of(np.where(mask[..., None], sim.mean.astype(np.float64) - R, 0.0)) * n_sim / max(samples, 1e-9)
+        noise["bulk_ratio_fewer_samples"] = bulk_few
+        if not bulk < 0.5 * bulk_few:
             return []
         hidden = {p["mutant"] for p in catalogue_power(ctx, samples) if not p["detectable"]}
         return rank_noise_level(var_ratio, ctx.mutants, ctx.baseline, mask, ctx.mutant_texts, hidden)[:2]
@@ -649,13 +669,23 @@ class _Grader:
 
 
 def _conclusive_chi2(cands, chi0: float, terms: int) -> bool:
-    """Pixel-level ranking: the best mutant lowers chi^2 by far more than noise could (5 sd of a chi^2
-    with ``terms`` degrees of freedom) and three times as much as the next one."""
+    r"""Pixel-level ranking: the best mutant lowers chi^2 by far more than noise could (5 sd of a chi^2
+    with ``terms`` degrees of freedom) and three times as much as the next one, and it beats a correct
+    renderer with fewer samples than declared.
+
+    That last rival has the model's noise times a factor s, fitted to the
+    image (s = chi0 / terms); in Gaussian deviance, -2 ln L + const, it scores
+    :math:`chi0 / s + terms \ln s = terms (1 + \ln(chi0 / terms))` against
+    the mutant's chi^2 at the declared noise. A correct render with a
+    sixteenth of its declared samples has chi0 near 16 terms: a mutant that
+    removes a few per cent of that is not a diagnosis.
+    """
     if not cands or terms <= 0:
         return False
     gain1 = chi0 - cands[0].chi2
     gain2 = chi0 - cands[1].chi2 if len(cands) > 1 else 0.0
-    return gain1 > 5.0 * np.sqrt(2.0 * terms) and gain1 > 3.0 * max(gain2, 0.0)
+    fewer_samples = terms * (1.0 + np.log(max(chi0 / terms, 1.0)))
+    return gain1 > 5.0 * np.sqrt(2.0 * terms) and gain1 > 3.0 * max(gain2, 0.0) and cands[0].chi2 < fewer_samples
 
 
 def _conclusive(cands) -> bool:
