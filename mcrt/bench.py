@@ -5,6 +5,13 @@ machine whose speed drifts slows both alike; the figures are medians over the
 repetitions after one warm-up render each, which also takes the JIT
 compilation out of the timing (reported apart, from Dr.Jit's kernel history).
 Speed is paths per second (one path per pixel sample, whatever its length).
+
+Where a committed Mitsuba reference of the case exists (mcrt.reference), each
+timed render is also scored against it: the excess MSE (the squared error
+minus the reference's own noise, mean(var_ref / spp_ref)), averaged over the
+repetitions, and the efficiency 1 / (MSE_excess x median time). For unbiased
+renderers MSE falls as 1/spp while time grows as spp, so the efficiency does
+not depend on the spp and its ratio is the ratio at equal time.
 """
 
 from __future__ import annotations
@@ -17,6 +24,8 @@ import sys
 import time
 from dataclasses import asdict, dataclass, replace
 from pathlib import Path
+
+import numpy as np
 
 
 @dataclass
@@ -36,6 +45,8 @@ class BenchRow:
     times: list[float]
     compile_time: float | None
     paths_per_second: float = 0.0
+    mse_excess: float | None = None  # mean over the timed renders; None without a committed reference
+    efficiency: float | None = None  # 1 / (mse_excess x median time)
 
 
 def _renderers(names, scene, backend, intersector):
@@ -46,9 +57,9 @@ def _renderers(names, scene, backend, intersector):
 
     def mcrt_time(c, seed):
         t0 = time.perf_counter()
-        render(scene, c.camera, c.spp, seed, c.max_depth, c.light_samples, backend,
-               width=c.width, height=c.height, intersector=intersector, progress=False)
-        return time.perf_counter() - t0, None
+        r = render(scene, c.camera, c.spp, seed, c.max_depth, c.light_samples, backend,
+                   width=c.width, height=c.height, intersector=intersector, progress=False)
+        return time.perf_counter() - t0, None, r.mean
 
     loaded = {}
 
@@ -70,7 +81,7 @@ def _renderers(names, scene, backend, intersector):
         dr.sync_thread()
         elapsed = time.perf_counter() - t0
         compile_s = sum(h.get("codegen_time", 0.0) + h.get("backend_time", 0.0) for h in dr.kernel_history()) / 1000
-        return elapsed, compile_s
+        return elapsed, compile_s, np.asarray(img)[..., :3]
 
     table = {"mcrt": mcrt_time, "mitsuba": mitsuba_time}
     unknown = set(names) - set(table)
@@ -88,39 +99,66 @@ def run_bench(scene, cases: list[BenchCase], *, renderers=("mcrt", "mitsuba"), r
     dr.set_flag(dr.JitFlag.KernelHistory, True)
     rows = []
     for case in cases:
+        ref = _committed_reference(scene, case, progress)
         times = {n: [] for n in fns}
+        errors = {n: [] for n in fns}
         compile_time = {}
         for n, fn in fns.items():  # warm-up: the first call compiles the kernels
             dr.kernel_history()
-            elapsed, compile_s = fn(case, 1000)
+            elapsed, compile_s, _ = fn(case, 1000)
             history = dr.kernel_history()
             compile_time[n] = compile_s if compile_s is not None else sum(
                 h.get("codegen_time", 0.0) + h.get("backend_time", 0.0) for h in history) / 1000
         for k in range(repeats):
             for n, fn in fns.items():
-                times[n].append(fn(case, k)[0])
+                elapsed, _, image = fn(case, k)
+                times[n].append(elapsed)
+                if ref is not None:
+                    errors[n].append(float(np.mean((image.astype(np.float64) - ref[0]) ** 2)) - ref[1])
             if progress:
                 print(f"  {case.camera} {case.width}x{case.height} {case.spp} spp depth {case.max_depth}: repetition {k + 1}/{repeats}",
                       file=sys.stderr, flush=True)
         paths = case.width * case.height * case.spp
         for n in fns:
-            rows.append(BenchRow(case, n, times[n], compile_time[n], paths / statistics.median(times[n])))
+            t = statistics.median(times[n])
+            mse = statistics.fmean(errors[n]) if errors[n] else None
+            eff = 1.0 / (mse * t) if mse is not None and mse > 0 else None
+            rows.append(BenchRow(case, n, times[n], compile_time[n], paths / t, mse, eff))
     return rows
 
 
+def _committed_reference(scene, case: BenchCase, progress: bool):
+    """(mean, noise floor mean(var / spp)) of the case's committed Mitsuba reference, or None where there is none."""
+    from mcrt.reference import MissingReference, ReferenceUnavailable, load_reference
+
+    try:
+        ref = load_reference(scene, case.camera, (case.width, case.height), case.max_depth)
+    except MissingReference:
+        return None
+    except ReferenceUnavailable as e:  # stale or corrupt: say so, and time without it
+        if progress:
+            print(f"  no efficiency for {case.camera} {case.width}x{case.height} depth {case.max_depth}: {e}", file=sys.stderr)
+        return None
+    floor = float(np.mean(np.maximum(ref.variance.astype(np.float64), 0.0) / ref.spp)) if ref.variance is not None else 0.0
+    return ref.mean.astype(np.float64), floor
+
+
 def format_table(rows: list[BenchRow]) -> str:
-    lines = ["| camera | resolution | spp | depth | K | renderer | median s | M paths/s | JIT s | speed-up |", "|---|---|---|---|---|---|---|---|---|---|"]
+    lines = ["| camera | resolution | spp | depth | K | renderer | median s | M paths/s | JIT s | speed-up | MSE excess | efficiency ratio |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     base = {}
     for r in rows:
         if r.renderer == "mitsuba":
-            base[json.dumps(asdict(r.case))] = r.paths_per_second
+            base[json.dumps(asdict(r.case))] = r
     for r in rows:
         c = r.case
-        ref = base.get(json.dumps(asdict(c)))
-        ratio = f"{r.paths_per_second / ref:.1f}x" if ref else ""
+        b = base.get(json.dumps(asdict(c)))
+        ratio = f"{r.paths_per_second / b.paths_per_second:.1f}x" if b else ""
         jit = f"{r.compile_time:.2f}" if r.compile_time is not None else "-"
+        mse = f"{r.mse_excess:.3g}" if r.mse_excess is not None else "-"
+        eff = f"{r.efficiency / b.efficiency:.1f}x" if b and r.efficiency and b.efficiency else "-"
         lines.append(f"| {c.camera} | {c.width}x{c.height} | {c.spp} | {c.max_depth} | {c.light_samples} | {r.renderer} | "
-                     f"{statistics.median(r.times):.3f} | {r.paths_per_second / 1e6:.2f} | {jit} | {ratio} |")
+                     f"{statistics.median(r.times):.3f} | {r.paths_per_second / 1e6:.2f} | {jit} | {ratio} | {mse} | {eff} |")
     return "\n".join(lines)
 
 

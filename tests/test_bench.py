@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import statistics
 
 from mcrt.bench import BenchCase, format_profile, format_table, kernel_profile, run_bench
 from mcrt.cli import main
@@ -13,7 +14,21 @@ def test_run_bench_times_both_renderers():
     rows = run_bench(load_scene(), [BenchCase("near", 16, 16, 2, 2)], repeats=2, progress=False)
     assert [r.renderer for r in rows] == ["mcrt", "mitsuba"]
     assert all(len(r.times) == 2 and r.paths_per_second > 0 for r in rows)
+    assert all(r.mse_excess is None and r.efficiency is None for r in rows)  # no committed 16x16 reference
     assert "| near | 16x16 | 2 | 2 |" in format_table(rows)
+
+
+def test_run_bench_scores_against_the_committed_reference():
+    """At 64x64, max depth 2 a committed reference exists: each render's excess MSE and the efficiency are reported.
+
+    Both renderers at 4 spp (seeds 0 and 1) are unbiased, so their excess MSE is their variance over 4 spp:
+    well above zero and within a factor 3 of each other (measured: 0.92).
+    """
+    rows = run_bench(load_scene(), [BenchCase("near", 64, 64, 4, 2)], repeats=2, progress=False)
+    mcrt, mitsuba = rows
+    assert mcrt.mse_excess > 0 and mitsuba.mse_excess > 0 and 1 / 3 < mcrt.mse_excess / mitsuba.mse_excess < 3
+    assert mcrt.efficiency == 1 / (mcrt.mse_excess * statistics.median(mcrt.times))
+    assert "x |" in format_table(rows).splitlines()[2]  # the efficiency ratio column is filled
 
 
 def test_kernel_profile_names_every_part():
