@@ -130,6 +130,7 @@ def run_bench(scene, cases: list[BenchCase], *, renderers=("mcrt", "mitsuba"), r
 def _committed_reference(scene, case: BenchCase, progress: bool):
     """(mean, noise floor mean(var / spp)) of the case's committed Mitsuba reference, or None where there is none."""
     from mcrt.reference import MissingReference, ReferenceUnavailable, load_reference
+    from mcrt.report.run import reference_floor
 
     try:
         ref = load_reference(scene, case.camera, (case.width, case.height), case.max_depth)
@@ -139,8 +140,7 @@ def _committed_reference(scene, case: BenchCase, progress: bool):
         if progress:
             print(f"  no efficiency for {case.camera} {case.width}x{case.height} depth {case.max_depth}: {e}", file=sys.stderr)
         return None
-    floor = float(np.mean(np.maximum(ref.variance.astype(np.float64), 0.0) / ref.spp)) if ref.variance is not None else 0.0
-    return ref.mean.astype(np.float64), floor
+    return ref.mean.astype(np.float64), reference_floor(ref)["mse"]
 
 
 def format_table(rows: list[BenchRow]) -> str:
