@@ -491,6 +491,8 @@ def floor_variance(tested: RenderResult, reference: RenderResult) -> RenderResul
     """
     if tested.variance is None or reference.variance is None:
         raise StatsError("a variance floor needs both renders' per-sample variance")
+    if tested.variance.shape != reference.variance.shape:
+        raise StatsError(f"images differ in shape: tested {tested.variance.shape}, reference {reference.variance.shape}")
     return replace(tested, variance=np.maximum(tested.variance, reference.variance))
 
 
@@ -925,8 +927,6 @@ def compare_files(
             if not r.spp:
                 raise StatsError(f"image {name} ({path}) does not record its spp; give it with --spp-{name.lower()} N")
         if floor_variance_from_b:
-            if a.mean.shape != b.mean.shape:
-                raise StatsError(f"images differ in shape: A is {a.mean.shape}, B is {b.mean.shape}")
             a = floor_variance(a, b)
             print("note: image A's per-sample variance is raised to image B's where lower (B taken as a reference)", file=out)
         c = compare_images(a, b, alpha=alpha, tile=tile, channels=channels, correction=correction, min_spp=min_spp)

@@ -532,3 +532,5 @@ def test_floor_variance_raises_only_lower_variances():
     assert (f.variance > small.variance).any() and (f.variance == small.variance).any() and f.spp == small.spp
     with pytest.raises(StatsError):
         floor_variance(small, RenderResult(mean=big.mean, variance=None, spp=1, seed=0, max_depth=0, renderer="x"))
+    with pytest.raises(StatsError, match="differ in shape"):
+        floor_variance(small, synth(3, mean_image(8, 16), 16))
