@@ -62,6 +62,15 @@ def plane_dot(normal, v):
     return out
 
 
+def plane_gap(normal, h, v):
+    """h - normal . v for a constant plane, as a chain of fmas from h (zero components left out)."""
+    out = h
+    for c in range(3):
+        if normal[c] != 0:
+            out = dr.fma(-normal[c], v[c], out)
+    return out
+
+
 def _slabs(planes):
     """Group room planes into slabs: (n, (h, sid), (h', sid') or None) with the partner -n.x <= h'.
 
@@ -226,8 +235,7 @@ class Geometry:
             num, den, sid, n = self._room_exit(o, d)
             t = num / den
             for faces, k in self.convex_objects:
-                num_in, den_in, n_in, ok = self._convex_entry(o, d, faces)
-                t_in = num_in / den_in
+                t_in, n_in, ok = self._convex_entry(o, d, faces)
                 hit = ok & (t_in < t)
                 t = dr.select(hit, t_in, t)
                 sid = dr.select(hit, k, sid)
@@ -262,12 +270,11 @@ class Geometry:
         blocked = m.Bool(False)
         if self.intersector == "convex":
             for faces, _ in self.convex_objects:
-                num_in, den_in, _, ok = self._convex_entry(o, d, faces, with_normal=False)
-                blocked |= ok & (num_in > tmax * den_in)  # t_in < tmax, with den_in < 0
+                blocked |= self._convex_blocks(o, d, faces, tmax)
             if include_room:
                 for normal, h, _ in self.room_planes:
                     denom = plane_dot(normal, d)
-                    tk = (h - plane_dot(normal, o)) / denom
+                    tk = plane_gap(normal, h, o) / denom
                     blocked |= (denom > 0) & (tk < tmax)
         else:
             for tri, k in self.triangles:
@@ -279,43 +286,44 @@ class Geometry:
 
     # -- primitives ------------------------------------------------------------
 
-    def _convex_entry(self, o, d, faces, with_normal=True):
-        """Where a ray enters a convex polytope (outward face planes n.x = h), without dividing.
+    def _convex_entry(self, o, d, faces):
+        """Where a ray enters a convex polytope (outward face planes n.x = h).
 
-        Face k bounds t by t denom_k <= num_k (denom = n.d, num = h - n.o):
-        from below where denom < 0 (entering), from above where denom > 0.
-        The entry t_in = max num/denom over entering faces and the exit t_out
-        = min over exiting faces are kept as fractions and compared by
-        cross-multiplying (signs known), so the caller divides at most once.
+        Face k bounds t by t denom_k <= num_k (denom = n.d, num = h - n.o),
+        at t_k = num_k / denom_k: from below where denom < 0 (entering), from
+        above where denom > 0 (exiting). The ray enters at t_in = max t_k over
+        entering faces, leaves at t_out = min over exiting ones, and hits
+        where 0 < t_in <= t_out. A face parallel to the ray (denom = 0) counts
+        as exiting: from inside its half-space t_k = +inf bounds nothing, from
+        outside t_k = -inf is a miss.
 
-        Returns (num_in, den_in, n_in, hit): t_in = num_in / den_in with
-        den_in < 0, the entry face's normal, and whether the ray enters at
-        t_in > 0 and t_in <= t_out.
+        Returns (t_in, n_in, hit): the entry distance, the entry face's normal,
+        and whether the ray enters.
         """
         m = self.m
-        # t_in starts at a sentinel with a zero denominator: num * 0 > 1 * denom holds
-        # for every entering face (denom < 0). t_out starts at a finite 2^100
-        # (num < 2^100 denom for every exiting face the scene can have); a face
-        # parallel to the ray (denom = 0) counts as exiting, and from outside
-        # its slab (num < 0) it sets t_out = num / 0 = -inf: a miss, with no
-        # separate test.
-        a_num, a_den = m.Float(1.0), m.Float(0.0)
-        b_num, b_den = m.Float(2.0**100), m.Float(1.0)
+        t_in, t_out = m.Float(0.0), m.Float(dr.inf)  # t_in stays 0 where no face enters ahead of the origin
         n_in = [m.Float(0.0), m.Float(0.0), m.Float(1.0)]
         for normal, h in faces:
             denom = plane_dot(normal, d)
-            num = h - plane_dot(normal, o)
-            later = (denom < 0) & (num * a_den > a_num * denom)  # num/denom > t_in
-            a_num = dr.select(later, num, a_num)
-            a_den = dr.select(later, denom, a_den)
-            if with_normal:
-                n_in = [dr.select(later, normal[c], n_in[c]) for c in range(3)]
-            sooner = (denom >= 0) & (num * b_den < b_num * denom)  # num/denom < t_out
-            b_num = dr.select(sooner, num, b_num)
-            b_den = dr.select(sooner, denom, b_den)
-        # t_in > 0 and t_in <= t_out (den_in < 0 <= den_out).
-        hit = (a_num < 0) & (a_num * b_den >= b_num * a_den)
-        return a_num, a_den, m.Array3f(*n_in), hit
+            t = plane_gap(normal, h, o) / denom
+            entering = denom < 0
+            later = entering & (t > t_in)
+            t_in = dr.select(later, t, t_in)
+            n_in = [dr.select(later, normal[c], n_in[c]) for c in range(3)]
+            t_out = dr.select(~entering & (t < t_out), t, t_out)
+        return t_in, m.Array3f(*n_in), (t_in > 0) & (t_in <= t_out)
+
+    def _convex_blocks(self, o, d, faces, tmax):
+        """Whether the segment o + t d, 0 < t < tmax, meets a convex polytope: the faces clip (0, tmax) to (lo, hi)."""
+        m = self.m
+        lo, hi = m.Float(0.0), tmax
+        for normal, h in faces:
+            denom = plane_dot(normal, d)
+            t = plane_gap(normal, h, o) / denom
+            entering = denom < 0
+            lo = dr.select(entering & (t > lo), t, lo)
+            hi = dr.select(~entering & (t < hi), t, hi)
+        return lo < hi
 
     def _sphere(self, o, d, c, r):
         """Nearest t > 0 of |o + t d - c| = r, or inf."""
