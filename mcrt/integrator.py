@@ -105,16 +105,39 @@ class PathIntegrator:
 
     # ------------------------------------------------------------------
     @dr.syntax
-    def radiance(self, o, d, rng):
-        """One radiance sample along each camera ray (o, d); d is unit length."""
+    def path_sums(self, camera_ray, rng, paths):
+        """Sums of x and x^2 over ``paths`` radiance samples x traced in turn by each lane.
+
+        A lane traces one camera path after another (path regeneration):
+        where a path ends, its sample x is added to the lane's sums and the
+        lane starts its next path in the same loop iteration. A 16-lane packet
+        then runs until its lanes' total work is done, instead of until its
+        longest single path ends; after the first roulette most packets
+        would otherwise carry mostly finished lanes.
+
+        The camera jitter of a new path reuses the two numbers that the
+        ended path drew for its next direction: a path ends at the light,
+        at the depth limit or by roulette, none of which depends on those
+        numbers, and the ended path never traced that direction, so they
+        are independent of everything its sample used.
+
+        ``camera_ray(u, v)`` gives the ray (o, d) through the lane's pixel
+        at jitter (u, v), d of unit length; ``paths`` (UInt32) counts the
+        lane's paths, at least one. Returns (sum x, sum x^2), Array3f.
+        """
         m, geo = self.m, self.geo
 
-        L = m.Array3f(0.0)  # radiance gathered so far
+        # ---- Loop state.
+        o, d = camera_ray(rng.next_float32(), rng.next_float32())  # the current ray
+        L = m.Array3f(0.0)  # radiance of the current path gathered so far
         beta = m.Array3f(1.0)  # path throughput: product of f cos / pdf so far
-        depth = m.UInt32(0)  # path segments traced so far
+        depth = m.UInt32(0)  # segments of the current path traced so far
         specular = m.Bool(True)  # the last vertex was the eye or a mirror: count emission
         pdf_bsdf = m.Float(0.0)  # solid-angle pdf of the last diffuse direction (for MIS)
-        active = m.Bool(True)
+        sum_x = m.Array3f(0.0)  # the lane's finished samples: sum of x
+        sum_x2 = m.Array3f(0.0)  # and of x^2
+        left = m.UInt32(paths - 1)  # paths the lane has still to start
+        active = m.Bool(True)  # the lane has a path in flight
 
         while dr.hint(active, label="mcrt_path"):
             t, sid, n = geo.intersect(o, d)
@@ -123,35 +146,52 @@ class PathIntegrator:
             is_light = sid == geo.light_id
 
             # ---- Emission seen from the eye or through mirrors.
-            L += beta * self.emitted(d, t, is_light, specular, pdf_bsdf)
-            L += beta * self.surface_emitted(d, n, sid)
+            L = dr.fma(beta, self.emitted(d, t, is_light, specular, pdf_bsdf), L)
+            if geo.has_surface_emission():
+                L = dr.fma(beta, self.surface_emitted(d, n, sid), L)
 
             # ---- Stop at the light (black on both sides) and at the depth limit.
-            active &= ~is_light & (depth < self.max_depth)
+            alive = ~is_light & (depth < self.max_depth)
             if not geo.normals_face_ray:
                 n = dr.select(dr.dot(d, n) < 0, n, -n)  # two-sided triangles: the normal on the arriving side
             origin = self.spawn_origin(p, n)
             mirror = self.is_mirror(sid)
-            diffuse = active & ~mirror  # the light has stopped the path already
+            diffuse = alive & ~mirror  # the light has stopped the path already
             if not self.diffuse_sees_emission:
                 # The last segment after a diffuse vertex could only find emission,
                 # which the light sample here has already counted: end the path.
-                active &= mirror | (depth + 1 < self.max_depth)
+                alive &= mirror | (depth + 1 < self.max_depth)
             color = self.surface_color(sid)
 
             # ---- Next-event estimation at diffuse vertices (depth + 1 <= max_depth holds here).
-            L += beta * color * self.direct_light(origin, n, rng, diffuse)
+            L = dr.fma(beta * color, self.direct_light(origin, n, rng, diffuse), L)
 
             # ---- Continue: cosine-weighted Lambertian direction or mirror reflection.
-            d, weight, specular = self.scatter(d, n, color, active & mirror, rng)
+            u1, u2 = rng.next_float32(), rng.next_float32()
+            d, weight, specular = self.scatter(d, n, color, alive & mirror, u1, u2, rng)
             if self.mis:
                 pdf_bsdf = dr.maximum(dr.dot(n, d), 0.0) * INV_PI
             beta *= weight
             o = origin
 
             # ---- Russian roulette.
-            beta, active = self.roulette(beta, depth, diffuse, active, rng)
-        return L
+            beta, alive = self.roulette(beta, depth, diffuse, alive, rng)
+
+            # ---- A path that ended is added to the sums; its lane starts the next one.
+            ended = ~alive
+            sum_x = dr.select(ended, sum_x + L, sum_x)
+            sum_x2 = dr.select(ended, dr.fma(L, L, sum_x2), sum_x2)
+            restart = ended & (left > 0)
+            left = dr.select(restart, left - 1, left)
+            o_new, d_new = camera_ray(u1, u2)
+            o = dr.select(restart, o_new, o)
+            d = dr.select(restart, d_new, d)
+            L = dr.select(ended, 0.0, L)
+            beta = dr.select(restart, 1.0, beta)
+            depth = dr.select(restart, 0, depth)
+            specular |= restart
+            active = alive | restart
+        return sum_x, sum_x2
 
     # ------------------------------------------------------------------
     def emitted(self, d, t, is_light, specular, pdf_bsdf):
@@ -199,8 +239,6 @@ class PathIntegrator:
         pass (mcrt.tracer.Tracer.pass_sums) cannot record.
         """
         m = self.m
-        if not self.geo.has_surface_emission():
-            return m.Array3f(0.0)
         out = [m.Float(0.0), m.Float(0.0), m.Float(0.0)]
         for k, srf in enumerate(self.geo.surfaces):
             if any(srf.emission):
@@ -222,13 +260,13 @@ class PathIntegrator:
                 mirror |= sid == k
         return mirror
 
-    def scatter(self, d, n, color, mirror, rng):
-        """Next direction, weight f cos / pdf, and whether the bounce was specular (at a mirror)."""
+    def scatter(self, d, n, color, mirror, u1, u2, rng):
+        """Next direction from (u1, u2), weight f cos / pdf, and whether the bounce was specular (at a mirror)."""
         m = self.m
-        d_next, weight = self.sample_lambertian(n, color, rng)
+        d_next, weight = self.sample_lambertian(n, color, u1, u2, rng)
         if not self.has_mirror:
             return d_next, weight, m.Bool(False)
-        r = d - 2.0 * dr.dot(d, n) * n  # perfect reflection about n
+        r = dr.fma(-2.0 * dr.dot(d, n), n, d)  # perfect reflection about n
         if "mirror_wrong_sign" in self.mutants:
             r = -r
         return dr.select(mirror, r, d_next), dr.select(mirror, color, weight), mirror
@@ -243,10 +281,9 @@ class PathIntegrator:
         survive = rng.next_float32() < q
         return dr.select(roulette, beta * dr.rcp(q), beta), active & (~roulette | survive)
 
-    def sample_lambertian(self, n, albedo, rng):
-        """A direction about n and its weight f cos / pdf (= albedo for the cosine warp)."""
+    def sample_lambertian(self, n, albedo, u1, u2, rng):
+        """A direction about n from (u1, u2) and its weight f cos / pdf (= albedo for the cosine warp)."""
         m, mut = self.m, self.mutants
-        u1, u2 = rng.next_float32(), rng.next_float32()
         weight = albedo * math.pi if "brdf_no_inv_pi" in mut else albedo
         if "ball_plus_normal" in mut:
             b = square_to_uniform_ball(u1, u2, rng.next_float32())

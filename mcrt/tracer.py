@@ -1,9 +1,10 @@
 """The standalone tracer: camera samples, passes, moments -> RenderResult.
 
-One pass traces ``n`` samples for every pixel in one kernel launch (lane
-``pixel * n + s``); each lane has its own random stream (mcrt.rng), keyed by a
-hash of (seed, pass), so a render is reproducible from its seed and renders with
-different seeds are independent. The per-pass seed and sample count enter the
+One pass traces ``n`` samples for every pixel in one kernel launch: each pixel
+has a few consecutive lanes (:func:`pass_layout`), and each lane traces its
+share of the pixel's paths one after another. Each lane has its own random
+stream (mcrt.rng), keyed by a hash of (seed, pass), so a render is
+reproducible from its seed and renders with different seeds are independent. The per-pass seed and sample count enter the
 kernel as opaque values: a new seed or spp does not recompile it.
 """
 
@@ -113,50 +114,55 @@ class Tracer:
     def _pass_kernel(self, key0, key1, n: int):
         """:meth:`pass_sums` for the pass keyed by the UInt32 arrays (key0, key1) (mcrt.rng.WeylRng.seeded).
 
-        The sums are formed inside the path kernel: lanes add x and x^2 (as
-        float64) into slots of GROUP consecutive lanes of one pixel, each
-        packet first reducing its own lanes (ReduceMode.Local), so a slot
-        receives one addition per packet. With packets of GROUP lanes or more
-        that is one addition, and two when the packet is half a group wide:
-        float additions commute, so the sums do not depend on which thread
-        adds first and a seed gives the same image bit for bit. The slots of
-        a pixel are added in a second, ordered reduction.
+        Each pixel gets consecutive lanes (:func:`pass_layout`),
+        and each lane traces its share of the pixel's n paths one after
+        another (mcrt.integrator.PathIntegrator.path_sums), keeping the sums
+        of its samples x and x^2. The lanes' sums are then added (as float64)
+        into slots of up to GROUP consecutive lanes of one pixel, each packet
+        first reducing its own lanes (ReduceMode.Local), so a slot receives
+        one addition per packet: a pixel's sums do not depend on which thread
+        adds first, and a seed gives the same image bit for bit. The slots
+        of a pixel are added in a second, ordered reduction.
         """
         import drjit as dr
 
         m = self.m
         W, H = self.width, self.height
-        stride, group = pass_layout(n)
+        stride, group = pass_layout(n, W * H)
         lanes = W * H * stride
         idx = dr.arange(m.UInt32, lanes)
         # lane // stride in float64 (exact for lanes < 2^32): an integer division by an
         # opaque value would be 16 scalar divides per packet.
         pixel = m.UInt32((m.Float64(idx) + 0.5) * dr.opaque(m.Float64, 1.0 / stride))
-        sample = idx - pixel * dr.opaque(m.UInt32, stride)
+        lane = idx - pixel * dr.opaque(m.UInt32, stride)  # the lane's place among its pixel's lanes
+        # The pixel's n paths dealt out: n // stride to every lane, one more to the first n % stride.
+        paths = dr.opaque(m.UInt32, n // stride) + dr.select(lane < dr.opaque(m.UInt32, n % stride), 1, 0)
         col = m.Float(pixel % W)
         row = m.Float(pixel // W)
         rng = WeylRng.seeded(m, lanes, key0, key1)
-        if "no_jitter" in self.mutants:
-            u = v = m.Float(0.5)
-        else:
-            u, v = rng.next_float32(), rng.next_float32()
         center, half_right, half_up = image_plane_basis(self.cam, W, H)
-        sx = 2.0 * (col + u) / W - 1.0
-        sy = 1.0 - 2.0 * (row + v) / H
-        d = dr.normalize(const3(m, center) + sx * const3(m, half_right) + sy * const3(m, half_up))
-        o = const3(m, self.cam.eye)
-        L = self.integrator.radiance(o, d, rng)
+        center, half_right, half_up = const3(m, center), const3(m, half_right), const3(m, half_up)
+        eye = const3(m, self.cam.eye)
+        no_jitter = "no_jitter" in self.mutants
+
+        def camera_ray(u, v):
+            if no_jitter:
+                u = v = 0.5
+            sx = dr.fma(col + u, 2.0 / W, -1.0)
+            sy = dr.fma(row + v, -2.0 / H, 1.0)
+            return eye, dr.normalize(dr.fma(sy, half_up, dr.fma(sx, half_right, center)))
+
+        used = paths > 0  # lanes past n pad the pass to a power of two per pixel
+        sum_x, sum_x2 = self.integrator.path_sums(camera_ray, rng, dr.maximum(paths, 1))
 
         slots = stride // group  # per pixel
-        used = sample < dr.opaque(m.UInt32, n)  # lanes past n pad the pass to whole groups
         # Layout (moment, pixel, channel, slot): the slots of one sum are one block of ``slots``.
-        base = (pixel * 3) * slots + (sample >> dr.opaque(m.UInt32, group.bit_length() - 1))
+        base = (pixel * 3) * slots + (lane >> dr.opaque(m.UInt32, group.bit_length() - 1))
         moment = 3 * W * H * slots
         acc = dr.zeros(m.Float64, 2 * moment)
         for c in range(3):
-            x = m.Float64(L[c])
-            dr.scatter_reduce(dr.ReduceOp.Add, acc, x, base + c * slots, used, mode=dr.ReduceMode.Local)
-            dr.scatter_reduce(dr.ReduceOp.Add, acc, x * x, base + (c * slots + moment), used, mode=dr.ReduceMode.Local)
+            dr.scatter_reduce(dr.ReduceOp.Add, acc, m.Float64(sum_x[c]), base + c * slots, used, mode=dr.ReduceMode.Local)
+            dr.scatter_reduce(dr.ReduceOp.Add, acc, m.Float64(sum_x2[c]), base + (c * slots + moment), used, mode=dr.ReduceMode.Local)
         if slots > 1:
             dr.eval(acc)
             acc = dr.block_sum(acc, slots)
@@ -191,17 +197,27 @@ class Tracer:
 
 #: Lanes summed into one slot inside the kernel (a power of two no wider than a packet of 16).
 GROUP = 16
+#: Paths one lane traces in turn, at most: its float32 sums of x and x^2 stay exact to about a
+#: millionth, and a packet's lanes, each with this many paths, end close together.
+PATHS_PER_LANE = 16
+#: Lanes a pass has at least, where it has the samples: Dr.Jit's LLVM backend hands out blocks
+#: of 16384 lanes to its threads, and a pass of one block would keep one core busy.
+MIN_LANES = 1 << 16
 
 
-def pass_layout(n: int) -> tuple[int, int]:
-    """(lanes per pixel, lanes per slot) of a pass of ``n`` samples per pixel.
+def pass_layout(n: int, pixels: int) -> tuple[int, int]:
+    """(lanes per pixel, lanes per slot) of a pass of ``n`` samples per pixel over ``pixels`` pixels.
 
-    Up to GROUP samples: the next power of two, one slot; beyond: whole groups of GROUP.
+    Enough lanes that none traces more than PATHS_PER_LANE paths and, where
+    n allows, that the pass has MIN_LANES; up to GROUP lanes per pixel, the
+    next power of two (lanes past n trace nothing that is counted), beyond,
+    whole groups of GROUP.
     """
-    if n <= GROUP:
-        stride = 1 << (n - 1).bit_length()
+    lanes = min(n, max(-(-n // PATHS_PER_LANE), -(-MIN_LANES // pixels)))
+    if lanes <= GROUP:
+        stride = 1 << (lanes - 1).bit_length()
         return stride, stride
-    return -(-n // GROUP) * GROUP, GROUP
+    return -(-lanes // GROUP) * GROUP, GROUP
 
 
 def pass_size(width: int, height: int, spp: int) -> int:

@@ -89,23 +89,39 @@ def test_mean_and_variance_follow_the_film_formulas(scene):
 
 
 def test_pass_layout():
-    """Lanes per pixel and per in-kernel slot: powers of two up to a group, then whole groups."""
-    from mcrt.tracer import GROUP, pass_layout, pass_size
+    """Lanes per pixel and per in-kernel slot, and the paths each lane traces in turn.
 
-    assert [pass_layout(n) for n in (1, 3, 4, 16, 17, 36, 64)] == [(1, 1), (4, 4), (4, 4), (16, 16), (32, 16), (48, 16), (64, 16)]
+    A 256x256 pass of 16 samples is one lane per pixel with 16 paths; small
+    images keep MIN_LANES lanes where they have the samples; powers of two
+    up to a group, then whole groups.
+    """
+    from mcrt.tracer import GROUP, MIN_LANES, PATHS_PER_LANE, pass_layout, pass_size
+
+    big, small = 256 * 256, 64 * 64
+    assert [pass_layout(n, big) for n in (1, 3, 16, 17, 64, 1024)] == [(1, 1), (1, 1), (1, 1), (2, 2), (4, 4), (64, 16)]
+    assert [pass_layout(n, small) for n in (1, 3, 16, 40, 1024)] == [(1, 1), (4, 4), (16, 16), (16, 16), (64, 16)]
+    assert pass_layout(40, 12 * 10) == (48, 16)
+    for pixels in (1, 120, small, big):
+        for n in (1, 2, 3, 5, 16, 17, 40, 100, 255, 1024, 4096):
+            stride, group = pass_layout(n, pixels)
+            assert -(-n // stride) <= PATHS_PER_LANE  # no lane traces more than its share
+            assert stride * pixels >= min(MIN_LANES, n * pixels) or stride >= n
+            assert stride % group == 0 and (stride <= GROUP or group == GROUP)
     assert pass_size(256, 256, 1000) % GROUP == 0 and pass_size(8, 8, 5) == 5
 
 
-@pytest.mark.parametrize("per_pass", [3, 36])
-def test_padded_lanes_are_not_counted(scene, per_pass):
-    """Passes of 3 and 36 samples run 4 and 48 lanes per pixel; the extra lanes must not enter the sums.
+@pytest.mark.parametrize("per_pass,res", [(3, 16), (36, 16), (40, 64)])
+def test_every_pixel_counts_its_paths_once(scene, per_pass, res):
+    """Passes whose lanes do not divide the samples evenly, against one that does.
 
-    Counting them would brighten the image by 4/3 at the 3-sample layout and
-    by 48/36 at the 36-sample layout (seed 5 against seed 6, level ALPHA).
+    3 and 36 samples at 16x16 run 4 and 48 lanes per pixel, one path each, the
+    extra lanes padding (counting them would brighten the image by 4/3 and
+    48/36); 40 samples at 64x64 run 16 lanes of 3 or 2 paths (dealing out
+    only 2 each would darken it by 32/40). Seed 5 against seed 6, level ALPHA.
     """
-    a = _render(scene, spp=72, spp_per_pass=per_pass, seed=5, width=16, height=16)
-    b = _render(scene, spp=256, seed=6, width=16, height=16)
-    assert a.spp == 72
+    a = _render(scene, spp=2 * per_pass, spp_per_pass=per_pass, seed=5, width=res, height=res)
+    b = _render(scene, spp=256, seed=6, width=res, height=res)
+    assert a.spp == 2 * per_pass
     c = compare_images(a, b, alpha=ALPHA)
     assert c.passed, c.summary()
 
@@ -157,8 +173,9 @@ def test_light_samples_do_not_change_the_expectation(scene):
     b = _render(scene, spp=512, seed=4, light_samples=1)
     c = compare_images(a, b, alpha=ALPHA)
     assert c.passed, c.summary()
-    # ...and K = 4 has less variance where direct light dominates (the floor).
-    assert a.variance[-8:].mean() < b.variance[-8:].mean()
+    # ...and K = 4 has less variance on the floor, in the typical pixel: the mean over pixels
+    # follows the rare heavy paths by way of the mirror, which light samples do not touch.
+    assert np.median(a.variance[-8:]) < np.median(b.variance[-8:])
 
 
 def test_russian_roulette_is_unbiased(scene):
