@@ -339,7 +339,7 @@ class PathIntegrator:
         if "shadow_unbounded" in mut:
             blocked = geo.occluded(origin, wi, m.Float(dr.inf), include_room=True)
         else:
-            blocked = geo.occluded(origin, wi, dist2 * inv_dist * SHADOW_TMAX_SCALE)
+            blocked = geo.occluded(origin, wi, dist2 * inv_dist * SHADOW_TMAX_SCALE, active=valid)
         area = 1.0 if "nee_no_area" in mut else self.light_area
         if self.mis:
             # Balance weight of K light samples against the cosine BSDF sample:

@@ -78,3 +78,45 @@ def test_shadow_segments_agree(setup):
     b = triangles.occluded(_arr(m, o), _arr(m, w), tmax).numpy()
     assert a.sum() > 200  # the objects do shadow some of these segments (0.6 %)
     assert np.array_equal(a, b), f"{np.sum(a != b)} of {len(a)} shadow segments disagree"
+
+
+def test_shadow_segments_near_the_tetrahedron_agree(setup):
+    """Segments aimed through the tetrahedron's enclosing ball, where the shadow test's branch decides.
+
+    The convex intersector tests the tetrahedron only in packets where some
+    segment meets its enclosing ball; these segments all pass through the
+    ball and end before it or inside it (8 % of them are blocked), and must
+    agree with the triangles one by one (NumPy seed 3).
+    """
+    scene, m, o, _ = setup
+    convex, triangles = Geometry(scene, m, "convex"), Geometry(scene, m, "triangles")
+    (center, radius), = convex.convex_bounds
+    rng = np.random.default_rng(3)
+    target = center + radius * rng.uniform(-1, 1, (len(o), 3))
+    planes = scene.room.planes()
+    inside = np.all(target @ planes[:, :3].T <= planes[:, 3] - 0.01, axis=1)  # the ball reaches below the floor
+    o, target = o[inside], target[inside]
+    w = target - o
+    dist = np.linalg.norm(w, axis=1)
+    w = (w / dist[:, None]).astype(np.float32)
+    tmax = m.Float((dist * rng.uniform(0.3, 1.0, len(o))).astype(np.float32))  # ending inside the room
+    a = convex.occluded(_arr(m, o), _arr(m, w), tmax).numpy()
+    b = triangles.occluded(_arr(m, o), _arr(m, w), tmax).numpy()
+    assert a.mean() > 0.05
+    assert np.array_equal(a, b), f"{np.sum(a != b)} of {len(a)} shadow segments disagree"
+
+
+def test_enclosing_ball():
+    """The smallest ball around a few points: it holds them all and no ball found by search is smaller (seed 4)."""
+    from scipy.optimize import minimize
+
+    from mcrt.geometry import enclosing_ball
+
+    rng = np.random.default_rng(4)
+    for k in (1, 2, 3, 4, 4, 4, 5):
+        pts = rng.normal(size=(k, 3))
+        center, radius = enclosing_ball(pts)
+        assert np.all(np.linalg.norm(pts - center, axis=1) <= radius)
+        spread = lambda c: np.max(np.linalg.norm(pts - c, axis=1))  # noqa: E731
+        found = minimize(spread, pts.mean(axis=0), method="Nelder-Mead", options=dict(xatol=1e-9, fatol=1e-12, maxiter=20000))
+        assert radius <= found.fun * (1 + 2.0**-9)
