@@ -176,8 +176,9 @@ def kernel_profile(scene, *, camera: str = "near", res: int = 256, spp: int = 16
     from Dr.Jit's kernel history. A part's cost is the difference to the full
     kernel; the variants render other images (no tetrahedron, fewer bounces),
     so they time work, not correctness. The RNG row is a kernel that only
-    draws the path's random numbers (two for the pixel, five per bounce for
-    the bounces an average path makes here, about 5).
+    draws a path's random numbers: five per bounce for the bounces an average
+    path makes here, about 5 (a lane's later paths take their pixel jitter
+    from numbers its previous path drew).
     """
     import drjit as dr
 
@@ -210,13 +211,13 @@ def kernel_profile(scene, *, camera: str = "near", res: int = 256, spp: int = 16
     for k in range(repeats + 1):
         rng = WeylRng.seeded(m, res * res * spp, dr.opaque(m.UInt32, k), dr.opaque(m.UInt32, 7))
         acc = m.Float(0.0)
-        for _ in range(2 + 5 * 5):
+        for _ in range(5 * 5):
             acc += rng.next_float32()
         dr.kernel_history()
         dr.eval(acc)
         dr.sync_thread()
         times.append(max(h["execution_time"] for h in dr.kernel_history() if "execution_time" in h))
-    rows.append(ProfileRow("RNG alone (27 draws per path)", statistics.median(times[1:])))
+    rows.append(ProfileRow("RNG alone (25 draws per path)", statistics.median(times[1:])))
     return rows
 
 
