@@ -1,4 +1,4 @@
-"""Per-path random numbers: a Weyl sequence through an integer mixer, 32 bits wide.
+"""Per-lane random numbers: a Weyl sequence through an integer mixer, 32 bits wide.
 
 Each lane holds a 32-bit counter s and an odd 32-bit increment g, and draw k
 (k = 1, 2, ...) is
@@ -14,7 +14,8 @@ s = mix(i ^ k0), a bijection of the lane index, so no two lanes of a pass
 start alike, and steps by g = mix(s + k1) | 1. Each lane has its own
 increment, so two lanes' sequences never run in step: with one shared
 increment a lane that started j steps behind another would repeat its
-numbers. A path draws a few dozen numbers, far below the period 2^32.
+numbers. A lane draws a few hundred numbers in a pass (its paths, up to 16
+of a few dozen numbers each), far below the period 2^32.
 
 Why not Dr.Jit's PCG32, which mcrt used before: seeded with consecutive
 stream indices (``initseq + lane``), consecutive lanes, the samples of one

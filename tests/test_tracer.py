@@ -126,6 +126,34 @@ def test_every_pixel_counts_its_paths_once(scene, per_pass, res):
     assert c.passed, c.summary()
 
 
+@pytest.mark.parametrize("paths_per_lane", [16, 4])
+def test_lanes_tracing_several_paths_agree_with_one_path_per_lane(scene, monkeypatch, paths_per_lane):
+    """Path regeneration does not change the image: 16 or 4 paths per lane against one.
+
+    32x32 at 256 spp: with MIN_LANES lifted, 16 (or 64) lanes per pixel trace
+    16 (or 4) paths each, reusing the ended path's direction numbers for the
+    next jitter; with PATHS_PER_LANE = 1 every lane traces one path. Seeds 71
+    and 72, level ALPHA. Fresh tracers: the layout is fixed when a pass is
+    first traced.
+    """
+    import mcrt.tracer as tracer
+
+    default_min_lanes = tracer.MIN_LANES
+
+    def render_with(seed, **constants):
+        monkeypatch.setattr(tracer, "_TRACERS", {})
+        for name, value in constants.items():
+            monkeypatch.setattr(tracer, name, value)
+        return _render(scene, spp=256, seed=seed)
+
+    a = render_with(71, MIN_LANES=1, PATHS_PER_LANE=paths_per_lane)
+    assert tracer.pass_layout(256, 32 * 32)[0] == 256 // paths_per_lane
+    b = render_with(72, MIN_LANES=default_min_lanes, PATHS_PER_LANE=1)
+    assert tracer.pass_layout(256, 32 * 32)[0] == 256
+    c = compare_images(a, b, alpha=ALPHA)
+    assert c.passed, c.summary()
+
+
 def test_finite_and_non_negative(scene):
     for cam in ("near", "far"):
         r = _render(scene, camera=cam, max_depth=-1)
