@@ -868,8 +868,8 @@ def compare_files(
     ``floor_variance_from_b``: B is a high-spp reference of the same
     estimator, and A takes B's per-sample variance where its own is lower
     (:func:`floor_variance`). Without it a modest render compared with a
-    high-spp reference false-alarms on about 30 % of correct renders; with
-    it 0.5 % (reports/validation/against_reference_floor/).
+    high-spp reference false-alarms on about a third of correct renders;
+    with it on none of 200 (reports/validation/against_reference_floor/).
 
     Returns
     -------
