@@ -351,8 +351,8 @@ class Geometry:
         shadow segment from a random vertex to the light seldom passes near the
         tetrahedron (3 % of them in the canonical scene), and a packet where
         none of the 16 lanes does skips the four faces' test (two packets in
-        three): 4 % of the kernel. The ball contains the polytope, so the
-        answer is the same as without the branch.
+        three): about 5 % of the kernel. The ball contains the polytope, so
+        the answer is the same as without the branch.
         """
         m = self.m
         center, radius = ball

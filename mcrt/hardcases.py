@@ -18,8 +18,9 @@ the negative count and the RMSE against the reference, and the verdict of
 moved) is also compared with the untransformed scene's image, which it must
 equal: the reference of a transformed case is rendered from the
 untransformed scene, and the comparison with it floors the render's
-per-sample variance at the reference's (:func:`mcrt.stats.floor_variance`). :func:`run_all` runs the catalogue, :func:`precision_sweep`
-measures where float32 breaks for each renderer (scenes moved 1e2 ... 1e5
+per-sample variance at the reference's (:func:`mcrt.stats.floor_variance`).
+:func:`run_all` runs the catalogue, :func:`precision_sweep` measures where
+float32 breaks for each renderer (scenes moved 1e2 ... 1e5
 from the origin, scaled 1e-20 ... 1e18), and :func:`write_report` writes
 reports/hardcases/index.md and data.json. ``mcrt hardcases`` is the command
 line (:func:`register`); it exits 1 when any case has NaN/Inf or negative

@@ -4,8 +4,9 @@ One pass traces ``n`` samples for every pixel in one kernel launch: each pixel
 has a few consecutive lanes (:func:`pass_layout`), and each lane traces its
 share of the pixel's paths one after another. Each lane has its own random
 stream (mcrt.rng), keyed by a hash of (seed, pass), so a render is
-reproducible from its seed and renders with different seeds are independent. The per-pass seed and sample count enter the
-kernel as opaque values: a new seed or spp does not recompile it.
+reproducible from its seed and renders with different seeds are independent.
+The per-pass seed and sample count enter the kernel as opaque values: a new
+seed or spp does not recompile it.
 """
 
 from __future__ import annotations
@@ -114,10 +115,10 @@ class Tracer:
     def _pass_kernel(self, key0, key1, n: int):
         """:meth:`pass_sums` for the pass keyed by the UInt32 arrays (key0, key1) (mcrt.rng.WeylRng.seeded).
 
-        Each pixel gets consecutive lanes (:func:`pass_layout`),
-        and each lane traces its share of the pixel's n paths one after
-        another (mcrt.integrator.PathIntegrator.path_sums), keeping the sums
-        of its samples x and x^2. The lanes' sums are then added (as float64)
+        Each pixel gets consecutive lanes (:func:`pass_layout`), and each lane
+        traces its share of the pixel's n paths one after another
+        (mcrt.integrator.PathIntegrator.path_sums), keeping the sums of its
+        samples x and x^2. The lanes' sums are then added (as float64)
         into slots of up to GROUP consecutive lanes of one pixel, each packet
         first reducing its own lanes (ReduceMode.Local), so a slot receives
         one addition per packet: a pixel's sums do not depend on which thread
