@@ -100,7 +100,7 @@ def find_llvm() -> str | None:
 def require_llvm() -> None:
     """Raise a one-line error naming what to install when no libLLVM was found."""
     if _problem is not None:
-        raise RuntimeError(f"mcrt: Dr.Jit's LLVM backend is unusable: {_problem}")
+        raise RuntimeError(f"Dr.Jit's LLVM backend is unusable: {_problem}")
 
 
 def main() -> int:

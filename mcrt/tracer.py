@@ -36,11 +36,11 @@ def backend_module(backend: str):
     if backend == "llvm":
         require_llvm()
         if not dr.has_backend(dr.JitBackend.LLVM):
-            raise RuntimeError("mcrt: Dr.Jit's LLVM backend did not initialise (is DRJIT_LIBLLVM_PATH a libLLVM >= 16?)")
+            raise RuntimeError("Dr.Jit's LLVM backend did not initialise (is DRJIT_LIBLLVM_PATH a libLLVM >= 16?)")
         import drjit.llvm as m
     elif backend == "cuda":
         if not dr.has_backend(dr.JitBackend.CUDA):
-            raise RuntimeError("mcrt: the CUDA backend is unavailable on this machine (no NVIDIA GPU or driver); use --backend llvm")
+            raise RuntimeError("the CUDA backend is unavailable on this machine (no NVIDIA GPU or driver); use --backend llvm")
         import drjit.cuda as m
     else:
         raise ValueError(f"unknown backend {backend!r} (one of {', '.join(BACKENDS)})")

@@ -46,3 +46,15 @@ def test_bench_command_writes_json(tmp_path, capsys):
     data = json.loads(out.read_text())
     assert {r["renderer"] for r in data["rows"]} == {"mcrt", "mitsuba"} and data["kernel_profile"] == []
     assert sorted({r["case"]["spp"] for r in data["rows"]}) == [2, 4] and len(data["rows"]) == 4
+
+
+def test_bench_without_cuda_says_so_in_one_line(capsys):
+    """--backend cuda on a machine without a GPU: exit 2 and one line naming the problem, prefixed once."""
+    import drjit as dr
+    import pytest
+
+    if dr.has_backend(dr.JitBackend.CUDA):
+        pytest.skip("this machine has the CUDA backend")
+    assert main(["bench", "--backend", "cuda", "--res", "16", "--repeats", "1"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err[-1] == "mcrt: the CUDA backend is unavailable on this machine (no NVIDIA GPU or driver); use --backend llvm"
