@@ -234,10 +234,10 @@ class Verdict:
 def _compare(a: RenderResult, b: RenderResult, *, reference: bool = False) -> Verdict:
     """compare_images(a, b); with ``reference``, b is a high-spp reference and a's variance is floored at b's.
 
-    A modest render compared with a high-spp reference as it is false-alarms
-    on about a third of correct renders (it misses the rare heavy paths, and
-    its mean and its own variance estimate come out low together); with the
-    floor, on none of 200 (reports/validation/).
+    Compared with a high-spp reference without the floor, a modest render
+    false-alarms on about a third of correct renders: it misses the rare
+    heavy paths, so its mean and its own variance estimate come out low
+    together. With the floor, on none of 200 (reports/validation/).
     """
     from mcrt.stats import StatsError, compare_images, floor_variance
 
