@@ -53,18 +53,20 @@ def _renderers(names, scene, backend, intersector):
     """Callables (case, seed) -> seconds for each renderer; setup and loading are outside the clock."""
     import drjit as dr
 
-    from mcrt.tracer import render
+    from mcrt.render import render
 
     def mcrt_time(c, seed):
+        s = scene.settings(camera=c.camera, width=c.width, height=c.height, spp=c.spp, max_depth=c.max_depth,
+                           light_samples=c.light_samples)
         t0 = time.perf_counter()
-        r = render(scene, c.camera, c.spp, seed, c.max_depth, c.light_samples, backend,
-                   width=c.width, height=c.height, intersector=intersector, progress=False)
+        r = render(scene, s, seed=seed, backend=backend, intersector=intersector, progress=False)
         return time.perf_counter() - t0, None, r.mean
 
     loaded = {}
 
     def mitsuba_time(c, seed):
-        # Mitsuba's own entry point, mi.render, on a scene loaded once per case: its best case.
+        # Mitsuba's own entry point, mi.render, on a scene loaded once per case: its best case, faster
+        # than the deterministic passes with variance of mcrt.render's 'mitsuba' renderer.
         import mitsuba as mi
 
         from mcrt.mitsuba import load_mitsuba_scene
@@ -212,7 +214,7 @@ def kernel_profile(scene, *, camera: str = "near", res: int = 256, spp: int = 16
         rng = WeylRng.seeded(m, res * res * spp, dr.opaque(m.UInt32, k), dr.opaque(m.UInt32, 7))
         acc = m.Float(0.0)
         for _ in range(5 * 5):
-            acc += rng.next_float32()
+            acc += rng.next_1d()
         dr.kernel_history()
         dr.eval(acc)
         dr.sync_thread()

@@ -1,44 +1,72 @@
-"""The pinhole camera: pixel coordinates to primary rays (scene.md mapping).
+"""The pinhole camera: how a pixel sample becomes a primary ray (scene.md mapping).
 
-For a W x H image, pixel (i, j) with jitter (u, v) in [0, 1)^2 goes through
-the image-plane point one unit in front of the eye
+For a W x H image, pixel (i, j) with jitter (u, v) in [0, 1)^2 sends a ray from
+the eye through the image-plane point one unit in front of it,
 
-    p = eye + forward + t_x (2 (i + u) / W - 1) right + t_y (1 - 2 (j + v) / H) up,
+    d = forward + s_x t_x right + s_y t_y up,    s_x = 2 (i + u) / W - 1,  s_y = 1 - 2 (j + v) / H,
 
-with t_x = tan(fov_x / 2) and t_y = t_x H / W, where right = forward x up.
-Column 0 is on the left, row 0 at the top; every sample's ray starts at the
-eye. For the canonical cameras this is the plane x = 0 with
-y = 1 - 2 (i + u) / W and z = 1 - 2 (j + v) / H.
+normalised, with t_x = tan(fov_x / 2), t_y = t_x H / W and right = forward x up.
+Column 0 is on the left, row 0 at the top. For the canonical cameras the plane
+is x = 0 and the point (0, 1 - 2 (i + u) / W, 1 - 2 (j + v) / H).
 
-The functions are written over plain arithmetic so that they run on NumPy
-arrays (tests, the Mitsuba cross-check) and on Dr.Jit arrays (the tracer).
+:meth:`Pinhole.direction` is the one implementation: the tracer's kernel
+calls it on Dr.Jit arrays, and the same code runs on NumPy arrays for the
+closed-form images and the Mitsuba cross-check.
 """
 
 from __future__ import annotations
 
 import math
+import sys
 
+import drjit as dr
 import numpy as np
 
 from mcrt.scene import Camera
 
 
-def image_plane_basis(camera: Camera, width: int, height: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(center, half_right, half_up): the plane point is center + sx half_right + sy half_up, sx, sy in [-1, 1]."""
-    right, up, forward = camera.frame()
-    tx = math.tan(math.radians(camera.fov_x_deg) / 2)
-    ty = tx * height / width
-    return forward, tx * right, ty * up
+def _fma(a, b, c):
+    """a b + c: one instruction on Dr.Jit arrays, plain arithmetic on NumPy arrays and floats."""
+    return dr.fma(a, b, c) if dr.is_array_v(a) else a * b + c
 
 
-def film_coordinates(width: int, height: int, i, j, u, v):
-    """Pixel (i, j) plus jitter (u, v) to (sx, sy) in [-1, 1]^2, sx to the right, sy up."""
-    return 2.0 * (i + u) / width - 1.0, 1.0 - 2.0 * (j + v) / height
+class Pinhole:
+    """The pixel-to-ray mapping of one camera at one resolution.
+
+    ``jitter=False`` sends every sample through its pixel's centre (the
+    catalogued no-jitter bug).
+    """
+
+    def __init__(self, camera: Camera, width: int, height: int, *, jitter: bool = True):
+        right, up, forward = camera.frame()
+        tx = math.tan(math.radians(camera.fov_x_deg) / 2)
+        ty = tx * height / width
+        self.width, self.height, self.jitter = width, height, jitter
+        self.eye = tuple(float(x) for x in camera.eye)
+        self.center = tuple(float(x) for x in forward)
+        self.half_right = tuple(float(x) for x in tx * right)
+        self.half_up = tuple(float(x) for x in ty * up)
+
+    def film(self, col, row, u, v):
+        """(s_x, s_y) in [-1, 1]^2 of pixel (col, row) at jitter (u, v): s_x to the right, s_y up."""
+        if not self.jitter:
+            u = v = 0.5
+        return _fma(col + u, 2.0 / self.width, -1.0), _fma(row + v, -2.0 / self.height, 1.0)
+
+    def direction(self, col, row, u, v):
+        """Unit direction of the ray through pixel (col, row) at jitter (u, v).
+
+        On Dr.Jit arrays an Array3f; on NumPy arrays an array (..., 3).
+        """
+        sx, sy = self.film(col, row, u, v)
+        d = [_fma(sy, self.half_up[k], _fma(sx, self.half_right[k], self.center[k])) for k in range(3)]
+        if dr.is_array_v(sx):
+            return dr.normalize(sys.modules[type(sx).__module__].Array3f(*d))
+        d = np.stack(np.broadcast_arrays(*d), axis=-1)
+        return d / np.linalg.norm(d, axis=-1, keepdims=True)
 
 
 def primary_directions(camera: Camera, width: int, height: int, i, j, u, v) -> np.ndarray:
-    """Unit directions (..., 3) of the rays through pixel samples, NumPy arrays in and out."""
-    center, hr, hu = image_plane_basis(camera, width, height)
-    sx, sy = film_coordinates(width, height, np.asarray(i, float), np.asarray(j, float), np.asarray(u, float), np.asarray(v, float))
-    d = center + sx[..., None] * hr + sy[..., None] * hu
-    return d / np.linalg.norm(d, axis=-1, keepdims=True)
+    """Unit directions (..., 3) of the rays through pixel samples (i, j) + (u, v): NumPy arrays in and out."""
+    asf = lambda a: np.asarray(a, dtype=float)  # noqa: E731
+    return Pinhole(camera, width, height).direction(asf(i), asf(j), asf(u), asf(v))

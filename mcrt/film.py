@@ -2,12 +2,15 @@
 
 A render is accumulated in passes of a few samples per pixel, so memory does
 not grow with spp. Each pass returns per-pixel sums of the samples x and of
-x^2 (float64); from the totals the mean and the unbiased per-sample variance
+x^2 (float64, in Dr.Jit's memory, laid out (moment, pixel, channel)); the
+totals stay on the device, and from them the mean and the unbiased
+per-sample variance
 
     mean = S1 / n,    var = (S2 - S1^2 / n) / (n - 1)
 
-are formed once at the end. Passes are independent given their seeds, so
-results merge exactly in any order (:func:`merge`).
+are formed once at the end (:func:`run_passes`, the one pass loop of every
+renderer). Passes are independent given their seeds, so results merge
+exactly in any order (:func:`merge`).
 """
 
 from __future__ import annotations
@@ -44,12 +47,6 @@ class RenderResult:
     @property
     def shape(self) -> tuple[int, int]:
         return self.mean.shape[:2]
-
-    def std_error(self) -> np.ndarray:
-        """Standard error of each pixel's mean, sqrt(var / spp)."""
-        if self.variance is None:
-            raise ValueError("this render has no per-sample variance")
-        return np.sqrt(np.maximum(self.variance, 0) / self.spp)
 
 
 @dataclass
@@ -142,26 +139,89 @@ class Progress:
         print(("\r" if self.tty else "") + msg.ljust(72), end=end, file=sys.stderr, flush=True)
 
 
-PassFn = Callable[[int, int], tuple[np.ndarray, np.ndarray]]
+def mean_variance(sums, n: int, width: int, height: int) -> tuple[np.ndarray, np.ndarray]:
+    """Mean and unbiased per-sample variance (float32, H x W x 3) from device sums laid out (moment, pixel, channel).
 
-
-def run_passes(render_pass: PassFn, height: int, width: int, spp: int, spp_per_pass: int, progress: Progress | None = None) -> Moments:
-    """Call ``render_pass(pass_index, n)`` until ``spp`` samples per pixel are summed.
-
-    ``render_pass`` returns the (height, width, 3) float64 sums of x and x^2
-    over its ``n`` samples per pixel; pass ``k`` must use seeds that no other
-    pass uses.
+    The formulas of :class:`Moments`, evaluated by Dr.Jit in one small kernel
+    (NumPy's temporaries cost a few ms at 256x256). The count is opaque: a
+    true division (Dr.Jit turns a division by a literal into a product with
+    its reciprocal), and one kernel for every spp.
     """
-    m = Moments.zeros(height, width)
-    k = 0
-    while m.n < spp:
-        n = min(spp_per_pass, spp - m.n)
-        s1, s2 = render_pass(k, n)
-        m.add(s1, s2, n)
-        k += 1
-        if progress is not None:
-            progress.update(m.n)
-    return m
+    import drjit as dr
+
+    Float64 = type(sums)
+    Float, UInt32 = dr.float32_array_t(Float64), dr.uint32_array_t(Float64)
+    size = 3 * width * height
+    idx = dr.arange(UInt32, size)
+    count = dr.opaque(Float64, n)
+    s1 = dr.gather(Float64, sums, idx)
+    mean = Float(s1 / count)
+    if n < 2:
+        var = dr.zeros(Float, size)
+    else:
+        s2 = dr.gather(Float64, sums, idx + size)
+        var = Float(dr.maximum((s2 - s1 * s1 / count) / dr.opaque(Float64, n - 1), 0.0))
+    dr.eval(mean, var)
+    shape = (height, width, 3)
+    return mean.numpy().reshape(shape), var.numpy().reshape(shape)
+
+
+@dataclass
+class PassTotals:
+    """What :func:`run_passes` returns: the image, its sample count and where the time went."""
+
+    mean: np.ndarray
+    variance: np.ndarray
+    spp: int
+    wall_time: float  # every pass, JIT compilation included, after the device finished
+    compile_time: float  # the part spent generating and compiling kernels (Dr.Jit's kernel history)
+
+
+def compile_seconds(history: list[dict]) -> float:
+    """Seconds spent generating and compiling kernels (codegen + backend) in a Dr.Jit kernel history."""
+    import drjit as dr
+
+    return sum(float(h.get("codegen_time", 0.0)) + float(h.get("backend_time", 0.0))
+               for h in history if h.get("type") == dr.KernelType.JIT) / 1000.0
+
+
+PassFn = Callable[[int, int], object]
+
+
+def run_passes(pass_sums: PassFn, *, width: int, height: int, spp: int, spp_per_pass: int, progress: Progress) -> PassTotals:
+    """Call ``pass_sums(pass_index, n)`` until ``spp`` samples per pixel are summed: the one pass loop.
+
+    ``pass_sums`` returns an evaluated Dr.Jit Float64 array of the sums of x
+    and x^2 over its ``n`` new samples per pixel, laid out (moment, pixel,
+    channel); pass ``k`` must use random numbers that no other pass uses. The
+    sums are added on the device, pass by pass.
+    """
+    import drjit as dr
+
+    if spp_per_pass < 1:
+        raise ValueError(f"spp_per_pass must be >= 1, got {spp_per_pass}")
+    was_recording = dr.flag(dr.JitFlag.KernelHistory)
+    dr.set_flag(dr.JitFlag.KernelHistory, True)
+    try:
+        dr.kernel_history_clear()
+        dr.sync_thread()
+        t0 = time.perf_counter()
+        sums, done, k = None, 0, 0
+        while done < spp:
+            n = min(spp_per_pass, spp - done)
+            acc = pass_sums(k, n)
+            sums = acc if sums is None else sums + acc
+            dr.eval(sums)
+            done, k = done + n, k + 1
+            if progress.enabled:
+                dr.sync_thread()  # the kernels run asynchronously: wait, so the time left is right
+                progress.update(done)
+        mean, var = mean_variance(sums, done, width, height)
+        wall = time.perf_counter() - t0
+        history = dr.kernel_history()
+    finally:
+        dr.set_flag(dr.JitFlag.KernelHistory, was_recording)
+    return PassTotals(mean, var, done, wall, compile_seconds(history))
 
 
 def samples_per_pass(width: int, height: int, spp: int, budget: int = 1 << 22) -> int:

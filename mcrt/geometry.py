@@ -45,8 +45,6 @@ INTERSECTORS = ("convex", "triangles")
 # Spawned rays start this far (relative to the position's magnitude plus the
 # scene's size) off the surface, along the side they leave from.
 OFFSET_SCALE = 2.0**-17
-# Shadow rays stop this fraction short of the light.
-SHADOW_TMAX_SCALE = 1.0 - 2.0**-12
 
 KIND_LAMBERTIAN, KIND_MIRROR, KIND_LIGHT = 0, 1, 2
 

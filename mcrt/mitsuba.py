@@ -22,7 +22,8 @@ images are not reproducible bit for bit, and it gives no variance. Instead each
 pass traces a wavefront of W H n lanes laid out pixel-major (lane = pixel n +
 s), with the pixel sample at film position ((i + u) / W, (j + v) / H), and
 reduces it per pixel with ``dr.block_sum`` (a deterministic reduction kernel)
-into the sums of x and x^2 that :func:`mcrt.film.run_passes` turns into
+into the sums of x and x^2 that :func:`mcrt.film.run_passes`, the pass loop
+of every renderer, turns into
 
     mean = S1 / n,    var = (S2 - S1^2 / n) / (n - 1).
 
@@ -43,7 +44,7 @@ import drjit as dr
 import mitsuba as mi
 
 from mcrt.film import Progress, RenderResult, run_passes, samples_per_pass
-from mcrt.scene import Camera, Lambertian, Mirror, Scene, Surface
+from mcrt.scene import Camera, Lambertian, Mirror, RenderSettings, Scene, Surface
 
 VARIANTS = {"llvm": "llvm_ad_rgb", "cuda": "cuda_ad_rgb"}
 _JIT_BACKENDS = {"llvm": dr.JitBackend.LLVM, "cuda": dr.JitBackend.CUDA}
@@ -260,45 +261,27 @@ def pass_seed(seed: int, pass_index: int) -> int:
     return int.from_bytes(hashlib.blake2b(key, digest_size=4).digest(), "little")
 
 
-def _compile_ms(history: list[dict]) -> float:
-    """Milliseconds spent generating and compiling kernels (codegen + backend) in a kernel history."""
-    return sum(float(h.get("codegen_time", 0.0)) + float(h.get("backend_time", 0.0)) for h in history if h.get("type") == dr.KernelType.JIT)
+def render_mitsuba(scene: Scene, settings: RenderSettings, *, backend: str = "llvm", progress: bool = True,
+                   spp_per_pass: int | None = None, integrator: str | dict[str, Any] = "path",
+                   jitter: bool = True) -> RenderResult:
+    """Render ``scene`` at ``settings`` with Mitsuba's ``path`` integrator: mean and per-sample variance images.
 
-
-def render_mitsuba(
-    scene: Scene,
-    camera: str | None = None,
-    width: int | None = None,
-    height: int | None = None,
-    spp: int | None = None,
-    seed: int | None = None,
-    max_depth: int | None = None,
-    backend: str = "llvm",
-    progress: bool = True,
-    spp_per_pass: int | None = None,
-    integrator: str | dict[str, Any] = "path",
-) -> RenderResult:
-    """Render ``scene`` with Mitsuba's ``path`` integrator: mean and per-sample variance images.
-
+    Called through :func:`mcrt.render.render` (renderer ``mitsuba``).
     ``integrator`` replaces ``path`` by another plugin (a name, or a
     dictionary as in :func:`scene_dict`; :func:`mcrt.plugins.render_plugin`
-    uses it for mcrt's estimator).
-
-    None takes the value from ``scene.render``. The result is identical bit
-    for bit for the same arguments on the same machine and backend.
+    uses it for mcrt's estimator); ``jitter=False`` sends every sample through
+    its pixel's centre (the plugin's no-jitter mutant). The result is identical bit for bit for
+    the same arguments on the same machine and backend.
 
     ``wall_time`` is the time of all passes (after ``dr.sync_thread()``),
     JIT compilation included; ``compile_time`` is the part of it spent
     generating and compiling kernels, from Dr.Jit's kernel history
-    (codegen + backend time), so ``spp / (wall_time - compile_time)`` is the
-    throughput. Scene loading is not timed in either (it is in
-    ``extra['load_time']``).
+    (codegen + backend time). Scene loading is not timed in either (it is
+    in ``extra['load_time']``).
     """
-    s = scene.settings(camera=camera, width=width, height=height, spp=spp, seed=seed, max_depth=max_depth)
+    s = settings
     W, H, n_total = s.width, s.height, s.spp
     per_pass = spp_per_pass if spp_per_pass is not None else samples_per_pass(W, H, n_total)
-    if per_pass < 1:
-        raise ValueError(f"spp_per_pass must be >= 1, got {per_pass}")
     if W * H * per_pass >= 2**32:
         raise ValueError(f"one pass of {W}x{H}x{per_pass} samples exceeds 2^32 lanes: lower spp_per_pass")
 
@@ -311,7 +294,7 @@ def render_mitsuba(
     integrator = mscene.integrator()
     sampler = sensor.sampler().clone()
 
-    def render_pass(k: int, n: int) -> tuple[np.ndarray, np.ndarray]:
+    def pass_sums(k: int, n: int):
         lanes = W * H * n
         # Opaque seed and n: one compiled kernel serves every pass and seed.
         sampler.seed(dr.opaque(mi.UInt32, pass_seed(s.seed, k)), lanes)
@@ -320,43 +303,36 @@ def render_mitsuba(
         row = pixel // W
         col = pixel - row * W
         uv = sampler.next_2d()
+        if not jitter:
+            uv = mi.Point2f(0.5)  # the catalogued no-jitter bug: every sample through the pixel centre
         pos = _film_positions(W, H, col, row, uv.x, uv.y)
         ray, weight = sensor.sample_ray_differential(time=0.0, sample1=0.0, sample2=pos, sample3=mi.Point2f(0.5))
         L, _, _ = integrator.sample(mscene, sampler, ray, None, True)
         L = L * weight  # the perspective sensor's weight is 1; kept for other sensors
         dr.eval(L)  # trace once; reducing an unevaluated L re-runs the path kernel per channel
-        x = [mi.Float64(L[c]) for c in range(3)]
-        x2 = [xc * xc for xc in x]
-        dr.eval(x, x2)
-        s1 = np.stack([dr.block_sum(xc, n, mode="evaluated").numpy() for xc in x], axis=-1)
-        s2 = np.stack([dr.block_sum(xc, n, mode="evaluated").numpy() for xc in x2], axis=-1)
-        return s1.reshape(H, W, 3), s2.reshape(H, W, 3)
+        # Per-pixel sums by block_sum (a deterministic reduction), laid out (moment, pixel, channel).
+        sums = dr.zeros(mi.Float64, 6 * W * H)
+        slot = dr.arange(mi.UInt32, W * H) * 3
+        for c in range(3):
+            x = mi.Float64(L[c])
+            dr.scatter(sums, dr.block_sum(x, n, mode="evaluated"), slot + c)
+            dr.scatter(sums, dr.block_sum(x * x, n, mode="evaluated"), slot + (3 * W * H + c))
+        dr.eval(sums)
+        return sums
 
-    bar = Progress(n_total, label="mitsuba", enabled=progress)
-    was_recording = dr.flag(dr.JitFlag.KernelHistory)
-    dr.set_flag(dr.JitFlag.KernelHistory, True)
-    try:
-        dr.kernel_history_clear()
-        dr.sync_thread()
-        t0 = time.perf_counter()
-        moments = run_passes(render_pass, H, W, n_total, per_pass, bar)
-        dr.sync_thread()
-        wall = time.perf_counter() - t0
-        history = dr.kernel_history()
-    finally:
-        dr.set_flag(dr.JitFlag.KernelHistory, was_recording)
-
+    totals = run_passes(pass_sums, width=W, height=H, spp=n_total, spp_per_pass=per_pass,
+                        progress=Progress(n_total, label="mitsuba", enabled=progress))
     return RenderResult(
-        mean=moments.mean(),
-        variance=moments.variance(),
-        spp=moments.n,
+        mean=totals.mean,
+        variance=totals.variance,
+        spp=totals.spp,
         seed=s.seed,
         max_depth=s.max_depth,
         renderer="mitsuba",
         scene_hash=scene.content_hash(),
         camera=s.camera,
-        wall_time=wall,
-        compile_time=_compile_ms(history) / 1000.0,
+        wall_time=totals.wall_time,
+        compile_time=totals.compile_time,
         extra={
             "variant": variant,
             "mitsuba_version": mi.__version__,

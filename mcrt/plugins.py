@@ -1,17 +1,17 @@
 r"""Mitsuba 3 plugins: mcrt's estimator as the Mitsuba integrator ``mcrt``.
 
-The integrator computes exactly the estimator of :mod:`mcrt.integrator`
-(Lambertian + mirror path tracing with next-event estimation, K light samples
-per diffuse vertex, the same Russian roulette and maximum-depth rule), but on
-top of Mitsuba's own ray intersection, BSDFs and emitter sampling. With it a
-render can be compared three ways:
+The integrator is :class:`mcrt.estimator.PathEstimator`, the very code of
+the standalone tracer, on a second host: :class:`MitsubaHost` answers the
+estimator's questions (closest hit, light sample, occlusion, material,
+spawned ray) with Mitsuba's ``ray_intersect``, emitter sampling,
+``ray_test`` and BSDFs. With it a render can be compared three ways:
 
 ===========================  ===================  ===============
-                             geometry/intersect.  estimator
+renderer (mcrt.render)       geometry/intersect.  estimator
 ===========================  ===================  ===============
-``mcrt.tracer.render``       mcrt                 mcrt
-:func:`render_plugin`        Mitsuba              mcrt
-``mcrt.mitsuba.render_...``  Mitsuba              Mitsuba ``path``
+``mcrt``                     mcrt                 mcrt
+``plugin``                   Mitsuba              mcrt
+``mitsuba``                  Mitsuba              Mitsuba ``path``
 ===========================  ===================  ===============
 
 so a disagreement between the standalone tracer and the plugin comes from
@@ -52,11 +52,15 @@ rr_depth : int
     Depth from which Russian roulette runs. Default 5.
 hide_emitters : bool
     Do not count emitters seen directly from the sensor. Default false.
+mis : bool
+    Combine light samples and cosine directions by the balance heuristic
+    (for a light that touches a surface). Default false.
 mutant : str
-    Comma-separated names from :data:`mcrt.mutants.MUTANTS` (those in
-    :data:`INTEGRATOR_MUTANTS`), the estimator bugs of the tracer, for
-    testing the tests. Default empty. Each has the tracer's expected image
-    except ``no_offset``, whose self-intersections are Mitsuba's own.
+    Comma-separated names of the estimator's catalogued bugs
+    (:data:`mcrt.mutants.MUTANTS` whose options are the estimator's), for
+    testing the tests. Default empty. The camera, output and scene bugs
+    (``no_jitter``, ``gamma_output``, ``albedo_1pct``) are not the
+    integrator's: :func:`render_plugin` applies them around it.
 
 Scenes
 ------
@@ -70,61 +74,31 @@ emitters, on any shapes; anything else (``roughconductor``, ``dielectric``,
 on the first call of :meth:`sample` for that scene; under ``mi.render`` the
 error arrives as the cause of Mitsuba's ``RuntimeError``.
 
-Variants: tested in ``llvm_ad_rgb``; it also runs in ``llvm_ad_spectral``,
-``llvm_ad_mono`` and (very slowly, one Python call per ray) ``scalar_rgb``.
-``cuda_ad_rgb`` uses the same code but was not run here (no GPU).
-Polarized variants are not supported.
+Variants: the JIT variants (tested in ``llvm_ad_rgb``; ``cuda_ad_rgb`` runs
+the same code). Polarized variants are not supported.
 """
 
 from __future__ import annotations
 
 import dataclasses
-import math
 from typing import Any
 
 import mcrt  # noqa: F401  (sets DRJIT_LIBLLVM_PATH before drjit is imported)
 import drjit as dr
 import mitsuba as mi
 
+from mcrt.estimator import EstimatorOptions, Hit, PathEstimator
 from mcrt.film import RenderResult
+from mcrt.imageio import encode_output
+from mcrt.light import LightSample, needs_mis
 from mcrt.mitsuba import _use, render_mitsuba
-from mcrt.mutants import MUTANTS, check_mutants, mutate_scene
-from mcrt.scene import Scene
+from mcrt.mutants import CATALOGUE, camera_jitter, check_mutants, estimator_overrides, mutate_scene, output_encoding
+from mcrt.scene import RenderSettings, Scene
 
-__all__ = [
-    "INTEGRATOR_MUTANTS",
-    "SCENE_MUTANTS",
-    "McrtIntegrator",
-    "check_scene",
-    "integrator_class",
-    "parse_mutants",
-    "register",
-    "render_plugin",
-]
+__all__ = ["MitsubaHost", "McrtIntegrator", "check_scene", "integrator_class", "parse_mutants", "register", "render_plugin"]
 
 #: Name under which the integrator is registered.
 NAME = "mcrt"
-
-#: Mutants of :mod:`mcrt.mutants` that the integrator implements (estimator bugs).
-INTEGRATOR_MUTANTS = (
-    "rr_no_divide",
-    "nee_no_cos_light",
-    "nee_no_cos_surface",
-    "nee_no_inv_dist2",
-    "nee_no_area",
-    "double_count",
-    "uniform_as_cosine",
-    "ball_plus_normal",
-    "brdf_no_inv_pi",
-    "mirror_wrong_sign",
-    "depth_off_by_one",
-    "no_offset",
-    "shadow_unbounded",
-)
-#: Mutants that change the scene, not the estimator: applied by :func:`render_plugin`.
-SCENE_MUTANTS = ("albedo_1pct",)
-
-UNBOUNDED = 2**32 - 1
 
 # Class names of Mitsuba plugins -> their plugin names, for error messages.
 _PLUGIN_NAMES = {
@@ -153,21 +127,20 @@ def _plugin(obj) -> str:
 
 
 def parse_mutants(spec) -> frozenset[str]:
-    """Mutant names from a comma-separated string or an iterable, checked against the integrator's.
+    """Mutant names from a comma-separated string or an iterable: the estimator's bugs only.
 
-    Raises a one-line ``ValueError`` for an unknown name and for a mutant of
-    the catalogue the integrator does not implement (camera, output and scene
-    mutants: ``no_jitter``, ``gamma_output``, ``albedo_1pct`` (applied by
-    :func:`render_plugin` instead), ``light_two_sided``).
+    Raises a one-line ``ValueError`` for an unknown name and for a bug of the
+    camera, the output or the scene, which the integrator cannot apply
+    (:func:`render_plugin` does).
     """
     if isinstance(spec, str):
         spec = [s.strip() for s in spec.split(",")]
     names = check_mutants(s for s in spec if s)
-    other = sorted(names - set(INTEGRATOR_MUTANTS))
+    other = sorted(n for n in names if not CATALOGUE[n].estimator)
     if other:
         raise ValueError(
-            f"mcrt integrator: mutant {other[0]!r} is not implemented inside Mitsuba "
-            f"(it has: {', '.join(INTEGRATOR_MUTANTS)})"
+            f"mcrt integrator: mutant {other[0]!r} changes the camera, the output or the scene, not the estimator: "
+            f"render with mcrt.render.render(..., renderer='plugin', mutants=...) instead"
         )
     return names
 
@@ -246,6 +219,96 @@ def check_scene(scene: "mi.Scene") -> None:
 
 
 # --------------------------------------------------------------------------
+# The estimator's host on a Mitsuba scene
+# --------------------------------------------------------------------------
+
+
+class MitsubaHost:
+    """The estimator's host (:mod:`mcrt.estimator`) on a loaded ``mi.Scene`` of the current variant.
+
+    - Closest hit: ``scene.ray_intersect``; the normal is the geometric one,
+      turned to the side the ray arrived from. The material comes from the
+      shape's BSDF: a delta BSDF is a mirror, whose reflectance is the
+      weight of its (deterministic) sample; otherwise the BSDF's diffuse
+      reflectance is the albedo, zero on the back of a one-sided BSDF.
+    - Light samples: ``scene.sample_emitter`` chooses an emitter (probability
+      p_sel), its ``sample_position`` a point with area density p_pos;
+      pdf_area = p_sel p_pos, and the radiance is ``emitter.eval`` seen from
+      the emitting side.
+    - Occlusion: ``scene.ray_test`` of the segment.
+    - Spawned rays: offset along the normal by Mitsuba's own rule,
+      RayEpsilon (1 + max |p_i|).
+
+    Every emitter is an area emitter that next-event estimation samples, so
+    no emission goes unsampled.
+    """
+
+    rays_escape = True
+    has_unsampled_emission = False
+
+    def __init__(self, scene: "mi.Scene"):
+        self.scene = scene
+        self.Float, self.UInt32, self.Bool = mi.Float, mi.UInt32, mi.Bool
+        self.Vector3f, self.Spectrum = mi.Vector3f, mi.Spectrum
+        flags = [int(s.bsdf().flags()) for s in scene.shapes() if s.bsdf() is not None]
+        self.has_mirror = any(f & int(mi.BSDFFlags.Delta) for f in flags)
+        self.has_diffuse = any(f & int(mi.BSDFFlags.DiffuseReflection) for f in flags)
+
+    def intersect(self, o, d, active=True) -> Hit:
+        ray = mi.Ray3f(o, d)
+        si = self.scene.ray_intersect(ray, ray_flags=mi.RayFlags.All, coherent=False, active=active)
+        valid = active & si.is_valid()
+        bsdf = si.bsdf(ray)
+        flags = bsdf.flags()
+        mirror = valid & mi.has_flag(flags, mi.BSDFFlags.Delta)
+        back = mi.Frame3f.cos_theta(si.wi) < 0
+        one_sided = ~mi.has_flag(flags, mi.BSDFFlags.BackSide)
+        albedo = bsdf.eval_diffuse_reflectance(si, valid & ~mirror)
+        color = dr.select(back & one_sided, 0.0, albedo)
+        if self.has_mirror:
+            _, reflectance = bsdf.sample(mi.BSDFContext(), si, 0.5, mi.Point2f(0.5), mirror)
+            color = dr.select(mirror, reflectance, color)
+        light = valid & si.shape.is_emitter()
+        n = mi.Vector3f(si.n)  # a Normal3f would change the type of the estimator's direction
+        front = mi.SurfaceInteraction3f(si)
+        front.wi = mi.Vector3f(si.wi.x, si.wi.y, dr.abs(si.wi.z))  # the emitting side, wherever the ray came from
+        return Hit(
+            t=si.t, p=si.p, n=dr.select(dr.dot(d, si.n) < 0, n, -n), reflects=valid & (dr.max(color) > 0),
+            mirror=mirror, color=color, light=light, light_cos=mi.Frame3f.cos_theta(si.wi),
+            light_radiance=si.emitter(self.scene, light).eval(front, light), valid=valid, extra=(si, o),
+        )
+
+    def sample_light(self, x, u1, u2, active=True) -> LightSample:
+        index, inv_p_sel, u1 = self.scene.sample_emitter(u1, active)
+        emitter = dr.gather(mi.EmitterPtr, self.scene.emitters_dr(), index, active)
+        ps, _ = emitter.sample_position(0.0, mi.Point2f(u1, u2), active)
+        seen = mi.SurfaceInteraction3f(ps, dr.zeros(mi.Color0f))
+        seen.wi = mi.Vector3f(0.0, 0.0, 1.0)  # the emitting side
+        wi = ps.p - x
+        dist2 = dr.squared_norm(wi)
+        inv_dist = dr.rsqrt(dist2)
+        wi = wi * inv_dist
+        return LightSample(wi, dist2, inv_dist, -dr.dot(ps.n, wi), emitter.eval(seen, active), ps.pdf / inv_p_sel)
+
+    def light_pdf_area(self, hit, active=True):
+        """p_sel p_pos of the hit light point, from Mitsuba's solid-angle density seen from the ray's origin."""
+        si, o = hit.extra
+        ref = dr.zeros(mi.Interaction3f)
+        ref.p = o
+        ds = mi.DirectionSample3f(self.scene, si, ref)
+        return self.scene.pdf_emitter_direction(ref, ds, active) * dr.abs(dr.dot(ds.d, ds.n)) / dr.square(ds.dist)
+
+    def occluded(self, o, d, tmax, active=True):
+        ray = mi.Ray3f(o, d)
+        if not (isinstance(tmax, float) and tmax == dr.inf):
+            ray.maxt = tmax
+        return self.scene.ray_test(ray, active)
+
+    def spawn_origin(self, hit):
+        return dr.fma((1.0 + dr.max(dr.abs(hit.p))) * mi.math.RayEpsilon, hit.n, hit.p)
+
+
+# --------------------------------------------------------------------------
 # The integrator (one class per Mitsuba variant)
 # --------------------------------------------------------------------------
 
@@ -254,230 +317,35 @@ def _define_class():
     """Define McrtIntegrator against the current variant's mi.SamplingIntegrator."""
 
     class McrtIntegrator(mi.SamplingIntegrator):
-        r"""mcrt's estimator on Mitsuba's intersection, BSDFs and emitter sampling.
-
-        For a camera ray it returns an unbiased sample of the radiance
-
-        .. math::
-
-            L(x, \omega_o) = L_e(x, \omega_o)
-                + \int_{H^2} f(x, \omega_i, \omega_o) L(x', -\omega_i) |\cos\theta_i| \, d\omega_i
-
-        truncated to paths of at most ``max_depth`` segments. At a diffuse
-        (Lambertian) vertex the integral splits into
-
-        * direct light from K emitter samples y_k (``scene.sample_emitter_direction``:
-          an emitter chosen with probability p_sel, then for a mesh emitter a
-          point uniform on its area, p_A = p_sel / A, as mcrt does; a sphere
-          emitter samples its visible cone, another density with the same
-          expectation):
-
-          .. math::
-
-              L_d = \frac{1}{K} \sum_k f(x, \omega_k, \omega_o) \, L_e(y_k, -\omega_k) \, V(x, y_k)
-                    \frac{|\cos\theta_x| \, |\cos\theta_y|}{|x - y_k|^2 \, p_A(y_k)},
-
-          which is ``bsdf.eval(...) * spec`` with Mitsuba's
-          ``spec = L_e / p_{\omega}`` and p_omega = p_A d^2 / |cos theta_y|;
-
-        * indirect light along one direction drawn by the BSDF (the cosine
-          warp for ``diffuse``), with weight f |cos| / pdf = albedo; emission
-          that ray finds is not counted (L_d has it).
-
-        After a delta (mirror) bounce the weight is the reflectance and the
-        emission found is counted, as it is from the sensor. From ``rr_depth``
-        on, a path survives with probability q = min(max(beta), 0.95) and beta
-        is divided by q.
-        """
+        """mcrt's estimator (:class:`mcrt.estimator.PathEstimator`) on :class:`MitsubaHost`."""
 
         def __init__(self, props):
             super().__init__(props)
-            max_depth = int(props.get("max_depth", 8))
-            if max_depth < -1:
-                raise ValueError(f"mcrt integrator: max_depth must be -1 (unbounded) or >= 0, got {max_depth}")
-            self.light_samples = int(props.get("light_samples", 1))
-            if self.light_samples < 1:
-                raise ValueError(f"mcrt integrator: light_samples must be >= 1, got {self.light_samples}")
-            self.rr_depth = int(props.get("rr_depth", 5))
-            if self.rr_depth < 1:
-                raise ValueError(f"mcrt integrator: rr_depth must be >= 1, got {self.rr_depth}")
+            try:
+                self.options = EstimatorOptions(
+                    max_depth=int(props.get("max_depth", 8)), light_samples=int(props.get("light_samples", 1)),
+                    rr_depth=int(props.get("rr_depth", 5)), mis=bool(props.get("mis", False)),
+                    hide_emitters=self.hide_emitters, **estimator_overrides(parse_mutants(props.get("mutant", ""))),
+                )
+            except ValueError as e:
+                raise ValueError(str(e) if str(e).startswith("mcrt integrator:") else f"mcrt integrator: {e}") from None
             self.mutants = parse_mutants(props.get("mutant", ""))
-            self.max_depth_param = max_depth
-            depth = UNBOUNDED if max_depth == -1 else max_depth
-            if "depth_off_by_one" in self.mutants and depth != UNBOUNDED:
-                depth += 1
-            self.max_depth = depth
-            self._checked: set[int] = set()
-
-        def _check(self, scene):
-            """check_scene (about 1 ms) at every trace: once per kernel in JIT variants.
-
-            Scalar variants call sample() once per ray, so there the check runs
-            once per scene object (by id).
-            """
-            if dr.is_jit_v(mi.Float):
-                check_scene(scene)
-            elif id(scene) not in self._checked:
-                check_scene(scene)
-                self._checked.add(id(scene))
 
         def to_string(self) -> str:
+            o = self.options
             mut = f", mutant='{','.join(sorted(self.mutants))}'" if self.mutants else ""
-            return (
-                f"McrtIntegrator[max_depth={self.max_depth_param}, light_samples={self.light_samples}, "
-                f"rr_depth={self.rr_depth}, hide_emitters={self.hide_emitters}{mut}]"
-            )
+            return (f"McrtIntegrator[max_depth={o.max_depth}, light_samples={o.light_samples}, rr_depth={o.rr_depth}, "
+                    f"mis={o.mis}, hide_emitters={o.hide_emitters}{mut}]")
 
         def aov_names(self):
             return []
 
-        # ------------------------------------------------------------------
-        @dr.syntax
         def sample(self, scene, sampler, ray, medium=None, active=True):
             """One radiance sample per ray: (spectrum, valid, aovs)."""
-            self._check(scene)
-
-            # --------------------- Loop state ----------------------
-            ray = mi.Ray3f(ray)                  # current ray
-            L = mi.Spectrum(0.0)                 # radiance gathered so far
-            beta = mi.Spectrum(1.0)              # path throughput: product of f cos / pdf so far
-            depth = mi.UInt32(0)                 # path segments traced so far
-            specular = mi.Bool(True)             # last vertex was the sensor or a mirror: count emission
-            valid = mi.Bool(False)               # the camera ray hit something
-            active = mi.Bool(active) & (self.max_depth > 0)
-
-            while dr.hint(active, label="mcrt_path"):
-                si = scene.ray_intersect(ray, ray_flags=mi.RayFlags.All, coherent=depth == 0, active=active)
-                depth += 1
-                valid |= active & si.is_valid() & (depth == 1)
-
-                # ---------------- Emission from the sensor or through mirrors ----------------
-                counted = self._counts_emission(specular, depth)
-                L += beta * si.emitter(scene).eval(si, active & counted)
-
-                # ---------------- Stop at misses and at the depth limit ----------------
-                active &= si.is_valid() & (depth < self.max_depth)
-                bsdf = si.bsdf(ray)
-                diffuse = active & mi.has_flag(bsdf.flags(), mi.BSDFFlags.Smooth)
-
-                # ---------------- Next-event estimation (depth + 1 <= max_depth here) ----------------
-                L += beta * self.direct_light(scene, sampler, si, bsdf, diffuse)
-
-                # ---------------- Continue: BSDF sample (cosine warp or mirror) ----------------
-                wo, weight, specular = self.scatter(si, bsdf, sampler, diffuse, active)
-                beta *= weight
-                ray = self.spawn(si, wo)
-                active &= dr.max(beta) > 0  # black surfaces (the light's) end the path
-
-                # ---------------- Russian roulette ----------------
-                beta, active = self.roulette(beta, depth, diffuse, active, sampler)
-
+            check_scene(scene)  # about 1 ms, once per traced kernel
+            estimator = PathEstimator(MitsubaHost(scene), self.options)
+            L, _, valid = estimator.path_sums(mi.Point3f(ray.o), mi.Vector3f(ray.d), sampler, active=mi.Bool(active))
             return L, valid, []
-
-        # ------------------------------------------------------------------
-        def _counts_emission(self, specular, depth):
-            """Count Le at this hit: after the sensor or a mirror (always, with double_count)."""
-            counted = mi.Bool(True) if "double_count" in self.mutants else mi.Bool(specular)
-            if self.hide_emitters:
-                counted = counted & (depth > 1)
-            return counted
-
-        def spawn(self, si, d):
-            """The ray leaving si along d, offset by Mitsuba's spawn_ray (not with no_offset)."""
-            if "no_offset" in self.mutants:
-                return mi.Ray3f(si.p, d)
-            return si.spawn_ray(d)
-
-        def scatter(self, si, bsdf, sampler, diffuse, active):
-            """Next direction (world), weight f |cos| / pdf, and whether the bounce was a delta one."""
-            ctx = mi.BSDFContext()
-            bs, weight = bsdf.sample(ctx, si, sampler.next_1d(), sampler.next_2d(), active)
-            wo_local = bs.wo
-            mut = self.mutants
-            if ("uniform_as_cosine" in mut) or ("ball_plus_normal" in mut):
-                side = dr.select(mi.Frame3f.cos_theta(si.wi) < 0, -1.0, 1.0)  # wi's side (two-sided)
-                if "ball_plus_normal" in mut:
-                    u, v = sampler.next_2d(), sampler.next_1d()
-                    b = mi.warp.square_to_uniform_sphere(u) * dr.cbrt(v)  # uniform in the unit ball
-                    w = dr.normalize(b + mi.Vector3f(0.0, 0.0, 1.0))
-                else:
-                    w = mi.warp.square_to_uniform_hemisphere(sampler.next_2d())
-                w = mi.Vector3f(w.x, w.y, w.z * side)
-                # Weighted as if cosine-distributed: f |cos| / (|cos| / pi) = albedo.
-                w_weight = bsdf.eval(ctx, si, w, diffuse) / mi.warp.square_to_cosine_hemisphere_pdf(mi.Vector3f(w.x, w.y, dr.abs(w.z)))
-                wo_local = dr.select(diffuse, w, wo_local)
-                weight = dr.select(diffuse, w_weight, weight)
-            if "brdf_no_inv_pi" in mut:
-                weight = dr.select(diffuse, weight * math.pi, weight)
-            delta = active & mi.has_flag(bs.sampled_type, mi.BSDFFlags.Delta)
-            wo = si.to_world(wo_local)
-            if "mirror_wrong_sign" in mut:
-                wo = dr.select(delta, -wo, wo)
-            return wo, dr.select(active, weight, 0.0), delta
-
-        def roulette(self, beta, depth, diffuse, active, sampler):
-            """Unbiased Russian roulette: survive with q = min(max beta, 0.95), then beta /= q."""
-            if "rr_no_divide" in self.mutants:
-                survive = sampler.next_1d() >= 0.75
-                return dr.select(diffuse, beta * 0.8, beta), active & (~diffuse | survive)
-            q = dr.minimum(dr.max(beta), 0.95)
-            roulette = active & (depth >= self.rr_depth)
-            survive = sampler.next_1d() < q
-            return dr.select(roulette, beta * dr.rcp(q), beta), active & (~roulette | survive)
-
-        # ------------------------------------------------------------------
-        def direct_light(self, scene, sampler, si, bsdf, active):
-            """(1/K) sum_k f Le V |cos_x| |cos_y| / (d^2 p_A): K = 1 traces no loop."""
-            if self.light_samples == 1:
-                return self.light_sample(scene, sampler, si, bsdf, active)
-            return self._light_sample_loop(scene, sampler, si, bsdf, active) * (1.0 / self.light_samples)
-
-        @dr.syntax
-        def _light_sample_loop(self, scene, sampler, si, bsdf, active):
-            acc = mi.Spectrum(0.0)  # sum of the light samples so far
-            k = mi.UInt32(0)        # light samples drawn
-            while dr.hint(active & (k < self.light_samples), label="mcrt_light_samples"):
-                acc += self.light_sample(scene, sampler, si, bsdf, active)
-                k += 1
-            return acc
-
-        def light_sample(self, scene, sampler, si, bsdf, active):
-            r"""One light sample: f(x, w, wo) |cos_x| Le(y, -w) V(x, y) |cos_y| / (d^2 p_A(y)).
-
-            Mitsuba's ``spec = Le / p_omega`` already holds the area-to-solid-angle
-            Jacobian, p_omega = p_A d^2 / |cos_y|; the mutants take factors out
-            of the geometry term |cos_x| |cos_y| / d^2 or the 1/p_A.
-            """
-            mut = self.mutants
-            ds, spec = scene.sample_emitter_direction(si, sampler.next_2d(), False, active)
-            wo = si.to_local(ds.d)
-            f = bsdf.eval(mi.BSDFContext(), si, wo, active)  # f |cos_x|; 0 unless wo is on wi's side
-            if "brdf_no_inv_pi" in mut:
-                f *= math.pi
-            cos_y = dr.abs(dr.dot(ds.n, ds.d))
-            d2 = dr.square(ds.dist)
-            scale = mi.Float(1.0)
-            if "nee_no_cos_surface" in mut:
-                f /= dr.abs(mi.Frame3f.cos_theta(wo))
-            if "nee_no_cos_light" in mut:
-                scale /= cos_y
-            if "nee_no_inv_dist2" in mut:
-                scale *= d2
-            if "nee_no_area" in mut:
-                scale *= ds.pdf * cos_y / d2  # p_A: the light's pdf taken as 1 instead of 1/A
-            contrib = f * spec * scale
-            # Not `active &= ...`: Dr.Jit's in-place operators would change the caller's mask.
-            active = active & (ds.pdf > 0) & dr.any(contrib != 0) & dr.all(dr.isfinite(contrib))
-
-            # ---------------- Visibility: a shadow ray stopping short of y ----------------
-            if "shadow_unbounded" in mut:
-                shadow = si.spawn_ray(ds.d)
-            elif "no_offset" in mut:
-                shadow = mi.Ray3f(si.p, ds.d, ds.dist * (1.0 - mi.math.ShadowEpsilon))
-            else:
-                shadow = si.spawn_ray_to(ds.p)
-            visible = ~scene.ray_test(shadow, active)
-            return dr.select(active & visible, contrib, 0.0)
 
     return McrtIntegrator
 
@@ -533,42 +401,27 @@ if mi.variant() is not None:
 # --------------------------------------------------------------------------
 
 
-def render_plugin(
-    scene: Scene,
-    camera: str | None = None,
-    width: int | None = None,
-    height: int | None = None,
-    spp: int | None = None,
-    seed: int | None = None,
-    max_depth: int | None = None,
-    light_samples: int | None = None,
-    backend: str = "llvm",
-    progress: bool = True,
-    mutants=(),
-    *,
-    spp_per_pass: int | None = None,
-) -> RenderResult:
-    """Render ``scene`` with the ``mcrt`` integrator inside Mitsuba: mean and per-sample variance.
+def render_plugin(scene: Scene, settings: RenderSettings, *, backend: str = "llvm", progress: bool = True,
+                  spp_per_pass: int | None = None, mutants=(), mis: bool | None = None) -> RenderResult:
+    """Render ``scene`` at ``settings`` with the ``mcrt`` integrator inside Mitsuba: mean and per-sample variance.
 
-    The scene, sensor and passes are those of :func:`mcrt.mitsuba.render_mitsuba`
-    (deterministic for a seed; None takes ``scene.render``'s value); only the
-    integrator differs. ``mutants`` may hold :data:`INTEGRATOR_MUTANTS` and
-    :data:`SCENE_MUTANTS`. The result has ``renderer='mitsuba-mcrt'``.
+    Called through :func:`mcrt.render.render` (renderer ``plugin``). The
+    scene, sensor and passes are those of :func:`mcrt.mitsuba.render_mitsuba`;
+    only the integrator differs. Every catalogued mutant runs: the
+    estimator's inside the integrator, the camera's (jitter) in the passes,
+    the output's on the image and the scene's on the scene. ``mis`` as in the
+    standalone tracer (default: where the scene needs it). The result has
+    ``renderer='mitsuba-mcrt'``.
     """
     names = check_mutants(mutants)
-    scene_mut = names & set(SCENE_MUTANTS)
-    est_mut = parse_mutants(names - scene_mut)
-    s = scene.settings(camera=camera, light_samples=light_samples)
+    mutated = mutate_scene(scene, names)
+    use_mis = needs_mis(mutated) if mis is None else bool(mis)
     _use(backend)
     register()
-    integrator = {"type": NAME, "light_samples": int(s.light_samples), "mutant": ",".join(sorted(est_mut))}
-    r = render_mitsuba(
-        mutate_scene(scene, scene_mut),
-        camera=camera, width=width, height=height, spp=spp, seed=seed, max_depth=max_depth,
-        backend=backend, progress=progress, spp_per_pass=spp_per_pass, integrator=integrator,
-    )
-    extra = dict(r.extra, light_samples=str(s.light_samples), mutants=",".join(sorted(names)))
-    return dataclasses.replace(r, renderer="mitsuba-mcrt", scene_hash=scene.content_hash(), extra=extra)
-
-
-assert set(INTEGRATOR_MUTANTS) | set(SCENE_MUTANTS) <= set(MUTANTS)
+    integrator = {"type": NAME, "light_samples": int(settings.light_samples), "mis": use_mis,
+                  "mutant": ",".join(sorted(n for n in names if CATALOGUE[n].estimator))}
+    r = render_mitsuba(mutated, settings, backend=backend, progress=progress, spp_per_pass=spp_per_pass,
+                       integrator=integrator, jitter=camera_jitter(names))
+    mean, var = encode_output(r.mean, r.variance, output_encoding(names))
+    extra = dict(r.extra, light_samples=str(settings.light_samples), mis=str(use_mis).lower(), mutants=",".join(sorted(names)))
+    return dataclasses.replace(r, mean=mean, variance=var, renderer="mitsuba-mcrt", scene_hash=scene.content_hash(), extra=extra)

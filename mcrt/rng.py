@@ -49,7 +49,7 @@ def mix32(x):
 
 
 class WeylRng:
-    """One random stream per lane; ``next_float32()`` draws u in [0, 1) on every lane.
+    """One random stream per lane; ``next_1d()`` draws u in [0, 1) on every lane (the name of Mitsuba's samplers' draw, so the estimator takes either).
 
     Only ``state`` changes; inside a symbolic loop Dr.Jit carries it as loop
     state (the struct is traversed through ``DRJIT_STRUCT``) and drops the
@@ -71,6 +71,6 @@ class WeylRng:
         self.state = self.state + self.step
         return mix32(self.state)
 
-    def next_float32(self):
+    def next_1d(self):
         bits = (self.next_uint32() >> 9) | FLOAT_ONE_BITS
         return dr.reinterpret_array(dr.float32_array_t(type(bits)), bits) - 1.0

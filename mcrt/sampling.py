@@ -14,7 +14,12 @@ formulas run on NumPy arrays, which the chi-square tests use.
   (4 cos^2(theta)) and, with pdf_area = 1 / (4 pi), pdf_solid_angle =
   cos(theta) / pi: the cosine density, for three multiplies instead of a frame.
 - Uniform hemisphere: cos(theta) = u1; pdf_solid_angle = 1 / (2 pi).
-- Uniform rectangle of area A: pdf_area = 1 / A.
+- Uniform point in the unit ball: radius u1^(1/3), a uniform direction.
+
+Multiple importance sampling combines two strategies by the balance
+heuristic (:func:`balance_heuristic`). Points on the light and their
+densities are in :mod:`mcrt.light`; the BSDFs that use these warps in
+:mod:`mcrt.bsdf`.
 """
 
 from __future__ import annotations
@@ -95,3 +100,15 @@ def coordinate_frame(nx, ny, nz):
 def to_world(local, s, t, n):
     """local[0] s + local[1] t + local[2] n, component-wise tuples."""
     return tuple(local[0] * s[k] + local[1] * t[k] + local[2] * n[k] for k in range(3))
+
+
+def balance_heuristic(n_a, pdf_a, n_b, pdf_b):
+    """Veach's balance heuristic: the weight of a sample of strategy a, n_a p_a / (n_a p_a + n_b p_b).
+
+    ``n_a`` and ``n_b`` are the strategies' sample counts, ``pdf_a`` and
+    ``pdf_b`` their densities at the sample, in the same measure (solid angle
+    here). The weights of the two strategies add up to one wherever either
+    density is positive.
+    """
+    a = n_a * pdf_a
+    return a / dr.fma(n_b, pdf_b, a)

@@ -51,16 +51,11 @@ def three_way(scene, settings, *, mutants=(), backend="llvm", alpha=0.01, tile=8
 
     ``mutants`` apply to both renderings of mcrt's estimator (standalone and plugin).
     """
-    from mcrt.mitsuba import render_mitsuba
-    from mcrt.plugins import render_plugin
-    from mcrt.tracer import render
+    from mcrt.render import render
 
-    s = settings
-    a = render(scene, s.camera, s.spp, s.seed, s.max_depth, s.light_samples, backend, width=s.width, height=s.height,
-               rr_depth=s.rr_depth, mutants=mutants, progress=progress)
-    p = render_plugin(scene, s.camera, s.width, s.height, s.spp, s.seed + 1, s.max_depth, s.light_samples, backend=backend,
-                      progress=progress, mutants=[m for m in mutants if m not in ("no_jitter", "gamma_output", "light_two_sided")])
-    m = render_mitsuba(scene, s.camera, s.width, s.height, s.spp, s.seed + 2, s.max_depth, backend=backend, progress=progress)
+    a = render(scene, settings, seed=settings.seed, backend=backend, progress=progress, mutants=mutants)
+    p = render(scene, settings, renderer="plugin", seed=settings.seed + 1, backend=backend, progress=progress, mutants=mutants)
+    m = render(scene, settings, renderer="mitsuba", seed=settings.seed + 2, backend=backend, progress=progress)
     return ThreeWay(compare_images(a, p, alpha=alpha, tile=tile), compare_images(p, m, alpha=alpha, tile=tile),
                     compare_images(a, m, alpha=alpha, tile=tile))
 

@@ -11,20 +11,22 @@ seed or spp does not recompile it.
 
 from __future__ import annotations
 
-import time
 from dataclasses import dataclass
 
-import numpy as np
 
 import mcrt  # noqa: F401  (sets DRJIT_LIBLLVM_PATH before drjit loads)
-from mcrt.camera import image_plane_basis
-from mcrt.geometry import const3
-from mcrt.film import Progress, RenderResult, samples_per_pass
+from mcrt.camera import Pinhole
+from mcrt.estimator import EstimatorOptions, PathEstimator
+from mcrt.film import Progress, RenderResult, run_passes, samples_per_pass
+from mcrt.imageio import encode_output
+from mcrt.geometry import Geometry
+from mcrt.host import McrtHost
+from mcrt.light import needs_mis
 from mcrt.llvm import require_llvm
-from mcrt.mutants import check_mutants, mutate_scene
+from mcrt.mutants import camera_jitter, check_mutants, estimator_overrides, mutate_scene, output_encoding
 from mcrt.precision import check_precision
 from mcrt.rng import WeylRng
-from mcrt.scene import Scene
+from mcrt.scene import RenderSettings, Scene
 
 BACKENDS = ("llvm", "cuda")
 
@@ -76,11 +78,10 @@ class Tracer:
     intersector: str = "convex"
     mutants: frozenset = frozenset()
     precision_guard: bool = True
-    mis: bool | None = None  # None: where the scene needs it (mcrt.integrator.needs_mis)
+    mis: bool | None = None  # None: where the scene needs it (mcrt.light.needs_mis)
 
     def __post_init__(self):
-        from mcrt.geometry import Geometry
-        from mcrt.integrator import PathIntegrator, needs_mis
+        import drjit as dr
 
         self.mutants = check_mutants(self.mutants)
         self.m = backend_module(self.backend)
@@ -88,13 +89,12 @@ class Tracer:
         if self.precision_guard:
             check_precision(scene)  # refuse scenes where float32 would silently give a wrong image
         self.geometry = Geometry(scene, self.m, self.intersector)
-        self.integrator = PathIntegrator(
-            self.geometry, max_depth=self.max_depth, light_samples=self.light_samples, rr_depth=self.rr_depth, mutants=self.mutants,
-            mis=needs_mis(scene) if self.mis is None else self.mis,
+        self.options = EstimatorOptions(
+            max_depth=self.max_depth, light_samples=self.light_samples, rr_depth=self.rr_depth,
+            mis=needs_mis(scene) if self.mis is None else self.mis, **estimator_overrides(self.mutants),
         )
-        self.cam = scene.camera(self.camera)
-        import drjit as dr
-
+        self.estimator = PathEstimator(McrtHost(self.geometry), self.options)
+        self.camera_model = Pinhole(scene.camera(self.camera), self.width, self.height, jitter=camera_jitter(self.mutants))
         self._frozen_pass = dr.freeze(self._pass_kernel, limit=8, warn_after=64)  # one recording per pass size, a few kept
 
     def pass_sums(self, seed: int, pass_index: int, n: int):
@@ -117,7 +117,7 @@ class Tracer:
 
         Each pixel gets consecutive lanes (:func:`pass_layout`), and each lane
         traces its share of the pixel's n paths one after another
-        (mcrt.integrator.PathIntegrator.path_sums), keeping the sums of its
+        (mcrt.estimator.PathEstimator.path_sums), keeping the sums of its
         samples x and x^2. The lanes' sums are then added (as float64)
         into slots of up to GROUP consecutive lanes of one pixel, each packet
         first reducing its own lanes (ReduceMode.Local), so a slot receives
@@ -141,20 +141,14 @@ class Tracer:
         col = m.Float(pixel % W)
         row = m.Float(pixel // W)
         rng = WeylRng.seeded(m, lanes, key0, key1)
-        center, half_right, half_up = image_plane_basis(self.cam, W, H)
-        center, half_right, half_up = const3(m, center), const3(m, half_right), const3(m, half_up)
-        eye = const3(m, self.cam.eye)
-        no_jitter = "no_jitter" in self.mutants
+        eye = m.Array3f(*self.camera_model.eye)
 
         def camera_ray(u, v):
-            if no_jitter:
-                u = v = 0.5
-            sx = dr.fma(col + u, 2.0 / W, -1.0)
-            sy = dr.fma(row + v, -2.0 / H, 1.0)
-            return eye, dr.normalize(dr.fma(sy, half_up, dr.fma(sx, half_right, center)))
+            return eye, self.camera_model.direction(col, row, u, v)
 
         used = paths > 0  # lanes past n pad the pass to a power of two per pixel
-        sum_x, sum_x2 = self.integrator.path_sums(camera_ray, rng, dr.maximum(paths, 1))
+        o, d = camera_ray(rng.next_1d(), rng.next_1d())
+        sum_x, sum_x2, _ = self.estimator.path_sums(o, d, rng, paths=dr.maximum(paths, 1), camera_ray=camera_ray)
 
         slots = stride // group  # per pixel
         # Layout (moment, pixel, channel, slot): the slots of one sum are one block of ``slots``.
@@ -169,31 +163,6 @@ class Tracer:
             acc = dr.block_sum(acc, slots)
         dr.eval(acc)
         return acc
-
-    def mean_variance(self, sums, n: int) -> tuple[np.ndarray, np.ndarray]:
-        """Mean and unbiased per-sample variance (float32, H x W x 3) from :meth:`pass_sums`' layout over n samples.
-
-        The formulas of :class:`mcrt.film.Moments`, evaluated by Dr.Jit: one
-        small kernel instead of NumPy's temporaries (a few ms at 256x256).
-        """
-        import drjit as dr
-
-        m = self.m
-        size = 3 * self.width * self.height
-        idx = dr.arange(m.UInt32, size)
-        # Opaque counts: a true division (Dr.Jit turns division by a literal into
-        # a product with its reciprocal), and one kernel for every spp.
-        count = dr.opaque(m.Float64, n)
-        s1 = dr.gather(m.Float64, sums, idx)
-        mean = m.Float(s1 / count)
-        if n < 2:
-            var = dr.zeros(m.Float, size)
-        else:
-            s2 = dr.gather(m.Float64, sums, idx + size)
-            var = m.Float(dr.maximum((s2 - s1 * s1 / count) / dr.opaque(m.Float64, n - 1), 0.0))
-        dr.eval(mean, var)
-        shape = (self.height, self.width, 3)
-        return mean.numpy().reshape(shape), var.numpy().reshape(shape)
 
 
 #: Lanes summed into one slot inside the kernel (a power of two no wider than a packet of 16).
@@ -242,87 +211,42 @@ def _tracer(scene: Scene, *args) -> Tracer:
     return tracer
 
 
-def srgb_encode(x: np.ndarray) -> np.ndarray:
-    x = np.clip(x, 0.0, None)
-    return np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1 / 2.4) - 0.055)
+def render_tracer(scene: Scene, settings: RenderSettings, *, backend: str = "llvm", progress: bool = True,
+                  spp_per_pass: int | None = None, mutants=(), intersector: str = "convex", mis: bool | None = None,
+                  precision_guard: bool = True) -> RenderResult:
+    """Render ``scene`` at ``settings`` with the standalone tracer: mean and per-sample variance.
 
-
-def render(
-    scene: Scene,
-    camera: str | None = None,
-    spp: int | None = None,
-    seed: int | None = None,
-    max_depth: int | None = None,
-    light_samples: int | None = None,
-    backend: str = "llvm",
-    *,
-    width: int | None = None,
-    height: int | None = None,
-    rr_depth: int | None = None,
-    mutants=(),
-    intersector: str = "convex",
-    spp_per_pass: int | None = None,
-    progress: bool = True,
-    precision_guard: bool = True,
-    mis: bool | None = None,
-) -> RenderResult:
-    """Render ``scene`` with the standalone tracer: mean and per-sample variance.
-
-    Arguments left as None take the scene file's render defaults.
-    ``mis`` forces multiple importance sampling on or off (default: where
-    the scene needs it). ``precision_guard=False`` renders scenes that :func:`mcrt.precision.check_precision`
-    would refuse (only to measure where float32 breaks).
+    Called through :func:`mcrt.render.render` (renderer ``mcrt``). ``mis``
+    forces multiple importance sampling on or off (default: where the scene
+    needs it). ``precision_guard=False`` renders scenes that
+    :func:`mcrt.precision.check_precision` would refuse (only to measure
+    where float32 breaks).
     """
     import drjit as dr
 
-    s = scene.settings(camera=camera, spp=spp, seed=seed, max_depth=max_depth, light_samples=light_samples, width=width, height=height, rr_depth=rr_depth)
+    s = settings
     tracer = _tracer(scene, s.camera, s.width, s.height, s.max_depth, s.light_samples, s.rr_depth, backend, intersector,
                      frozenset(mutants), precision_guard, mis)
     per_pass = spp_per_pass or pass_size(s.width, s.height, s.spp)
-    bar = Progress(s.spp, label="mcrt", enabled=progress)
-    flag = dr.flag(dr.JitFlag.KernelHistory)
-    dr.set_flag(dr.JitFlag.KernelHistory, True)
-    dr.kernel_history()  # clear
-    t0 = time.perf_counter()
-    # The sums stay in Dr.Jit's memory across passes (float64, added pass by pass).
-    sums, done, k = None, 0, 0
-    while done < s.spp:
-        n = min(per_pass, s.spp - done)
-        acc = tracer.pass_sums(s.seed, k, n)
-        sums = acc if sums is None else sums + acc
-        dr.eval(sums)
-        done, k = done + n, k + 1
-        if bar.enabled:
-            dr.sync_thread()  # the kernels run asynchronously: wait, so the time left is right
-            bar.update(done)
-    mean, var = tracer.mean_variance(sums, done)
-    wall = time.perf_counter() - t0
-    history = dr.kernel_history()
-    dr.set_flag(dr.JitFlag.KernelHistory, flag)
-    compile_ms = sum(h.get("codegen_time", 0.0) + h.get("backend_time", 0.0) for h in history if not h.get("cache_hit", False))
-    if "gamma_output" in tracer.mutants:
-        # The student's file holds sRGB-encoded values; the variance follows by the delta method.
-        eps = 1e-4
-        deriv = (srgb_encode(mean + eps) - srgb_encode(np.maximum(mean - eps, 0))) / (mean + eps - np.maximum(mean - eps, 0))
-        var = (var * deriv**2).astype(np.float32)
-        mean = srgb_encode(mean).astype(np.float32)
-
+    totals = run_passes(lambda k, n: tracer.pass_sums(s.seed, k, n), width=s.width, height=s.height, spp=s.spp,
+                        spp_per_pass=per_pass, progress=Progress(s.spp, label="mcrt", enabled=progress))
+    mean, var = encode_output(totals.mean, totals.variance, output_encoding(tracer.mutants))
     return RenderResult(
         mean=mean,
         variance=var,
-        spp=s.spp,
+        spp=totals.spp,
         seed=s.seed,
         max_depth=s.max_depth,
         renderer="mcrt",
         scene_hash=scene.content_hash(),
         camera=s.camera,
-        wall_time=wall,
-        compile_time=compile_ms / 1000.0,
+        wall_time=totals.wall_time,
+        compile_time=totals.compile_time,
         extra={
             "backend": backend,
             "intersector": intersector,
             "light_samples": str(s.light_samples),
-            "mis": str(tracer.integrator.mis).lower(),
+            "mis": str(tracer.options.mis).lower(),
             "rr_depth": str(s.rr_depth),
             "mutants": ",".join(sorted(tracer.mutants)),
             "drjit_version": dr.__version__,

@@ -10,13 +10,19 @@ import pytest
 
 import mcrt
 from mcrt.camera import primary_directions
-from mcrt.mitsuba import load_mitsuba_scene, render_mitsuba, scene_dict, sensor_rays, variant_for
+from mcrt.mitsuba import load_mitsuba_scene, scene_dict, sensor_rays, variant_for
+from mcrt.render import render
 
 import drjit as dr  # noqa: E402  (after mcrt: it sets DRJIT_LIBLLVM_PATH)
 import mitsuba as mi  # noqa: E402
 
 CAMERAS = ("near", "far")
 W = H = 32
+
+
+def _mitsuba(scene, seed, spp_per_pass=None, **settings):
+    """Mitsuba's path integrator through mcrt.render.render at these settings."""
+    return render(scene, scene.settings(**settings), renderer="mitsuba", seed=seed, progress=False, spp_per_pass=spp_per_pass)
 
 
 @pytest.fixture(scope="module")
@@ -157,7 +163,7 @@ def test_light_emits_downward_only(scene):
 
 @pytest.mark.parametrize("camera", CAMERAS)
 def test_render_is_finite_and_oriented(scene, camera):
-    r = render_mitsuba(scene, camera=camera, width=W, height=H, spp=16, seed=3, max_depth=8, progress=False)
+    r = _mitsuba(scene, camera=camera, width=W, height=H, spp=16, seed=3, max_depth=8)
     assert r.mean.shape == r.variance.shape == (H, W, 3)
     assert r.mean.dtype == r.variance.dtype == np.float32
     for a in (r.mean, r.variance):
@@ -180,14 +186,14 @@ def test_render_is_finite_and_oriented(scene, camera):
 
 
 def test_render_is_deterministic(scene):
-    kw = dict(camera="near", width=16, height=16, spp=8, max_depth=4, progress=False, spp_per_pass=3)
-    a = render_mitsuba(scene, seed=11, **kw)
-    b = render_mitsuba(scene, seed=11, **kw)
-    c = render_mitsuba(scene, seed=12, **kw)
+    kw = dict(camera="near", width=16, height=16, spp=8, max_depth=4, spp_per_pass=3)
+    a = _mitsuba(scene, seed=11, **kw)
+    b = _mitsuba(scene, seed=11, **kw)
+    c = _mitsuba(scene, seed=12, **kw)
     assert np.array_equal(a.mean, b.mean) and np.array_equal(a.variance, b.variance)
     assert not np.array_equal(a.mean, c.mean)
     # One sample per pass: identical pass seeds would make every pixel's samples equal (zero variance).
-    d = render_mitsuba(scene, seed=11, **dict(kw, spp=4, spp_per_pass=1))
+    d = _mitsuba(scene, seed=11, **dict(kw, spp=4, spp_per_pass=1))
     assert np.mean(np.any(d.variance > 0, axis=-1)) > 0.5
 
 
@@ -208,7 +214,7 @@ def _light_coverage(scene, camera, width, height, k=16):
 @pytest.mark.parametrize("camera", CAMERAS)
 def test_max_depth_1_shows_only_the_light(scene, camera):
     """With max_depth 1 only directly seen emitters count: 0 or the light's radiance, nothing else."""
-    r = render_mitsuba(scene, camera=camera, width=W, height=H, spp=16, seed=5, max_depth=1, progress=False)
+    r = _mitsuba(scene, camera=camera, width=W, height=H, spp=16, seed=5, max_depth=1)
     Le = np.float32(scene.light.radiance[0])
     cov = _light_coverage(scene, camera, W, H)
     full, none = cov == 1.0, cov == 0.0
@@ -232,7 +238,7 @@ def test_max_depth_1_shows_only_the_light(scene, camera):
 
 def test_matches_mi_render_on_average(scene):
     """Driving the integrator by hand estimates the same image as mi.render (image mean within 5 sigma)."""
-    r = render_mitsuba(scene, camera="near", width=W, height=H, spp=32, seed=9, max_depth=4, progress=False)
+    r = _mitsuba(scene, camera="near", width=W, height=H, spp=32, seed=9, max_depth=4)
     ms = load_mitsuba_scene(scene, "near", W, H, max_depth=4)
     ref = np.asarray(mi.render(ms, spp=32, seed=1234)).astype(np.float64)
     n_pix = W * H

@@ -46,7 +46,7 @@ def numpy_draws(lanes, draws, key0, key1, mixer=mix32, shared_step=None):
 
 def drjit_draws(lanes, draws, key0, key1):
     rng = WeylRng.seeded(m, lanes, dr.opaque(m.UInt32, key0), dr.opaque(m.UInt32, key1))
-    return np.stack([rng.next_float32().numpy() for _ in range(draws)], axis=1)
+    return np.stack([rng.next_1d().numpy() for _ in range(draws)], axis=1)
 
 
 @pytest.fixture(scope="module")

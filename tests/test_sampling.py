@@ -15,7 +15,6 @@ import numpy as np
 import pytest
 
 import mcrt  # noqa: F401  (libLLVM before drjit)
-from mcrt.camera import image_plane_basis
 from mcrt.sampling import (
     cosine_about_normal,
     cosine_hemisphere_pdf,
@@ -23,7 +22,6 @@ from mcrt.sampling import (
     square_to_uniform_ball,
     square_to_uniform_hemisphere,
 )
-from mcrt.scene import load_scene
 from mcrt.stats import chi2_gof
 
 ALPHA = 0.01
@@ -145,98 +143,3 @@ def test_mitsuba_chi2_rejects_a_wrong_pdf(mi):
 
     ok, _ = _mitsuba_chi2(mi, sample, pdf, seed=5)
     assert not ok
-
-
-def _solid_angle(points: np.ndarray, polygon: np.ndarray) -> float:
-    """Solid angle of a convex polygon seen from a point: a fan of triangles (Van Oosterom and Strackee)."""
-    total = 0.0
-    r = polygon - points
-    for i in range(1, len(r) - 1):
-        a, b, c = r[0], r[i], r[i + 1]
-        la, lb, lc = np.linalg.norm(a), np.linalg.norm(b), np.linalg.norm(c)
-        num = abs(a @ np.cross(b, c))
-        den = la * lb * lc + (a @ b) * lc + (a @ c) * lb + (b @ c) * la
-        total += 2.0 * math.atan2(num, den)
-    return total
-
-
-def _light_directions(scene, x, u1, u2):
-    """Directions from x to uniform points on the light, their distance and the light's cosine."""
-    light = scene.light
-    cx, cy, cz = light.center
-    y = np.stack([cx + (2 * u1 - 1) * light.size[0] / 2, cy + (2 * u2 - 1) * light.size[1] / 2, np.full(u1.shape, cz)], axis=1)
-    w = y - np.asarray(x)
-    d = np.linalg.norm(w, axis=1)
-    w /= d[:, None]
-    return w, d, np.abs(w[:, 2])
-
-
-@pytest.mark.parametrize("x", [(5.0, 0.0, -5.0), (1.0, 5.0, 2.0), (6.5, 0.3, 4.0)])
-def test_light_sampling_jacobian(x):
-    """pdf_solid_angle = d^2 / (A cos_y) for uniform points on the light, checked by two integrals.
-
-    E[1 / pdf] is the light's solid angle (Van Oosterom-Strackee) and
-    E[cos_x / pdf] its irradiance over Le (Lambert's formula), for x on a
-    floor-facing-up plane. z-tests at level 0.01 each, seed 9.
-    """
-    from scipy.stats import norm
-
-    from mcrt.closed_form import polygon_irradiance
-
-    scene = load_scene()
-    light = scene.light
-    u1, u2 = (u.astype(np.float64) for u in _uniform(9, n=200_000))
-    w, d, cos_y = _light_directions(scene, x, u1, u2)
-    inv_pdf = light.area * cos_y / d**2
-    omega = _solid_angle(np.asarray(x), light.corners())
-    z = (inv_pdf.mean() - omega) / (inv_pdf.std(ddof=1) / math.sqrt(len(inv_pdf)))
-    assert abs(z) < norm.isf(ALPHA / 2), (inv_pdf.mean(), omega)
-    irr = np.maximum(w[:, 2], 0) * inv_pdf
-    expected = polygon_irradiance(np.array([x]), np.array([[0.0, 0.0, 1.0]]), light.corners(), 1.0)[0]
-    z = (irr.mean() - expected) / (irr.std(ddof=1) / math.sqrt(len(irr)))
-    assert abs(z) < norm.isf(ALPHA / 2), (irr.mean(), expected)
-
-
-def test_light_sampling_jacobian_without_cosine_fails():
-    """The Jacobian without cos_y (what mutant nee_no_cos_light computes) misses the solid angle."""
-    scene = load_scene()
-    x = (1.0, 5.0, 2.0)
-    u1, u2 = (u.astype(np.float64) for u in _uniform(10, n=200_000))
-    _, d, _ = _light_directions(scene, x, u1, u2)
-    wrong = (scene.light.area / d**2).mean()
-    omega = _solid_angle(np.asarray(x), scene.light.corners())
-    assert abs(wrong - omega) / omega > 0.5
-
-
-@pytest.mark.parametrize("camera", ["near", "far"])
-def test_pinhole_directions_cover_the_film_uniformly(camera):
-    """Jittered film positions give directions of pdf 1 / (A_film cos^3 theta).
-
-    E[1 / pdf] over the directions is the film's solid angle seen from the eye
-    (z-test at 0.01, seed 11), and the directions' film coordinates are
-    uniform (own chi-square over 16 x 16 cells at 0.01).
-    """
-    from scipy.stats import norm
-
-    from mcrt.camera import film_coordinates, primary_directions
-
-    scene = load_scene()
-    cam = scene.camera(camera)
-    W = H = 16
-    u1, u2 = (u.astype(np.float64) for u in _uniform(11, n=200_000))
-    i, j = np.floor(u1 * W), np.floor(u2 * H)
-    d = primary_directions(cam, W, H, i, j, u1 * W - i, u2 * H - j)
-    center, hr, hu = (np.asarray(v, float) for v in image_plane_basis(cam, W, H))
-    cos_t = d @ center
-    film_area = 4 * np.linalg.norm(hr) * np.linalg.norm(hu)
-    inv_pdf = film_area * cos_t**3
-    film = np.array([center - hr + hu, center + hr + hu, center + hr - hu, center - hr - hu])
-    omega = _solid_angle(np.zeros(3), film)
-    z = (inv_pdf.mean() - omega) / (inv_pdf.std(ddof=1) / math.sqrt(len(inv_pdf)))
-    assert abs(z) < norm.isf(ALPHA / 2), (inv_pdf.mean(), omega)
-    # Back-project to film coordinates and bin.
-    p = d / cos_t[:, None] - center
-    sx, sy = p @ hr / (hr @ hr), p @ hu / (hu @ hu)
-    counts, _, _ = np.histogram2d(sx, sy, bins=16, range=[[-1, 1], [-1, 1]])
-    assert chi2_gof(counts.ravel(), np.full(256, len(sx) / 256))[2] > ALPHA
-    assert np.allclose(film_coordinates(W, H, 0, 0, 0.0, 0.0), (-1.0, 1.0))

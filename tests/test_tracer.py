@@ -10,10 +10,9 @@ import numpy as np
 import pytest
 
 from mcrt.closed_form import furnace_radiance, furnace_scene, lit_floor_image, lit_floor_scene
-from mcrt.mitsuba import render_mitsuba
+from mcrt.render import render
 from mcrt.scene import load_scene
 from mcrt.stats import compare_images
-from mcrt.tracer import render
 
 ALPHA = 0.01  # family-wise error rate of every image comparison here (Holm over tiles and channels)
 
@@ -23,10 +22,14 @@ def scene():
     return load_scene()
 
 
-def _render(scene, **kw):
-    args = dict(camera="near", spp=64, seed=1, max_depth=8, width=32, height=32, progress=False)
-    args.update(kw)
-    return render(scene, **args)
+SETTINGS = ("camera", "spp", "max_depth", "width", "height", "light_samples", "rr_depth")
+
+
+def _render(scene, renderer="mcrt", seed=1, **kw):
+    """A render through mcrt.render.render: settings from ``kw`` (defaults below), the rest as options."""
+    args = dict(camera="near", spp=64, max_depth=8, width=32, height=32) | {k: v for k, v in kw.items() if k in SETTINGS}
+    options = {k: v for k, v in kw.items() if k not in SETTINGS}
+    return render(scene, scene.settings(**args), renderer=renderer, seed=seed, progress=False, **options)
 
 
 def test_same_seed_same_image_bit_for_bit(scene):
@@ -63,14 +66,14 @@ def test_frozen_pass_replays_the_traced_kernel(scene, n):
 
 
 def test_mean_and_variance_follow_the_film_formulas(scene):
-    """The tracer forms mean and variance in Dr.Jit; mcrt.film.Moments is the definition they must match.
+    """Mean and variance are formed in Dr.Jit (mcrt.film.mean_variance); mcrt.film.Moments is the definition they must match.
 
-    Three passes (16, 16 and 5 samples) summed pass by pass, as render() does,
+    Three passes (16, 16 and 5 samples) summed pass by pass, as run_passes does,
     against the same sums taken out to NumPy: equal to the last bit.
     """
     import drjit as dr
 
-    from mcrt.film import Moments
+    from mcrt.film import Moments, mean_variance
     from mcrt.tracer import Tracer
 
     tracer = Tracer(scene, "near", 12, 10, 8)
@@ -81,10 +84,10 @@ def test_mean_and_variance_follow_the_film_formulas(scene):
         moments.add(s[0], s[1], n)
         sums = acc if sums is None else sums + acc
         dr.eval(sums)
-    mean, var = tracer.mean_variance(sums, moments.n)
+    mean, var = mean_variance(sums, moments.n, 12, 10)
     assert np.array_equal(mean, moments.mean()) and np.array_equal(var, moments.variance())
     assert np.all(var > 0) and mean.dtype == var.dtype == np.float32
-    one_mean, one_var = tracer.mean_variance(tracer.pass_sums(3, 9, 1), 1)
+    one_mean, one_var = mean_variance(tracer.pass_sums(3, 9, 1), 1, 12, 10)
     assert np.all(one_var == 0) and np.all(one_mean >= 0)
 
 
@@ -189,8 +192,8 @@ def test_agrees_with_mitsuba(scene, camera, max_depth):
 
     Seeds: mcrt 11, Mitsuba 12.
     """
-    a = render(scene, camera, 1024, 11, max_depth, width=64, height=64, progress=False)
-    b = render_mitsuba(scene, camera, 64, 64, 1024, 12, max_depth, progress=False)
+    a = _render(scene, camera=camera, spp=1024, seed=11, max_depth=max_depth, width=64, height=64)
+    b = _render(scene, "mitsuba", camera=camera, spp=1024, seed=12, max_depth=max_depth, width=64, height=64)
     c = compare_images(a, b, alpha=ALPHA, tile=8)
     assert c.passed, c.summary()
 
@@ -229,7 +232,7 @@ def test_furnace(max_depth):
     from scipy.stats import norm
 
     scene = furnace_scene(albedo=0.5, emission=1.0)
-    r = render(scene, "near", 256, 21, max_depth, width=32, height=32, progress=False)
+    r = _render(scene, spp=256, seed=21, max_depth=max_depth)
     expected = furnace_radiance(0.5, 1.0, max_depth)
     se = np.sqrt(r.variance / r.spp)
     if max_depth != -1 and max_depth <= 5:
@@ -254,7 +257,7 @@ def test_furnace_with_mirror_unbounded():
     from scipy.stats import norm
 
     scene = furnace_scene(albedo=0.5, emission=1.0, mirror=True)
-    r = render(scene, "near", 256, 22, -1, width=32, height=32, progress=False)
+    r = _render(scene, spp=256, seed=22, max_depth=-1)
     assert np.array_equal(r.mean[..., 0], r.mean[..., 2])  # grey: the z below relies on it
     z_mean = _grey_image_mean_z(r, 2.0)
     assert abs(z_mean) < norm.isf(ALPHA / 2), z_mean
@@ -272,7 +275,7 @@ def test_direct_light_on_the_floor_matches_lamberts_formula(max_depth):
     scene = lit_floor_scene(0.5)
     expected, floor = lit_floor_image(scene, "near", 64, 64)
     assert floor.sum() > 500
-    r = render(scene, "near", 256, 31, max_depth, width=64, height=64, progress=False)
+    r = _render(scene, spp=256, seed=31, max_depth=max_depth, width=64, height=64)
     got, var = r.mean[..., 0][floor], r.variance[..., 0][floor] / r.spp
     z = (got - expected[floor]) / np.sqrt(var)
     assert np.abs(z).max() < norm.isf(ALPHA / 2 / z.size), np.abs(z).max()
@@ -305,7 +308,7 @@ def test_multiple_importance_sampling_is_unbiased(scene, light_samples):
 
 def test_mis_agrees_with_mitsuba(scene):
     """MIS on, near camera, 64x64, 1024 spp each side (seeds 61, 62), Holm at 0.01."""
-    a = render(scene, "near", 1024, 61, 8, width=64, height=64, progress=False, mis=True)
-    b = render_mitsuba(scene, "near", 64, 64, 1024, 62, 8, progress=False)
+    a = _render(scene, spp=1024, seed=61, width=64, height=64, mis=True)
+    b = _render(scene, "mitsuba", spp=1024, seed=62, width=64, height=64)
     c = compare_images(a, b, alpha=ALPHA)
     assert c.passed, c.summary()

@@ -1,0 +1,348 @@
+r"""mcrt's path estimator, written once against a small interface of the scene it runs in.
+
+For a camera ray the estimator returns an unbiased sample of the pixel's
+radiance, the measurement of
+
+    L(x, wo) = Le(x, wo) + int_H f(x, wi, wo) L(x', -wi) cos(theta_i) dwi
+
+truncated to paths of at most ``max_depth`` segments (Mitsuba's convention:
+1 sees emitters only, 2 adds direct light, -1 is unbounded). At a Lambertian
+vertex x the integral is split into
+
+- direct light, from K points y_k sampled on the light with area density
+  p_A (next-event estimation), each tested for visibility V by a shadow ray:
+
+      L_direct = (1/K) sum_k f Le V cos(theta_x) cos(theta_y) / (|x - y_k|^2 p_A(y_k));
+
+- indirect light, along one cosine-weighted direction (pdf cos/pi), whose
+  weight f cos / pdf is the albedo; light that this ray finds is not counted
+  (the direct term has it), except by multiple importance sampling.
+
+A mirror reflects with weight equal to its reflectance; emission seen from
+the eye or after a mirror is counted, because no light sample could have
+found it. Emission of surfaces that next-event estimation does not sample is
+counted at every hit. Russian roulette from ``rr_depth`` on keeps a path
+with probability q = min(max(throughput), 0.95) and divides the throughput by q.
+
+Where a lit surface nearly touches the light, area sampling alone has
+unbounded variance (the 1/d^2); there (``mis``) light samples and the cosine
+direction are combined by the balance heuristic, in solid angle.
+
+The host
+--------
+:class:`PathEstimator` never asks which scene it runs in. A host provides
+
+- ``intersect(o, d, active) -> Hit``: the closest hit of rays (o, d);
+- ``sample_light(x, u1, u2, active) -> mcrt.light.LightSample``: a point on a
+  light with its radiance and area density;
+- ``light_pdf_area(hit, o, active)``: the area density with which
+  ``sample_light`` would have chosen a hit light point (for MIS);
+- ``occluded(o, d, tmax, active) -> Bool``: whether anything but the light
+  blocks o + t d for 0 < t < tmax (tmax = inf: anything at all);
+- ``spawn_origin(hit)``: the origin of rays leaving a hit, offset against
+  self-intersection on the side the ray arrived from;
+- the array types ``Float``, ``UInt32``, ``Bool``, ``Vector3f``, ``Spectrum``
+  and what the scene holds: ``has_diffuse``, ``has_mirror``,
+  ``has_unsampled_emission``, ``rays_escape``.
+
+:mod:`mcrt.host` implements it on mcrt's own geometry (a kernel specialised
+to the scene: nothing is traced that the scene lacks) and
+:mod:`mcrt.plugins` on a Mitsuba scene, so that the standalone tracer and
+the Mitsuba plugin run this estimator by construction.
+
+Every bug of the catalogue (:mod:`mcrt.mutants`) is a named option of
+:class:`EstimatorOptions` whose default is the correct physics.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import drjit as dr
+
+from mcrt.bsdf import LAMBERTIAN_SAMPLERS, lambertian_f, lambertian_weight, reflect, sample_lambertian
+from mcrt.light import solid_angle_pdf
+from mcrt.sampling import balance_heuristic, cosine_hemisphere_pdf
+
+UNBOUNDED = 2**32 - 1
+
+#: Shadow rays stop this fraction short of the light point, so that they never hit the light itself.
+SHADOW_TMAX_SCALE = 1.0 - 2.0**-12
+
+
+@dataclass
+class Hit:
+    """What the estimator needs of a ray's closest hit (every field an array over lanes).
+
+    ``n`` is the unit geometric normal on the side the ray arrived from;
+    ``reflects`` whether the surface scatters light (false for the light's
+    black surface and for rays that hit nothing); ``color`` the albedo of a
+    Lambertian surface or the reflectance of a mirror; ``light`` whether the
+    hit lies on a light that :meth:`Host.sample_light` samples, with
+    ``light_cos`` the cosine between -d and its emitting-side normal and
+    ``light_radiance`` the radiance of its emitting side; ``emission`` the
+    radiance towards the ray of surfaces no light sample reaches (None
+    where the scene has none); ``valid`` whether the ray hit anything.
+    """
+
+    t: object
+    p: object
+    n: object
+    reflects: object
+    mirror: object
+    color: object
+    light: object
+    light_cos: object
+    light_radiance: object
+    emission: object = None
+    valid: object = True
+    extra: object = None  # what the host keeps for its own later calls (Mitsuba's SurfaceInteraction)
+
+
+@dataclass(frozen=True)
+class EstimatorOptions:
+    """The estimator's settings, then its named physics options.
+
+    The physics options' defaults are the correct estimator; each other value
+    is one catalogued bug (:data:`mcrt.mutants.MUTANTS` maps bug names to them).
+    """
+
+    max_depth: int = 8  # longest path in segments; -1 unbounded
+    light_samples: int = 1  # K, points sampled on the light per Lambertian vertex
+    rr_depth: int = 5  # depth from which Russian roulette runs
+    mis: bool = False  # combine light samples and the cosine direction by the balance heuristic
+    hide_emitters: bool = False  # do not count emitters seen directly from the eye
+
+    lambertian_sampler: str = "cosine"  # mcrt.bsdf.LAMBERTIAN_SAMPLERS
+    brdf_inv_pi: bool = True  # the Lambertian BRDF is albedo / pi
+    nee_cos_surface: bool = True  # the geometry term has the cosine at the receiver
+    nee_cos_light: bool = True  # ... the cosine at the light
+    nee_inv_dist2: bool = True  # ... the 1 / d^2
+    nee_pdf_area: bool = True  # the light sample is divided by its area density (1 / A for one light)
+    count_emission: str = "unsampled"  # 'unsampled': where no light sample found it; 'always': counted twice
+    roulette: str = "unbiased"  # 'unbiased', or 'course2023': absorb with 0.75, else times 0.8
+    mirror_sign: float = 1.0  # -1: the mirror reflects the wrong way
+    extra_depth: int = 0  # segments added to a bounded max_depth
+    spawn_offset: bool = True  # rays leave a surface from an offset origin
+    shadow_bounded: bool = True  # shadow rays stop short of the light point
+    light_one_sided: bool = True  # the light emits from the side its normal points to only
+
+    def __post_init__(self):
+        if self.max_depth < -1:
+            raise ValueError(f"max_depth must be -1 (unbounded) or >= 0, got {self.max_depth}")
+        if self.light_samples < 1:
+            raise ValueError(f"light_samples must be >= 1, got {self.light_samples}")
+        if self.rr_depth < 1:
+            raise ValueError(f"rr_depth must be >= 1, got {self.rr_depth}")
+        if self.lambertian_sampler not in LAMBERTIAN_SAMPLERS:
+            raise ValueError(f"lambertian_sampler must be one of {', '.join(LAMBERTIAN_SAMPLERS)}")
+        if self.count_emission not in ("unsampled", "always"):
+            raise ValueError("count_emission must be 'unsampled' or 'always'")
+        if self.roulette not in ("unbiased", "course2023"):
+            raise ValueError("roulette must be 'unbiased' or 'course2023'")
+
+    @property
+    def depth_limit(self) -> int:
+        """max_depth as the loop compares it: UNBOUNDED for -1, plus ``extra_depth`` otherwise."""
+        return UNBOUNDED if self.max_depth == -1 else self.max_depth + self.extra_depth
+
+
+def _max_component(v):
+    """The largest component; for three by two compares (dr.max also orders NaNs and signed zeros, at a cost)."""
+    if dr.size_v(v) != 3:
+        return dr.max(v)
+    a = dr.select(v.x > v.y, v.x, v.y)
+    return dr.select(a > v.z, a, v.z)
+
+
+class PathEstimator:
+    """The path loop of the module docstring on one host."""
+
+    def __init__(self, host, options: EstimatorOptions):
+        self.host, self.opt = host, options
+        self.max_depth = options.depth_limit
+        # Whether light found by a diffuse bounce counts: only then does a
+        # path whose last vertex is diffuse need its final segment traced.
+        self.diffuse_sees_emission = options.mis or host.has_unsampled_emission or options.count_emission == "always"
+
+    # ------------------------------------------------------------------
+    @dr.syntax
+    def path_sums(self, o, d, sampler, paths=1, camera_ray=None, active=True):
+        """Sums of x and x^2 over ``paths`` radiance samples x traced in turn by each lane.
+
+        The first path starts along the rays (o, d). Where ``camera_ray(u, v)``
+        is given, a lane whose path ended starts its next one in the same
+        loop iteration (path regeneration): a packet then runs until its
+        lanes' total work is done instead of until its longest path ends.
+        The new path's camera jitter reuses the two numbers the ended path
+        drew for its next direction: a path ends at the light, at the depth
+        limit or by roulette, none of which depends on them, and it never
+        traced that direction. ``paths`` (UInt32) counts the lane's paths,
+        at least one. Returns (sum x, sum x^2, hit), ``hit`` whether the
+        first ray hit anything.
+        """
+        # Plain Python values only: dr.syntax treats the locals the loop reads as loop state.
+        host = self.host
+        spawn_offset, mis, brdf_inv_pi = self.opt.spawn_offset, self.opt.mis, self.opt.brdf_inv_pi
+
+        # ---- Loop state.
+        L = host.Spectrum(0.0)  # radiance of the current path gathered so far
+        beta = host.Spectrum(1.0)  # path throughput: product of f cos / pdf so far
+        depth = host.UInt32(0)  # segments of the current path traced so far
+        specular = host.Bool(True)  # the last vertex was the eye or a mirror: count emission
+        pdf_bsdf = host.Float(0.0)  # solid-angle pdf of the last cosine direction (for MIS)
+        sum_x = host.Spectrum(0.0)  # the lane's finished samples: sum of x
+        sum_x2 = host.Spectrum(0.0)  # and of x^2
+        left = host.UInt32(paths - 1)  # paths the lane has still to start
+        hit_first = host.Bool(False)  # the first ray hit something
+        active = host.Bool(active) & (self.max_depth > 0)  # the lane has a path in flight
+
+        while dr.hint(active, label="mcrt_path"):
+            hit = host.intersect(o, d, active)
+            depth += 1
+            if host.rays_escape:
+                hit_first |= hit.valid & (depth == 1)
+
+            # ---- Emission.
+            L = dr.fma(beta, self.emitted(hit, specular, pdf_bsdf, depth, active), L)
+            if hit.emission is not None:
+                L = dr.fma(beta, hit.emission, L)
+
+            # ---- Stop where nothing reflects (the light) and at the depth limit.
+            alive = hit.reflects & (depth < self.max_depth)
+            origin = host.spawn_origin(hit) if spawn_offset else hit.p
+            diffuse = alive & ~hit.mirror if host.has_mirror else alive
+            if not self.diffuse_sees_emission:
+                # The last segment after a diffuse vertex could only find emission,
+                # which the light sample here has already counted: end the path.
+                alive = alive & (hit.mirror | (depth + 1 < self.max_depth))
+
+            # ---- Next-event estimation at diffuse vertices (depth + 1 <= max_depth holds here).
+            if host.has_diffuse:
+                f = lambertian_f(hit.color, inv_pi=brdf_inv_pi)
+                L = dr.fma(beta * f, self.direct_light(origin, hit.n, sampler, diffuse), L)
+
+            # ---- Continue: cosine-weighted Lambertian direction or mirror reflection.
+            u1, u2 = sampler.next_1d(), sampler.next_1d()
+            d, weight, specular = self.scatter(d, hit, alive, u1, u2, sampler)
+            if mis:
+                pdf_bsdf = cosine_hemisphere_pdf(dr.dot(hit.n, d))
+            beta *= weight
+            o = origin
+
+            # ---- Russian roulette.
+            beta, alive = self.roulette(beta, depth, diffuse, alive, sampler)
+
+            # ---- A path that ended is added to the sums; its lane starts the next one.
+            ended = ~alive
+            sum_x = dr.select(ended, sum_x + L, sum_x)
+            sum_x2 = dr.select(ended, dr.fma(L, L, sum_x2), sum_x2)
+            L = dr.select(ended, 0.0, L)
+            if camera_ray is None:
+                active = alive
+            else:
+                restart = ended & (left > 0)
+                left = dr.select(restart, left - 1, left)
+                o_new, d_new = camera_ray(u1, u2)
+                o = dr.select(restart, o_new, o)
+                d = dr.select(restart, d_new, d)
+                beta = dr.select(restart, 1.0, beta)
+                depth = dr.select(restart, 0, depth)
+                specular |= restart
+                active = alive | restart
+        return sum_x, sum_x2, hit_first
+
+    # ------------------------------------------------------------------
+    def emitted(self, hit, specular, pdf_bsdf, depth, active):
+        """Le towards the ray where it meets a light's emitting side, weighted against light sampling.
+
+        Without MIS it counts only where no light sample could have found it
+        (from the eye, after a mirror). With MIS a hit after a diffuse bounce
+        counts too, with the balance weight of the cosine direction against
+        K light samples, both densities in solid angle.
+        """
+        opt = self.opt
+        cos_y = hit.light_cos if opt.light_one_sided else dr.abs(hit.light_cos)
+        seen = hit.light & (cos_y > 0)
+        weight = 1.0
+        if opt.count_emission == "always":
+            counted = seen
+        elif not opt.mis:
+            counted = seen & specular
+        else:
+            counted = seen
+            p_light = solid_angle_pdf(self.host.light_pdf_area(hit, active), dr.square(hit.t), cos_y)
+            weight = dr.select(specular, 1.0, balance_heuristic(1, pdf_bsdf, opt.light_samples, p_light))
+        if opt.hide_emitters:
+            counted = counted & (depth > 1)
+        return dr.select(counted, hit.light_radiance * weight, 0.0)
+
+    def scatter(self, d, hit, alive, u1, u2, sampler):
+        """Next direction from (u1, u2), its weight f cos / pdf, and whether the bounce was specular (a mirror)."""
+        host, opt = self.host, self.opt
+        d_next = sample_lambertian(host.Vector3f, hit.n, u1, u2, sampler, method=opt.lambertian_sampler)
+        weight = lambertian_weight(hit.color, inv_pi=opt.brdf_inv_pi)
+        if not host.has_mirror:
+            return d_next, weight, host.Bool(False)
+        mirror = alive & hit.mirror
+        r = reflect(d, hit.n, sign=opt.mirror_sign)
+        return dr.select(mirror, r, d_next), dr.select(mirror, hit.color, weight), mirror
+
+    def roulette(self, beta, depth, diffuse, alive, sampler):
+        """Unbiased Russian roulette: survive with q = min(max beta, 0.95), then beta /= q."""
+        if self.opt.roulette == "course2023":
+            survive = sampler.next_1d() >= 0.75
+            return dr.select(diffuse, beta * 0.8, beta), alive & (~diffuse | survive)
+        q = dr.minimum(_max_component(beta), 0.95)
+        roulette = alive & (depth >= self.opt.rr_depth)
+        survive = sampler.next_1d() < q
+        return dr.select(roulette, beta * dr.rcp(q), beta), alive & (~roulette | survive)
+
+    # ------------------------------------------------------------------
+    def direct_light(self, origin, n, sampler, active):
+        """(1/K) sum_k Le V G / p_A over K light samples: the direct light over f. K = 1 traces no loop."""
+        if self.opt.light_samples == 1:
+            return self.light_sample(origin, n, sampler, active)
+        return self._light_sample_loop(origin, n, sampler, active) * (1.0 / self.opt.light_samples)
+
+    @dr.syntax
+    def _light_sample_loop(self, origin, n, sampler, active):
+        acc = self.host.Spectrum(0.0)  # sum of the light samples so far
+        k = self.host.UInt32(0)  # light samples drawn
+        while dr.hint(active & (k < self.opt.light_samples), label="mcrt_light_samples"):
+            acc += self.light_sample(origin, n, sampler, active)
+            k += 1
+        return acc
+
+    def light_sample(self, origin, n, sampler, active):
+        """One light sample seen from ``origin`` with unit normal ``n``: Le V G / p_A, G = cos_x cos_y / d^2.
+
+        Its expectation over the light is the irradiance the light gives the
+        point, E = int Le V cos_x cos_y / d^2 dA (with MIS, the light
+        sampling's share of it).
+        """
+        host, opt = self.host, self.opt
+        ls = host.sample_light(origin, sampler.next_1d(), sampler.next_1d(), active)
+        cos_x = dr.dot(n, ls.wi)
+        cos_y = ls.cos_y if opt.light_one_sided else dr.abs(ls.cos_y)
+        valid = active & (cos_x > 0) & (cos_y > 0)
+        g = self.geometry_term(cos_x, cos_y, ls.inv_dist)
+        tmax = ls.dist2 * ls.inv_dist * SHADOW_TMAX_SCALE if opt.shadow_bounded else dr.inf
+        blocked = host.occluded(origin, ls.wi, tmax, valid)
+        if opt.mis:
+            p_light = solid_angle_pdf(ls.pdf_area, ls.dist2, cos_y)
+            g = g * balance_heuristic(opt.light_samples, p_light, 1, cosine_hemisphere_pdf(cos_x))
+        pdf = ls.pdf_area if opt.nee_pdf_area else 1.0
+        return dr.select(valid & ~blocked, ls.radiance * (g / pdf), 0.0)
+
+    def geometry_term(self, cos_x, cos_y, inv_dist):
+        """G = cos_x cos_y / d^2, less the factors a catalogued bug leaves out."""
+        opt = self.opt
+        g = self.host.Float(1.0)
+        if opt.nee_cos_surface:
+            g = cos_x
+        if opt.nee_cos_light:
+            g = g * cos_y
+        if opt.nee_inv_dist2:
+            g = g * dr.square(inv_dist)
+        return g
