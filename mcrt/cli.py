@@ -10,7 +10,7 @@ import argparse
 import sys
 from pathlib import Path
 
-EXIT_OK, EXIT_FAILED, EXIT_UNUSABLE = 0, 1, 2
+from mcrt.exitcodes import EXIT_FAILED, EXIT_OK, EXIT_UNUSABLE
 
 
 def _add_render_options(p: argparse.ArgumentParser) -> None:
@@ -61,34 +61,15 @@ def render_to_files(result, out: Path, exposure: float = 0.0) -> tuple[Path, Pat
     return out, png
 
 
-def render_scene(renderer: str, scene, s, *, backend="llvm", mutants=(), intersector="convex", progress=True):
-    """Render with one renderer at settings ``s``: 'mcrt' (the standalone tracer), 'mitsuba'
-    (Mitsuba's path integrator) or 'plugin' (mcrt's estimator inside Mitsuba)."""
-    if renderer == "mcrt":
-        from mcrt.tracer import render
-
-        return render(
-            scene, s.camera, s.spp, s.seed, s.max_depth, s.light_samples, backend,
-            width=s.width, height=s.height, rr_depth=s.rr_depth, mutants=mutants, intersector=intersector, progress=progress,
-        )
-    if renderer == "mitsuba":
-        if mutants:
-            raise ValueError("mutants exist in the mcrt renderer and the plugin, not in Mitsuba's path integrator")
-        from mcrt.mitsuba import render_mitsuba
-
-        return render_mitsuba(scene, s.camera, s.width, s.height, s.spp, s.seed, s.max_depth, backend=backend, progress=progress)
-    if renderer == "plugin":
-        from mcrt.plugins import render_plugin
-
-        return render_plugin(scene, s.camera, s.width, s.height, s.spp, s.seed, s.max_depth, s.light_samples, backend=backend,
-                             progress=progress, mutants=mutants)
-    raise ValueError(f"unknown renderer {renderer!r} (mcrt, mitsuba or plugin)")
-
-
 def cmd_render(args) -> int:
     scene = _load(args)
     s = _settings(args, scene)
-    result = render_scene(args.renderer, scene, s, backend=args.backend, mutants=args.mutant or (), intersector=args.intersector)
+    from mcrt.render import render
+
+    options = {"mutants": tuple(args.mutant)} if args.mutant else {}
+    if args.intersector != "convex":
+        options["intersector"] = args.intersector
+    result = render(scene, s, renderer=args.renderer, backend=args.backend, **options)
     exr, png = render_to_files(result, Path(args.output), args.exposure)
     compile_note = f", of which JIT compilation {result.compile_time:.2f} s" if result.compile_time else ""
     paths = s.width * s.height * s.spp
@@ -99,11 +80,11 @@ def cmd_render(args) -> int:
 
 
 def cmd_compare(args) -> int:
-    from mcrt.stats import compare_files
+    from mcrt.compare import compare_files
 
-    return compare_files(args.a, args.b, alpha=args.alpha, tile=args.tile, heatmap=args.heatmap, json_path=args.json,
-                         assume_variance_from_other=args.assume_variance_from == "other",
-                         floor_variance_from_b=args.reference_variance_floor, spp_a=args.spp_a, spp_b=args.spp_b)
+    return compare_files(args.a, args.b, policy=args.policy, alpha=args.alpha, tile=args.tile, heatmap=args.heatmap,
+                         json_path=args.json, assume_variance_from_other=args.assume_variance_from == "other",
+                         spp_a=args.spp_a, spp_b=args.spp_b)
 
 
 def cmd_scene(args) -> int:
@@ -125,6 +106,7 @@ def cmd_mutants(args) -> int:
 
 def cmd_main(args) -> int:
     """The main job: the convergence report of the canonical scene, and mcrt beside Mitsuba."""
+    from mcrt.compare import write_heatmap
     from mcrt.imageio import side_by_side
     from mcrt.report import main_report
     from mcrt.stats import compare_images
@@ -134,10 +116,12 @@ def cmd_main(args) -> int:
     print(f"convergence report: {report.folder / 'index.md'} and index.html")
     scene = _load(args)
     s = scene.settings(camera=args.camera, width=args.res, height=args.res, spp=args.spp, seed=args.seed)
-    results = {name: render_scene(name, scene, s, backend=args.backend) for name in ("mcrt", "mitsuba")}
+    from mcrt.render import render
+
+    results = {name: render(scene, s, renderer=name, backend=args.backend) for name in ("mcrt", "mitsuba")}
     cmp = compare_images(results["mcrt"], results["mitsuba"], alpha=args.alpha)
     side_by_side(out / f"side_by_side_{s.camera}.png", [results["mcrt"].mean, results["mitsuba"].mean], ["mcrt", "Mitsuba 3 (path)"])
-    cmp.heatmap(out / f"difference_{s.camera}.png")
+    write_heatmap(cmp, out / f"difference_{s.camera}.png")
     for name, r in results.items():
         print(f"{name}: {s.width}x{s.height}, {s.spp} spp: {r.wall_time:.2f} s, {s.width * s.height * s.spp / r.wall_time / 1e6:.2f} M paths/s")
     print(f"mcrt against Mitsuba: {cmp.summary()}")
@@ -151,7 +135,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("render", help="render a scene to EXR (mean + per-sample variance) and a PNG preview")
     _add_render_options(p)
-    p.add_argument("--renderer", choices=("mcrt", "mitsuba", "plugin"), default="mcrt",
+    p.add_argument("--renderer", choices=("mcrt", "plugin", "mitsuba"), default="mcrt",
                    help="mcrt: the standalone tracer; mitsuba: Mitsuba's path integrator; plugin: mcrt's estimator inside Mitsuba")
     p.add_argument("--light-samples", type=int, default=None, help="shadow rays per diffuse vertex (mcrt, plugin)")
     p.add_argument("--mutant", action="append", metavar="NAME", help="switch on a catalogued bug (mcrt, plugin; repeatable; see `mcrt mutants`)")
@@ -167,9 +151,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--tile", type=int, default=8, help="tile size in pixels")
     p.add_argument("--heatmap", default=None, help="write a PNG of the per-tile statistic here")
     p.add_argument("--json", default=None, help="write the comparison (every tile's statistic) as JSON here")
-    p.add_argument("--reference-variance-floor", action="store_true",
-                   help="B is a high-spp reference of the same estimator: A's per-sample variance is raised to B's where "
-                        "lower (without it a modest render false-alarms against a reference; reports/validation/)")
+    # The names of mcrt.stats.policy.POLICIES (not imported here: mcrt.stats loads SciPy; tests/test_stats.py checks them).
+    p.add_argument("--policy", choices=("independent", "reference-floor"), default="independent",
+                   help="independent: two independent renders, each with its own variance; reference-floor: B is a "
+                        "high-spp reference of the same estimator and A's per-sample variance is raised to B's where lower")
+    p.add_argument("--reference-variance-floor", dest="policy", action="store_const", const="reference-floor",
+                   help="the same as --policy reference-floor")
     p.add_argument("--assume-variance-from", choices=("other",), default=None,
                    help="an image without per-sample variance borrows the other's (an approximation)")
     p.add_argument("--spp-a", type=int, default=None, help="spp of image A, where its file does not record it")

@@ -7,12 +7,12 @@ so any test in an environment where mcrt is installed can ask for the
     def test_my_renderer_matches_mitsuba(assert_same_image):
         mine = my_render(spp=1024, seed=1)            # a RenderResult with per-sample variance
         ref = mcrt.reference.load_reference(None, "near", 64, 8)
-        assert_same_image(mine, ref)                  # Welch tile test, Holm at FWER 0.01
+        assert_same_image(mine, ref, policy="reference-floor")  # Welch tile test, Holm at FWER 0.01
 
 When the renders differ the test fails with the report of
-:func:`mcrt.stats.assert_same_image`: how many tile tests were rejected,
-which tiles (with their pixel rows and columns), how large the difference is
-(t, p-value, relative difference), the smallest p-value and the whole-image
+:func:`assert_same_image`: how many tile tests were rejected, which tiles
+(with their pixel rows and columns), how large the difference is (t,
+p-value, relative difference), the smallest p-value and the whole-image
 difference; both means (``.npy``), the heat map of t (``.png``) and the full
 comparison (``.json``) are saved in the test's own folder,
 ``<tmp_path>/<test name>/`` (pytest keeps the last three runs' temporary
@@ -20,18 +20,80 @@ folders), or under ``--mcrt-save-dir DIR`` when that option is given (for CI
 artifacts). The fixture returns the :class:`mcrt.stats.Comparison` when the
 renders agree.
 
-Keyword arguments are those of :func:`mcrt.stats.assert_same_image`
-(``alpha``, ``tile``, ``channels``, ``correction``, ``name``). Each call in
+Keyword arguments are those of :func:`assert_same_image` (``policy``,
+``alpha``, ``tile``, ``channels``, ``correction``, ``name``). Each call in
 one test gets its own file names (``compare``, ``compare_2``, ...) unless
 ``name`` is given.
+
+The plugin is loaded by every pytest run in the environment, so NumPy and
+:mod:`mcrt.stats` are imported only when a comparison runs.
 """
 
 from __future__ import annotations
 
 import re
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import pytest
+
+if TYPE_CHECKING:
+    from mcrt.film import RenderResult
+    from mcrt.stats import Comparison
+
+__all__ = ["assert_same_image"]
+
+
+def assert_same_image(
+    a: RenderResult,
+    b: RenderResult,
+    *,
+    policy: str = "independent",
+    save_dir=None,
+    name: str = "compare",
+    **options,
+) -> Comparison:
+    """Assert that two renders agree under :func:`mcrt.stats.compare`.
+
+    ``a`` is the render under test and ``b`` the other one (the high-spp
+    reference under ``policy='reference-floor'``; see
+    :mod:`mcrt.stats.policy` for which policy to use when). Returns the
+    :class:`~mcrt.stats.Comparison` when they agree. Otherwise raises
+    ``AssertionError`` with the multi-line report of
+    :func:`mcrt.compare.report_lines`. ``options`` (``alpha``, ``tile``,
+    ``channels``, ``correction``) are those of :func:`mcrt.stats.compare`.
+    With ``save_dir`` a failure also saves the two means as
+    ``{name}_a.npy`` / ``{name}_b.npy``, the heat map ``{name}_heatmap.png``
+    and the report ``{name}.json`` there.
+    :class:`~mcrt.stats.StatsError` (unusable inputs) and ``ValueError``
+    (invalid options) propagate unchanged.
+    """
+    __tracebackhide__ = True
+    from mcrt.compare import report_lines
+    from mcrt.stats import compare
+
+    c = compare(a, b, policy=policy, **options)
+    if c.passed:
+        return c
+    lines = report_lines(c)
+    lines[0] = "renders differ: " + lines[0]
+    if save_dir is not None:
+        _save(c, a, b, Path(save_dir), name)
+        lines.append(f"saved means, heat map and report to {save_dir}/{name}_*")
+    raise AssertionError("\n".join(lines))
+
+
+def _save(c: Comparison, a: RenderResult, b: RenderResult, d: Path, name: str) -> None:
+    """The failure's files: both means (.npy), the heat map (.png, about 256 pixels wide) and the report (.json)."""
+    import numpy as np
+
+    from mcrt.compare import write_heatmap, write_json
+
+    d.mkdir(parents=True, exist_ok=True)
+    np.save(d / f"{name}_a.npy", a.mean)
+    np.save(d / f"{name}_b.npy", b.mean)
+    write_heatmap(c, d / f"{name}_heatmap.png", scale=max(1, 256 // max(c.shape[1], 1)))
+    write_json(c, d / f"{name}.json")
 
 
 def pytest_addoption(parser) -> None:
@@ -50,16 +112,14 @@ def _safe(nodeid: str) -> str:
     return re.sub(r"[^A-Za-z0-9_.-]+", "_", nodeid).strip("_")[:200]
 
 
-@pytest.fixture
-def assert_same_image(request, tmp_path):
+@pytest.fixture(name="assert_same_image")
+def _assert_same_image_fixture(request, tmp_path):
     """``assert_same_image(a, b, **kw)``: fail the test when renders ``a`` and ``b`` differ.
 
-    Wraps :func:`mcrt.stats.assert_same_image` with ``save_dir`` set to the
-    test's own folder, so a failing comparison leaves ``<name>_a.npy``,
+    Wraps :func:`assert_same_image` with ``save_dir`` set to the test's own
+    folder, so a failing comparison leaves ``<name>_a.npy``,
     ``<name>_b.npy``, ``<name>_heatmap.png`` and ``<name>.json`` behind.
     """
-    from mcrt.stats import assert_same_image as _assert
-
     root = request.config.getoption("--mcrt-save-dir", default=None)
     save_dir = Path(root) / _safe(request.node.nodeid) if root else tmp_path / _safe(request.node.name)
     used: dict[str, int] = {}
@@ -70,7 +130,7 @@ def assert_same_image(request, tmp_path):
         used[base] = used.get(base, 0) + 1
         stem = base if used[base] == 1 else f"{base}_{used[base]}"
         try:
-            return _assert(a, b, save_dir=save_dir, name=stem, **kwargs)
+            return assert_same_image(a, b, save_dir=save_dir, name=stem, **kwargs)
         except AssertionError as e:
             # Re-raised here so that pytest shows the caller's line and the report, not the library's source.
             raise AssertionError(str(e)) from None

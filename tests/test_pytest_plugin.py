@@ -78,6 +78,8 @@ def test_two_failures_in_one_test(assert_same_image, tmp_path):
 def test_options_pass_through(assert_same_image):
     c = assert_same_image(render(1), render(2), alpha=0.05, tile=4, channels="luminance", correction="bh")
     assert (c.alpha, c.tile, c.channels, c.correction, c.n_tests) == (0.05, 4, "luminance", "bh", 64)
+    assert c.policy == "independent"
+    assert assert_same_image(render(1), render(2), policy="reference-floor").policy == "reference-floor"
 ''')
     # No -p option: the plugin must come from the installed pytest11 entry point.
     result = pytester.runpytest_subprocess("-p", "no:cacheprovider")

@@ -19,21 +19,27 @@ import pytest
 from PIL import Image
 from scipy import stats as sps
 
+from mcrt.compare import compare_files, heatmap_rgb, write_heatmap, write_json
+from mcrt.exitcodes import EXIT_FAILED as DIFFERENT
+from mcrt.exitcodes import EXIT_OK as CONSISTENT
+from mcrt.exitcodes import EXIT_UNUSABLE as UNUSABLE
 from mcrt.film import Moments, RenderResult
+from mcrt.pytest_plugin import assert_same_image
 from mcrt.stats import (
-    CONSISTENT,
-    DIFFERENT,
-    UNUSABLE,
+    POLICIES,
     StatsError,
     ZeroPdfError,
     adjust_p_values,
-    assert_same_image,
     binomial_interval,
     chi2_gof,
-    compare_files,
+    compare,
     compare_images,
     floor_variance,
     reject,
+    tile_box,
+    tile_counts,
+    tile_means,
+    tile_sums,
 )
 
 # --------------------------------------------------------------------------
@@ -404,16 +410,18 @@ def test_heatmap_and_to_dict(tmp_path):
     # alpha = 0.01. Red where A is brighter, failing tile outlined in black.
     a, b = biased_pair()
     c = compare_images(a, b, alpha=0.01, tile=8)
-    path = c.heatmap(tmp_path / "heat.png", scale=2)
+    path = write_heatmap(c, tmp_path / "sub" / "heat.png", scale=2)
     img = np.asarray(Image.open(path))
     assert img.shape == (128, 128, 3)
     assert img[2 * 28, 2 * 44].tolist() == [255, 0, 0]  # saturated red inside tile (3, 5)
     assert img[2 * 24, 2 * 44].tolist() == [0, 0, 0]  # its top edge
     assert img[2 * 28, 2 * 44 - 16].max() == 255  # the neighbour is not outlined
+    assert np.array_equal(img, heatmap_rgb(c, scale=2))
     d = c.to_dict()
     text = json.dumps(d, allow_nan=False)
     assert json.loads(text)["failing_tiles"][0]["box"] == [24, 32, 40, 48]
-    assert d["passed"] is False and d["n_tests"] == 192 and d["error_rate"] == "FWER"
+    assert d["passed"] is False and d["n_tests"] == 192 and d["error_rate"] == "FWER" and d["policy"] == "independent"
+    assert json.loads(write_json(c, tmp_path / "sub" / "c.json").read_text()) == json.loads(text)
 
 
 @pytest.fixture
@@ -487,6 +495,10 @@ def test_compare_reference_variance_floor_from_the_command_line(fake_imageio, ca
     capsys.readouterr()
     assert main(["compare", "a.exr", "ref.exr", "--reference-variance-floor"]) == CONSISTENT
     assert "raised to image B's where lower" in capsys.readouterr().out
+    assert main(["compare", "a.exr", "ref.exr", "--policy", "reference-floor"]) == CONSISTENT
+    assert "policy reference-floor" in capsys.readouterr().out
+    assert main(["compare", "a.exr", "ref.exr", "--policy", "independent"]) == DIFFERENT
+    capsys.readouterr()
     # The options the error messages name exist on the command line.
     assert main(["compare", "nospp.png", "ref.exr", "--assume-variance-from", "other"]) == UNUSABLE
     assert "--spp-a" in capsys.readouterr().err
@@ -506,6 +518,14 @@ def test_assert_same_image(tmp_path):
     for f in ("room_a.npy", "room_b.npy", "room_heatmap.png", "room.json"):
         assert (tmp_path / f).exists()
     assert np.array_equal(np.load(tmp_path / "room_a.npy"), a.mean)
+    # policy= passes through: a render whose variance came out low fails against a reference unless floored.
+    low, ref = synth(121, mean_image(32, 32), 256), synth(122, mean_image(32, 32), 16384)
+    low.variance = low.variance * 0.05
+    with pytest.raises(AssertionError, match="policy reference-floor"):
+        assert_same_image(mean_shift(low, 1.05), ref, policy="reference-floor")
+    with pytest.raises(AssertionError):
+        assert_same_image(low, ref)
+    assert assert_same_image(low, ref, policy="reference-floor").policy == "reference-floor"
 
 
 def test_compare_files_with_real_exr_files(tmp_path, capsys):
@@ -534,3 +554,56 @@ def test_floor_variance_raises_only_lower_variances():
         floor_variance(small, RenderResult(mean=big.mean, variance=None, spp=1, seed=0, max_depth=0, renderer="x"))
     with pytest.raises(StatsError, match="differ in shape"):
         floor_variance(small, synth(3, mean_image(8, 16), 16))
+
+
+def mean_shift(r: RenderResult, factor: float) -> RenderResult:
+    return RenderResult(r.mean * np.float32(factor), r.variance, r.spp, r.seed, r.max_depth, r.renderer)
+
+
+# --------------------------------------------------------------------------
+# Comparison policy
+# --------------------------------------------------------------------------
+
+
+def test_policy_reference_floor_is_the_floored_comparison():
+    # alpha = 0.01, seeds 121 and 122 (as in the command-line test above): A's variance estimate came out low (x0.05).
+    mu = mean_image(32, 32)
+    a, ref = synth(121, mu, 256), synth(122, mu, 16384)
+    a.variance = a.variance * 0.05
+    plain = compare(a, ref, alpha=0.01)
+    assert plain.policy == "independent" and not plain.passed
+    assert np.array_equal(plain.t, compare_images(a, ref, alpha=0.01).t)
+    floored = compare(a, ref, policy="reference-floor", alpha=0.01, tile=4, correction="bh")
+    by_hand = compare_images(floor_variance(a, ref), ref, alpha=0.01, tile=4, correction="bh")
+    assert floored.passed and floored.policy == "reference-floor"
+    assert np.array_equal(floored.t, by_hand.t) and np.array_equal(floored.p_adjusted, by_hand.p_adjusted)
+    assert "policy reference-floor" in floored.summary() and floored.to_dict()["policy"] == "reference-floor"
+    assert np.array_equal(a.variance, synth(121, mu, 256).variance * 0.05)  # the caller's render is not modified
+    with pytest.raises(ValueError, match="policy must be one of independent, reference-floor"):
+        compare(a, ref, policy="floor")
+
+
+def test_command_line_policies_are_the_policies():
+    from mcrt.cli import build_parser
+
+    sub = next(a for a in build_parser()._actions if a.dest == "command").choices["compare"]
+    choices = next(a for a in sub._actions if a.option_strings == ["--policy"]).choices
+    assert tuple(choices) == tuple(POLICIES)
+
+
+# --------------------------------------------------------------------------
+# Tiles
+# --------------------------------------------------------------------------
+
+
+def test_tile_sums_means_counts_and_boxes_with_partial_and_whole_tiles():
+    x = np.arange(5 * 7 * 2, dtype=np.float64).reshape(5, 7, 2)
+    s = tile_sums(x, 3)
+    assert s.shape == (2, 3, 2)
+    assert np.array_equal(s[1, 2], x[3:5, 6:7].sum(axis=(0, 1)))  # the bottom-right partial tile
+    assert tile_counts(5, 7, 3).tolist() == [[9, 9, 3], [6, 6, 2]]
+    assert np.allclose(tile_means(x, 3)[1, 2], x[3:5, 6:7].mean(axis=(0, 1)))
+    assert np.allclose(tile_means(x, 0)[0, 0], x.mean(axis=(0, 1)))  # tile 0: the whole image
+    assert tile_sums(x[:, :, 0], 0).shape == (1, 1)
+    assert np.allclose(tile_means(x[:4, :6], 2), x[:4, :6].reshape(2, 2, 3, 2, 2).mean(axis=(1, 3)))  # block means
+    assert tile_box(5, 7, 3, 1, 2) == (3, 5, 6, 7) and tile_box(5, 7, 0, 0, 0) == (0, 5, 0, 7)
