@@ -436,6 +436,20 @@ def test_tonemap_known_values():
     assert tonemap(np.full((1, 1, 3), 1.0), exposure=-1.0)[0, 0].tolist() == [188] * 3
 
 
+def test_srgb_curve_both_ways_and_its_slope():
+    x = np.concatenate([np.linspace(0.0, 0.01, 101), np.linspace(0.01, 1.0, 1001)])
+    np.testing.assert_allclose(imageio.srgb_eotf(imageio.srgb_oetf(x)), x, rtol=1e-12, atol=1e-15)
+    assert imageio.srgb_oetf(0.5) == pytest.approx(1.055 * 0.5 ** (1 / 2.4) - 0.055)
+    assert imageio.srgb_eotf(0.04) == pytest.approx(0.04 / 12.92) and imageio.srgb_eotf(1.0) == pytest.approx(1.0)
+    v, h = np.linspace(0.001, 0.999, 500), 1e-6
+    numeric = (imageio.srgb_eotf(v + h) - imageio.srgb_eotf(v - h)) / (2 * h)
+    np.testing.assert_allclose(imageio.srgb_eotf_slope(v), numeric, rtol=1e-4)
+    with np.errstate(all="raise"):  # negative and NaN inputs: the linear segment, NaN; never a warning
+        out = imageio.srgb_eotf(np.array([-0.5, np.nan])), imageio.srgb_oetf(np.array([-0.5, np.nan]))
+    assert out[0][0] == pytest.approx(-0.5 / 12.92) and out[1][0] == pytest.approx(-0.5 * 12.92)
+    assert np.isnan(out[0][1]) and np.isnan(out[1][1])
+
+
 def test_write_png_preview(tmp_path):
     img = gradient() / 600.0
     img[1, 1, 0] = np.nan

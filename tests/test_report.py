@@ -1,8 +1,8 @@
-"""Convergence reports: metrics, slope fit, a tiny end-to-end report, and the HTML in a real browser.
+"""Convergence reports: image metrics, slope fit, a tiny end-to-end report, the HTML in a real browser, and the import graph.
 
 The end-to-end report is tiny (16x16 pixels, spp 1, 4, 16, one seed, mcrt
 and Mitsuba, against a 256-spp Mitsuba reference rendered into a temporary
-cache), so the file runs in well under a minute on two CPU cores.
+cache), so that the file stays quick.
 """
 
 from __future__ import annotations
@@ -20,11 +20,12 @@ import numpy as np
 import pytest
 
 import mcrt
+from mcrt import metrics as M
 from mcrt.report import REPORT_FILES, SCHEMA, preset_config, run_report
-from mcrt.report import metrics as M
 from mcrt.report.config import RendererSpec, parse_ladder, render_seed
 from mcrt.report.data import MEASUREMENT_KEYS, TOP_KEYS
 from mcrt.report.run import run_ladder
+from mcrt.report.slopes import fit_slope
 
 # Fixed seed: the synthetic test data are arbitrary but must be the same every run.
 RNG_SEED = 20240611
@@ -62,6 +63,20 @@ def test_relmse_epsilon():
 def test_metrics_reject_mismatched_shapes():
     with pytest.raises(ValueError):
         M.rmse(np.zeros((2, 2, 3)), np.zeros((2, 3, 3)))
+    with pytest.raises(ValueError):
+        M.rmse(np.zeros((2, 2, 3)), np.zeros((2, 2, 3)), mask=np.ones((2, 3), bool))
+
+
+def test_rmse_over_a_mask_and_relmse_per_pixel():
+    ref = np.zeros((2, 2, 3))
+    x = ref.copy()
+    x[0, 0], x[1, 1] = 1.0, np.nan  # the NaN pixel is masked out
+    mask = np.ones((2, 2), bool)
+    mask[1, 1] = False
+    assert M.rmse(ref, x, mask=mask) == pytest.approx(math.sqrt(1 / 3))
+    emap = M.relmse_map(ref, np.nan_to_num(x))
+    assert emap.shape == (2, 2) and emap[0, 0] == pytest.approx(1 / M.RELMSE_EPS) and emap[0, 1] == 0
+    assert M.relmse(ref, np.nan_to_num(x)) == pytest.approx(emap.mean())
 
 
 def test_ssim_of_identical_images_is_one():
@@ -91,13 +106,13 @@ def test_flip_of_identical_images_is_zero():
 
 def test_fit_slope_recovers_minus_one_half():
     n = np.repeat(2.0 ** np.arange(11), 3)  # 1 .. 1024 spp, three seeds each
-    exact = M.fit_slope(n, 0.7 / np.sqrt(n))
+    exact = fit_slope(n, 0.7 / np.sqrt(n))
     assert exact.slope == pytest.approx(-0.5) and exact.intercept == pytest.approx(math.log(0.7))
-    assert M.fit_slope(n, 1.0 / n).slope == pytest.approx(-1.0)
+    assert fit_slope(n, 1.0 / n).slope == pytest.approx(-1.0)
     # Noisy 1/sqrt(n) data: every fit is close, and the 95 % interval holds -1/2
     # in about 95 % of 400 independent data sets (binomial sd 1.1 %).
     g = rng()
-    fits = [M.fit_slope(n, 0.7 / np.sqrt(n) * g.lognormal(0.0, 0.15, n.shape)) for _ in range(400)]
+    fits = [fit_slope(n, 0.7 / np.sqrt(n) * g.lognormal(0.0, 0.15, n.shape)) for _ in range(400)]
     assert all(abs(f.slope + 0.5) < 0.06 and f.n == 33 and f.level == 0.95 for f in fits)
     assert all(f.ci_high - f.ci_low < 0.1 for f in fits)
     coverage = np.mean([f.contains(-0.5) for f in fits])
@@ -105,10 +120,10 @@ def test_fit_slope_recovers_minus_one_half():
 
 
 def test_fit_slope_with_too_few_points():
-    two = M.fit_slope([1, 4], [1.0, 0.5])
+    two = fit_slope([1, 4], [1.0, 0.5])
     assert two.slope == pytest.approx(-0.5) and math.isinf(two.ci_high)
-    assert math.isnan(M.fit_slope([1], [1.0]).slope)
-    assert M.fit_slope([1, 2, 4, 8], [1.0, 0.0, -1.0, 0.25]).n == 2  # non-positive values dropped
+    assert math.isnan(fit_slope([1], [1.0]).slope)
+    assert fit_slope([1, 2, 4, 8], [1.0, 0.0, -1.0, 0.25]).n == 2  # non-positive values dropped
 
 
 # --------------------------------------------------------------------------
@@ -137,7 +152,7 @@ def test_presets():
     scene = mcrt.load_scene(mcrt.CANONICAL)
     canonical = preset_config("canonical", scene).check()
     assert canonical.spp_ladder == tuple(2**i for i in range(11)) and len(canonical.seeds) == 3
-    assert {"mcrt", "mitsuba"} <= set(canonical.renderers)
+    assert canonical.renderers == ("mcrt", "mitsuba", "plugin")
     course = preset_config("course2023", scene).check()
     assert (course.width, course.height, course.max_depth) == (800, 800, 8)
     assert course.spp_ladder[-1] == 100 and course.renderers == ("mcrt:k30", "mcrt:k1")
@@ -225,8 +240,8 @@ def test_tiny_report_data_json(tiny_report, tiny_config):
         assert m["rmse"] == pytest.approx(math.sqrt(m["mse"]))
     prov = d["provenance"]
     assert prov["command"] == "pytest tiny report" and prov["backend"] == "llvm"
-    assert prov["machine"]["cpu"] and prov["machine"]["cores"] >= 1
-    assert {"mcrt", "drjit", "mitsuba", "scikit-image", "flip-evaluator", "matplotlib"} <= set(prov["versions"])
+    assert prov["machine"]["cpu"] and prov["machine"]["cores"] >= 1 and prov["date"] and len(prov["source_hash"]) == 16
+    assert {"mcrt", "drjit", "mitsuba", "python", "scikit-image", "flip-evaluator", "matplotlib"} <= set(prov["versions"])
     ref = d["reference"]
     assert ref["source"] in ("rendered", "cached render") and ref["spp"] == 256 and ref["floor"]["known"]
     assert d["conventions"]["relmse_eps"] == M.RELMSE_EPS
@@ -334,7 +349,7 @@ def test_chromium_check_catches_a_broken_image(tmp_path):
 def test_cached_renders_are_keyed_by_the_source(tmp_path, monkeypatch):
     """A change to mcrt's code changes the key of cached references and grading renders (not only a version bump)."""
     import mcrt.provenance
-    from mcrt.grade.expected import _cache_key
+    from mcrt.grade.expected import _cache_key, grading_settings
     from mcrt.report.run import _versions_key
     from mcrt.scene import load_scene
 
@@ -344,7 +359,86 @@ def test_cached_renders_are_keyed_by_the_source(tmp_path, monkeypatch):
     assert mcrt.provenance.source_hash.__wrapped__(tmp_path) != before
 
     scene = load_scene()
-    keys = [_versions_key(), _cache_key(scene, "near", 8, 8, 8, 4, 1, "none")]
+    s = grading_settings(scene, "near", 8, 8, 8, 4, 1)
+    keys = [_versions_key(), _cache_key(scene, s, "none")]
+    assert _cache_key(scene, replace(s, seed=2), "none") != keys[1]  # and by every render setting
     monkeypatch.setattr(mcrt.provenance, "source_hash", lambda: "0" * 16)
     assert _versions_key() != keys[0]
-    assert _cache_key(scene, "near", 8, 8, 8, 4, 1, "none") != keys[1]
+    assert _cache_key(scene, s, "none") != keys[1]
+
+
+# --------------------------------------------------------------------------
+# The import graph
+# --------------------------------------------------------------------------
+
+
+def import_graph(root: Path) -> dict[str, set[str]]:
+    """Module -> the modules of the package at ``root`` it imports, at module level or inside functions.
+
+    ``from pkg import name`` counts as importing ``pkg`` (its ``__init__``
+    runs, and ``name`` may be defined there) and, when ``pkg.name`` is a
+    module, that module too.
+    """
+    import ast
+
+    files = {}
+    for path in sorted(root.rglob("*.py")):
+        parts = path.relative_to(root.parent).with_suffix("").parts
+        files[".".join(parts[:-1] if parts[-1] == "__init__" else parts)] = path
+    graph: dict[str, set[str]] = {}
+    for name, path in files.items():
+        package = name if path.name == "__init__.py" else name.rpartition(".")[0]
+        edges = set()
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.Import):
+                edges |= {a.name for a in node.names}
+            elif isinstance(node, ast.ImportFrom):
+                base = node.module or ""
+                if node.level:
+                    up = package.split(".")[: len(package.split(".")) - node.level + 1]
+                    base = ".".join(up + ([base] if base else []))
+                edges |= {base} | {f"{base}.{a.name}" for a in node.names}
+        graph[name] = {e for e in edges if e in files and e != name}
+    return graph
+
+
+def cycles_through(graph: dict[str, set[str]], prefixes: tuple[str, ...]) -> list[list[str]]:
+    """Strongly connected groups of two or more modules (import cycles) that hold a module starting with ``prefixes``."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    out = []
+
+    def visit(v: str) -> None:  # Tarjan
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        for w in graph[v]:
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in stack:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            group = []
+            while True:
+                w = stack.pop()
+                group.append(w)
+                if w == v:
+                    break
+            if len(group) > 1 and any(m.startswith(prefixes) for m in group):
+                out.append(sorted(group))
+
+    for v in sorted(graph):
+        if v not in index:
+            visit(v)
+    return out
+
+
+def test_grade_and_report_have_no_import_cycles():
+    graph = import_graph(Path(mcrt.__file__).resolve().parent)
+    assert "mcrt.grade.batch" in graph and "mcrt.report.run" in graph
+    assert cycles_through(graph, ("mcrt.grade", "mcrt.report")) == []
+    # The check sees a cycle when there is one: a function-level import back from run to the package.
+    graph["mcrt.report.run"] = graph["mcrt.report.run"] | {"mcrt.report"}
+    graph["mcrt.report"] = graph["mcrt.report"] | {"mcrt.report.run"}
+    assert cycles_through(graph, ("mcrt.grade", "mcrt.report")) == [["mcrt.report", "mcrt.report.run"]]

@@ -1,10 +1,12 @@
 """A grading worker process: ``python -m mcrt.grade._worker`` (started by :mod:`mcrt.grade.batch`).
 
 Protocol on stdin/stdout, each message a little-endian 8-byte length and a
-pickle: first ``(context, out_dir, memory_mb)``, answered by ``"ready"`` once
-the worker has imported everything; then ``(index, submission)`` per student
-(``None`` to stop), each answered by ``(index, result)``.
-Anything the libraries print goes to stderr, never into the channel.
+pickle (:func:`write_message`, :func:`read_message`): first
+``(context, out_dir, memory_mb)``, answered by ``"ready"`` once the worker
+has imported everything; then ``(index, submission)`` per student (``None``
+to stop), each answered by ``(index, result)``, the result of
+:func:`grade_and_write`. Anything the libraries print goes to stderr, never
+into the channel.
 """
 
 from __future__ import annotations
@@ -13,9 +15,16 @@ import os
 import pickle
 import struct
 import sys
+from pathlib import Path
+
+from mcrt.grade.expected import Context
+from mcrt.grade.grader import STATUS_ERROR, StudentResult, error_result, format_exception, grade_submission
+from mcrt.grade.report import write_student
+from mcrt.grade.submissions import Submission
 
 
-def _read(f):
+def read_message(f):
+    """The next message from ``f``, or the class EOFError when the stream ends first."""
     head = f.read(8)
     if len(head) < 8:
         return EOFError
@@ -26,10 +35,27 @@ def _read(f):
     return pickle.loads(data)
 
 
-def _write(f, obj) -> None:
+def write_message(f, obj) -> None:
     data = pickle.dumps(obj, protocol=pickle.HIGHEST_PROTOCOL)
     f.write(struct.pack("<Q", len(data)) + data)
     f.flush()
+
+
+def grade_and_write(sub: Submission, ctx: Context, out: Path) -> StudentResult:
+    """Grade one student and write their results.json and feedback.html; a crash of the grader is a graded failure."""
+    try:
+        res = grade_submission(sub, ctx)
+        res.details.setdefault("reference_source", ctx.references[res.details.get("orientation", {}).get("camera", ctx.assignment.camera)].source)
+    except Exception as e:  # noqa: BLE001 - a bug in the grader: graded failure, never a crash of the batch
+        res = error_result(sub.student, ctx.assignment, STATUS_ERROR,
+                           f"the grader failed on this submission ({type(e).__name__}: {' '.join(str(e).split())[:200]})",
+                           format_exception())
+    try:
+        write_student(res, ctx.assignment, out)
+    except Exception as e:  # noqa: BLE001 - the result still reaches grades.csv
+        res.notes.append(f"could not write feedback: {e}")
+    res.figures = {}
+    return res
 
 
 def main() -> int:  # pragma: no cover - runs in a child process
@@ -37,7 +63,7 @@ def main() -> int:  # pragma: no cover - runs in a child process
     os.dup2(2, 1)
     sys.stdout = sys.stderr
     inp = sys.stdin.buffer
-    setup = _read(inp)
+    setup = read_message(inp)
     if setup is EOFError:
         return 0
     ctx, out, memory_mb = setup
@@ -48,18 +74,13 @@ def main() -> int:  # pragma: no cover - runs in a child process
         resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
     except (ImportError, ValueError, OSError):
         pass
-    from pathlib import Path
-
-    from mcrt.grade.batch import _grade_and_write
-
-    _write(chan, "ready")  # the parent starts a student's clock only now
+    write_message(chan, "ready")  # the parent starts a student's clock only now
     while True:
-        task = _read(inp)
+        task = read_message(inp)
         if task is EOFError or task is None:
             return 0
         idx, sub = task
-        res = _grade_and_write(sub, ctx, Path(out))
-        _write(chan, (idx, res))
+        write_message(chan, (idx, grade_and_write(sub, ctx, Path(out))))
 
 
 if __name__ == "__main__":

@@ -40,10 +40,6 @@ from typing import Any
 
 from mcrt.scene import SCENE_DIR, Scene, SceneError, load_scene
 
-REPO_ROOT = Path(__file__).resolve().parent.parent.parent
-ASSIGNMENT_DIR = REPO_ROOT / "reference" / "assignments"
-EXAMPLE = ASSIGNMENT_DIR / "course2023.toml"
-
 VISIBILITIES = ("visible", "hidden", "after_due_date", "after_published")
 REFERENCE_SOURCES = ("auto", "mitsuba", "mcrt")
 

@@ -28,15 +28,10 @@ from dataclasses import dataclass, field
 from multiprocessing.connection import wait
 from pathlib import Path
 
+from mcrt.grade._worker import grade_and_write, read_message, write_message
 from mcrt.grade.assignment import Assignment
 from mcrt.grade.expected import Context, prepare_context
-from mcrt.grade.grader import (
-    STATUS_ERROR,
-    STATUS_TIMEOUT,
-    StudentResult,
-    error_result,
-    grade_submission,
-)
+from mcrt.grade.grader import STATUS_ERROR, STATUS_TIMEOUT, StudentResult, error_result
 from mcrt.grade.report import write_class, write_student
 from mcrt.grade.submissions import Submission, discover
 
@@ -98,30 +93,10 @@ def grade_class(submissions: str | os.PathLike, assignment: Assignment, out: str
 # --------------------------------------------------------------------------
 
 
-def _grade_and_write(sub: Submission, ctx: Context, out: Path) -> StudentResult:
-    try:
-        res = grade_submission(sub, ctx)
-        res.details.setdefault("reference_source", ctx.references[res.details.get("orientation", {}).get("camera", ctx.assignment.camera)].source)
-    except Exception as e:  # noqa: BLE001 - a bug in the grader: graded failure, never a crash of the batch
-        from mcrt.grade.grader import format_exception
-
-        res = error_result(sub.student, ctx.assignment, STATUS_ERROR,
-                           f"the grader failed on this submission ({type(e).__name__}: {' '.join(str(e).split())[:200]})",
-                           format_exception())
-    try:
-        write_student(res, ctx.assignment, out)
-    except Exception as e:  # noqa: BLE001 - the result still reaches grades.csv
-        res.notes.append(f"could not write feedback: {e}")
-    res.figures = {}
-    return res
-
-
 class _Worker:
     """One ``python -m mcrt.grade._worker`` process and the student it is grading."""
 
     def __init__(self, ctx: Context, out: Path, memory_mb: int, log_file):
-        from mcrt.grade._worker import _write
-
         env = dict(os.environ, **_THREAD_ENV)
         root = str(Path(__file__).resolve().parent.parent.parent)
         env["PYTHONPATH"] = root + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
@@ -129,8 +104,7 @@ class _Worker:
                                      stdout=subprocess.PIPE, stderr=log_file, env=env, cwd=root)
         self.task: tuple[int, Submission] | None = None
         self.started = 0.0
-        self._write = _write
-        self._write(self.proc.stdin, (ctx, str(out), memory_mb))
+        write_message(self.proc.stdin, (ctx, str(out), memory_mb))
         # Wait for the worker's imports, so that they do not count against the first student's time.
         if not wait([self.proc.stdout], timeout=STARTUP_TIMEOUT) or self.receive() != "ready":
             self.kill()
@@ -139,12 +113,10 @@ class _Worker:
     def give(self, idx: int, sub: Submission) -> None:
         self.task = (idx, sub)
         self.started = time.monotonic()
-        self._write(self.proc.stdin, (idx, sub))
+        write_message(self.proc.stdin, (idx, sub))
 
     def receive(self):
-        from mcrt.grade._worker import _read
-
-        return _read(self.proc.stdout)
+        return read_message(self.proc.stdout)
 
     def kill(self) -> None:
         with contextlib.suppress(Exception):
@@ -157,7 +129,7 @@ class _Worker:
 
     def stop(self) -> None:
         with contextlib.suppress(Exception):
-            self._write(self.proc.stdin, None)
+            write_message(self.proc.stdin, None)
             self.proc.stdin.close()
         try:
             self.proc.wait(5)
@@ -182,7 +154,7 @@ def run_pool(subs: list[Submission], ctx: Context, out: Path, *, jobs: int, time
 
     if jobs <= 0:
         for i, s in enumerate(subs):
-            done(i, _grade_and_write(s, ctx, out))
+            done(i, grade_and_write(s, ctx, out))
         return [results[i] for i in range(n)]
 
     pending = list(enumerate(subs))[::-1]

@@ -19,6 +19,7 @@ import numpy as np
 from scipy import stats as _sps
 
 from mcrt.grade.score import LUMINANCE, tile_sum
+from mcrt.imageio import ImageError, read_image, srgb_eotf, srgb_oetf
 
 MAX_FILE_BYTES = 1 << 30
 
@@ -68,8 +69,6 @@ def _format(path: str, img: np.ndarray, linear_png: bool) -> str:
 
 def read_renders(paths: list[str], linear_png: bool) -> tuple[Loaded | None, str | None]:
     """Read one or two renders; (None, message) when the first cannot be used."""
-    from mcrt.imageio import ImageError, read_image
-
     images, files, notes = [], [], []
     fmt, spp, cam = "float", None, None
     for k, p in enumerate(paths[:2]):
@@ -283,22 +282,12 @@ def detect_orientation(img: np.ndarray, refs: dict[str, np.ndarray], camera: str
 # --------------------------------------------------------------------------
 
 
-def srgb_decode(v: np.ndarray) -> np.ndarray:
-    v = np.maximum(v, 0.0)
-    return np.where(v <= 0.04045, v / 12.92, ((v + 0.055) / 1.055) ** 2.4)
-
-
-def srgb_encode(x: np.ndarray) -> np.ndarray:
-    x = np.maximum(x, 0.0)
-    return np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(np.maximum(x, 0.0031308), 1 / 2.4) - 0.055)
-
-
 #: name -> (decoder applied to the submission, description)
 ENCODINGS = {
     "linear": (lambda x: x, "linear"),
-    "srgb": (srgb_decode, "sRGB-encoded"),
+    "srgb": (srgb_eotf, "sRGB-encoded"),
     "gamma2.2": (lambda x: np.maximum(x, 0.0) ** 2.2, "gamma-encoded (x^(1/2.2))"),
-    "png-linear": (srgb_encode, "linear values in an sRGB PNG"),
+    "png-linear": (srgb_oetf, "linear values in an sRGB PNG"),
 }
 
 

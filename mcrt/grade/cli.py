@@ -3,9 +3,10 @@
     mcrt grade SUBMISSIONS --assignment assignment.toml --out DIR [--jobs N] [--timeout S]
                [--mode image|code] [--cache DIR] [--single [--student ID]] [--prepare]
 
-Exit codes: 0 every student was graded (whatever their scores), 1 some
-students could not be graded (their results.json says why, with score 0),
-2 unusable input (a bad assignment file, no SUBMISSIONS, a bad option).
+Exit codes (those of every mcrt command, mcrt.exitcodes): 0 every student
+was graded (whatever their scores), 1 some students could not be graded
+(their results.json says why, with score 0), 2 unusable input (a bad
+assignment file, no SUBMISSIONS, a bad option).
 """
 
 from __future__ import annotations
@@ -14,7 +15,7 @@ import argparse
 import sys
 from pathlib import Path
 
-EXIT_OK, EXIT_SOME_FAILED, EXIT_UNUSABLE = 0, 1, 2
+from mcrt.exitcodes import EXIT_FAILED, EXIT_OK, EXIT_UNUSABLE
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -92,7 +93,7 @@ def run(args) -> int:
         mean = f"{s['mean']:.1f}" if s.get("mean") is not None else "-"
         print(f"graded {s['graded']} of {s['students']} students in {res.elapsed:.1f} s; mean {mean} of {s['max_score']:g}; "
               f"wrote {Path(args.out) / 'grades.csv'} and {Path(args.out) / 'summary.md'}")
-    return EXIT_OK if res.all_graded else EXIT_SOME_FAILED
+    return EXIT_OK if res.all_graded else EXIT_FAILED
 
 
 def _prepare(a, args, log) -> int:

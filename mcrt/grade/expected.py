@@ -2,7 +2,9 @@
 
 :func:`prepare_context` builds a :class:`Context` once per grading run, in
 the grading process, before any student is graded; workers receive it
-ready-made and never render (they do not even import Dr.Jit).
+ready-made (the one render a worker may make is the small correct render
+that tells too few samples from a noisy bug, in
+:mod:`mcrt.grade.grader`).
 
 * References, one per camera of the scene, at the grade resolution: the
   committed Mitsuba reference (:func:`mcrt.reference.load_reference`) when
@@ -21,8 +23,8 @@ ready-made and never render (they do not even import Dr.Jit).
 
 Renders are cached as OpenEXR files (mean and per-sample variance) under the
 cache folder, keyed by the scene's content hash and every setting that
-changes the image (camera, size, max depth, spp, seed, mutant, mcrt version),
-so each is rendered once per machine.
+changes the image (the render settings with the seed, the mutant, mcrt's
+version and source hash), so each is rendered once per machine.
 """
 
 from __future__ import annotations
@@ -30,16 +32,15 @@ from __future__ import annotations
 import hashlib
 import json
 import os
-import sys
 import time
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
 
 from mcrt.film import RenderResult
 from mcrt.grade.assignment import Assignment
-from mcrt.scene import Lambertian, Mirror, Scene
+from mcrt.scene import Lambertian, Mirror, RenderSettings, Scene
 
 CACHE_ENV = "MCRT_CACHE"
 DIRECT_SPP = 256  # spp of the max-depth-2 images used to describe regions (mcrt fallback)
@@ -115,22 +116,29 @@ def downsample_result(r: RenderResult, k: int) -> RenderResult:
 # --------------------------------------------------------------------------
 
 
-def _cache_key(scene: Scene, camera: str, w: int, h: int, max_depth: int, spp: int, seed: int, mutant: str) -> str:
+def grading_settings(scene: Scene, camera: str, w: int, h: int, max_depth: int, spp: int, seed: int) -> RenderSettings:
+    """The settings of every mcrt render grading makes: one shadow ray per diffuse vertex, the scene's Russian roulette."""
+    return scene.settings(camera=camera, width=w, height=h, spp=spp, max_depth=max_depth, light_samples=1, seed=seed)
+
+
+def _cache_key(scene: Scene, s: RenderSettings, mutant: str) -> str:
     import mcrt
     from mcrt.provenance import source_hash
 
-    desc = {"scene": scene.content_hash(), "camera": camera, "w": w, "h": h, "max_depth": max_depth, "spp": spp,
-            "seed": seed, "mutant": mutant, "mcrt": mcrt.__version__, "source": source_hash(), "light_samples": 1, "rr_depth": 5}
+    desc = {"scene": scene.content_hash(), "settings": asdict(s), "mutant": mutant, "mcrt": mcrt.__version__,
+            "source": source_hash()}
     digest = hashlib.sha256(json.dumps(desc, sort_keys=True).encode()).hexdigest()[:12]
-    return f"{scene.name}_{camera}_{w}x{h}_d{max_depth}_{mutant}_{spp}spp_s{seed}_{digest}"
+    return f"{scene.name}_{s.camera}_{s.width}x{s.height}_d{s.max_depth}_{mutant}_{s.spp}spp_s{s.seed}_{digest}"
 
 
 def cached_render(scene: Scene, camera: str, w: int, h: int, max_depth: int, spp: int, seed: int, mutant: str,
                   cache_dir: Path, log=None) -> RenderResult:
-    """An mcrt render from the cache, rendered and stored on a miss (``mutant='none'``: no bug)."""
+    """An mcrt render (:func:`grading_settings`) from the cache, rendered and stored on a miss (``mutant='none'``: no bug)."""
     from mcrt.imageio import ImageError, read_exr, write_exr
+    from mcrt.render import render
 
-    path = Path(cache_dir) / (_cache_key(scene, camera, w, h, max_depth, spp, seed, mutant) + ".exr")
+    s = grading_settings(scene, camera, w, h, max_depth, spp, seed)
+    path = Path(cache_dir) / (_cache_key(scene, s, mutant) + ".exr")
     if path.exists():
         try:
             r = read_exr(path)
@@ -138,11 +146,8 @@ def cached_render(scene: Scene, camera: str, w: int, h: int, max_depth: int, spp
                 return r
         except ImageError:
             pass
-    from mcrt.tracer import render
-
     t0 = time.perf_counter()
-    r = render(scene, camera, spp, seed, max_depth, width=w, height=h, progress=False,
-               mutants=() if mutant == "none" else (mutant,))
+    r = render(scene, s, seed=seed, progress=False, mutants=() if mutant == "none" else (mutant,))
     if log:
         log(f"  rendered {camera} {w}x{h} d{max_depth} {mutant} at {spp} spp in {time.perf_counter() - t0:.1f} s")
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -156,10 +161,8 @@ def cached_render(scene: Scene, camera: str, w: int, h: int, max_depth: int, spp
 
 def _committed(scene: Scene, camera: str, w: int, h: int, max_depth: int) -> RenderResult | None:
     """The committed Mitsuba reference at (w, h) or at an integer multiple, box-filtered down."""
-    try:
-        from mcrt.reference import load_reference
-    except ImportError:
-        return None
+    from mcrt.reference import load_reference
+
     for k in (1, 2, 3, 4, 5, 6, 8, 10, 12, 16):
         if w * k > 2048:
             break
@@ -340,10 +343,6 @@ def surface_labels(scene: Scene, camera: str, width: int, height: int, sub: int 
     return np.argmax(counts, axis=2).astype(np.int16)
 
 
-def log_to_stderr(line: str) -> None:
-    print(line, file=sys.stderr, flush=True)
-
-
 # --------------------------------------------------------------------------
 # A coarser view of a context (hand-ins smaller than the grade resolution)
 # --------------------------------------------------------------------------
@@ -371,8 +370,6 @@ def coarsen(ctx: Context, k: int) -> Context:
     """
     if k == 1:
         return ctx
-    from dataclasses import replace
-
     model = {}
     for cam, v in ctx.model_var.items():
         m = (ctx.baseline.mean if cam == ctx.assignment.camera else ctx.references[cam].mean).astype(np.float64)

@@ -49,7 +49,7 @@ from mcrt.grade.diagnose import (
     short_text,
     signature_region,
 )
-from mcrt.grade.expected import Context, coarsen
+from mcrt.grade.expected import Context, coarsen, grading_settings
 from mcrt.grade.score import (
     LUMINANCE,
     Noise,
@@ -599,13 +599,12 @@ class _Grader:
         (``samples``) gives: a correct mcrt render at that count (at most 64
         spp, scaled) is made and measured the same way. Too few samples
         raise the median pixel's residual with the whole noise, though less
-        than the variance when a pixel's samples are heavy-tailed (measured
-        at 32x32: a 4-spp render declared as 64 had bulk 2.0 at var_ratio 17,
-        the simulated correct render 2.5; light_two_sided at 16384 spp had
-        bulk 1.7 at var_ratio 50, the simulation 6.3).
+        than the variance when a pixel's samples are heavy-tailed, by an
+        amount that depends on the scene: hence a simulated render, not a
+        formula.
         """
         from mcrt.grade.diagnose import catalogue_power, rank_noise_level
-        from mcrt.tracer import render
+        from mcrt.render import render
 
         ctx = self.ctx
         if not ctx.mutants or not np.isfinite(var_ratio) or var_ratio <= 1.0:
@@ -624,7 +623,8 @@ class _Grader:
             return []
         a = self.a
         n_sim = int(min(max(round(samples), 1), 64))
-        sim = render(a.load_scene(), cam, n_sim, a.seed + 3, a.max_depth, width=R.shape[1], height=R.shape[0],
+        scene = a.load_scene()
+        sim = render(scene, grading_settings(scene, cam, R.shape[1], R.shape[0], a.max_depth, n_sim, a.seed + 3),
                      progress=False)
         bulk_few = bulk_of(np.where(mask[..., None], sim.mean.astype(np.float64) - R, 0.0)) * n_sim / max(samples, 1e-9)
         noise["bulk_ratio_fewer_samples"] = bulk_few

@@ -47,6 +47,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import stats as _sps
 
+from mcrt import metrics as image_metrics
+from mcrt.imageio import srgb_eotf_slope, srgb_oetf
 from mcrt.stats import adjust_p_values
 
 LUMINANCE = np.array([0.2126, 0.7152, 0.0722])
@@ -235,9 +237,9 @@ def noise_ratio(resid: np.ndarray, ref: np.ndarray, mask: np.ndarray, model_var_
     mean(R)^2), so an image that is too bright or too dark is not called
     noisy for it. The result is 1/spp_eff: mcrt with spp samples per pixel
     has a ratio of 1/spp. A mean, not a median: per-pixel noise here is
-    heavy-tailed (rare bright paths), and the median tile of a correct
-    16-spp render looks like 150 spp, the mean like 16 to 30. NaN when no
-    tile has noise.
+    heavy-tailed (rare bright paths), so the median tile of a correct
+    render looks far less noisy than the render is. NaN when no tile has
+    noise.
     """
     m = mask[..., None].astype(np.float64)
     n = tile_sum(mask.astype(np.float64), tile)[..., None]
@@ -286,11 +288,7 @@ def quantisation_variance(image: np.ndarray, fmt: str) -> np.ndarray:
         if fmt.endswith("linear"):
             q = np.full_like(x, 1.0 / levels)
         else:
-            from mcrt.imageio import srgb_oetf
-
-            v = srgb_oetf(np.clip(x, 0.0, 1.0))
-            slope = np.where(v <= 0.04045, 1 / 12.92, 2.4 / 1.055 * ((v + 0.055) / 1.055) ** 1.4)
-            q = slope / levels
+            q = srgb_eotf_slope(srgb_oetf(np.clip(x, 0.0, 1.0))) / levels
     else:  # float32
         q = x * 2.0**-23
     return q * q / 12.0
@@ -302,42 +300,27 @@ def quantisation_variance(image: np.ndarray, fmt: str) -> np.ndarray:
 
 
 def metrics(image: np.ndarray, ref: np.ndarray, mask: np.ndarray, expected_noise_var: np.ndarray) -> dict:
-    """RMSE (absolute and relative), the RMSE noise alone would give, SSIM and FLIP.
+    """RMSE over the valid pixels (absolute, and relative to the mean reference), the RMSE noise alone would give, SSIM and FLIP.
 
-    SSIM (scikit-image) and FLIP (NVIDIA's ``flip_evaluator``, LDR mode)
-    compare the 8-bit sRGB previews (exposure 0, clipped): what a student
-    sees. (HDR-FLIP would tone-map at several exposures, 2 s per 64x64 image
-    here, too slow for a class.) Both grow with noise, so they are reported,
-    not graded.
+    RMSE, SSIM and FLIP follow the conventions of :mod:`mcrt.metrics` (the
+    convergence reports' too); non-finite pixels count as 0 in SSIM and
+    FLIP. FLIP's error map comes back as magma colours under ``_flip_map``
+    for the feedback page. All grow with noise, so they are reported, not
+    graded.
     """
     out: dict = {}
     img = np.nan_to_num(image.astype(np.float64), nan=0.0, posinf=0.0, neginf=0.0)
-    d = (img - ref)[mask]
     mref = float(np.mean(np.abs(ref[mask]))) if mask.any() else 1.0
-    out["rmse"] = float(np.sqrt(np.mean(d**2))) if d.size else float("nan")
+    out["rmse"] = image_metrics.rmse(ref, img, mask=mask) if mask.any() else float("nan")
     out["relative_rmse"] = out["rmse"] / max(mref, 1e-12)
     out["noise_rmse"] = float(np.sqrt(np.mean(expected_noise_var[mask]))) if mask.any() else float("nan")
-    from mcrt.imageio import tonemap
-
-    a, b = tonemap(img) / 255.0, tonemap(ref) / 255.0
     try:
-        from skimage.metrics import structural_similarity
-
-        win = min(7, *(s - (1 - s % 2) for s in img.shape[:2]))
-        out["ssim"] = float(structural_similarity(a, b, channel_axis=2, data_range=1.0, win_size=max(win, 3)))
+        out["ssim"] = image_metrics.ssim(ref, img)
     except Exception as e:  # noqa: BLE001 - pragma: no cover - a metric library's trouble is not the student's
         out["ssim"] = None
         out["ssim_error"] = str(e)[:200]
     try:
-        import contextlib
-        import io
-
-        import flip_evaluator
-
-        with contextlib.redirect_stdout(io.StringIO()):
-            fmap, fmean, _ = flip_evaluator.evaluate(b.astype(np.float32), a.astype(np.float32), "LDR", applyMagma=True)
-        out["flip"] = float(fmean)
-        out["_flip_map"] = fmap
+        out["_flip_map"], out["flip"] = image_metrics.flip_map(ref, img, magma=True)
     except Exception as e:  # noqa: BLE001 - pragma: no cover - a metric library's trouble is not the student's
         out["flip"] = None
         out["flip_error"] = str(e)[:200]

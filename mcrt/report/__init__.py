@@ -2,9 +2,9 @@
 
 ``mcrt report`` (and :func:`main_report`, the project's main job) renders a
 scene with each renderer at a ladder of samples per pixel and several seeds,
-compares every render with the ground truth (RMSE, relMSE, SSIM, FLIP), fits
-the log-log slopes, measures efficiency 1 / (MSE x time), and writes
-``reports/<name>/``:
+compares every render with the ground truth (RMSE, relMSE, SSIM, FLIP, with
+the conventions of :mod:`mcrt.metrics`), fits the log-log slopes, measures
+efficiency 1 / (MSE x time), and writes ``reports/<name>/``:
 
 * ``error_vs_spp.png|svg``, ``error_vs_time.png|svg``, ``efficiency.png|svg``;
 * ``images.png`` (renders beside the reference), ``flip.png`` and
@@ -13,85 +13,32 @@ the log-log slopes, measures efficiency 1 / (MSE x time), and writes
   provenance; schema :data:`SCHEMA`);
 * ``index.md`` and ``index.html`` (self-contained: images embedded).
 
-Modules: :mod:`.config` (settings, presets), :mod:`.metrics`, :mod:`.run`
-(the ladder), :mod:`.summary` (means, slopes, efficiencies), :mod:`.plots`,
+Modules: :mod:`.config` (settings, presets), :mod:`.run` (the ladder),
+:mod:`.summary` (means, slopes, efficiencies) with :mod:`.slopes` (the
+slope fit), :mod:`.build` (the report folder), :mod:`.plots`,
 :mod:`.images`, :mod:`.content` with :mod:`.markdown` and :mod:`.html` (one
-module per format), :mod:`.data` (JSON, CSV), :mod:`.cli`.
+module per format), :mod:`.data` (JSON, CSV, the conventions), :mod:`.cli`.
+
+The names below are imported lazily (no module of the package imports the
+package itself), so ``mcrt --help`` stays fast.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
-from pathlib import Path
+import importlib
 
-from mcrt.report.config import PRESETS, RendererSpec, ReportConfig, preset_config
-from mcrt.report.data import SCHEMA
+_API = {
+    "PRESETS": "config", "RendererSpec": "config", "ReportConfig": "config", "preset_config": "config",
+    "SCHEMA": "data",
+    "REPORT_FILES": "build", "ReportOutput": "build", "run_report": "build", "write_report": "build", "main_report": "build",
+    "register": "cli",
+}
 
-__all__ = ["SCHEMA", "PRESETS", "ReportConfig", "RendererSpec", "ReportOutput", "preset_config", "run_report",
-           "write_report", "main_report", "register"]
-
-#: Files a report folder holds (SVGs only when asked for).
-REPORT_FILES = ("index.html", "index.md", "data.json", "table.csv", "error_vs_spp.png", "error_vs_time.png",
-                "efficiency.png", "images.png", "flip.png", "relerr.png", "error_vs_spp.svg", "error_vs_time.svg",
-                "efficiency.svg")
+__all__ = ["SCHEMA", "PRESETS", "ReportConfig", "RendererSpec", "ReportOutput", "REPORT_FILES", "preset_config",  # noqa: RUF022
+           "run_report", "write_report", "main_report", "register"]
 
 
-@dataclass
-class ReportOutput:
-    folder: Path
-    data: "object"  # mcrt.report.run.ReportData
-    summary: "object"  # mcrt.report.summary.Summary
-    files: list[Path]
-
-
-def write_report(data, out: str | Path, *, clean: bool = True) -> ReportOutput:
-    """Write every file of a report for measured ``data`` into ``out``."""
-    from mcrt.report import content, html, markdown
-    from mcrt.report.data import data_dict, write_csv, write_json
-    from mcrt.report.images import write_strips
-    from mcrt.report.plots import write_plots
-    from mcrt.report.summary import summarize
-
-    out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
-    if clean:  # drop the files of an earlier report (an SVG no longer asked for), nothing else
-        for name in REPORT_FILES:
-            (out / name).unlink(missing_ok=True)
-    s = summarize(data)
-    plots = write_plots(data, s, out, svg=data.config.svg)
-    images = write_strips(data, out)
-    names = sorted({p.name for d in plots.values() for p in d.values()} | {p.name for p in images.values()}
-                   | {"index.html", "index.md", "data.json", "table.csv"})
-    files = {"plots": plots, "images": images, "all": names}
-    doc = content.build_document(data, s, files)
-    write_csv(out / "table.csv", data)
-    write_json(out / "data.json", data_dict(data, s, names))
-    markdown.write(out / "index.md", doc)
-    html.write(out / "index.html", doc)
-    return ReportOutput(out, data, s, [out / n for n in names])
-
-
-def run_report(cfg: ReportConfig, out: str | Path | None = None, *, progress: bool = True, command: str | None = None) -> ReportOutput:
-    """Render the ladder of ``cfg``, then write the report to ``out`` (default reports/<name>)."""
-    from mcrt.report.run import run_ladder
-
-    data = run_ladder(cfg, progress=progress, command=command)
-    return write_report(data, out if out is not None else Path("reports") / cfg.name)
-
-
-def main_report(out: str | Path = "reports/canonical", *, progress: bool = True, command: str | None = None, **overrides) -> ReportOutput:
-    """The project's main job: the ``canonical`` preset (overridable field by field), written to ``out``.
-
-    Near camera, 64x64, spp 1, 2, 4, ..., 1024, seeds 1, 2, 3, max depth 8,
-    one shadow ray, renderers mcrt and Mitsuba (and the plugin when
-    installed), against the committed Mitsuba reference.
-    """
-    cfg = replace(preset_config("canonical"), **overrides)
-    return run_report(cfg, out, progress=progress, command=command or "mcrt main")
-
-
-def register(subparsers) -> None:
-    """Add ``mcrt report`` to an argparse subparsers object."""
-    from mcrt.report.cli import register as _register
-
-    _register(subparsers)
+def __getattr__(name: str):
+    if name in _API:
+        return getattr(importlib.import_module(f"mcrt.report.{_API[name]}"), name)
+    raise AttributeError(f"module 'mcrt.report' has no attribute {name!r}")

@@ -1,7 +1,8 @@
-"""``mcrt report``: a thin command line over :func:`mcrt.report.run_report`.
+"""``mcrt report``: a thin command line over :func:`mcrt.report.build.run_report`.
 
-Exit codes: 0 report written, 2 unusable input (bad option, scene or
-missing reference with ``--reference committed``).
+Exit codes (those of every mcrt command, :mod:`mcrt.exitcodes`): 0 report
+written, 2 unusable input (bad option, scene or missing reference with
+``--reference committed``).
 """
 
 from __future__ import annotations
@@ -13,9 +14,8 @@ import time
 from dataclasses import replace
 from pathlib import Path
 
+from mcrt.exitcodes import EXIT_OK, EXIT_UNUSABLE
 from mcrt.report.config import PRESET_HELP, PRESETS, parse_ladder, preset_config
-
-EXIT_OK, EXIT_FAILED, EXIT_UNUSABLE = 0, 1, 2
 
 
 def _positive(text: str) -> int:
@@ -119,7 +119,7 @@ _OPTION_OF = {"scene": "--scene", "camera": "--camera", "width": "--res", "heigh
 
 
 def cmd_report(args) -> int:
-    from mcrt.report import run_report
+    from mcrt.report.build import run_report
     from mcrt.scene import SceneError
 
     try:

@@ -12,10 +12,6 @@ import re
 from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 
-#: Renderer kinds a report knows.
-KINDS = ("mcrt", "mitsuba", "plugin")
-
-
 @dataclass(frozen=True)
 class RendererSpec:
     """One renderer of a report: ``mcrt``, ``mitsuba`` or ``plugin``, optionally with K shadow rays.
@@ -49,24 +45,11 @@ class RendererSpec:
         """Name in plots and tables: 'mcrt', 'mitsuba', 'mcrt K=30'."""
         return self.kind if self.light_samples is None else f"{self.kind} K={self.light_samples}"
 
-    @property
-    def slug(self) -> str:
-        return self.text.replace(":", "_")
-
     def shadow_rays(self, default: int) -> int | None:
         """K this renderer uses (None for Mitsuba)."""
         if self.kind == "mitsuba":
             return None
         return self.light_samples if self.light_samples is not None else default
-
-
-def plugin_available() -> bool:
-    """Whether mcrt's estimator as a Mitsuba plugin (mcrt.plugins.render_plugin) is installed."""
-    try:
-        from mcrt.plugins import render_plugin  # noqa: F401,PLC0415
-    except Exception:  # noqa: BLE001 - any import problem means "not available"
-        return False
-    return True
 
 
 def parse_ladder(text: str) -> tuple[int, ...]:
@@ -226,12 +209,11 @@ def preset_config(name: str, scene=None) -> ReportConfig:
 
 
 def _canonical(scene=None) -> ReportConfig:
-    renderers = ("mcrt", "mitsuba", "plugin") if plugin_available() else ("mcrt", "mitsuba")
     return ReportConfig(
         name="canonical", preset="canonical",
         description="The main job: the canonical scene by every renderer, 64x64, spp 1 to 1024, three seeds, "
                     "against the committed Mitsuba reference.",
-        renderers=renderers,
+        renderers=("mcrt", "mitsuba", "plugin"),
     )
 
 
@@ -274,7 +256,7 @@ PRESETS = {
 }
 
 PRESET_HELP = {
-    "canonical": "the main job: near camera, 64x64, spp 1..1024, 3 seeds, mcrt + Mitsuba (+ plugin when installed)",
+    "canonical": "the main job: near camera, 64x64, spp 1..1024, 3 seeds, mcrt + Mitsuba + plugin",
     "quick": "64x64, spp 1..128, 2 seeds, mcrt + Mitsuba",
     "tiny": "16x16, spp 1,4,16, 1 seed, a 256-spp Mitsuba reference (tests)",
     "course2023": "800x800, 100 spp, 30 shadow rays, max depth 8, against K=1 at equal time (reference: 1024-spp mcrt)",

@@ -12,7 +12,7 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from mcrt.report.metrics import CONVENTIONS
+from mcrt.report.data import CONVENTIONS
 from mcrt.report.run import ReportData
 from mcrt.report.summary import Summary
 
@@ -152,9 +152,9 @@ def build_document(data: ReportData, s: Summary, files: dict[str, Any]) -> list[
 
     doc.append(("h", 2, "Provenance"))
     p = data.provenance
-    prov = [f"command: {p['command']}", f"date: {p['date']}", f"git commit: {p['git_commit']}",
-            f"machine: {p['machine']['cpu']}, {p['machine']['cores']} cores, {p['machine']['platform']}, Python {p['machine']['python']}",
-            f"backend: {p['backend']}",
+    prov = [f"command: {p['command']}", f"date: {p['date']}", f"git commit: {p['git_commit']}, source hash {p['source_hash']}",
+            f"machine: {p['machine']['cpu']}, {p['machine']['cores']} cores, {p['machine']['platform']}",
+            f"backend: {p['backend']}, {p['drjit_threads']} Dr.Jit threads",
             "versions: " + ", ".join(f"{k} {v}" for k, v in p["versions"].items()),
             "warm-up (JIT compile): " + "; ".join(f"{k}: {v['wall_time']:.2f} s wall, {v['compile_time']:.2f} s compile" for k, v in data.warmup.items()),
             f"reference: {ref['description']}" + (f", sha256 {ref['sha256']}" if ref.get("sha256") else "")]

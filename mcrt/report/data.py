@@ -9,12 +9,24 @@ from dataclasses import asdict, fields
 from pathlib import Path
 from typing import Any
 
-from mcrt.report.metrics import CONVENTIONS, RELMSE_EPS, SlopeFit
+from mcrt import metrics
 from mcrt.report.run import Measurement, ReportData
+from mcrt.report.slopes import SlopeFit
 from mcrt.report.summary import Summary
 
 #: Schema tag of data.json; bump the number when a field changes meaning or goes away.
 SCHEMA = "mcrt.report/1"
+
+#: What every number of a report means: the image metrics' conventions (:mod:`mcrt.metrics`) and the report's own.
+CONVENTIONS = {
+    **metrics.CONVENTIONS,
+    "mse_ref_floor": ("mean(var_ref / spp_ref): the squared error that the reference's own noise adds to every MSE "
+                      "(E|x - ref|^2 = E|x - mu|^2 + E|ref - mu|^2 for independent x and ref); "
+                      "'excess' MSE and efficiency subtract it"),
+    "efficiency": "1 / (MSE_excess x render time), with render time = wall time - JIT compile time",
+    "slope": "least squares of log(metric) on log(spp) or log(time) over every render (seeds as points), 95 % CI from Student's t, n - 2 dof",
+    "error_bars": "mean over seeds +- one standard deviation over seeds",
+}
 
 #: Top-level keys every data.json has.
 TOP_KEYS = ("schema", "name", "config", "scene", "provenance", "reference", "conventions", "flip_parameters", "warmup",
@@ -48,7 +60,7 @@ def data_dict(data: ReportData, s: Summary, files: list[str]) -> dict[str, Any]:
         "scene": {"name": data.scene.name, "path": str(data.scene.path), "hash": data.scene.content_hash()},
         "provenance": data.provenance,
         "reference": dict(data.reference_info, floor=data.floor, width=cfg.width, height=cfg.height, max_depth=cfg.max_depth),
-        "conventions": dict(CONVENTIONS, relmse_eps=RELMSE_EPS),
+        "conventions": dict(CONVENTIONS, relmse_eps=metrics.RELMSE_EPS),
         "flip_parameters": data.flip_params,
         "warmup": data.warmup,
         "calibration": data.calibration,

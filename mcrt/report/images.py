@@ -132,7 +132,7 @@ def grid(path: str | Path, cells: list[list[np.ndarray | None]], row_labels: lis
 
 def write_strips(data, out: Path) -> dict[str, Path]:
     """images.png (renders beside the reference), flip.png and relerr.png (heat maps); returns their paths."""
-    from mcrt.report.metrics import RELMSE_EPS
+    from mcrt.metrics import RELMSE_EPS
 
     ref = data.reference.mean
     H, W = ref.shape[:2]

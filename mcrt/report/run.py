@@ -14,10 +14,7 @@ is the render time. Renders synchronise before their clock stops.
 from __future__ import annotations
 
 import contextlib
-import datetime as _dt
 import hashlib
-import os
-import platform
 import shlex
 import sys
 import time
@@ -27,9 +24,9 @@ from typing import Any
 
 import numpy as np
 
-import mcrt  # noqa: F401  (sets DRJIT_LIBLLVM_PATH before drjit loads)
+import mcrt  # sets DRJIT_LIBLLVM_PATH before drjit loads
+from mcrt import metrics as M
 from mcrt.film import Progress, RenderResult
-from mcrt.report import metrics as M
 from mcrt.report.config import WARMUP_SEED, RendererSpec, ReportConfig, default_cache_dir, render_seed
 from mcrt.scene import CANONICAL, Scene, load_scene
 
@@ -95,24 +92,11 @@ class ReportData:
 
 def render_with(spec: RendererSpec, scene: Scene, cfg: ReportConfig, spp: int, seed: int, *, progress: bool = False) -> RenderResult:
     """One render by ``spec`` at the report's camera, size, depth and backend."""
-    w, h = cfg.width, cfg.height
-    if spec.kind == "mcrt":
-        from mcrt.tracer import render
+    from mcrt.render import render
 
-        return render(scene, cfg.camera, spp, seed, cfg.max_depth, spec.shadow_rays(cfg.light_samples), cfg.backend,
-                      width=w, height=h, progress=progress)
-    if spec.kind == "mitsuba":
-        from mcrt.mitsuba import render_mitsuba
-
-        return render_mitsuba(scene, cfg.camera, w, h, spp, seed, cfg.max_depth, backend=cfg.backend, progress=progress)
-    if spec.kind == "plugin":
-        try:
-            from mcrt.plugins import render_plugin
-        except ImportError as e:
-            raise RuntimeError(f"the plugin renderer is not available ({e})") from None
-        return render_plugin(scene, camera=cfg.camera, width=w, height=h, spp=spp, seed=seed, max_depth=cfg.max_depth,
-                             light_samples=spec.shadow_rays(cfg.light_samples), backend=cfg.backend, progress=progress)
-    raise ValueError(f"unknown renderer kind {spec.kind!r}")
+    s = scene.settings(camera=cfg.camera, width=cfg.width, height=cfg.height, spp=spp, max_depth=cfg.max_depth,
+                       light_samples=spec.shadow_rays(cfg.light_samples))
+    return render(scene, s, renderer=spec.kind, seed=seed, backend=cfg.backend, progress=progress)
 
 
 def _render_time(r: RenderResult) -> tuple[float, float]:
@@ -148,30 +132,25 @@ def obtain_reference(cfg: ReportConfig, scene: Scene, *, progress: bool = True, 
     size = (cfg.width, cfg.height)
     note = ""
     if cfg.reference in ("auto", "committed"):
+        from mcrt.reference import ReferenceUnavailable, load_reference, read_manifest, reference_key
+
         try:
-            from mcrt.reference import ReferenceUnavailable, load_reference, read_manifest, reference_key
-        except ImportError as e:  # the module is optional
+            ref = load_reference(scene, cfg.camera, size, cfg.max_depth)
+        except ReferenceUnavailable as e:
             if cfg.reference == "committed":
-                raise RuntimeError(f"no committed references available (mcrt.reference: {e})") from None
-            note = f"no committed reference module ({e})"
+                raise RuntimeError(str(e)) from None
+            note = f"no committed reference: {e}"
         else:
-            try:
-                ref = load_reference(scene, cfg.camera, size, cfg.max_depth)
-            except ReferenceUnavailable as e:
-                if cfg.reference == "committed":
-                    raise RuntimeError(str(e)) from None
-                note = f"no committed reference: {e}"
-            else:
-                key = reference_key(scene.name, cfg.camera, size, cfg.max_depth)
-                entry = read_manifest()["references"].get(key, {})
-                info = {
-                    "source": "committed",
-                    "description": f"committed Mitsuba 3 reference {key} ({ref.spp} spp, path integrator), reference/{entry.get('file', key + '.exr')}",
-                    "key": key, "file": f"reference/{entry.get('file', key + '.exr')}", "sha256": entry.get("sha256"),
-                    "renderer": ref.renderer, "spp": ref.spp, "seed": ref.seed,
-                    "mitsuba_version": ref.extra.get("mitsuba_version"), "variant": ref.extra.get("variant"),
-                }
-                return ref, info
+            key = reference_key(scene.name, cfg.camera, size, cfg.max_depth)
+            entry = read_manifest()["references"].get(key, {})
+            info = {
+                "source": "committed",
+                "description": f"committed Mitsuba 3 reference {key} ({ref.spp} spp, path integrator), reference/{entry.get('file', key + '.exr')}",
+                "key": key, "file": f"reference/{entry.get('file', key + '.exr')}", "sha256": entry.get("sha256"),
+                "renderer": ref.renderer, "spp": ref.spp, "seed": ref.seed,
+                "mitsuba_version": ref.extra.get("mitsuba_version"), "variant": ref.extra.get("variant"),
+            }
+            return ref, info
     spec = RendererSpec.parse(cfg.reference_renderer)
     spp = cfg.ref_spp()
     seed = render_seed(spec, cfg.reference_seed, spp) ^ 0x5EED
@@ -220,59 +199,6 @@ def reference_floor(ref: RenderResult) -> dict[str, float]:
 
 
 # --------------------------------------------------------------------------
-# Provenance
-# --------------------------------------------------------------------------
-
-
-def _cpu() -> str:
-    from mcrt.provenance import cpu_name
-
-    return cpu_name()
-
-
-def _version(dist: str) -> str | None:
-    from importlib import metadata
-
-    try:
-        return metadata.version(dist)
-    except metadata.PackageNotFoundError:
-        return None
-
-
-def _git_commit() -> str | None:
-    import subprocess
-
-    root = Path(__file__).resolve().parents[2]
-    try:
-        out = subprocess.run(["git", "-C", str(root), "rev-parse", "HEAD"], capture_output=True, text=True, timeout=10)
-        dirty = subprocess.run(["git", "-C", str(root), "status", "--porcelain", "--untracked-files=no"], capture_output=True, text=True, timeout=10)
-    except (OSError, subprocess.SubprocessError):
-        return None
-    if out.returncode != 0:
-        return None
-    return out.stdout.strip() + ("+dirty" if dirty.stdout.strip() else "")
-
-
-def provenance(cfg: ReportConfig, command: str | None) -> dict[str, Any]:
-    import drjit as dr
-    import mitsuba as mi
-
-    return {
-        "command": command or " ".join(shlex.quote(a) for a in sys.argv),
-        "date": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
-        "git_commit": _git_commit(),
-        "machine": {"cpu": _cpu(), "cores": os.cpu_count(), "platform": platform.platform(), "python": platform.python_version()},
-        "backend": cfg.backend,
-        "versions": {
-            "mcrt": mcrt.__version__, "drjit": dr.__version__, "mitsuba": mi.__version__,
-            "numpy": np.__version__, "scikit-image": _version("scikit-image"), "flip-evaluator": _version("flip-evaluator"),
-            "matplotlib": _version("matplotlib"), "scipy": _version("scipy"),
-        },
-        "drjit_threads": dr.thread_count() if hasattr(dr, "thread_count") else None,
-    }
-
-
-# --------------------------------------------------------------------------
 # The ladder
 # --------------------------------------------------------------------------
 
@@ -318,7 +244,10 @@ def run_ladder(cfg: ReportConfig, *, progress: bool = True, command: str | None 
     scene = load_scene(cfg.scene or CANONICAL)
     scene.camera(cfg.camera)  # fail early on a bad camera name
     specs = cfg.specs()
-    prov = provenance(cfg, command)
+    from mcrt.provenance import provenance
+
+    prov = provenance(packages=("scikit-image", "flip-evaluator", "matplotlib", "scipy"),
+                      command=command or " ".join(shlex.quote(a) for a in sys.argv), backend=cfg.backend)
 
     ref, ref_info = obtain_reference(cfg, scene, progress=progress, log=log)
     if ref.shape != (cfg.height, cfg.width):
@@ -380,9 +309,8 @@ def run_ladder(cfg: ReportConfig, *, progress: bool = True, command: str | None 
             mse_predicted=float(np.mean(r.variance, dtype=np.float64) / spp) if r.variance is not None and spp > 1 else float("nan"),
         ))
         if rung in strip_rungs and seed == cfg.seeds[0]:
-            a, b = ref.mean.astype(np.float64), r.mean.astype(np.float64)
-            rel = ((b - a) ** 2 / (a * a + M.RELMSE_EPS)).mean(axis=2)
-            strip[(spec.label, rung)] = StripImage(mean=r.mean.copy(), flip_map=fmap, rel_error=rel, flip=fmean)
+            strip[(spec.label, rung)] = StripImage(mean=r.mean.copy(), flip_map=fmap, rel_error=M.relmse_map(ref.mean, r.mean),
+                                                   flip=fmean)
         left = sum(cost.predict(sp.label, ladders[sp.label][rg]) for rg, _, sp in jobs[i + 1:])
         bar.label = f"report (last: {spec.label}, {spp} spp, seed {seed})"
         bar.update(i + 1, left)

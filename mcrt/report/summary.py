@@ -3,7 +3,7 @@
 Efficiency is 1 / (MSE x time): the inverse of the work needed for a given
 error (an unbiased estimator's MSE x time is constant once overheads are
 amortised). MSE here is the excess over the reference's own noise floor
-(see :data:`mcrt.report.metrics.CONVENTIONS`); time is render time (wall
+(see :data:`mcrt.report.data.CONVENTIONS`); time is render time (wall
 minus JIT compile). A renderer's summary efficiency pools the upper half of
 its ladder, where fixed costs per render matter least:
 
@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from mcrt.report.metrics import SlopeFit, fit_slope
+from mcrt.report.slopes import SlopeFit, fit_slope
 from mcrt.report.run import METRICS, Measurement, ReportData
 
 #: Metrics whose slopes are fitted (against spp and against time).
@@ -31,10 +31,6 @@ FIT_METRICS = ("rmse", "relmse", "dssim", "flip")
 #: An RMSE slope this close to -1/2 is called practically right even when its
 #: confidence interval (narrow with few points) excludes -1/2.
 SLOPE_TOLERANCE = 0.05
-
-
-def _finite(x: float) -> float | None:
-    return x if isinstance(x, (int, float)) and math.isfinite(x) else None
 
 
 @dataclass
