@@ -94,11 +94,11 @@ def test_catalogue_is_complete_and_loads():
 
 def test_tracer_refuses_a_far_moved_scene():
     """The tracer itself fails loudly on the canonical scene moved 1e4 from the origin."""
-    from mcrt.tracer import render
+    from mcrt.render import render
 
     far = load_scene().scaled(1.0, (1e4, 1e4, 1e4))
     with pytest.raises(ValueError, match="float32 rendering would be wrong"):
-        render(far, "near", 2, 1, 2, width=4, height=4, progress=False)
+        render(far, far.settings(camera="near", width=4, height=4, spp=2, max_depth=2), seed=1, progress=False)
 
 
 def test_triangle_and_convex_intersectors_agree_on_a_light_in_the_ceiling():
@@ -108,6 +108,28 @@ def test_triangle_and_convex_intersectors_agree_on_a_light_in_the_ceiling():
     a = hardcases.render_mcrt(case, scene, RES, 64, SEED_MCRT, intersector="convex", max_depth=1)
     b = hardcases.render_mcrt(case, scene, RES, 64, SEED_MCRT + 1, intersector="triangles", max_depth=1)
     assert compare_images(a, b, alpha=ALPHA).passed
+
+
+def test_report_writer_on_a_tiny_run(tmp_path):
+    """One case at 8x8 pixels and a few spp, with synthetic sweep and convergence rows: index.md and strict data.json."""
+    import json
+
+    r = hardcases.run_case(hardcases.case("light_on_ceiling"), res=8, spp=8, ref_spp=16, images=tmp_path)
+    assert set(r.renders) == {"mcrt", "mitsuba", "mitsuba_equal_time", "reference"}
+    assert {"mcrt_vs_mitsuba", "mcrt_vs_reference", "mitsuba_vs_reference"} <= set(r.comparisons)
+    sweep = [hardcases.SweepRow("canonical", "near", kind, v, who, 1e-3, True, ok, 0, 0, 1.0, 0.001)
+             for kind, v, ok in (("moved", 1e2, True), ("moved", 1e4, False), ("scaled", 1e-3, True), ("scaled", 1e3, True))
+             for who in ("mcrt", "mitsuba")]
+    conv = [hardcases.ConvergenceRow("light_low", "mcrt", n, 4, 0.1 / n ** 0.5, 4, -0.5, 0.1) for n in (64, 256)]
+    md, js = hardcases.write_report([r], tmp_path, argv=["--res 8"], settings={"res": 8, "spp": 8, "ref_spp": 16},
+                                    sweep=sweep, conv=conv)
+    text = md.read_text()
+    assert text.startswith("# Hard cases") and "`mcrt hardcases --res 8`" in text and "| light_on_ceiling |" in text
+    assert "## Float32 limits" in text and "right up to an offset of 100, wrong from 10000" in text
+    assert "## Fireflies and convergence" in text and "-0.50" in text
+    data = json.loads(js.read_text(), parse_constant=lambda c: pytest.fail(f"non-strict JSON constant {c}"))
+    assert data["cases"][0]["name"] == "light_on_ceiling" and len(data["sweep"]) == len(sweep)
+    assert (tmp_path / "light_on_ceiling.png").exists()
 
 
 # --------------------------------------------------------------------------

@@ -17,6 +17,9 @@ import pytest
 
 import mcrt
 from mcrt import reference as ref
+from mcrt.exitcodes import EXIT_FAILED, EXIT_OK, EXIT_UNUSABLE
+from mcrt.reference import build as ref_build
+from mcrt.reference import manifest as ref_manifest
 from mcrt.film import RenderResult, merge
 from mcrt.imageio import ImageError, read_exr, write_exr
 
@@ -151,7 +154,7 @@ def test_resume_renders_only_missing_or_corrupt_chunks(scene, built, tmp_path):
 
 
 def test_interrupted_build_continues_where_it_stopped(scene, built, tmp_path, monkeypatch):
-    real = ref._render_chunk
+    real = ref_build._render_chunk
     calls = []
 
     def interrupted(task):
@@ -160,12 +163,12 @@ def test_interrupted_build_continues_where_it_stopped(scene, built, tmp_path, mo
             raise KeyboardInterrupt  # Ctrl-C during the third chunk
         return real(task)
 
-    monkeypatch.setattr(ref, "_render_chunk", interrupted)
+    monkeypatch.setattr(ref_build, "_render_chunk", interrupted)
     with pytest.raises(KeyboardInterrupt):
         ref.build_reference(scene, "near", RES, 8, SPP, chunk_spp=CHUNK, directory=tmp_path, workers=1, progress=False)
     assert calls == [0, 1, 2]
     assert not (tmp_path / f"{built[1].key}.exr").exists() and not (tmp_path / "manifest.json").exists()
-    monkeypatch.setattr(ref, "_render_chunk", real)
+    monkeypatch.setattr(ref_build, "_render_chunk", real)
     b = ref.build_reference(scene, "near", RES, 8, SPP, chunk_spp=CHUNK, directory=tmp_path, progress=False)
     assert b.rendered == [2] and b.reused == [0, 1]
     _same_image(b.result, read_exr(built[1].path))
@@ -218,9 +221,9 @@ def test_failed_manifest_write_keeps_old_manifest(scene, built, tmp_path, monkey
     def fail(src, dst):
         raise OSError(28, "No space left on device")
 
-    monkeypatch.setattr(ref.os, "replace", fail)
+    monkeypatch.setattr(ref_manifest.os, "replace", fail)
     with pytest.raises(OSError):
-        ref._write_manifest(d, {"references": {}})
+        ref_manifest.write_manifest(d, {"references": {}})
     monkeypatch.undo()
     assert (d / "manifest.json").read_bytes() == manifest_before
     assert not list(d.glob(".*.tmp"))
@@ -348,27 +351,27 @@ def _cli(*argv) -> int:
 def test_cli_build_list_verify(tmp_path, capsys):
     d = str(tmp_path)
     assert _cli("reference", "build", "--camera", "near", "far", "--res", str(RES), "--max-depth", "2",
-                "--spp", "32", "--chunk-spp", "16", "--dir", d, "--quiet") == ref.EXIT_OK
+                "--spp", "32", "--chunk-spp", "16", "--dir", d, "--quiet") == EXIT_OK
     assert sorted(ref.read_manifest(d)["references"]) == ["canonical_far_8x8_d2", "canonical_near_8x8_d2"]
     capsys.readouterr()
-    assert _cli("reference", "list", "--dir", d) == ref.EXIT_OK
+    assert _cli("reference", "list", "--dir", d) == EXIT_OK
     out = capsys.readouterr().out
     assert "canonical_far_8x8_d2" in out and "status" in out and "2 references" in out
-    assert _cli("reference", "verify", "--dir", d, "--checksums-only") == ref.EXIT_OK
-    assert _cli("reference", "verify", "canonical_near_8x8_d2", "--dir", d, "--spp", "64", "--quiet") == ref.EXIT_OK
+    assert _cli("reference", "verify", "--dir", d, "--checksums-only") == EXIT_OK
+    assert _cli("reference", "verify", "canonical_near_8x8_d2", "--dir", d, "--spp", "64", "--quiet") == EXIT_OK
     out = capsys.readouterr().out
     assert "OK" in out and "agreement" in out and "1 of 1 references verified" in out
 
     p = tmp_path / "canonical_far_8x8_d2.exr"
     p.write_bytes(p.read_bytes()[:-1] + b"\0")
-    assert _cli("reference", "verify", "--dir", d, "--checksums-only") == ref.EXIT_FAILED
-    assert _cli("reference", "list", "--dir", d) == ref.EXIT_FAILED
+    assert _cli("reference", "verify", "--dir", d, "--checksums-only") == EXIT_FAILED
+    assert _cli("reference", "list", "--dir", d) == EXIT_FAILED
 
 
 def test_cli_unusable_input(tmp_path, capsys):
-    assert _cli("reference", "verify", "--dir", str(tmp_path)) == ref.EXIT_UNUSABLE
-    assert _cli("reference", "verify", "nosuch", "--dir", str(tmp_path)) == ref.EXIT_UNUSABLE
-    assert _cli("reference", "build", "--camera", "nosuch", "--dir", str(tmp_path)) == ref.EXIT_UNUSABLE
+    assert _cli("reference", "verify", "--dir", str(tmp_path)) == EXIT_UNUSABLE
+    assert _cli("reference", "verify", "nosuch", "--dir", str(tmp_path)) == EXIT_UNUSABLE
+    assert _cli("reference", "build", "--camera", "nosuch", "--dir", str(tmp_path)) == EXIT_UNUSABLE
     assert "nosuch" in capsys.readouterr().err
     for sub in ("build", "verify", "list"):
         with pytest.raises(SystemExit) as e:

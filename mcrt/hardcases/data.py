@@ -1,0 +1,35 @@
+"""The hard-case report as JSON: reports/hardcases/data.json (every number, with its provenance)."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import asdict
+from pathlib import Path
+from typing import Any
+
+from mcrt.hardcases.cases import ALPHA, SEEDS, TILE, CaseResult
+from mcrt.hardcases.convergence import ConvergenceRow
+from mcrt.hardcases.sweep import SweepRow, sweep_limits
+from mcrt.report.data import clean
+
+#: Schema number of data.json (2: the run's provenance under ``provenance``, :func:`mcrt.provenance.provenance`).
+SCHEMA = 2
+
+
+def report_data(results: list[CaseResult], *, command: str, prov: dict[str, Any], settings: dict[str, Any],
+                sweep: list[SweepRow] | None = None, conv: list[ConvergenceRow] | None = None) -> dict[str, Any]:
+    """Everything the run measured, JSON-ready (non-finite numbers as null)."""
+    return clean({
+        "schema": SCHEMA, "command": command, "provenance": prov, "settings": settings, "seeds": SEEDS,
+        "alpha": ALPHA, "tile": TILE, "correction": "holm",
+        "cases": [asdict(r) | {"passed": r.passed, "problems": r.problems} for r in results],
+        "sweep": [asdict(r) for r in sweep] if sweep else None,
+        "limits": sweep_limits(sweep) if sweep else None,
+        "convergence": [asdict(r) for r in conv] if conv else None,
+    })
+
+
+def write(path: Path, data: dict[str, Any]) -> Path:
+    path = Path(path)
+    path.write_text(json.dumps(data, indent=2, allow_nan=False) + "\n", encoding="utf-8")
+    return path
