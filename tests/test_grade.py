@@ -430,6 +430,29 @@ def test_assignment_errors_name_the_file_and_field(data, field):
 
 
 # --------------------------------------------------------------------------
+# Box filtering and tile maps
+# --------------------------------------------------------------------------
+
+
+def test_box_filter_is_the_block_mean_and_needs_whole_blocks():
+    from mcrt.grade.checks import box_down
+    from mcrt.stats.tiles import tile_expand, tile_means
+
+    x = np.random.default_rng(5).lognormal(size=(12, 18, 3)).astype(np.float32).astype(np.float64)
+    assert box_down(x, 1) is x
+    assert np.array_equal(box_down(x, 3), x.reshape(4, 3, 6, 3, 3).mean(axis=(1, 3)))
+    x[0, 0, 0], x[5, 5, 1] = np.nan, np.inf
+    d = box_down(x, 3)
+    assert np.isnan(d[0, 0, 0]) and np.isinf(d[1, 1, 1]) and np.isfinite(d).sum() == d.size - 2
+    with pytest.raises(ValueError, match="does not divide"):
+        box_down(x[:11], 3)
+    t = tile_means(x[..., 2], 5)  # partial edge tiles
+    assert tile_expand(t, 12, 18, 5).shape == (12, 18) and tile_expand(t, 12, 18, 5)[11, 17] == t[2, 3]
+    whole = tile_means(x[..., 2], 0)
+    assert np.array_equal(tile_expand(whole, 12, 18, 0), np.full((12, 18), whole[0, 0]))
+
+
+# --------------------------------------------------------------------------
 # Code mode
 # --------------------------------------------------------------------------
 

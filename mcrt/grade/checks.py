@@ -18,8 +18,9 @@ from pathlib import Path
 import numpy as np
 from scipy import stats as _sps
 
-from mcrt.grade.score import LUMINANCE, tile_sum
+from mcrt.grade.score import LUMINANCE
 from mcrt.imageio import ImageError, read_image, srgb_eotf, srgb_oetf
+from mcrt.stats.tiles import block_means, tile_sums
 
 MAX_FILE_BYTES = 1 << 30
 
@@ -67,42 +68,33 @@ def _format(path: str, img: np.ndarray, linear_png: bool) -> str:
     return "float"
 
 
+def _read_one(p: str, linear_png: bool):
+    """(the render, None) or (None, why the file cannot be used)."""
+    name = Path(p).name
+    try:
+        size = os.path.getsize(p)
+    except OSError as e:
+        return None, f"{name}: cannot read ({e.strerror or e})"
+    if size > MAX_FILE_BYTES:
+        return None, f"{name}: {size / 2**20:.0f} MiB is larger than the {MAX_FILE_BYTES >> 20} MiB limit"
+    if size == 0:
+        return None, f"{name}: the file is empty"
+    try:
+        return read_image(p, linear_png=linear_png), None
+    except ImageError as e:
+        return None, _short(str(e), p)
+    except (OSError, ValueError, MemoryError) as e:
+        return None, f"{name}: cannot be read ({' '.join(str(e).split())[:160]})"
+
+
 def read_renders(paths: list[str], linear_png: bool) -> tuple[Loaded | None, str | None]:
     """Read one or two renders; (None, message) when the first cannot be used."""
     images, files, notes = [], [], []
     fmt, spp, cam = "float", None, None
     for k, p in enumerate(paths[:2]):
         name = Path(p).name
-        try:
-            size = os.path.getsize(p)
-        except OSError as e:
-            msg = f"{name}: cannot read ({e.strerror or e})"
-            if k == 0:
-                return None, msg
-            notes.append(f"second render {msg}; graded the first alone")
-            continue
-        if size > MAX_FILE_BYTES:
-            msg = f"{name}: {size / 2**20:.0f} MiB is larger than the {MAX_FILE_BYTES >> 20} MiB limit"
-            if k == 0:
-                return None, msg
-            notes.append(f"second render {msg}; graded the first alone")
-            continue
-        if size == 0:
-            msg = f"{name}: the file is empty"
-            if k == 0:
-                return None, msg
-            notes.append(f"second render {msg}; graded the first alone")
-            continue
-        try:
-            r = read_image(p, linear_png=linear_png)
-        except ImageError as e:
-            msg = _short(str(e), p)
-            if k == 0:
-                return None, msg
-            notes.append(f"second render {msg}; graded the first alone")
-            continue
-        except (OSError, ValueError, MemoryError) as e:
-            msg = f"{name}: cannot be read ({' '.join(str(e).split())[:160]})"
+        r, msg = _read_one(p, linear_png)
+        if msg is not None:
             if k == 0:
                 return None, msg
             notes.append(f"second render {msg}; graded the first alone")
@@ -160,11 +152,8 @@ def plan_resolution(h: int, w: int, height: int, width: int, gh: int, gw: int) -
 
 def box_down(x: np.ndarray, k: int) -> np.ndarray:
     """Block means over k x k (NaN or inf in a block makes the block non-finite)."""
-    if k == 1:
-        return x
-    h, w = x.shape[:2]
     with np.errstate(invalid="ignore", over="ignore"):
-        return x.reshape(h // k, k, w // k, k, *x.shape[2:]).mean(axis=(1, 3))
+        return block_means(x, k)
 
 
 # --------------------------------------------------------------------------
@@ -293,10 +282,10 @@ ENCODINGS = {
 
 def _log_ratios(img: np.ndarray, ref: np.ndarray, mask: np.ndarray, tile: int) -> np.ndarray:
     m = mask.astype(np.float64)
-    n = tile_sum(m, tile)
+    n = tile_sums(m, tile)
     with np.errstate(invalid="ignore", divide="ignore"):
-        s = tile_sum(np.where(mask, np.nan_to_num(img @ LUMINANCE), 0.0), tile) / np.maximum(n, 1)
-        r = tile_sum(np.where(mask, ref @ LUMINANCE, 0.0), tile) / np.maximum(n, 1)
+        s = tile_sums(np.where(mask, np.nan_to_num(img @ LUMINANCE), 0.0), tile) / np.maximum(n, 1)
+        r = tile_sums(np.where(mask, ref @ LUMINANCE, 0.0), tile) / np.maximum(n, 1)
         ok = (n >= 2) & (r > 1e-3 * max(float(r.max()), 1e-12)) & (s > 0)
         return np.log(s[ok] / r[ok])
 

@@ -31,7 +31,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mcrt.grade.score import LUMINANCE, tile_boxes, tile_sum
+from mcrt.grade.score import LUMINANCE, bias_scales
+from mcrt.stats.tiles import tile_box, tile_counts, tile_sums
 
 FLOOR = 0.002
 
@@ -64,8 +65,13 @@ def short_text(text: str) -> str:
 
 
 def tile_means(x: np.ndarray, mask: np.ndarray, tile: int) -> np.ndarray:
-    n = np.maximum(tile_sum(mask.astype(np.float64), tile), 1.0)[..., None]
-    return tile_sum(np.where(mask[..., None], x, 0.0), tile) / n
+    """Means of an (H, W, 3) array over the valid pixels (``mask``) of each tile (0 where a tile has none)."""
+    return tile_sums(np.where(mask[..., None], x, 0.0), tile) / _valid_counts(mask, tile)
+
+
+def _valid_counts(mask: np.ndarray, tile: int) -> np.ndarray:
+    """Valid pixels per tile, at least 1, shape (tiles_y, tiles_x, 1)."""
+    return np.maximum(tile_sums(mask.astype(np.float64), tile), 1.0)[..., None]
 
 
 def rank_mutants(diff: np.ndarray, var: np.ndarray, ref_t: np.ndarray, valid: np.ndarray, mutants: dict,
@@ -82,12 +88,12 @@ def rank_mutants(diff: np.ndarray, var: np.ndarray, ref_t: np.ndarray, valid: np
     v0 = np.where(ok, var + floor, 1.0)
     v0 = np.where(v0 > 0, v0, 1e-30)
     chi0 = float(np.sum(np.where(ok, diff**2 / v0, 0.0)))
-    n_pix = np.maximum(tile_sum(mask.astype(np.float64), tile), 1.0)[..., None]
+    n_pix = _valid_counts(mask, tile)
     base_t = tile_means(baseline.mean.astype(np.float64), mask, tile)
     out = []
     for name, e in mutants.items():
         delta = tile_means(e.mean.astype(np.float64), mask, tile) - base_t
-        wv = (tile_sum(np.where(mask[..., None], e.var / e.spp + baseline.var / baseline.spp, 0.0), tile) / n_pix**2)
+        wv = (tile_sums(np.where(mask[..., None], e.var / e.spp + baseline.var / baseline.spp, 0.0), tile) / n_pix**2)
         w = np.where(ok, var + wv + floor, 1.0)
         w = np.where(w > 0, w, 1e-30)
         chi1 = float(np.sum(np.where(ok, (diff - delta) ** 2 / w, 0.0)))
@@ -120,12 +126,11 @@ def describe_tiles(rel: np.ndarray, chosen: np.ndarray, shape: tuple[int, int], 
                    names: tuple[str, ...], direct: np.ndarray) -> str:
     """Words for the tiles marked in ``chosen`` (tiles_y, tiles_x), with signed relative effects ``rel``.
 
-    'too dark (about -38 %) on the floor, wall AB (red) and the ceiling, where
+    For example: 'too dark (about -38 %) on the floor, wall AB (red) and the ceiling, where
     indirect light dominates (70 % of the light there is indirect); too bright
     (about +12 %) on the mirror sphere'.
     """
     h, w = shape
-    boxes = tile_boxes(h, w, tile)
     parts = []
     for sign, word in ((-1, "too dark"), (1, "too bright")):
         sel = chosen & (np.sign(rel) == sign)
@@ -134,7 +139,7 @@ def describe_tiles(rel: np.ndarray, chosen: np.ndarray, shape: tuple[int, int], 
         weights = np.zeros(len(names))
         eff, npx, dsum, wsum = 0.0, 0, 0.0, 0.0
         for ty, tx in zip(*np.nonzero(sel)):
-            y0, y1, x0, x1 = boxes[ty][tx]
+            y0, y1, x0, x1 = tile_box(h, w, tile, int(ty), int(tx))
             lab = labels[y0:y1, x0:x1].ravel()
             a = abs(float(rel[ty, tx]))
             np.add.at(weights, lab, a)
@@ -183,14 +188,13 @@ def rank_noise(spread: np.ndarray, n: np.ndarray, valid: np.ndarray, image_t: np
     brightens the image does not pass for a noisy one. The share explained is
     ``1 - deviance_m / deviance_none``.
     """
-    nn = np.maximum(tile_sum(mask.astype(np.float64), tile), 1.0)[..., None]
     with np.errstate(divide="ignore", invalid="ignore"):
         meas = spread / np.where(image_t > 0, image_t, np.nan) ** 2
     ok = valid[..., None] & (n[..., None] >= 8) & np.isfinite(meas) & (meas > 0)
 
     def deviance(e) -> float:
-        m = tile_sum(np.where(mask[..., None], e.mean.astype(np.float64), 0.0), tile) / nn
-        v = tile_sum(np.where(mask[..., None], e.var.astype(np.float64), 0.0), tile) / nn / samples
+        m = tile_means(e.mean.astype(np.float64), mask, tile)
+        v = tile_means(e.var.astype(np.float64), mask, tile) / samples
         with np.errstate(divide="ignore", invalid="ignore"):
             rel = v / m**2
         good = ok & np.isfinite(rel) & (rel > 0)
@@ -270,22 +274,21 @@ def catalogue_power(ctx, spp: float | None = None) -> list[dict]:
     ref = ctx.references[cam]
     model = ctx.model_var[cam].astype(np.float64)
     h, w = ref.mean.shape[:2]
-    mask = np.ones((h, w), bool)
-    tiles = [t for t in a.tiles if not (t > 0 and t >= max(h, w) and 0 in a.tiles)]
-    n_tests = sum(3 * len(range(0, h, t or h)) * len(range(0, w, t or w)) for t in tiles)
+    tiles = bias_scales(a.tiles, h, w)
+    n_tests = sum(3 * tile_counts(h, w, t).size for t in tiles)
     zcrit = float(sps.norm.isf(a.thresholds.alpha / (2 * max(n_tests, 1))))
     out = []
     for name, e in ctx.mutants.items():
         best, best_fixed = 0.0, 0.0
         for t in tiles:
-            n = np.maximum(tile_sum(mask.astype(np.float64), t), 1.0)[..., None]
-            d = (tile_sum(e.mean.astype(np.float64) - ctx.baseline.mean, t)) / n
-            r = tile_sum(ref.mean.astype(np.float64), t) / n
-            v_student = tile_sum(model, t) / n**2 / spp
-            v_fixed = tile_sum(ref.var / ref.spp, t) / n**2
+            n = tile_counts(h, w, t)[..., None]
+            d = (tile_sums(e.mean.astype(np.float64) - ctx.baseline.mean, t)) / n
+            r = tile_sums(ref.mean.astype(np.float64), t) / n
+            v_student = tile_sums(model, t) / n**2 / spp
+            v_fixed = tile_sums(ref.var / ref.spp, t) / n**2
             # The signature is an estimate: shrink it by two of its own standard deviations (without the
             # common-random-number correlation, so this is cautious).
-            sd_sig = np.sqrt(tile_sum(e.var / e.spp + ctx.baseline.var / ctx.baseline.spp, t)) / n
+            sd_sig = np.sqrt(tile_sums(e.var / e.spp + ctx.baseline.var / ctx.baseline.spp, t)) / n
             d = np.sign(d) * np.maximum(np.abs(d) - 2.0 * sd_sig, 0.0)
             rel = np.abs(d) / np.maximum(np.abs(r), 1e-12)
             ok = rel >= a.thresholds.min_effect

@@ -41,6 +41,8 @@ import numpy as np
 from mcrt.film import RenderResult
 from mcrt.grade.assignment import Assignment
 from mcrt.scene import Lambertian, Mirror, RenderSettings, Scene
+from mcrt.stats import LUMINANCE_WEIGHTS
+from mcrt.stats.tiles import block_means
 
 CACHE_ENV = "MCRT_CACHE"
 DIRECT_SPP = 256  # spp of the max-depth-2 images used to describe regions (mcrt fallback)
@@ -87,14 +89,6 @@ class Context:
 # --------------------------------------------------------------------------
 
 
-def block_mean(x: np.ndarray, k: int) -> np.ndarray:
-    """Mean over k x k blocks of an (H, W, ...) array; H and W must be multiples of k."""
-    if k == 1:
-        return x
-    h, w = x.shape[:2]
-    return x.reshape(h // k, k, w // k, k, *x.shape[2:]).mean(axis=(1, 3))
-
-
 def downsample_result(r: RenderResult, k: int) -> RenderResult:
     """A render box-filtered by k: the block means, with the stratified per-sample variance.
 
@@ -105,8 +99,8 @@ def downsample_result(r: RenderResult, k: int) -> RenderResult:
     """
     if k == 1:
         return r
-    var = None if r.variance is None else block_mean(r.variance.astype(np.float64), k).astype(np.float32)
-    return RenderResult(mean=block_mean(r.mean.astype(np.float64), k).astype(np.float32), variance=var,
+    var = None if r.variance is None else block_means(r.variance.astype(np.float64), k).astype(np.float32)
+    return RenderResult(mean=block_means(r.mean.astype(np.float64), k).astype(np.float32), variance=var,
                         spp=r.spp * k * k, seed=r.seed, max_depth=r.max_depth, renderer=r.renderer,
                         scene_hash=r.scene_hash, camera=r.camera, extra=dict(r.extra))
 
@@ -242,7 +236,7 @@ def prepare_context(a: Assignment, cache_dir: str | os.PathLike | None = None, *
 
 def _direct_fraction(direct: np.ndarray, full: np.ndarray, max_depth: int) -> np.ndarray:
     """Share of each pixel's luminance that max depth 2 (emission + direct light) already gives."""
-    lum = np.array([0.2126, 0.7152, 0.0722])
+    lum = np.asarray(LUMINANCE_WEIGHTS)
     dl, fl = direct.astype(np.float64) @ lum, full.astype(np.float64) @ lum
     if max_depth in (1, 2):
         return np.ones_like(fl)
@@ -349,8 +343,8 @@ def surface_labels(scene: Scene, camera: str, width: int, height: int, sub: int 
 
 
 def _coarse_expected(e: Expected, k: int) -> Expected:
-    return Expected(block_mean(e.mean.astype(np.float64), k).astype(np.float32),
-                    block_mean(e.var.astype(np.float64), k).astype(np.float32), e.spp * k * k, e.source + f", box-filtered by {k}")
+    return Expected(block_means(e.mean.astype(np.float64), k).astype(np.float32),
+                    block_means(e.var.astype(np.float64), k).astype(np.float32), e.spp * k * k, e.source + f", box-filtered by {k}")
 
 
 def _mode_blocks(lab: np.ndarray, k: int, n: int) -> np.ndarray:
@@ -373,14 +367,14 @@ def coarsen(ctx: Context, k: int) -> Context:
     model = {}
     for cam, v in ctx.model_var.items():
         m = (ctx.baseline.mean if cam == ctx.assignment.camera else ctx.references[cam].mean).astype(np.float64)
-        between = block_mean(m * m, k) - block_mean(m, k) ** 2
-        model[cam] = (block_mean(v.astype(np.float64), k) + np.maximum(between, 0)).astype(np.float32)
+        between = block_means(m * m, k) - block_means(m, k) ** 2
+        model[cam] = (block_means(v.astype(np.float64), k) + np.maximum(between, 0)).astype(np.float32)
     return replace(
         ctx,
         references={c: _coarse_expected(e, k) for c, e in ctx.references.items()},
         model_var=model,
         baseline=_coarse_expected(ctx.baseline, k),
         mutants={m: _coarse_expected(e, k) for m, e in ctx.mutants.items()},
-        direct_fraction={c: block_mean(d.astype(np.float64), k).astype(np.float32) for c, d in ctx.direct_fraction.items()},
+        direct_fraction={c: block_means(d.astype(np.float64), k).astype(np.float32) for c, d in ctx.direct_fraction.items()},
         labels={c: _mode_blocks(lab, k, len(ctx.label_names)) for c, lab in ctx.labels.items()},
     )

@@ -35,6 +35,8 @@ from pathlib import Path
 import numpy as np
 from PIL import Image
 
+from mcrt.stats.tiles import tile_box, tile_expand
+
 SCHEMA = "mcrt.grade.results/1"
 DIFF_VMAX = 0.25  # the relative-difference maps saturate at +-25 %
 FIG_MIN = 256  # figures are enlarged (nearest neighbour) to at least this many pixels across
@@ -64,11 +66,6 @@ def diff_scale(rel: np.ndarray) -> float:
     return 5.0
 
 
-def _expand(tiles: np.ndarray, shape: tuple[int, int], tile: int) -> np.ndarray:
-    h, w = shape
-    return np.repeat(np.repeat(tiles, tile, axis=0), tile, axis=1)[:h, :w]
-
-
 def _scale(shape) -> int:
     return max(1, math.ceil(FIG_MIN / max(shape[1], 1)))
 
@@ -80,12 +77,11 @@ def _enlarge(img: np.ndarray, s: int) -> np.ndarray:
 def tile_figure(tiles: np.ndarray, shape, tile: int, flagged: np.ndarray | None = None, vmax: float = DIFF_VMAX) -> np.ndarray:
     """A per-tile signed map enlarged for viewing, with flagged tiles outlined in black."""
     s = _scale(shape)
-    img = _enlarge(diverging(_expand(tiles, shape, tile), vmax), s)
+    h, w = shape
+    img = _enlarge(diverging(tile_expand(tiles, h, w, tile), vmax), s)
     if flagged is not None:
-        h, w = shape
         for ty, tx in zip(*np.nonzero(flagged)):
-            y0, y1 = ty * tile * s, min(h, (ty + 1) * tile) * s
-            x0, x1 = tx * tile * s, min(w, (tx + 1) * tile) * s
+            y0, y1, x0, x1 = (s * b for b in tile_box(h, w, tile, int(ty), int(tx)))
             img[y0:y1, x0:x0 + 1] = img[y0:y1, x1 - 1:x1] = 0
             img[y0:y0 + 1, x0:x1] = img[y1 - 1:y1, x0:x1] = 0
     return img

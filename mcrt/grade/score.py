@@ -49,33 +49,11 @@ from scipy import stats as _sps
 
 from mcrt import metrics as image_metrics
 from mcrt.imageio import srgb_eotf_slope, srgb_oetf
-from mcrt.stats import adjust_p_values
+from mcrt.stats import LUMINANCE_WEIGHTS, adjust_p_values
+from mcrt.stats.tiles import tile_box, tile_expand, tile_sums
 
-LUMINANCE = np.array([0.2126, 0.7152, 0.0722])
+LUMINANCE = np.asarray(LUMINANCE_WEIGHTS)  # as an array, for ``rgb @ LUMINANCE``
 CHANNELS = ("R", "G", "B")
-
-
-# --------------------------------------------------------------------------
-# Tiles
-# --------------------------------------------------------------------------
-
-
-def _edges(n: int, tile: int) -> np.ndarray:
-    return np.arange(0, n, tile if tile > 0 else n)
-
-
-def tile_sum(x: np.ndarray, tile: int) -> np.ndarray:
-    """Sums over tile x tile blocks (tile 0: the whole image), partial edge tiles kept."""
-    h, w = x.shape[:2]
-    return np.add.reduceat(np.add.reduceat(x, _edges(h, tile), axis=0), _edges(w, tile), axis=1)
-
-
-def tile_boxes(h: int, w: int, tile: int) -> list[list[tuple[int, int, int, int]]]:
-    """Pixel bounds (y0, y1, x0, x1) of every tile, indexed [ty][tx]."""
-    ys, xs = _edges(h, tile), _edges(w, tile)
-    ys1 = list(ys[1:]) + [h]
-    xs1 = list(xs[1:]) + [w]
-    return [[(int(y0), int(y1), int(x0), int(x1)) for x0, x1 in zip(xs, xs1)] for y0, y1 in zip(ys, ys1)]
 
 
 @dataclass
@@ -141,16 +119,16 @@ def scale_stats(resid: np.ndarray, ref: np.ndarray, mask: np.ndarray, noise: Noi
     """
     m = mask[..., None].astype(np.float64)
     r = np.where(m > 0, resid, 0.0)
-    n = tile_sum(mask.astype(np.float64), tile)
+    n = tile_sums(mask.astype(np.float64), tile)
     n3 = n[..., None]
     with np.errstate(divide="ignore", invalid="ignore"):
         safe = np.maximum(n3, 1.0)
-        d = tile_sum(r, tile) / safe
-        rm = tile_sum(np.where(m > 0, ref, 0.0), tile) / safe
-        vr = tile_sum(noise.reference * m, tile) / safe**2
-        vm = tile_sum(noise.model * m, tile) / safe**2 + vr
-        vp = tile_sum(noise.pair * m, tile) / safe**2 + vr if noise.pair is not None else None
-        ss = tile_sum(r * r, tile)
+        d = tile_sums(r, tile) / safe
+        rm = tile_sums(np.where(m > 0, ref, 0.0), tile) / safe
+        vr = tile_sums(noise.reference * m, tile) / safe**2
+        vm = tile_sums(noise.model * m, tile) / safe**2 + vr
+        vp = tile_sums(noise.pair * m, tile) / safe**2 + vr if noise.pair is not None else None
+        ss = tile_sums(r * r, tile)
         s2 = np.maximum(ss - safe * d * d, 0.0) / np.maximum(n3 - 1.0, 1.0)
         vs = s2 / safe
         v = np.maximum(vm, vs)
@@ -169,15 +147,17 @@ def scale_stats(resid: np.ndarray, ref: np.ndarray, mask: np.ndarray, noise: Noi
     return ScaleResult(tile, n, d, rm, v, vm, vs, vp, t, np.minimum(p, 1.0), rel, valid)
 
 
+def bias_scales(tiles, h: int, w: int) -> list[int]:
+    """The scales :func:`bias_test` runs for an h x w image: ``tiles`` less those that cover the whole
+    image when 0 (the whole image) is also among them (the same test twice)."""
+    return [t for t in tiles if not (t > 0 and t >= max(h, w) and 0 in tiles)]
+
+
 def bias_test(resid: np.ndarray, ref: np.ndarray, mask: np.ndarray, noise: Noise, tiles, *, alpha: float,
               min_effect: float, full_effect: float) -> BiasTest:
     """Multi-scale tile test, Holm-corrected over every tile, scale and channel (module docstring)."""
     h, w = resid.shape[:2]
-    scales = []
-    for tile in tiles:
-        if tile > 0 and tile >= max(h, w) and 0 in tiles:
-            continue  # the same test as the whole image
-        scales.append(scale_stats(resid, ref, mask, noise, tile))
+    scales = [scale_stats(resid, ref, mask, noise, tile) for tile in bias_scales(tiles, h, w)]
     ps = np.concatenate([s.p[s.valid].ravel() for s in scales]) if scales else np.zeros(0)
     adj = adjust_p_values(ps, "holm") if ps.size else ps
     k = 0
@@ -192,10 +172,9 @@ def bias_test(resid: np.ndarray, ref: np.ndarray, mask: np.ndarray, noise: Noise
         s.p_adj = pa
         s.rejected = (pa <= alpha) & s.valid[..., None]
         s.penalised = s.rejected & (np.abs(s.rel) >= min_effect)
-        boxes = tile_boxes(h, w, s.tile)
         for ty, tx in zip(*np.nonzero(s.penalised.any(axis=2))):
             any_pen = True
-            y0, y1, x0, x1 = boxes[ty][tx]
+            y0, y1, x0, x1 = tile_box(h, w, s.tile, int(ty), int(tx))
             e = float(np.max(np.abs(s.rel[ty, tx][s.penalised[ty, tx]])))
             pix[y0:y1, x0:x1] = np.maximum(pix[y0:y1, x0:x1], e)
             c = int(np.argmax(np.where(s.penalised[ty, tx], np.abs(s.t[ty, tx]), -1)))
@@ -242,35 +221,30 @@ def noise_ratio(resid: np.ndarray, ref: np.ndarray, mask: np.ndarray, model_var_
     noise.
     """
     m = mask[..., None].astype(np.float64)
-    n = tile_sum(mask.astype(np.float64), tile)[..., None]
+    n = tile_sums(mask.astype(np.float64), tile)[..., None]
     safe = np.maximum(n, 1.0)
     r = np.where(m > 0, resid, 0.0)
-    d = tile_sum(r, tile) / safe
-    rm = tile_sum(np.where(m > 0, ref, 0.0), tile) / safe
+    d = tile_sums(r, tile) / safe
+    rm = tile_sums(np.where(m > 0, ref, 0.0), tile) / safe
     sm = rm + d
     if pair is not None:
-        meas = tile_sum(pair * m, tile) / safe
+        meas = tile_sums(pair * m, tile) / safe
     else:
         # Residuals against the reference scaled to the tile's own brightness, so that an image
         # brighter by a constant (or smoothly varying) factor keeps only its noise in the spread.
         with np.errstate(divide="ignore", invalid="ignore"):
             k = np.where(rm > 0, sm / np.where(rm > 0, rm, 1.0), 1.0)
         h, w = resid.shape[:2]
-        kp = _expand_tiles(k, h, w, tile)
+        kp = tile_expand(k, h, w, tile)
         rr = np.where(m > 0, resid + ref - kp * ref, 0.0)
-        dd = tile_sum(rr, tile) / safe
-        meas = np.maximum(tile_sum(rr * rr, tile) - safe * dd * dd, 0.0) / np.maximum(n - 2, 1)
-        meas = np.maximum(meas - tile_sum(ref_noise * kp * kp * m, tile) / safe, 0.0)
-    model = tile_sum(model_var_per_sample * m, tile) / safe
+        dd = tile_sums(rr, tile) / safe
+        meas = np.maximum(tile_sums(rr * rr, tile) - safe * dd * dd, 0.0) / np.maximum(n - 2, 1)
+        meas = np.maximum(meas - tile_sums(ref_noise * kp * kp * m, tile) / safe, 0.0)
+    model = tile_sums(model_var_per_sample * m, tile) / safe
     ok = (n >= 4) & (model > 0) & (rm > 0) & (sm > 0.2 * rm)
     if not ok.any():
         return float("nan")
     return float(np.mean((meas[ok] / sm[ok] ** 2) / (model[ok] / rm[ok] ** 2)))
-
-
-def _expand_tiles(t: np.ndarray, h: int, w: int, tile: int) -> np.ndarray:
-    size = tile if tile > 0 else max(h, w)
-    return np.repeat(np.repeat(t, size, axis=0), size, axis=1)[:h, :w]
 
 
 def quantisation_variance(image: np.ndarray, fmt: str) -> np.ndarray:

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["tile_sums", "tile_counts", "tile_means", "tile_box"]
+__all__ = ["tile_sums", "tile_counts", "tile_means", "block_means", "tile_box", "tile_expand"]
 
 
 def _step(n: int, tile: int) -> int:
@@ -57,7 +57,33 @@ def tile_means(x: np.ndarray, tile: int) -> np.ndarray:
     return tile_sums(x, tile) / n.reshape(n.shape + (1,) * (x.ndim - 2))
 
 
+def block_means(x: np.ndarray, k: int) -> np.ndarray:
+    """Means over k x k blocks of an (H, W, ...) array whose H and W are multiples of ``k``, shape (H/k, W/k, ...).
+
+    The box filter and decimation of a change of resolution by ``k``:
+    :func:`tile_means` of edge ``k`` where no tile is partial. ``k = 1``
+    returns ``x`` itself; a ValueError where H or W is not a multiple of
+    ``k`` (a resolution that is not an integer multiple has no block means).
+    """
+    if k == 1:
+        return x
+    h, w = x.shape[:2]
+    if k < 1 or h % k or w % k:
+        raise ValueError(f"a {w}x{h} image does not divide into {k}x{k} blocks")
+    return tile_means(x, k)
+
+
 def tile_box(h: int, w: int, tile: int, ty: int, tx: int) -> tuple[int, int, int, int]:
     """Pixel bounds ``(y0, y1, x0, x1)`` (end exclusive) of tile ``(ty, tx)`` of an h x w image."""
     sy, sx = _step(h, tile), _step(w, tile)
     return ty * sy, min(h, (ty + 1) * sy), tx * sx, min(w, (tx + 1) * sx)
+
+
+def tile_expand(t: np.ndarray, h: int, w: int, tile: int) -> np.ndarray:
+    """Per-tile values (tiles_y, tiles_x, ...) spread over the pixels of an h x w image, shape (h, w, ...).
+
+    Every pixel gets the value of the tile that covers it (partial edge
+    tiles included): the inverse of pooling, for per-pixel use of a tile
+    statistic and for drawing tile maps.
+    """
+    return np.repeat(np.repeat(t, _step(h, tile), axis=0), _step(w, tile), axis=1)[:h, :w]
