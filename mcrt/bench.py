@@ -12,12 +12,16 @@ minus the reference's own noise, mean(var_ref / spp_ref)), averaged over the
 repetitions, and the efficiency 1 / (MSE_excess x median time). For unbiased
 renderers MSE falls as 1/spp while time grows as spp, so the efficiency does
 not depend on the spp and its ratio is the ratio at equal time.
+
+This module measures; :mod:`mcrt.bench_report` writes the report
+(``mcrt bench --report DIR``) from the measurements' dictionary
+(:func:`bench_data`, also the JSON file).
 """
 
 from __future__ import annotations
 
+import contextlib
 import json
-import platform
 import resource
 import statistics
 import sys
@@ -145,29 +149,11 @@ def _committed_reference(scene, case: BenchCase, progress: bool):
     return ref.mean.astype(np.float64), reference_floor(ref)["mse"]
 
 
-def format_table(rows: list[BenchRow]) -> str:
-    lines = ["| camera | resolution | spp | depth | K | renderer | median s | M paths/s | JIT s | speed-up | MSE excess | efficiency ratio |",
-             "|---|---|---|---|---|---|---|---|---|---|---|---|"]
-    base = {}
-    for r in rows:
-        if r.renderer == "mitsuba":
-            base[json.dumps(asdict(r.case))] = r
-    for r in rows:
-        c = r.case
-        b = base.get(json.dumps(asdict(c)))
-        ratio = f"{r.paths_per_second / b.paths_per_second:.1f}x" if b else ""
-        jit = f"{r.compile_time:.2f}" if r.compile_time is not None else "-"
-        mse = f"{r.mse_excess:.3g}" if r.mse_excess is not None else "-"
-        eff = f"{r.efficiency / b.efficiency:.1f}x" if b and r.efficiency and b.efficiency else "-"
-        lines.append(f"| {c.camera} | {c.width}x{c.height} | {c.spp} | {c.max_depth} | {c.light_samples} | {r.renderer} | "
-                     f"{statistics.median(r.times):.3f} | {r.paths_per_second / 1e6:.2f} | {jit} | {ratio} | {mse} | {eff} |")
-    return "\n".join(lines)
-
-
 @dataclass
 class ProfileRow:
     variant: str
     kernel_ms: float  # median execution time of the path kernel (Dr.Jit kernel history)
+    key: str = ""  # what the variant changes: 'full', 'no_tetrahedron', 'no_sphere', 'depth2', 'depth1', 'k4', 'triangles', 'rng'
 
 
 def kernel_profile(scene, *, camera: str = "near", res: int = 256, spp: int = 16, max_depth: int = 8, repeats: int = 5,
@@ -178,9 +164,10 @@ def kernel_profile(scene, *, camera: str = "near", res: int = 256, spp: int = 16
     from Dr.Jit's kernel history. A part's cost is the difference to the full
     kernel; the variants render other images (no tetrahedron, fewer bounces),
     so they time work, not correctness. The RNG row is a kernel that only
-    draws a path's random numbers: five per bounce for the bounces an average
-    path makes here, about 5 (a lane's later paths take their pixel jitter
-    from numbers its previous path drew).
+    draws random numbers: five per bounce for five bounces, the order of an
+    average path's length in the canonical scene (a lane's later paths take
+    their pixel jitter from numbers its previous path drew, so a path draws
+    no more than five per bounce).
     """
     import drjit as dr
 
@@ -189,16 +176,16 @@ def kernel_profile(scene, *, camera: str = "near", res: int = 256, spp: int = 16
 
     objects = {type(o).__name__: o for o in scene.objects}
     no = {name: replace(scene, objects=tuple(o for o in scene.objects if type(o).__name__ != name)) for name in objects}
-    variants = [("full kernel (depth %d)" % max_depth, scene, {}),
-                ("without the tetrahedron", no.get("Tetrahedron", scene), {}),
-                ("without the mirror sphere", no.get("Sphere", scene), {}),
-                ("depth 2 (camera ray, one light sample, one bounce)", scene, {"max_depth": 2}),
-                ("depth 1 (camera ray and its hit)", scene, {"max_depth": 1}),
-                ("K = 4 light samples", scene, {"light_samples": 4}),
-                ("triangles intersector", scene, {"intersector": "triangles"})]
+    variants = [("full", "full kernel (depth %d)" % max_depth, scene, {}),
+                ("no_tetrahedron", "without the tetrahedron", no.get("Tetrahedron", scene), {}),
+                ("no_sphere", "without the mirror sphere", no.get("Sphere", scene), {}),
+                ("depth2", "depth 2 (camera ray, one light sample, one bounce)", scene, {"max_depth": 2}),
+                ("depth1", "depth 1 (camera ray and its hit)", scene, {"max_depth": 1}),
+                ("k4", "K = 4 light samples", scene, {"light_samples": 4}),
+                ("triangles", "triangles intersector", scene, {"intersector": "triangles"})]
     rows = []
     dr.set_flag(dr.JitFlag.KernelHistory, True)
-    for label, sc, kw in variants:
+    for key, label, sc, kw in variants:
         args = dict(max_depth=max_depth, light_samples=1, intersector="convex") | kw
         tracer = Tracer(sc, camera, res, res, args["max_depth"], args["light_samples"], backend=backend, intersector=args["intersector"])
         times = []
@@ -207,7 +194,7 @@ def kernel_profile(scene, *, camera: str = "near", res: int = 256, spp: int = 16
             tracer.pass_sums(1, k, spp)
             dr.sync_thread()
             times.append(max(h["execution_time"] for h in dr.kernel_history() if "execution_time" in h))
-        rows.append(ProfileRow(label, statistics.median(times[1:])))
+        rows.append(ProfileRow(label, statistics.median(times[1:]), key))
     m = Tracer(scene, camera, res, res, max_depth, backend=backend).m
     times = []
     for k in range(repeats + 1):
@@ -219,29 +206,8 @@ def kernel_profile(scene, *, camera: str = "near", res: int = 256, spp: int = 16
         dr.eval(acc)
         dr.sync_thread()
         times.append(max(h["execution_time"] for h in dr.kernel_history() if "execution_time" in h))
-    rows.append(ProfileRow("RNG alone (25 draws per path)", statistics.median(times[1:])))
+    rows.append(ProfileRow("RNG alone (25 draws per path)", statistics.median(times[1:]), "rng"))
     return rows
-
-
-def format_profile(rows: list[ProfileRow], paths: int) -> str:
-    full = rows[0].kernel_ms
-    lines = [f"| kernel ({paths:,} paths) | ms | share of the full kernel |", "|---|---|---|"]
-    for r in rows:
-        lines.append(f"| {r.variant} | {r.kernel_ms:.1f} | {100 * r.kernel_ms / full:.0f} % |")
-    return "\n".join(lines)
-
-
-def environment() -> dict:
-    import drjit as dr
-    import mitsuba as mi
-
-    import mcrt
-
-    from mcrt.provenance import cpu_name
-
-    cpu = cpu_name()
-    return {"mcrt": mcrt.__version__, "mitsuba": mi.__version__, "drjit": dr.__version__, "cpu": cpu,
-            "threads": dr.thread_count(), "python": platform.python_version(), "date": time.strftime("%Y-%m-%d %H:%M:%S")}
 
 
 def peak_memory_mib() -> float:
@@ -249,49 +215,150 @@ def peak_memory_mib() -> float:
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
 
 
+def bench_cases(cameras, resolutions, spps, depths, light_samples: int = 1, spp_sweep=()) -> list[BenchCase]:
+    """Every (camera, resolution, spp, depth), then each camera's ``spp_sweep`` at the last resolution and depth.
+
+    A sweep case that is already among the others is not timed twice.
+    """
+    cases = [BenchCase(cam, res, res, spp, depth, light_samples)
+             for cam in cameras for res in resolutions for spp in spps for depth in depths]
+    for cam in cameras:
+        for spp in spp_sweep:
+            case = BenchCase(cam, resolutions[-1], resolutions[-1], spp, depths[-1], light_samples)
+            if case not in cases:
+                cases.append(case)
+    return cases
+
+
+def simd_extension() -> str | None:
+    """The widest x86 vector extension the CPU reports (/proc/cpuinfo flags), which sets Dr.Jit's LLVM packet width."""
+    with contextlib.suppress(OSError):
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("flags"):
+                flags = set(line.split(":", 1)[1].split())
+                for flag, name in (("avx512f", "AVX-512"), ("avx2", "AVX2"), ("avx", "AVX"), ("sse4_2", "SSE4.2")):
+                    if flag in flags:
+                        return name
+    return None
+
+
+def bench_data(rows: list[BenchRow], *, command: str, backend: str, intersector: str, repeats: int,
+               profile: list[ProfileRow] = (), profile_case: dict | None = None) -> dict:
+    """The run as one JSON-ready dictionary: what ``--json`` writes and :mod:`mcrt.bench_report` reads.
+
+    Machine and versions come from :func:`mcrt.provenance.provenance`, with
+    the backend, the intersector, the libLLVM version and the CPU's vector
+    extension added.
+    """
+    import drjit as dr
+
+    from mcrt.provenance import provenance
+
+    llvm = ".".join(map(str, dr.detail.llvm_version())) if backend == "llvm" else None
+    return {"command": command,
+            "provenance": provenance(command=command, backend=backend, intersector=intersector, libllvm=llvm,
+                                     simd=simd_extension()),
+            "backend": backend, "intersector": intersector, "repeats": repeats, "warmup_renders": 1,
+            "rows": [dict(asdict(r), median_time=statistics.median(r.times)) for r in rows],
+            "peak_memory_mib": peak_memory_mib(),
+            "kernel_profile": [asdict(r) for r in profile], "kernel_profile_case": profile_case}
+
+
+def command_line(parser, args) -> str:
+    """The ``mcrt bench`` command that repeats this run: every option that differs from its default."""
+    import shlex
+
+    words = ["mcrt", "bench"]
+    for action in parser._actions:
+        if not action.option_strings or action.dest in ("help",):
+            continue
+        value, flag = getattr(args, action.dest), action.option_strings[0]
+        if value is None or value == action.default:
+            continue
+        if action.const is True:  # store_true
+            words.append(flag)
+        else:
+            for v in value if isinstance(value, list) else [value]:
+                words += [flag, str(v)]
+    return " ".join(shlex.quote(w) for w in words)
+
+
 def register(sub) -> None:
     p = sub.add_parser("bench", help="paths per second of mcrt and Mitsuba on the same scene, in one run")
-    p.add_argument("--scene", default=None)
-    p.add_argument("--camera", action="append", help="camera(s) (default: near and far)")
-    p.add_argument("--res", type=int, action="append", help="square resolution(s) (default 256)")
-    p.add_argument("--spp", type=int, action="append", help="samples per pixel of one render (repeatable; default 16)")
-    p.add_argument("--max-depth", type=int, action="append", help="max depth(s) (default 8)")
-    p.add_argument("--light-samples", type=int, default=1)
-    p.add_argument("--repeats", type=int, default=5, help="timed repetitions per renderer (after one warm-up)")
-    p.add_argument("--renderers", default="mcrt,mitsuba")
-    p.add_argument("--intersector", choices=("convex", "triangles"), default="convex")
-    p.add_argument("--backend", choices=("llvm", "cuda"), default="llvm")
-    p.add_argument("--json", default=None, help="also write the measurements to this JSON file")
+    p.add_argument("--scene", default=None, help="scene file (default: reference/scenes/canonical.toml)")
+    p.add_argument("--camera", action="append", help="camera(s), repeatable (default: near and far)")
+    p.add_argument("--res", type=int, action="append", help="square resolution(s), repeatable (default 256)")
+    p.add_argument("--spp", type=int, action="append", help="samples per pixel of one render, repeatable (default 16)")
+    p.add_argument("--max-depth", type=int, action="append", help="max depth(s), repeatable (default 8)")
+    p.add_argument("--spp-sweep", type=int, action="append", default=None, metavar="SPP",
+                   help="also time these samples per pixel, repeatable, at the last --res and --max-depth of each camera "
+                        "(the report's section against samples per render; default: none)")
+    p.add_argument("--light-samples", type=int, default=1, help="K, shadow rays per diffuse vertex (default 1)")
+    p.add_argument("--repeats", type=int, default=5,
+                   help="timed repetitions per renderer and case, after one warm-up render (default 5)")
+    p.add_argument("--renderers", default="mcrt,mitsuba", help="comma-separated renderers (default: mcrt,mitsuba)")
+    p.add_argument("--intersector", choices=("convex", "triangles"), default="convex", help="mcrt's intersector (default: convex)")
+    p.add_argument("--backend", choices=("llvm", "cuda"), default="llvm", help="Dr.Jit backend (default: llvm)")
+    p.add_argument("--json", default=None, metavar="FILE",
+                   help="also write the measurements to this JSON file (default: none; DIR/bench.json with --report)")
     p.add_argument("--profile", action="store_true",
-                   help="also time mcrt's path kernel with one part left out at a time (where the time goes)")
-    p.set_defaults(func=cmd_bench)
+                   help="also time mcrt's path kernel with one part left out at a time, at the first camera and the last "
+                        "--res, --spp and --max-depth (where the time goes; default: off)")
+    p.add_argument("--report", default=None, metavar="DIR",
+                   help="write the report DIR/index.md, every number in it from this run, and the measurements "
+                        "(DIR/bench.json unless --json names another file; default: none)")
+    p.add_argument("--tried", default=None, metavar="FILE",
+                   help="hand-kept log that the report copies verbatim as its last, labelled section "
+                        "(default: DIR/tried.md when that file exists; 'none': no log)")
+    p.set_defaults(func=cmd_bench, bench_parser=p)
+
+
+def _tried_file(args) -> Path | None:
+    """The hand-kept log to include: --tried, else DIR/tried.md where it exists; checked before the run."""
+    if args.tried == "none" or not args.report:
+        return None
+    if args.tried is None:
+        default = Path(args.report) / "tried.md"
+        return default if default.is_file() else None
+    if not Path(args.tried).is_file():
+        raise ValueError(f"{args.tried}: no such file (--tried names the hand-kept log the report includes)")
+    return Path(args.tried)
 
 
 def cmd_bench(args) -> int:
+    from mcrt.bench_report import format_profile, format_table, write_report
     from mcrt.scene import CANONICAL, load_scene
 
+    if args.repeats < 1:
+        raise ValueError(f"--repeats must be at least 1, got {args.repeats}")
+    tried = _tried_file(args)
     scene = load_scene(args.scene or CANONICAL)
+    cameras, resolutions, depths = args.camera or ["near", "far"], args.res or [256], args.max_depth or [8]
     spps = args.spp or [16]
-    cases = [BenchCase(cam, res, res, spp, depth, args.light_samples)
-             for cam in (args.camera or ["near", "far"]) for res in (args.res or [256]) for spp in spps
-             for depth in (args.max_depth or [8])]
+    cases = bench_cases(cameras, resolutions, spps, depths, args.light_samples, args.spp_sweep or ())
     rows = run_bench(scene, cases, renderers=args.renderers.split(","), repeats=args.repeats, backend=args.backend,
                      intersector=args.intersector)
-    env = environment()
-    print(f"mcrt {env['mcrt']}, Mitsuba {env['mitsuba']}, Dr.Jit {env['drjit']}, {env['threads']} threads, {env['cpu']}")
-    print(format_table(rows))
-    print(f"peak memory of this process: {peak_memory_mib():.0f} MiB")
-    profile = []
+    profile, profile_case = [], None
     if args.profile:
-        res, cam = (args.res or [256])[-1], (args.camera or ["near"])[0]
-        profile = kernel_profile(scene, camera=cam, res=res, spp=spps[-1], max_depth=(args.max_depth or [8])[-1],
+        profile_case = {"camera": cameras[0], "width": resolutions[-1], "height": resolutions[-1], "spp": spps[-1],
+                        "max_depth": depths[-1], "repeats": args.repeats}
+        profile = kernel_profile(scene, camera=cameras[0], res=resolutions[-1], spp=spps[-1], max_depth=depths[-1],
                                  repeats=args.repeats, backend=args.backend)
-        print(format_profile(profile, res * res * spps[-1]))
-    if args.json:
-        out = {"command": " ".join(sys.argv), "environment": env, "backend": args.backend, "intersector": args.intersector,
-               "rows": [dict(asdict(r), median_time=statistics.median(r.times)) for r in rows], "peak_memory_mib": peak_memory_mib(),
-               "kernel_profile": [asdict(r) for r in profile]}
-        Path(args.json).parent.mkdir(parents=True, exist_ok=True)
-        Path(args.json).write_text(json.dumps(out, indent=2))
-        print(f"wrote {args.json}")
+    data = bench_data(rows, command=command_line(args.bench_parser, args), backend=args.backend,
+                      intersector=args.intersector, repeats=args.repeats, profile=profile, profile_case=profile_case)
+    prov, v = data["provenance"], data["provenance"]["versions"]
+    print(f"mcrt {v['mcrt']}, Mitsuba {v['mitsuba']}, Dr.Jit {v['drjit']}, {prov['drjit_threads']} threads, "
+          f"{prov['machine']['cpu']}")
+    print(format_table(data["rows"]))
+    print(f"peak memory of this process: {data['peak_memory_mib']:.0f} MiB")
+    if profile:
+        print(format_profile(data["kernel_profile"], resolutions[-1] ** 2 * spps[-1]))
+    json_path = Path(args.json) if args.json else Path(args.report) / "bench.json" if args.report else None
+    if json_path is not None:
+        json_path.parent.mkdir(parents=True, exist_ok=True)
+        json_path.write_text(json.dumps(data, indent=2))
+        print(f"wrote {json_path}")
+    if args.report:
+        index = write_report(Path(args.report), data, json_path=json_path, tried=tried)
+        print(f"wrote {index}")
     return 0

@@ -1,12 +1,19 @@
-"""The benchmark's library API on a tiny case: shapes of its results, not speeds (speed lives in reports/bench/)."""
+"""The benchmark on tiny cases: shapes of its results, not speeds (speed lives in reports/bench/), and its report.
+
+The report (mcrt.bench_report) is checked against recorded rows whose numbers
+are chosen so that every derived figure is known exactly, and end to end from
+a tiny run of ``mcrt bench --report``.
+"""
 
 from __future__ import annotations
 
 import json
+import re
 import statistics
 
-from mcrt.bench import BenchCase, format_profile, format_table, kernel_profile, run_bench
-from mcrt.cli import main
+from mcrt.bench import BenchCase, bench_cases, kernel_profile, run_bench
+from mcrt.bench_report import LOG_HEADING, format_profile, format_table, markdown, write_report
+from mcrt.cli import build_parser, main
 from mcrt.scene import load_scene
 
 
@@ -22,7 +29,7 @@ def test_run_bench_scores_against_the_committed_reference():
     """At 64x64, max depth 2 a committed reference exists: each render's excess MSE and the efficiency are reported.
 
     Both renderers at 4 spp (seeds 0 and 1) are unbiased, so their excess MSE is their variance over 4 spp:
-    well above zero and within a factor 3 of each other (measured: 0.92).
+    well above zero and within a factor 3 of each other.
     """
     rows = run_bench(load_scene(), [BenchCase("near", 64, 64, 4, 2)], repeats=2, progress=False)
     mcrt, mitsuba = rows
@@ -58,3 +65,123 @@ def test_bench_without_cuda_says_so_in_one_line(capsys):
     assert main(["bench", "--backend", "cuda", "--res", "16", "--repeats", "1"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert err[-1] == "mcrt: the CUDA backend is unavailable on this machine (no NVIDIA GPU or driver); use --backend llvm"
+
+
+def _row(camera, res, spp, depth, renderer, seconds, mse=None):
+    """A recorded row: ``seconds`` per render, so paths per second and efficiency follow exactly."""
+    case = {"camera": camera, "width": res, "height": res, "spp": spp, "max_depth": depth, "light_samples": 1}
+    eff = 1 / (mse * seconds) if mse else None
+    return {"case": case, "renderer": renderer, "times": [seconds] * 3, "compile_time": 0.0,
+            "paths_per_second": res * res * spp / seconds, "mse_excess": mse, "efficiency": eff, "median_time": seconds}
+
+
+def _recorded_run() -> dict:
+    """Both renderers at 64x64 (depth 2 and 8, 16 spp) and a 1/4/16-spp sweep at depth 8.
+
+    Times are a + b x paths: mcrt 2 ms + 16 ns per path, Mitsuba 3 ms + 272 ns, so the fit recovers them exactly.
+    """
+    rows = []
+    for spp, depth in ((16, 2), (1, 8), (4, 8), (16, 8)):
+        paths = 64 * 64 * spp * depth / 8
+        mse = 0.5 / spp if depth == 8 else None
+        rows.append(_row("near", 64, spp, depth, "mcrt", 2e-3 + 16e-9 * paths, mse))
+        rows.append(_row("near", 64, spp, depth, "mitsuba", 3e-3 + 272e-9 * paths, mse and mse * 1.1))
+    profile = [{"variant": "full kernel (depth 8)", "kernel_ms": 20.0, "key": "full"},
+               {"variant": "without the tetrahedron", "kernel_ms": 16.0, "key": "no_tetrahedron"},
+               {"variant": "K = 4 light samples", "kernel_ms": 35.0, "key": "k4"},
+               {"variant": "triangles intersector", "kernel_ms": 64.0, "key": "triangles"},
+               {"variant": "RNG alone (25 draws per path)", "kernel_ms": 1.5, "key": "rng"}]
+    prov = {"date": "2000-01-02T03:04:05+00:00", "git_commit": "abc", "source_hash": "def",
+            "machine": {"cpu": "Test CPU", "cores": 3, "platform": "TestOS"},
+            "versions": {"mcrt": "9.9", "drjit": "8.8", "mitsuba": "7.7", "numpy": "6.6", "python": "5.5"},
+            "drjit_threads": 3, "libllvm": "42.0.0", "simd": "AVX-512"}
+    return {"command": "mcrt bench --res 64 --spp-sweep 1", "provenance": prov, "backend": "llvm", "intersector": "convex",
+            "repeats": 3, "warmup_renders": 1, "rows": rows, "peak_memory_mib": 123.4, "kernel_profile": profile,
+            "kernel_profile_case": {"camera": "near", "width": 64, "height": 64, "spp": 16, "max_depth": 8, "repeats": 3}}
+
+
+def _sections(page: str) -> list[str]:
+    return [line for line in page.splitlines() if line.startswith("## ")]
+
+
+def _table_line(page: str, case: dict, renderer: str) -> str:
+    prefix = f"| {case['camera']} | {case['width']}x{case['height']} | {case['spp']} | {case['max_depth']} | 1 | {renderer} |"
+    (line,) = [line for line in page.splitlines() if line.startswith(prefix)]
+    return line
+
+
+def test_report_from_recorded_rows(tmp_path):
+    data = _recorded_run()
+    tried = tmp_path / "tried.md"
+    tried.write_text("### An old round\n\n- Something 11 % slower.\n")
+    page = markdown(data, tmp_path, json_path=tmp_path / "bench.json", tried=tried)
+    assert _sections(page) == ["## Machine", "## Method", "## Paths per second", "## Against samples per render",
+                               "## Where mcrt's time goes", "## Reading it", LOG_HEADING]
+    assert "    mcrt bench --res 64 --spp-sweep 1\n" in page and "[bench.json](bench.json)" in page
+    for fact in ("2000-01-02T03:04:05+00:00", "Test CPU, 3 cores", "16-lane packets", "| Dr.Jit threads | 3 |", "mcrt 9.9",
+                 "Mitsuba 7.7", "Dr.Jit 8.8", "libLLVM 42.0.0", "abc", "Peak memory of the benchmark process: 123 MiB",
+                 "medians of the 3 timed renders"):
+        assert fact in page, fact
+    # Every row's numbers in its table line, the speed-up and efficiency ratio from the same case.
+    rows = data["rows"]
+    for a, b in zip(rows[::2], rows[1::2]):
+        line = _table_line(page, a["case"], "mcrt")
+        assert f"| {a['median_time']:.4f} | {a['paths_per_second'] / 1e6:.2f} |" in line
+        assert f"| {a['paths_per_second'] / b['paths_per_second']:.1f}x |" in line
+        if a["efficiency"]:
+            assert f"| {a['efficiency'] / b['efficiency']:.1f}x |" in line
+        assert f"| {b['median_time']:.4f} | {b['paths_per_second'] / 1e6:.2f} |" in _table_line(page, b["case"], "mitsuba")
+    # The fit recovers the times' fixed cost and cost per path.
+    assert "mcrt 2 ms per render plus 16 ns per path, Mitsuba 3 ms plus 272 ns per path: 17.0x per path" in page
+    # The profile's derived costs.
+    assert "The tetrahedron costs 4 ms (20 % of the full kernel)" in page
+    assert "(K = 4) add 75 %" in page and "3.2 times as slow" in page and "take 8 % of the full kernel" in page
+    # The log comes last, verbatim, and only there does its number appear.
+    body, log = page.split(LOG_HEADING)
+    assert log.rstrip().endswith(tried.read_text().rstrip()) and "11 %" not in body
+
+
+def test_report_without_log_or_sweep(tmp_path):
+    data = _recorded_run()
+    data["rows"] = data["rows"][:2]
+    data["kernel_profile"], data["kernel_profile_case"] = [], None
+    page = (write_report(tmp_path / "r", data)).read_text()
+    assert _sections(page) == ["## Machine", "## Method", "## Paths per second", "## Reading it"]
+    assert "outside the last section" not in page
+
+
+def test_spp_sweep_cases_are_not_timed_twice():
+    cases = bench_cases(["near", "far"], [64, 256], [16], [2, 8], 1, [1, 16, 64])
+    assert len(cases) == len(set(map(str, cases))) == 2 * (4 + 2)
+    assert BenchCase("far", 256, 256, 64, 8) in cases and BenchCase("near", 64, 64, 64, 8) not in cases
+
+
+def test_bench_command_writes_report(tmp_path, capsys):
+    """A tiny run of ``mcrt bench --report``: the page, its JSON, and the table's numbers those of the JSON."""
+    out = tmp_path / "bench"
+    tried = tmp_path / "log.md"
+    tried.write_text("### Hand-kept\n\nkept 1.23x\n")
+    assert main(["bench", "--res", "16", "--spp", "2", "--spp-sweep", "1", "--max-depth", "3", "--camera", "near",
+                 "--repeats", "1", "--profile", "--report", str(out), "--tried", str(tried)]) == 0
+    page, data = (out / "index.md").read_text(), json.loads((out / "bench.json").read_text())
+    assert data["command"] == ("mcrt bench --camera near --res 16 --spp 2 --max-depth 3 --spp-sweep 1 --repeats 1 --profile "
+                               f"--report {out} --tried {tried}")
+    assert f"    {data['command']}\n" in page and page.rstrip().endswith("kept 1.23x")
+    assert {"Where mcrt's time goes", "Against samples per render", "Machine"} <= {s[3:] for s in _sections(page)}
+    assert len(data["rows"]) == 4 and data["provenance"]["versions"]["mitsuba"]
+    for r in data["rows"]:
+        assert f"| {r['median_time']:.4f} | {r['paths_per_second'] / 1e6:.2f} |" in _table_line(page, r["case"], r["renderer"])
+    for p in data["kernel_profile"]:
+        assert f"| {p['variant']} | {p['kernel_ms']:.3g} |" in page
+
+
+def test_bench_refuses_a_missing_log_before_running(tmp_path, capsys):
+    assert main(["bench", "--report", str(tmp_path), "--tried", str(tmp_path / "none.md")]) == 2
+    assert "none.md: no such file" in capsys.readouterr().err and not (tmp_path / "index.md").exists()
+
+
+def test_every_bench_option_states_its_default():
+    sub = next(a for a in build_parser()._subparsers._group_actions[0].choices.items() if a[0] == "bench")[1]
+    for action in sub._actions:
+        if action.option_strings and action.dest != "help":
+            assert re.search(r"default", action.help or ""), action.option_strings
