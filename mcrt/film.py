@@ -65,7 +65,7 @@ class Moments:
         if self.n == 0:
             # Take the first sums over (later adds update them in place; callers
             # pass fresh arrays): adding them to fresh zeros would first touch
-            # every page of the zero arrays, about 10 ms at 256x256.
+            # every page of the zero arrays, a cost that grows with the image.
             self.s1, self.s2 = np.asarray(s1, dtype=np.float64), np.asarray(s2, dtype=np.float64)
         else:
             self.s1 += s1
@@ -143,9 +143,9 @@ def mean_variance(sums, n: int, width: int, height: int) -> tuple[np.ndarray, np
     """Mean and unbiased per-sample variance (float32, H x W x 3) from device sums laid out (moment, pixel, channel).
 
     The formulas of :class:`Moments`, evaluated by Dr.Jit in one small kernel
-    (NumPy's temporaries cost a few ms at 256x256). The count is opaque: a
-    true division (Dr.Jit turns a division by a literal into a product with
-    its reciprocal), and one kernel for every spp.
+    (NumPy would allocate and traverse a temporary image per operation).
+    The count is opaque: a true division (Dr.Jit turns a division by a
+    literal into a product with its reciprocal), and one kernel for every spp.
     """
     import drjit as dr
 

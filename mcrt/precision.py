@@ -1,7 +1,7 @@
 """Where float32 rendering of a scene stops being right, and a guard that says so.
 
-mcrt traces in float32. Two things limit it, both measured (``mcrt hardcases``,
-reports/hardcases/index.md, "Float32 limits"):
+mcrt traces in float32. Two things limit it; ``mcrt hardcases`` renders scenes
+on both sides of each limit (reports/hardcases/index.md, "Float32 limits"):
 
 **Distance from the origin against the smallest feature.** A ray leaving a
 surface at p starts ``eps(p) = OFFSET_SCALE (|p|_inf + S)`` off it
@@ -16,32 +16,25 @@ The offset reaches M when
     N / M = 1 / OFFSET_SCALE = 2^17 = 131072,
 
 which is :data:`LIMIT_RATIO`. Float32 rounding itself (2^-24 N) is 128 times
-smaller than the offset and never decides first. Measured: the 0.001-radius
-mirror sphere (reference/scenes/hard/sphere_tiny.toml) renders right at
-N / M = 1.1e5 (moved by 100) and wrong at 3.1e5 (moved by 300); the 0.02 x
-0.02 light (tiny_light.toml) wrong moved by 3e3 (+0.6 %), about its limit
-2^17 * 0.02 = 2.6e3. Moved by 1e3, which the guard accepts, it is found
-+0.2 % too bright (64 x 64, 512 spp per side): the direct-light bias of the
-offset described next, 2 eps / d = 0.16 % at eps = 0.0078 and d = 10,
-within the bound the guard accepts.
+smaller than the offset and never decides first. The hard cases with a tiny
+mirror sphere (reference/scenes/hard/sphere_tiny.toml) and a tiny light
+(tiny_light.toml) are moved across this limit.
 
 The offset also moves every shading point towards or away from the light by
 up to eps, which biases direct light by about 2 eps / d at a distance d from
-it. In the canonical room this bias is detected (8x8 tiles 2 to 3 % too
-bright at 32 x 32, 1024 spp) once the scene is moved by 1e4 (eps = 0.077),
-and not at 3e3 (eps = 0.023). So no feature counts as larger than
-:data:`ROOM_FRACTION` of the room's size S: with M <= S / 500 an accepted
-scene has eps <= 2^-17 * 2^17 M <= S / 500, a bias of at most about
-2 (S / 500) / d, 0.6 % for the canonical light's d of about 10, and the
+it. It grows with the distance from the origin even where every feature is
+large, and a moved canonical room shows it (the report). So no feature
+counts as larger than :data:`ROOM_FRACTION` of the room's size S: with
+M <= S / 500 an accepted scene has eps <= 2^-17 * 2^17 M <= S / 500, a
+bias of at most about 2 (S / 500) / d, 0.6 % for the canonical light's d of about 10, and the
 canonical room's limit becomes N = 2^17 * 16 / 500 = 4.2e3.
 
 **Squares of lengths.** Squared distances (1/d^2 of a light sample, |v|^2 of
 a normalisation) must stay inside float32's normal range, 1.2e-38 to
-3.4e38, that is lengths between about 1.1e-19 and 1.1e19 (three components).
-Measured: the canonical scene scaled by 1e-18 renders right and by 1e-20
-returns NaN and inf; scaled by 1e17 it is right, by 1e18 silently dark. The
-guard refuses rooms smaller than :data:`MIN_SIZE` and scenes reaching beyond
-:data:`MAX_EXTENT`.
+3.4e38, that is lengths between about 1.1e-19 and 1.1e19 (three components);
+beyond them a render returns NaN and inf or goes silently dark (the hard
+cases scale the canonical scene past both ends). The guard refuses rooms
+smaller than :data:`MIN_SIZE` and scenes reaching beyond :data:`MAX_EXTENT`.
 
 Scaling a scene about the origin changes neither ratio, so a scene is
 refused at every scale or at none (between the two range limits), as the

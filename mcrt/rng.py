@@ -6,8 +6,9 @@ Each lane holds a 32-bit counter s and an odd 32-bit increment g, and draw k
     x_k = mix(s + k g)  (mod 2^32),    u_k = floor(x_k / 2^9) / 2^23  in [0, 1),
 
 with ``mix`` a 32-bit avalanche hash (two rounds of xor-shift and multiply,
-constants from Wellons' hash-prospector search, where flipping one input bit
-flips each output bit with probability within about 0.1 % of one half).
+constants from Wellons' hash-prospector search, chosen there for their low
+bias: flipping one input bit flips each output bit with probability close to
+one half).
 
 Seeding: lane i of a pass with 32-bit keys (k0, k1) starts at
 s = mix(i ^ k0), a bijection of the lane index, so no two lanes of a pass
@@ -19,12 +20,13 @@ of a few dozen numbers each), far below the period 2^32.
 
 Why not Dr.Jit's PCG32, which mcrt used before: seeded with consecutive
 stream indices (``initseq + lane``), consecutive lanes, the samples of one
-pixel, come out correlated (sums over 256 lanes varied 0.5 to 2.6 times as
-much as independent samples' do), which breaks every per-pixel variance
-estimate. It is also dearer: its 64-bit state and increment fill four AVX-512
-registers per 16 lanes and a draw costs two 64-bit multiplies, about 25
-instructions; this generator keeps one register of state and draws in 11,
-which made mcrt's path kernel about 8 % faster. tests/test_rng.py checks it
+pixel, come out correlated (their sums do not vary as independent samples'
+do), which breaks every per-pixel variance estimate. It is also dearer: its
+64-bit state and increment fill four AVX-512 registers per 16 lanes and a
+draw costs two 64-bit multiplies; this generator keeps one register of state
+and draws with a few 32-bit operations, which leaves the path kernel more
+registers and fewer instructions per draw (``mcrt bench --profile`` times
+the draws alone). tests/test_rng.py checks it
 against a NumPy twin bit for bit and tests uniformity, successive draws,
 second differences and blocks of lanes; every comparison with Mitsuba tests
 it end to end.

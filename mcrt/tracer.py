@@ -104,7 +104,7 @@ class Tracer:
         pixels in row-major order. The work is :meth:`_pass_kernel`, frozen
         (``dr.freeze``): Dr.Jit traces the path kernel in Python once per
         pass size and replays the recorded kernels for every later pass,
-        which saves about a millisecond of tracing per pass. The seed's keys
+        which then skips the Python tracing. The seed's keys
         enter as opaque arrays, so a new seed replays the same recording.
         """
         import drjit as dr

@@ -76,7 +76,7 @@ def test_shadow_segments_agree(setup):
     tmax = m.Float((dist * 0.999).astype(np.float32))
     a = convex.occluded(_arr(m, o), _arr(m, w), tmax).numpy()
     b = triangles.occluded(_arr(m, o), _arr(m, w), tmax).numpy()
-    assert a.sum() > 200  # the objects do shadow some of these segments (0.6 %)
+    assert a.sum() > 200  # the objects do shadow some of these segments
     assert np.array_equal(a, b), f"{np.sum(a != b)} of {len(a)} shadow segments disagree"
 
 
@@ -85,7 +85,7 @@ def test_shadow_segments_near_the_tetrahedron_agree(setup):
 
     The convex intersector tests the tetrahedron only in packets where some
     segment meets its enclosing ball; these segments all pass through the
-    ball and end before it or inside it (8 % of them are blocked), and must
+    ball and end before it or inside it (some of them are blocked), and must
     agree with the triangles one by one (NumPy seed 3).
     """
     scene, m, o, _ = setup

@@ -119,9 +119,9 @@ def test_samples_of_one_pixel_independent(draws):
     """Consecutive lanes are the samples of one pixel: their sums must vary as independent samples' do.
 
     A per-pixel variance estimate assumes it. Dr.Jit's PCG32 seeded with
-    consecutive stream indices (how mcrt seeded it until 2026-11) fails this:
-    sums of 256 lanes varied 0.5 to 2.6 times as much as independent ones,
-    depending on the draw (the power check below).
+    consecutive stream indices (how mcrt seeded it before mcrt.rng) fails this:
+    sums of 256 lanes vary more or less than independent ones' do, depending
+    on the draw (the power check below).
     """
     for k in range(DRAWS):
         assert block_variance_p(draws[:, k], 256) > ALPHA, f"draw {k}"

@@ -46,7 +46,7 @@ def _save(fig, out: Path, stem: str, svg: bool) -> dict[str, Path]:
 
 
 def _palette(path: Path) -> None:
-    """Re-save a plot PNG with a 256-colour palette: a third of the size, no visible change for line plots."""
+    """Re-save a plot PNG with a 256-colour palette: a smaller file, no visible change for line plots."""
     from PIL import Image
 
     with Image.open(path) as im:
