@@ -181,7 +181,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("mutants", help="list the bug catalogue")
     p.set_defaults(func=cmd_mutants)
 
-    from mcrt import bench, hardcases, reference, report, threeway, validate
+    from mcrt import bench, hardcases, reference, report, reports, threeway, validate
     from mcrt.grade.cli import register as register_grade
 
     report.register(sub)
@@ -191,6 +191,7 @@ def build_parser() -> argparse.ArgumentParser:
     hardcases.register(sub)
     bench.register(sub)
     threeway.register(sub)
+    reports.register(sub)
     return ap
 
 

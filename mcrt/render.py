@@ -14,7 +14,7 @@ mitsuba    Mitsuba's ``path`` integrator Mitsuba             Mitsuba
 
 Each takes the options every renderer has (``backend``, ``progress``,
 ``spp_per_pass``) and its own, keyword-only; an option a renderer does not
-have is refused with a one-line ``TypeError`` naming both::
+have is refused with a one-line ``ValueError`` naming both::
 
     from mcrt.render import render
     s = scene.settings(camera="near", width=64, height=64, spp=256)
@@ -50,7 +50,7 @@ class Renderer:
         known = {**COMMON_OPTIONS, **self.options}
         unknown = sorted(set(options) - set(known))
         if unknown:
-            raise TypeError(f"renderer {self.name!r} has no option {unknown[0]!r} (it has: {', '.join(sorted(known))})")
+            raise ValueError(f"renderer {self.name!r} has no option {unknown[0]!r} (it has: {', '.join(sorted(known))})")
         return self.load()(scene, settings, **{**known, **options})
 
 

@@ -1,0 +1,106 @@
+"""``mcrt reports``: regenerate every committed report with the command that wrote it.
+
+Each folder under reports/ is written by one ``mcrt`` command, which records
+itself in the report's JSON (``command``); :data:`REPORTS` lists those
+commands, and a test checks that it matches what the committed reports
+record, so that this one command rebuilds all of them. Each report is built
+by its own process, one after another; when one command fails, the others
+go on, and the exit code says that one failed.
+"""
+
+from __future__ import annotations
+
+import argparse
+import shlex
+import subprocess
+import sys
+import time
+from dataclasses import dataclass
+
+from mcrt.exitcodes import EXIT_FAILED, EXIT_OK, EXIT_UNUSABLE
+
+
+@dataclass(frozen=True)
+class Report:
+    """One committed report: its folder under reports/, the command that writes it, and what it shows."""
+
+    name: str
+    command: str  # the mcrt command line, without the program name
+    what: str
+
+
+REPORTS: tuple[Report, ...] = (
+    Report("canonical", "main", "convergence of every renderer on the canonical scene at 64x64; mcrt beside Mitsuba"),
+    Report("canonical_256", "report --res 256 --spp-ladder 1..256 --seeds 3 --renderers mcrt,mitsuba --reference committed "
+           "--name canonical_256 --out reports/canonical_256 --quiet", "the same at 256x256"),
+    Report("course2023", "report --preset course2023 --out reports/course2023 --quiet",
+           "the 2023 course report's settings: 30 shadow rays against one, at equal time"),
+    Report("hardcases", "hardcases --res 64 --spp 512 --ref-spp 4096 --limits auto --convergence auto --out reports/hardcases",
+           "numerically hard scenes: agreement, float32 limits, fireflies"),
+    Report("bench", "bench --res 64 --res 256 --spp 16 --max-depth 2 --max-depth 8 --spp-sweep 1 --spp-sweep 4 "
+           "--spp-sweep 64 --repeats 11 --profile --report reports/bench",
+           "paths per second and efficiency against Mitsuba, where the kernel's time goes"),
+    Report("validation", "validate --seeds 200 --power-seeds 20 --spp 1024 --res 64 --camera near --max-depth 8 --alpha 0.01 "
+           "--tile 8 --against mitsuba --extra-tiles 1,16,32 --escalate-spp 2048,4096,8192,16384 --followup max_depth=2 "
+           "--followup camera=far --effect-spp 65536 --out reports/validation",
+           "false-alarm rate and power of the comparison against fresh Mitsuba renders"),
+    Report("validation/against_reference", "validate --seeds 200 --power-seeds 20 --spp 1024 --res 64 --camera near "
+           "--max-depth 8 --alpha 0.01 --tile 8 --against reference --extra-tiles 1,16,32 --escalate-spp 2048,4096,8192,16384 "
+           "--followup max_depth=2 --followup camera=far --effect-spp 0 --out reports/validation/against_reference",
+           "the same against the committed reference"),
+    Report("validation/against_reference_floor", "validate --seeds 200 --power-seeds 20 --spp 1024 --res 64 --camera near "
+           "--max-depth 8 --alpha 0.01 --tile 8 --against reference-floor --extra-tiles 1,16,32 "
+           "--escalate-spp 2048,4096,8192,16384 --followup max_depth=2 --followup camera=far --effect-spp 0 "
+           "--out reports/validation/against_reference_floor",
+           "the same against the committed reference with the variance floor"),
+)
+
+
+def select(only=(), skip=()) -> list[Report]:
+    """The reports to build: all, or those named in ``only``, less those in ``skip``; unknown names raise ValueError."""
+    names = {r.name for r in REPORTS}
+    for n in (*only, *skip):
+        if n not in names:
+            raise ValueError(f"no committed report named {n!r} (have {', '.join(sorted(names))})")
+    return [r for r in REPORTS if (not only or r.name in only) and r.name not in skip]
+
+
+def build(reports: list[Report], *, dry_run: bool = False) -> list[str]:
+    """Run each report's command in its own process, in order; returns the names whose command failed."""
+    failed = []
+    t0 = time.perf_counter()
+    for k, r in enumerate(reports, 1):
+        argv = [sys.executable, "-m", "mcrt.cli", *shlex.split(r.command)]
+        print(f"mcrt reports: [{k}/{len(reports)}] {r.name}: mcrt {r.command} ({time.perf_counter() - t0:.0f} s so far)",
+              file=sys.stderr, flush=True)
+        if dry_run:
+            continue
+        if subprocess.run(argv).returncode != 0:
+            print(f"mcrt reports: {r.name}: the command failed; its committed files are kept", file=sys.stderr)
+            failed.append(r.name)
+    return failed
+
+
+def register(sub) -> None:
+    p = sub.add_parser("reports", help="regenerate every committed report under reports/ with the command that wrote it",
+                       description=__doc__.split("\n\n")[1], formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--list", action="store_true", help="print each report's folder and command, and build nothing (default: build)")
+    p.add_argument("--only", action="append", default=[], metavar="NAME",
+                   help="build only this report (repeatable; default: every report)")
+    p.add_argument("--skip", action="append", default=[], metavar="NAME", help="do not build this report (repeatable; default: none)")
+    p.add_argument("--dry-run", action="store_true", help="print the commands in the order they would run (default: run them)")
+    p.set_defaults(func=cmd_reports)
+
+
+def cmd_reports(args) -> int:
+    try:
+        reports = select(args.only, args.skip)
+    except ValueError as e:
+        print(f"mcrt reports: {e}", file=sys.stderr)
+        return EXIT_UNUSABLE
+    if args.list:
+        for r in reports:
+            print(f"reports/{r.name}: mcrt {r.command}\n    {r.what}")
+        return EXIT_OK
+    failed = build(reports, dry_run=args.dry_run)
+    return EXIT_FAILED if failed else EXIT_OK
