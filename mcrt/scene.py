@@ -23,10 +23,14 @@ from typing import Any
 
 import numpy as np
 
+import mcrt.data as _data
+
 Vec2 = tuple[float, float]
 Vec3 = tuple[float, float, float]
 
-SCENE_DIR = Path(__file__).resolve().parent.parent / "reference" / "scenes"
+#: The ground truth's folder: reference/ of a checkout, installed as the package data mcrt.data.
+DATA_DIR = Path(_data.__file__).resolve().parent
+SCENE_DIR = DATA_DIR / "scenes"
 CANONICAL = SCENE_DIR / "canonical.toml"
 
 # Relative tolerance for "touching is allowed" checks (object on the floor,

@@ -115,8 +115,12 @@ def test_mcrt_reports_rebuilds_every_committed_report_with_its_own_command():
 
 
 def test_the_install_ships_every_package_of_the_source():
-    """pyproject.toml lists each folder of mcrt/ with an __init__.py, and plugins/ as mcrt.plugins."""
+    """pyproject.toml lists each folder of mcrt/ with an __init__.py, plugins/ as mcrt.plugins, and reference/ with
+    every sub-folder as mcrt.data (package data: the scenes, references and assignments)."""
     tool = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]
-    found = {"mcrt"} | {f"mcrt.{p.parent.name}" for p in PACKAGE.glob("*/__init__.py")} | {"mcrt.plugins"}
-    assert set(tool["packages"]) == found
-    assert tool["package-dir"] == {"mcrt.plugins": "plugins"} and (ROOT / "plugins" / "__init__.py").is_file()
+    code = {"mcrt"} | {f"mcrt.{p.parent.name}" for p in PACKAGE.glob("*/__init__.py")} | {"mcrt.plugins"}
+    data = {"mcrt.data"} | {"mcrt.data." + ".".join(p.relative_to(ROOT / "reference").parts) for p in (ROOT / "reference").rglob("*")
+                            if p.is_dir() and p.name not in ("__pycache__", "chunks")}
+    assert set(tool["packages"]) == code | data
+    assert tool["package-dir"] == {"mcrt.plugins": "plugins", "mcrt.data": "reference"}
+    assert set(tool["package-data"]) == data

@@ -403,6 +403,6 @@ def test_committed_references_are_listed_and_valid(scene):
 def _ignored(path: str) -> bool:
     import subprocess
 
-    root = ref.REPO_ROOT
+    root = ref.REFERENCE_DIR.parent  # the checkout
     r = subprocess.run(["git", "check-ignore", "-q", path], cwd=root, capture_output=True)
     return r.returncode == 0

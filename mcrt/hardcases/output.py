@@ -14,7 +14,7 @@ from mcrt.hardcases.sweep import SweepRow
 from mcrt.provenance import provenance
 
 #: Where ``mcrt hardcases`` writes by default.
-REPORT_DIR = Path(__file__).resolve().parents[2] / "reports" / "hardcases"
+REPORT_DIR = Path("reports") / "hardcases"  # the default --out, relative to the working folder like every report's
 
 
 def write_report(results: list[CaseResult], out: Path, *, argv: Sequence[str], settings: dict[str, Any],

@@ -54,14 +54,13 @@ from mcrt.reference.cli import register
 from mcrt.reference.errors import CorruptReference, MissingReference, ReferenceUnavailable, StaleReference
 from mcrt.reference.load import load_reference
 from mcrt.reference.manifest import read_manifest, sha256_file
-from mcrt.reference.spec import (CHUNK_DIR_NAME, DEFAULT_WORKERS, MANIFEST_NAME, REFERENCE_DIR, REPO_ROOT, SCHEMA, STANDARD,
+from mcrt.reference.spec import (CHUNK_DIR_NAME, DEFAULT_WORKERS, MANIFEST_NAME, REFERENCE_DIR, SCHEMA, STANDARD,
                                  VERIFY_BASE_SEED, ReferenceSpec, chunk_seed, rebuild_command, reference_key)
 from mcrt.reference.text import format_table, format_verify
 from mcrt.reference.verify import VerifyResult, list_references, verify_references
 
 __all__ = [
     "REFERENCE_DIR",
-    "REPO_ROOT",
     "MANIFEST_NAME",
     "CHUNK_DIR_NAME",
     "DEFAULT_WORKERS",

@@ -9,11 +9,12 @@ import shlex
 from dataclasses import dataclass
 from pathlib import Path
 
-from mcrt.scene import CANONICAL, Scene, load_scene
+from mcrt.scene import CANONICAL, DATA_DIR, Scene, load_scene
 
-REPO_ROOT = Path(__file__).resolve().parents[2]
-#: Where committed references and the manifest live.
-REFERENCE_DIR = REPO_ROOT / "reference"
+#: Where committed references and the manifest live: reference/ of a checkout, mcrt.data when installed.
+REFERENCE_DIR = DATA_DIR
+#: What the manifest calls that folder: its paths read ``reference/scenes/canonical.toml`` in either.
+DATA_NAME = "reference"
 MANIFEST_NAME = "manifest.json"
 #: Sub-folder of the reference folder holding per-chunk files (git-ignored).
 CHUNK_DIR_NAME = "chunks"
@@ -141,12 +142,20 @@ def standard_spp(camera: str, size: tuple[int, int], max_depth: int) -> int:
 
 
 def display_path(path: str | os.PathLike) -> str:
-    """A path relative to the repository when it lies inside it."""
+    """A path inside the ground truth's folder as ``reference/...``, whether that folder is a checkout's or installed; others as given."""
     p = Path(path)
     try:
-        return str(p.resolve().relative_to(REPO_ROOT))
+        return (Path(DATA_NAME) / p.resolve().relative_to(REFERENCE_DIR)).as_posix()
     except (ValueError, OSError):
         return str(p)
+
+
+def data_path(recorded: str | os.PathLike) -> Path:
+    """The file a manifest's ``reference/...`` path names (the inverse of :func:`display_path`); other paths as given."""
+    p = Path(recorded)
+    if not p.is_absolute() and p.parts[:1] == (DATA_NAME,):
+        return REFERENCE_DIR.joinpath(*p.parts[1:])
+    return p
 
 
 def resolve_scene(scene: Scene | str | os.PathLike | None) -> Scene:

@@ -12,8 +12,8 @@ from typing import Any, Sequence
 from mcrt.reference.build import installed_versions
 from mcrt.reference.errors import MissingReference
 from mcrt.reference.manifest import read_manifest, sha256_file
-from mcrt.reference.spec import (MANIFEST_NAME, REFERENCE_DIR, REPO_ROOT, VERIFY_BASE_SEED, VERIFY_MIN_SPP, VERIFY_PATHS,
-                                 chunk_seed, display_path, rebuild_command)
+from mcrt.reference.spec import (MANIFEST_NAME, REFERENCE_DIR, VERIFY_BASE_SEED, VERIFY_MIN_SPP, VERIFY_PATHS,
+                                 chunk_seed, data_path, display_path, rebuild_command)
 from mcrt.scene import Scene, load_scene
 
 
@@ -23,8 +23,7 @@ def _log(msg: str, enabled: bool = True) -> None:
 
 
 def entry_scene(entry: dict[str, Any]) -> Scene:
-    p = Path(entry["scene_file"])
-    return load_scene(p if p.is_absolute() else REPO_ROOT / p)
+    return load_scene(data_path(entry["scene_file"]))
 
 
 def entry_status(directory: Path, key: str, entry: dict[str, Any]) -> tuple[str, str]:
