@@ -1,16 +1,37 @@
-"""``mcrt compare``: read two image files, compare them under a policy, write the verdict.
+"""``mcrt compare``: two renders in, compared under a policy, the verdict out.
 
-A thin layer over :mod:`mcrt.stats`: :func:`compare_files` reads the files
-(:func:`mcrt.imageio.read_image`), fills in what the files lack where asked
-to (sample counts, a borrowed variance), runs :func:`mcrt.stats.compare`
-under the chosen policy and writes the results: the report printed by
-:func:`report_lines`, the heat map of t (:func:`write_heatmap`) and the JSON
-report (:func:`write_json`). The exit codes are :mod:`mcrt.exitcodes`'s:
-0 consistent, 1 different, 2 unusable input.
+A thin layer over :mod:`mcrt.stats`. Each side is an image file
+(:func:`mcrt.imageio.read_image`; OpenEXR through :func:`mcrt.imageio.read_exr`,
+which also reads Mitsuba's ``moment`` integrator), a
+:class:`~mcrt.film.RenderResult`, or a NumPy mean with its per-sample
+variance and spp given alongside (:func:`as_result`, :func:`image`).
+:func:`compare_files` fills in what the inputs lack where asked to (sample
+counts, a borrowed variance), refuses inputs whose headers show different
+cameras, scenes, resolutions or max depths (:func:`check_headers`), runs
+:func:`mcrt.stats.compare` under the chosen policy and writes the results:
+the report printed by :func:`report_lines`, the heat map of t
+(:func:`write_heatmap`) and the JSON report (:func:`write_json`). The exit
+codes are :mod:`mcrt.exitcodes`'s: 0 consistent, 1 different, 2 unusable
+input.
+
+Which policy (:mod:`mcrt.stats.policy`):
+
+* ``independent`` (default): two independent renders, each with its own
+  variance: two integrators or renderers, two seeds, sample counts of the
+  same order. Use it whenever B is not a high-spp render of A's estimator.
+* ``reference-floor``: A against a high-spp reference B *of the same
+  estimator* (a committed Mitsuba reference against a fresh Mitsuba or
+  ``path`` render): A's per-sample variance is raised to B's where lower,
+  because a low-spp render that misses rare bright paths underestimates its
+  variance where its mean is low, and correct renders are then rejected.
+
+Relative differences are *symmetric*: (A - B) / ((|A| + |B|) / 2), per tile
+and for the whole image; positive where A is brighter.
 """
 
 from __future__ import annotations
 
+import importlib
 import json
 import sys
 from pathlib import Path
@@ -22,7 +43,8 @@ from mcrt.exitcodes import EXIT_FAILED, EXIT_OK, EXIT_UNUSABLE
 from mcrt.film import RenderResult
 from mcrt.stats import POLICIES, Comparison, StatsError, compare
 
-__all__ = ["report_lines", "heatmap_rgb", "write_heatmap", "write_json", "compare_files"]
+__all__ = ["report_lines", "heatmap_rgb", "write_heatmap", "write_json", "image", "as_result", "check_headers",
+           "HEADER_FIELDS", "HeaderMismatch", "compare_files"]
 
 # Saturation of the heat map's colour scale, in units of t.
 _HEATMAP_T_MAX = 5.0
@@ -39,16 +61,16 @@ def report_lines(c: Comparison, limit: int = 20) -> list[str]:
             y0, y1, x0, x1 = c.tile_box(f.ty, f.tx)
             lines.append(
                 f"  tile ({f.ty},{f.tx}) {f.channel}  rows {y0}-{y1 - 1} cols {x0}-{x1 - 1}  "
-                f"t={f.t:+.2f}  p={f.p:.3g}  A-B={f.diff:+.4g} ({100 * f.rel_diff:+.2f} %)"
+                f"t={f.t:+.2f}  p={f.p:.3g}  A-B={f.diff:+.4g} ({100 * f.rel_diff:+.2f} % symmetric)"
             )
         if len(c.failing_tiles) > limit:
             lines.append(f"  ... and {len(c.failing_tiles) - limit} more")
         e = c.largest_effect
-        lines.append(f"largest effect: {100 * e.rel_diff:+.2f} % at tile ({e.ty},{e.tx}) {e.channel}")
+        lines.append(f"largest effect: {100 * e.rel_diff:+.2f} % (symmetric) at tile ({e.ty},{e.tx}) {e.channel}")
     m = c.max_abs_t
     lines.append(f"largest |t|: {abs(m.t):.2f} at tile ({m.ty},{m.tx}) {m.channel}; min p-value: {c.min_p:.3g}")
     g = ", ".join(f"{ch} {100 * v:+.3f} %" for ch, v in zip(c.channel_names, c.global_rel_diff))
-    lines.append(f"whole-image mean, A relative to B: {g}")
+    lines.append(f"whole-image mean, symmetric relative difference (A-B)/mean(|A|,|B|): {g}")
     n_det = int(np.count_nonzero(c.deterministic))
     if n_det:
         lines.append(f"{n_det} tests had zero variance on both sides and were compared for equality")
@@ -108,7 +130,95 @@ def _describe(r: RenderResult, path) -> str:
     var = "variance" if r.variance is not None else "NO variance"
     spp = f"{r.spp} spp" if r.spp else "spp unknown"
     who = f", {r.renderer}" if r.renderer else ""
-    return f"{path} ({w}x{h}, {spp}, {var}{who})"
+    cam = f", camera {r.camera}" if r.camera else ""
+    return f"{path} ({w}x{h}, {spp}, {var}{who}{cam})"
+
+
+def image(mean, variance=None, spp: int = 0, *, seed: int = 0, max_depth: int = 0, renderer: str = "unknown",
+          scene_hash: str = "", camera: str = "", wall_time: float = 0.0) -> RenderResult:
+    """A :class:`RenderResult` from your own renderer's arrays: mean and per-sample variance (H, W, 3), and spp.
+
+    The per-sample variance is that of one sample (not of the mean): the
+    unbiased estimate (S2 - S1^2 / n) / (n - 1) from per-pixel sums of x and
+    x^2. Provenance fields default to "unknown" values (max depth 0, empty
+    camera and scene hash), which :func:`check_headers` does not check.
+    """
+    mean = np.asarray(mean, dtype=np.float32)
+    var = None if variance is None else np.asarray(variance, dtype=np.float32)
+    return RenderResult(mean=mean, variance=var, spp=int(spp), seed=int(seed), max_depth=int(max_depth),
+                        renderer=renderer, scene_hash=scene_hash, camera=camera, wall_time=float(wall_time))
+
+
+def as_result(x, *, name: str = "A", variance=None, spp: int | None = None) -> RenderResult:
+    """One side of a comparison as a RenderResult: a file path, a RenderResult, or a NumPy mean.
+
+    A path is read (``spp`` replaces a sample count the file lacks, and
+    scales a ``moment`` file's variance, :func:`mcrt.imageio.read_exr`); a
+    RenderResult is used as is (a copy with ``spp``/``variance`` replaced
+    when given); an array is the mean and needs ``variance`` and ``spp``
+    alongside. Raises :class:`StatsError` naming the side and what is
+    missing, :class:`mcrt.imageio.ImageError` for an unreadable file.
+    """
+    from dataclasses import replace
+
+    imageio = importlib.import_module("mcrt.imageio")  # what sys.modules holds (tests stand in for it)
+
+    if isinstance(x, RenderResult):
+        changes = {k: v for k, v in (("spp", spp), ("variance", variance)) if v is not None}
+        return replace(x, **changes)  # a copy: filling in what it lacks must not change the caller's object
+    if isinstance(x, (str, bytes)) or hasattr(x, "__fspath__"):
+        # An EXR given its spp: read_exr scales a 'moment' file's variance by n / (n - 1).
+        exr = spp is not None and str(x).lower().endswith(".exr") and hasattr(imageio, "read_exr")
+        r = imageio.read_exr(x, spp=spp) if exr else imageio.read_image(x)
+        if spp is not None:
+            r.spp = int(spp)
+        if variance is not None:
+            r.variance = np.asarray(variance, dtype=np.float32)
+        return r
+    if isinstance(x, np.ndarray) or hasattr(x, "__array__"):
+        a = name.lower()
+        if variance is None or spp is None:
+            lacks = " and ".join(w for w, v in (("variance", variance), ("spp", spp)) if v is None)
+            raise StatsError(f"image {name} is a bare array: give its per-sample {lacks} alongside "
+                             f"(variance_{a}=..., spp_{a}=...), or pass mcrt.compare.image(mean, variance, spp)")
+        return image(x, variance, spp)
+    raise StatsError(f"image {name}: expected a file path, a RenderResult or a NumPy array, got {type(x).__name__}")
+
+
+#: The provenance fields two compared renders must share; ``check_headers`` refuses a difference in any.
+HEADER_FIELDS = ("resolution", "camera", "scene_hash", "max_depth")
+
+
+class HeaderMismatch(StatsError):
+    """Two renders whose headers say they are not images of the same thing (different camera, scene, ...)."""
+
+
+def check_headers(a: RenderResult, b: RenderResult, name_a="A", name_b="B", allow=()) -> None:
+    """Refuse two renders whose recorded resolution, camera, scene hash or max depth differ.
+
+    A field is compared only where both sides record it (a camera or scene
+    hash is not empty, a max depth is not 0, which files without our
+    attributes read as); ``allow`` names fields (of :data:`HEADER_FIELDS`,
+    or ``'all'``) to compare anyway. A different resolution is always
+    refused (there is nothing to compare pixel by pixel). Raises
+    :class:`HeaderMismatch` with one line naming both inputs and the field.
+    """
+    allow = set(HEADER_FIELDS) - {"resolution"} if "all" in allow else set(allow)
+    unknown = allow - set(HEADER_FIELDS)
+    if unknown:
+        raise ValueError(f"unknown header field {sorted(unknown)[0]!r} (have {', '.join(HEADER_FIELDS)}, all)")
+    checks = [("resolution", a.mean.shape[:2], b.mean.shape[:2], True)]
+    checks += [(f, getattr(a, f), getattr(b, f), getattr(a, f) not in ("", None) and getattr(b, f) not in ("", None))
+               for f in ("camera", "scene_hash")]
+    checks.append(("max_depth", a.max_depth, b.max_depth, a.max_depth != 0 and b.max_depth != 0))
+    for field_name, va, vb, known in checks:
+        if known and va != vb and field_name not in allow:
+            if field_name == "resolution":
+                va, vb = f"{va[1]}x{va[0]}", f"{vb[1]}x{vb[0]}"
+                hint = "render both at one resolution"
+            else:
+                hint = f"pass --allow-mismatch {field_name} (allow_mismatch=('{field_name}',)) to compare anyway"
+            raise HeaderMismatch(f"{name_a} and {name_b} differ in {field_name}: {va} against {vb}; {hint}")
 
 
 def _borrow_variance(sides: dict[str, tuple[RenderResult, object]], min_spp: int, allowed: bool, out: IO[str]) -> None:
@@ -156,23 +266,34 @@ def compare_files(
     assume_variance_from_other: bool = False,
     spp_a: int | None = None,
     spp_b: int | None = None,
+    variance_a=None,
+    variance_b=None,
+    allow_mismatch=(),
     out: IO[str] | None = None,
     err: IO[str] | None = None,
     **options,
 ) -> int:
-    """Compare two image files under ``policy``, print the verdict, return an exit code.
+    """Compare two renders under ``policy``, print the verdict, return an exit code.
 
-    Reads both files, runs :func:`mcrt.stats.compare` (A is the image under
-    test, B the other; under ``policy='reference-floor'`` B is the high-spp
-    reference) and prints the inputs, the verdict and :func:`report_lines`
-    to ``out`` (stdout). Optionally writes the heat map (PNG, ``heatmap``)
-    and the :meth:`Comparison.to_dict` report (JSON, ``json_path``).
-    ``options`` (``alpha``, ``tile``, ``channels``, ``correction``) and
-    ``min_spp`` are those of :func:`mcrt.stats.compare`.
+    ``path_a`` and ``path_b`` are each a file, a RenderResult or a NumPy mean
+    (:func:`as_result`: an array needs ``variance_*`` and ``spp_*``). Runs
+    :func:`mcrt.stats.compare` (A is the image under test, B the other;
+    under ``policy='reference-floor'`` B is the high-spp reference of A's
+    estimator: the module docstring says which policy to use when) and
+    prints the inputs, the verdict and :func:`report_lines` to ``out``
+    (stdout). Optionally writes the heat map (PNG, ``heatmap``) and the
+    :meth:`Comparison.to_dict` report (JSON, ``json_path``). ``options``
+    (``alpha``, ``tile``, ``channels``, ``correction``) and ``min_spp`` are
+    those of :func:`mcrt.stats.compare`.
+
+    Headers: inputs whose recorded resolution, camera, scene hash or max
+    depth differ are refused (exit 2, one line naming both and the field,
+    :func:`check_headers`) unless the field is in ``allow_mismatch``.
 
     Missing variance or sample count: the test needs each side's own
     per-sample variance and spp. ``spp_a`` / ``spp_b`` override the sample
-    counts read from the files. If one side lacks variance, the comparison
+    counts read from the files (and scale the variance of a ``moment``
+    integrator's file). If one side lacks variance, the comparison
     is refused (exit 2) with a message naming that side, unless
     ``assume_variance_from_other`` is set: then that side borrows the other
     image's per-sample variance (its spp must be known or given). This is an
@@ -196,20 +317,20 @@ def compare_files(
     """
     out = sys.stdout if out is None else out
     err = sys.stderr if err is None else err
-    from mcrt.imageio import ImageError, read_image
+    imageio = importlib.import_module("mcrt.imageio")  # what sys.modules holds (tests stand in for it)
 
+    label_a = _label(path_a, "A")
+    label_b = _label(path_b, "B")
     try:
-        a = read_image(path_a)
-        b = read_image(path_b)
-    except (ImageError, OSError) as e:
+        a = as_result(path_a, name="A", variance=variance_a, spp=spp_a)
+        b = as_result(path_b, name="B", variance=variance_b, spp=spp_b)
+    except (imageio.ImageError, OSError, StatsError) as e:
         print(f"error: {e}", file=err)
         return EXIT_UNUSABLE
 
-    sides = {"A": (a, path_a), "B": (b, path_b)}
-    for (r, _), override in zip(sides.values(), (spp_a, spp_b)):
-        if override is not None:
-            r.spp = int(override)
+    sides = {"A": (a, label_a), "B": (b, label_b)}
     try:
+        check_headers(a, b, label_a, label_b, allow=allow_mismatch)
         _borrow_variance(sides, min_spp, assume_variance_from_other, out)
         for name, (r, path) in sides.items():
             if not r.spp:
@@ -222,8 +343,8 @@ def compare_files(
     if c.policy != "independent":
         print(f"note: policy {c.policy}: {POLICIES[c.policy]}", file=out)
 
-    print(f"A: {_describe(a, path_a)}", file=out)
-    print(f"B: {_describe(b, path_b)}", file=out)
+    print(f"A: {_describe(a, label_a)}", file=out)
+    print(f"B: {_describe(b, label_b)}", file=out)
     for line in report_lines(c):
         print(line, file=out)
     if heatmap is not None:
@@ -231,3 +352,12 @@ def compare_files(
     if json_path is not None:
         print(f"report: {write_json(c, json_path)}", file=out)
     return EXIT_OK if c.passed else EXIT_FAILED
+
+
+def _label(x, name: str) -> str:
+    """How an input is named in messages: its path, or 'image A (a RenderResult of path)'."""
+    if isinstance(x, (str, bytes)) or hasattr(x, "__fspath__"):
+        return str(x)
+    if isinstance(x, RenderResult):
+        return f"image {name} ({x.renderer}, seed {x.seed})"
+    return f"image {name} (an array)"

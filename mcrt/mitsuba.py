@@ -29,12 +29,21 @@ of every renderer, turns into
 
 Pass k of a render with seed s seeds Mitsuba's ``independent`` sampler with a
 32-bit hash of (s, k), so passes and seeds draw independent streams.
+
+:func:`render_with_variance` renders *any* Mitsuba scene (a dictionary, a
+loaded scene, an XML file) with any of its integrators through the same
+passes (:func:`_run`), recording the integrator, its max depth, the camera
+(:func:`camera_id`) and the scene's hash (:func:`mitsuba_scene_hash`).
 """
 
 from __future__ import annotations
 
 import hashlib
+import json
+import os
+import re
 import time
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -261,53 +270,96 @@ def pass_seed(seed: int, pass_index: int) -> int:
     return int.from_bytes(hashlib.blake2b(key, digest_size=4).digest(), "little")
 
 
-def render_mitsuba(scene: Scene, settings: RenderSettings, *, backend: str = "llvm", progress: bool = True,
-                   spp_per_pass: int | None = None, integrator: str | dict[str, Any] = "path",
-                   jitter: bool = True) -> RenderResult:
-    """Render ``scene`` at ``settings`` with Mitsuba's ``path`` integrator: mean and per-sample variance images.
+def _integrator_name(integrator) -> str:
+    """The plugin name of an integrator given as a name or a dictionary (its ``type``)."""
+    return integrator if isinstance(integrator, str) else str(integrator.get("type", "path"))
 
-    Called through :func:`mcrt.render.render` (renderer ``mitsuba``).
-    ``integrator`` replaces ``path`` by another plugin (a name, or a
-    dictionary as in :func:`scene_dict`; :func:`mcrt.plugins.render_plugin`
-    uses it for mcrt's estimator); ``jitter=False`` sends every sample through
-    its pixel's centre (the plugin's no-jitter mutant). The result is identical bit for bit for
-    the same arguments on the same machine and backend.
 
-    ``wall_time`` is the time of all passes (after ``dr.sync_thread()``),
-    JIT compilation included; ``compile_time`` is the part of it spent
-    generating and compiling kernels, from Dr.Jit's kernel history
-    (codegen + backend time). Scene loading is not timed in either (it is
-    in ``extra['load_time']``).
+def _sample_function(integrator):
+    """``f(scene, sampler, ray) -> L`` for an integrator that samples one camera ray at a time, else None.
+
+    C++ sampling integrators (``path``, ``volpath``, ``direct``, ...) take
+    ``sample(scene, sampler, ray, medium, active)``; Mitsuba's differentiable
+    Python integrators (``prb``, ``prbvolpath``, ...) take the AD interface
+    in primal mode, as their own ``render`` calls it. Adjoint (particle)
+    integrators such as ``ptracer`` start at the emitters and splat onto the
+    film: None.
     """
-    s = settings
-    W, H, n_total = s.width, s.height, s.spp
-    per_pass = spp_per_pass if spp_per_pass is not None else samples_per_pass(W, H, n_total)
-    if W * H * per_pass >= 2**32:
-        raise ValueError(f"one pass of {W}x{H}x{per_pass} samples exceeds 2^32 lanes: lower spp_per_pass")
+    try:
+        from mitsuba.python.ad.integrators.common import ADIntegrator
+    except ImportError:  # pragma: no cover - a Mitsuba built without the Python integrators
+        ADIntegrator = ()
+    if ADIntegrator and isinstance(integrator, ADIntegrator):
+        def sample(scene, sampler, ray):
+            return integrator.sample(mode=dr.ADMode.Primal, scene=scene, sampler=sampler, ray=ray, depth=mi.UInt32(0),
+                                     δL=None, δaovs=None, state_in=None, active=mi.Bool(True))[0]
+        return sample
+    if isinstance(integrator, mi.SamplingIntegrator):
+        return lambda scene, sampler, ray: integrator.sample(scene, sampler, ray, None, True)[0]
+    return None
 
-    variant = _use(backend)
-    t_load = time.perf_counter()
-    mscene = mi.load_dict(scene_dict(scene, s.camera, W, H, s.max_depth, integrator, rr_depth=s.rr_depth, spp=n_total, backend=backend))
-    load_time = time.perf_counter() - t_load
+
+def _pass_function(mscene, integrator, seed: int, *, jitter: bool = True):
+    """The pass of :func:`mcrt.film.run_passes` for ``integrator`` on a loaded Mitsuba scene (its first sensor).
+
+    Returns ``(pass_sums, width, height, method)``. ``method`` is
+    ``'samples'`` for an integrator that samples camera rays
+    (:func:`_sample_function`): pass k traces W H n lanes, lane = pixel n + s,
+    film position ((i + u) / W, (j + v) / H) (a box pixel, whatever
+    reconstruction filter the film names), the sampler seeded with
+    :func:`pass_seed` (seed, k), and reduces each pixel's n samples with
+    ``dr.block_sum`` into sums of x and x^2. ``method`` is ``'batches'`` for
+    an adjoint integrator (``ptracer``): pass k is the integrator's own
+    ``render`` at n spp with seed :func:`pass_seed` (seed, k), and the image
+    of the pass counts as one sample of weight n (sums n x and n x^2; see
+    :func:`_run`).
+    """
     sensor = mscene.sensors()[0]
-    integrator_name = integrator if isinstance(integrator, str) else str(integrator.get("type", "path"))
-    integrator = mscene.integrator()
+    film = sensor.film()
+    W, H = (int(v) for v in film.crop_size())
+    ox, oy = (int(v) for v in film.crop_offset())
+    FW, FH = (int(v) for v in film.size())
+    sample = _sample_function(integrator)
+    if sample is None:
+        if not isinstance(integrator, mi.AdjointIntegrator):
+            raise ValueError(f"integrator {integrator.class_name()} neither samples camera rays nor traces particles")
+        if film.rfilter().class_name() != "BoxFilter":
+            raise ValueError(f"integrator {integrator.class_name()} splats through the film's reconstruction filter "
+                             f"({film.rfilter().class_name()}); give the scene's film a box filter (rfilter type 'box')")
+
+        def pass_sums(k: int, n: int):
+            img = integrator.render(mscene, sensor, seed=pass_seed(seed, k), spp=n, develop=True)
+            channels = int(img.shape[2])
+            idx = dr.arange(mi.UInt32, 3 * W * H)
+            x = mi.Float64(dr.gather(mi.Float, img.array, (idx // 3) * channels + idx % 3))
+            sums = dr.zeros(mi.Float64, 6 * W * H)
+            dr.scatter(sums, x * n, idx)
+            dr.scatter(sums, x * x * n, idx + 3 * W * H)
+            dr.eval(sums)
+            return sums
+
+        return pass_sums, W, H, "batches"
+
     sampler = sensor.sampler().clone()
+    aperture = sensor.needs_aperture_sample()
 
     def pass_sums(k: int, n: int):
         lanes = W * H * n
         # Opaque seed and n: one compiled kernel serves every pass and seed.
-        sampler.seed(dr.opaque(mi.UInt32, pass_seed(s.seed, k)), lanes)
+        sampler.seed(dr.opaque(mi.UInt32, pass_seed(seed, k)), lanes)
         idx = dr.arange(mi.UInt32, lanes)
         pixel = idx // dr.opaque(mi.UInt32, n)  # lane = pixel * n + sample
         row = pixel // W
         col = pixel - row * W
+        if ox or oy:
+            col, row = col + ox, row + oy
         uv = sampler.next_2d()
         if not jitter:
             uv = mi.Point2f(0.5)  # the catalogued no-jitter bug: every sample through the pixel centre
-        pos = _film_positions(W, H, col, row, uv.x, uv.y)
-        ray, weight = sensor.sample_ray_differential(time=0.0, sample1=0.0, sample2=pos, sample3=mi.Point2f(0.5))
-        L, _, _ = integrator.sample(mscene, sampler, ray, None, True)
+        pos = _film_positions(FW, FH, col, row, uv.x, uv.y)
+        lens = sampler.next_2d() if aperture else mi.Point2f(0.5)
+        ray, weight = sensor.sample_ray_differential(time=0.0, sample1=0.0, sample2=pos, sample3=lens)
+        L = sample(mscene, sampler, ray)
         L = L * weight  # the perspective sensor's weight is 1; kept for other sensors
         dr.eval(L)  # trace once; reducing an unevaluated L re-runs the path kernel per channel
         # Per-pixel sums by block_sum (a deterministic reduction), laid out (moment, pixel, channel).
@@ -320,8 +372,73 @@ def render_mitsuba(scene: Scene, settings: RenderSettings, *, backend: str = "ll
         dr.eval(sums)
         return sums
 
-    totals = run_passes(pass_sums, width=W, height=H, spp=n_total, spp_per_pass=per_pass,
-                        progress=Progress(n_total, label="mitsuba", enabled=progress))
+    return pass_sums, W, H, "samples"
+
+
+def _run(mscene, integrator, *, seed: int, spp: int, spp_per_pass: int | None, progress: bool, label: str,
+         jitter: bool = True, batches: int = 32):
+    """Render a loaded Mitsuba scene with ``integrator`` in passes: the pass loop of every Mitsuba render here.
+
+    Returns ``(totals, spp_per_pass, method)`` (:class:`mcrt.film.PassTotals`).
+    For an integrator that samples camera rays the totals are exact
+    per-sample moments. For an adjoint integrator (``'batches'``) the
+    samples of one pixel are not separable (a particle splats into any
+    pixel), so the spp are split into ``batches`` equal passes of
+    spp_per_pass = spp // batches (spp rounded down to a multiple), each
+    pass image one batch mean; the per-sample variance is the variance
+    between batch means times the batch size,
+
+        var = n (sum x_k^2 - (sum x_k)^2 / P) / (P - 1),
+
+    which :func:`mcrt.film.run_passes`'s formula gives after scaling by
+    (nP - 1) / (P - 1). It has P - 1 degrees of freedom, not nP - 1 (keep
+    P >= 16). It ignores the correlation between pixels that one particle
+    path creates (its vertices may land in several pixels of a tile), which
+    :func:`mcrt.stats.compare` assumes away.
+    """
+    pass_sums, W, H, method = _pass_function(mscene, integrator, seed, jitter=jitter)
+    if method == "batches":
+        if spp_per_pass is None:
+            spp_per_pass = max(1, spp // max(1, min(batches, spp)))
+        spp = max(2, spp // spp_per_pass) * spp_per_pass
+    per_pass = spp_per_pass if spp_per_pass is not None else samples_per_pass(W, H, spp)
+    if method == "samples" and W * H * per_pass >= 2**32:
+        raise ValueError(f"one pass of {W}x{H}x{per_pass} samples exceeds 2^32 lanes: lower spp_per_pass")
+    totals = run_passes(pass_sums, width=W, height=H, spp=spp, spp_per_pass=per_pass,
+                        progress=Progress(spp, label=label, enabled=progress))
+    if method == "batches":
+        P = totals.spp // per_pass
+        totals.variance = (totals.variance.astype(np.float64) * (totals.spp - 1) / (P - 1)).astype(np.float32)
+    return totals, per_pass, method
+
+
+def render_mitsuba(scene: Scene, settings: RenderSettings, *, backend: str = "llvm", progress: bool = True,
+                   spp_per_pass: int | None = None, integrator: str | dict[str, Any] = "path",
+                   jitter: bool = True) -> RenderResult:
+    """Render ``scene`` at ``settings`` with Mitsuba's ``path`` integrator: mean and per-sample variance images.
+
+    Called through :func:`mcrt.render.render` (renderer ``mitsuba``).
+    ``integrator`` replaces ``path`` by another plugin (a name, or a
+    dictionary as in :func:`scene_dict`; :func:`mcrt.plugins.render_plugin`
+    uses it for mcrt's estimator); ``jitter=False`` sends every sample through
+    its pixel's centre (the plugin's no-jitter mutant). The result is identical bit for bit for
+    the same arguments on the same machine and backend. The passes are
+    :func:`_run`'s, shared with :func:`render_with_variance`.
+
+    ``wall_time`` is the time of all passes (after ``dr.sync_thread()``),
+    JIT compilation included; ``compile_time`` is the part of it spent
+    generating and compiling kernels, from Dr.Jit's kernel history
+    (codegen + backend time). Scene loading is not timed in either (it is
+    in ``extra['load_time']``).
+    """
+    s = settings
+    variant = _use(backend)
+    t_load = time.perf_counter()
+    mscene = mi.load_dict(scene_dict(scene, s.camera, s.width, s.height, s.max_depth, integrator, rr_depth=s.rr_depth,
+                                     spp=s.spp, backend=backend))
+    load_time = time.perf_counter() - t_load
+    totals, per_pass, _ = _run(mscene, mscene.integrator(), seed=s.seed, spp=s.spp, spp_per_pass=spp_per_pass,
+                               progress=progress, label="mitsuba", jitter=jitter)
     return RenderResult(
         mean=totals.mean,
         variance=totals.variance,
@@ -337,9 +454,224 @@ def render_mitsuba(scene: Scene, settings: RenderSettings, *, backend: str = "ll
             "variant": variant,
             "mitsuba_version": mi.__version__,
             "drjit_version": dr.__version__,
-            "integrator": integrator_name,
+            "integrator": _integrator_name(integrator),
             "rr_depth": str(s.rr_depth),
             "spp_per_pass": str(per_pass),
             "load_time": f"{load_time:.3f}",
         },
     )
+
+
+# --------------------------------------------------------------------------
+# Any Mitsuba scene, any integrator
+# --------------------------------------------------------------------------
+
+
+def _canonical(value) -> Any:
+    """A JSON-ready, order-independent form of a scene dictionary (Mitsuba objects by their text)."""
+    if isinstance(value, dict):
+        return {str(k): _canonical(v) for k, v in sorted(value.items(), key=lambda kv: str(kv[0]))}
+    if isinstance(value, (list, tuple)):
+        return [_canonical(v) for v in value]
+    if isinstance(value, (str, int, float, bool)) or value is None:
+        return value
+    return f"{type(value).__name__}:{value}"
+
+
+def mitsuba_scene_hash(scene: dict[str, Any] | str | os.PathLike) -> str:
+    """A content hash of a Mitsuba scene dictionary or XML file, the same for every integrator and sample count.
+
+    A dictionary is hashed without its ``integrator`` and without its
+    sensor's ``sampler`` and ``film`` (resolution and sample count are
+    recorded apart); key order does not matter. A file is hashed byte for
+    byte (its integrator included, not the files it references). 16 hex
+    digits, like :meth:`mcrt.scene.Scene.content_hash`.
+    """
+    if isinstance(scene, dict):
+        d = {k: v for k, v in scene.items() if k != "integrator"}
+        for k, v in d.items():
+            if isinstance(v, dict) and str(v.get("type", "")) in _SENSOR_TYPES:
+                d[k] = {kk: vv for kk, vv in v.items() if kk not in ("sampler", "film")}
+        data = json.dumps(_canonical(d), sort_keys=True, separators=(",", ":")).encode()
+    else:
+        data = Path(scene).read_bytes()
+    return hashlib.sha256(data).hexdigest()[:16]
+
+
+_SENSOR_TYPES = ("perspective", "thinlens", "orthographic", "telecentric", "radiancemeter", "irradiancemeter",
+                 "batch", "distant")
+
+
+def camera_id(sensor) -> str:
+    """``'<sensor plugin>:<hash>'``: which camera a sensor is, from its pose, field of view and clip planes.
+
+    The hash covers the sensor's traversable parameters other than its film
+    and shutter (``to_world``, ``x_fov``, ``near_clip``, ...), so two loads of
+    one camera at any resolution or sample count agree and two cameras
+    differ.
+    """
+    params = mi.traverse(sensor)
+    text = ";".join(f"{k}={params[k]}" for k in sorted(params.keys())
+                    if not k.startswith("film.") and not k.startswith("shutter"))
+    return f"{sensor.class_name()}:{hashlib.sha256(text.encode()).hexdigest()[:8]}"
+
+
+def integrator_max_depth(integrator) -> int:
+    """The integrator's ``max_depth`` (-1 unbounded), read from the object; -1 too where it has none (``direct``, ``aov``).
+
+    Python integrators (``prb``) keep it as an attribute; C++ ones print it
+    (``max_depth = 8``; an unbounded depth prints as 2^32 - 1).
+    """
+    v = getattr(integrator, "max_depth", None)
+    if v is None:
+        m = re.search(r"max_depth\s*=\s*(-?\d+)", str(integrator))
+        if m is None:
+            return -1
+        v = int(m.group(1))
+    v = int(v)
+    return -1 if v < 0 or v >= 2**31 else v
+
+
+def _integrator_spec(integrator: str | dict[str, Any] | None, max_depth: int | None, current: str) -> dict[str, Any] | None:
+    """The integrator dictionary that replaces the scene's (None: keep it).
+
+    A dictionary replaces it as given. A name replaces the plugin and keeps
+    the scene integrator's ``max_depth`` and ``rr_depth`` (``current`` is its
+    description), so that ``path`` and ``prb`` (default depths -1 and 6)
+    render the same light paths; ``max_depth`` overrides the depth.
+    """
+    if integrator is None:
+        if max_depth is None:
+            return None
+        integrator = _INTEGRATOR_CLASSES.get(current.split("[", 1)[0].strip(), None)
+        if integrator is None:
+            raise ValueError(f"cannot set max_depth of the scene's integrator {current.split('[', 1)[0]}: name the integrator")
+    if isinstance(integrator, dict):
+        spec = dict(integrator)
+    else:
+        spec = {"type": str(integrator)}
+        for key in ("max_depth", "rr_depth"):
+            m = re.search(rf"{key}\s*=\s*(-?\d+)", current)
+            if m is not None:
+                v = int(m.group(1))
+                spec[key] = -1 if v >= 2**31 else v
+    if max_depth is not None:
+        spec["max_depth"] = int(max_depth)
+    return spec
+
+
+def render_with_variance(scene: "dict[str, Any] | mi.Scene | str | os.PathLike", *, integrator: str | dict[str, Any] | None = None,
+                         spp: int | None = None, seed: int = 0, width: int | None = None, height: int | None = None,
+                         max_depth: int | None = None, backend: str = "llvm", progress: bool = False,
+                         spp_per_pass: int | None = None, batches: int = 32) -> RenderResult:
+    """Render any Mitsuba scene with any of its integrators: mean and per-sample variance, reproducible from ``seed``.
+
+    ``scene`` is a scene dictionary (``mi.cornell_box()``), a loaded
+    ``mi.Scene`` or the path of an XML file. ``integrator`` (a plugin name
+    or a dictionary with ``type``) replaces the scene's; ``max_depth`` sets
+    its ``max_depth``; ``width``/``height`` change the film's resolution;
+    ``spp`` defaults to the scene sampler's sample count. The passes are
+    those of :func:`render_mitsuba` (:func:`_run`): for integrators that
+    sample camera rays (``path``, ``volpath``, ``prb``, ``direct``, ...) each
+    pixel's samples are summed per pass, so the variance comes from
+    per-sample second moments and the same seed gives the same image bit for
+    bit; adjoint integrators (``ptracer``) are rendered in ``batches`` passes
+    whose images give the variance (see :func:`_run`; their film adds splats
+    atomically, so the image is reproducible only up to rounding).
+
+    Every sample counts for its own pixel (a box pixel): a dictionary's film
+    filter is set to ``box`` (noted in ``extra['rfilter']`` when it was
+    another), so that ``mi.render`` with that scene converges to the same
+    image; a loaded scene or a file keeps its filter, which sampling
+    integrators ignore and ``ptracer`` refuses unless it is ``box``.
+
+    The result records ``renderer`` = the integrator's plugin name,
+    ``max_depth`` = :func:`integrator_max_depth` (-1 unbounded or none),
+    ``camera`` = :func:`camera_id`, ``scene_hash`` =
+    :func:`mitsuba_scene_hash` of the dictionary or file ("" for a loaded
+    scene: nothing to hash), and in ``extra`` the integrator's description,
+    the variant, the versions, the method (``samples`` or ``batches``), the
+    spp per pass and the scene's source.
+    """
+    variant = _use(backend)
+    t_load = time.perf_counter()
+    extra: dict[str, str] = {}
+    if isinstance(scene, dict):
+        d = dict(scene)
+        scene_hash, source = mitsuba_scene_hash(d), "dict"
+        for k, v in d.items():
+            if isinstance(v, dict) and str(v.get("type", "")) in _SENSOR_TYPES and isinstance(v.get("film"), dict):
+                film = dict(v["film"])
+                old = film.get("rfilter", {"type": "gaussian"})
+                old_type = old.get("type", "?") if isinstance(old, dict) else str(old)
+                if old_type != "box":
+                    extra["rfilter"] = f"box (the scene's film had {old_type})"
+                film["rfilter"] = {"type": "box"}
+                d[k] = dict(v, film=film)
+                break
+        mscene = mi.load_dict(d)
+    elif isinstance(scene, mi.Scene):
+        mscene, scene_hash, source = scene, "", "mi.Scene"
+    else:
+        path = Path(scene)
+        if not path.is_file():
+            raise ValueError(f"{path}: no such Mitsuba scene file")
+        mscene, scene_hash, source = mi.load_file(str(path)), mitsuba_scene_hash(path), str(path)
+    spec = _integrator_spec(integrator, max_depth, str(mscene.integrator()))
+    integ = mscene.integrator() if spec is None else mi.load_dict(spec)
+    if width is not None or height is not None:
+        params = mi.traverse(mscene.sensors()[0])
+        fw, fh = (int(v) for v in mscene.sensors()[0].film().size())
+        size = mi.ScalarVector2u(int(width or fw), int(height or fh))
+        params["film.size"] = size
+        params["film.crop_size"] = size
+        params["film.crop_offset"] = mi.ScalarPoint2u(0, 0)
+        params.update()
+    load_time = time.perf_counter() - t_load
+    sensor = mscene.sensors()[0]
+    if spp is None:
+        spp = int(sensor.sampler().sample_count())
+    name = _integrator_name_of(integ)
+    totals, per_pass, method = _run(mscene, integ, seed=seed, spp=int(spp), spp_per_pass=spp_per_pass, progress=progress,
+                                    label=name, batches=batches)
+    extra.update({
+        "variant": variant,
+        "mitsuba_version": mi.__version__,
+        "drjit_version": dr.__version__,
+        "integrator": " ".join(str(integ).split()),
+        "method": method,
+        "spp_per_pass": str(per_pass),
+        "source": source,
+        "load_time": f"{load_time:.3f}",
+    })
+    return RenderResult(
+        mean=totals.mean,
+        variance=totals.variance,
+        spp=totals.spp,
+        seed=int(seed),
+        max_depth=integrator_max_depth(integ),
+        renderer=name,
+        scene_hash=scene_hash,
+        camera=camera_id(sensor),
+        wall_time=totals.wall_time,
+        compile_time=totals.compile_time,
+        extra=extra,
+    )
+
+
+#: Mitsuba's class names of its integrators -> their plugin names (the rest: the class name, lower case).
+_INTEGRATOR_CLASSES = {
+    "PathIntegrator": "path", "VolumetricPathIntegrator": "volpath", "VolumetricMisPathIntegrator": "volpathmis",
+    "PRBIntegrator": "prb", "PRBBasicIntegrator": "prb_basic", "PRBVolpathIntegrator": "prbvolpath",
+    "ParticleTracerIntegrator": "ptracer", "DirectIntegrator": "direct", "AOVIntegrator": "aov",
+    "MomentIntegrator": "moment", "DirectProjectiveIntegrator": "direct_projective",
+    "PRBProjectiveIntegrator": "prb_projective",
+}
+
+
+def _integrator_name_of(integrator) -> str:
+    """The plugin name of a loaded integrator (``path`` for PathIntegrator, ``prb`` for PRBIntegrator, ...)."""
+    cls = type(integrator).__name__
+    if cls in ("MonteCarloIntegrator", "SamplingIntegrator", "AdjointIntegrator", "Integrator"):
+        cls = integrator.class_name()  # a C++ plugin: its own class name
+    return _INTEGRATOR_CLASSES.get(cls, cls.lower())

@@ -5,9 +5,21 @@ so any test in an environment where mcrt is installed can ask for the
 ``assert_same_image`` fixture::
 
     def test_my_renderer_matches_mitsuba(assert_same_image):
-        mine = my_render(spp=1024, seed=1)            # a RenderResult with per-sample variance
+        mean, var = my_render(spp=1024, seed=1)       # NumPy (H, W, 3): mean and per-sample variance
         ref = mcrt.reference.load_reference(None, "near", 64, 8)
-        assert_same_image(mine, ref, policy="reference-floor")  # Welch tile test, Holm at FWER 0.01
+        assert_same_image(mean, ref, variance_a=var, spp_a=1024, policy="reference-floor")
+
+Each side is a RenderResult, an image file (an EXR with its variance,
+Mitsuba's ``moment`` integrator's output) or a NumPy mean with
+``variance_a``/``spp_a`` (``variance_b``/``spp_b``) alongside. The policy
+is explicit: ``'independent'`` (the default) for two independent renders
+(two integrators, two seeds), ``'reference-floor'`` for a render against a
+high-spp reference of the same estimator, such as the committed Mitsuba
+references (without the floor, correct low-spp renders that miss rare
+bright paths are rejected; see :mod:`mcrt.stats.policy`). Renders whose
+headers record different resolutions, cameras, scene hashes or max depths
+are refused (:func:`mcrt.compare.check_headers`; ``allow_mismatch=`` names
+the fields to compare anyway).
 
 When the renders differ the test fails with the report of
 :func:`assert_same_image`: how many tile tests were rejected, which tiles
@@ -21,6 +33,7 @@ artifacts). The fixture returns the :class:`mcrt.stats.Comparison` when the
 renders agree.
 
 Keyword arguments are those of :func:`assert_same_image` (``policy``,
+``variance_a``, ``spp_a``, ``variance_b``, ``spp_b``, ``allow_mismatch``,
 ``alpha``, ``tile``, ``channels``, ``correction``, ``name``). Each call in
 one test gets its own file names (``compare``, ``compare_2``, ...) unless
 ``name`` is given.
@@ -45,10 +58,15 @@ __all__ = ["assert_same_image"]
 
 
 def assert_same_image(
-    a: RenderResult,
-    b: RenderResult,
+    a,
+    b,
     *,
     policy: str = "independent",
+    variance_a=None,
+    spp_a: int | None = None,
+    variance_b=None,
+    spp_b: int | None = None,
+    allow_mismatch=(),
     save_dir=None,
     name: str = "compare",
     **options,
@@ -57,7 +75,9 @@ def assert_same_image(
 
     ``a`` is the render under test and ``b`` the other one (the high-spp
     reference under ``policy='reference-floor'``; see
-    :mod:`mcrt.stats.policy` for which policy to use when). Returns the
+    :mod:`mcrt.stats.policy` for which policy to use when). Each is a
+    RenderResult, an image file or a NumPy mean with its per-sample variance
+    and spp given alongside (:func:`mcrt.compare.as_result`). Returns the
     :class:`~mcrt.stats.Comparison` when they agree. Otherwise raises
     ``AssertionError`` with the multi-line report of
     :func:`mcrt.compare.report_lines`. ``options`` (``alpha``, ``tile``,
@@ -65,13 +85,18 @@ def assert_same_image(
     With ``save_dir`` a failure also saves the two means as
     ``{name}_a.npy`` / ``{name}_b.npy``, the heat map ``{name}_heatmap.png``
     and the report ``{name}.json`` there.
-    :class:`~mcrt.stats.StatsError` (unusable inputs) and ``ValueError``
-    (invalid options) propagate unchanged.
+    :class:`~mcrt.stats.StatsError` (unusable inputs: a bare array without
+    its variance or spp, headers that differ,
+    :class:`mcrt.compare.HeaderMismatch`) and ``ValueError`` (invalid
+    options) propagate unchanged.
     """
     __tracebackhide__ = True
-    from mcrt.compare import report_lines
+    from mcrt.compare import as_result, check_headers, report_lines
     from mcrt.stats import compare
 
+    a = as_result(a, name="A", variance=variance_a, spp=spp_a)
+    b = as_result(b, name="B", variance=variance_b, spp=spp_b)
+    check_headers(a, b, allow=allow_mismatch)
     c = compare(a, b, policy=policy, **options)
     if c.passed:
         return c

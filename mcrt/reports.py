@@ -53,6 +53,9 @@ REPORTS: tuple[Report, ...] = (
            "--escalate-spp 2048,4096,8192,16384 --followup max_depth=2 --followup camera=far --effect-spp 0 "
            "--out reports/validation/against_reference_floor",
            "the same against the committed reference with the variance floor"),
+    Report("integrators", "validate-integrator cornell-box --integrator path --against volpath --against prb "
+           "--against ptracer --wrong path:max_depth=7 --res 32 --budget 0.25 --seeds 100 --report reports/integrators",
+           "mcrt validate-integrator on Mitsuba's Cornell box: false-alarm rate of path against volpath, prb, ptracer"),
 )
 
 

@@ -41,8 +41,9 @@ def test_differ(assert_same_image):
     # How many tiles, where (tile and pixel ranges), how large, p-value, where the files are.
     result.stdout.fnmatch_lines([
         "*renders differ: DIFFERENT: 3 of 48 tile tests rejected at FWER 0.01 (Holm, 8x8 tiles, rgb)*",
-        "*tile (1,2) ? *rows 8-15 cols 16-23*t=+*p=*(+18.* %)*",
-        "*largest effect: +18.* % at tile (1,2)*",
+        "*tile (1,2) ? *rows 8-15 cols 16-23*t=+*p=*(+18.* % symmetric)*",
+        "*largest effect: +18.* % (symmetric) at tile (1,2)*",
+        "*whole-image mean, symmetric relative difference (A-B)/mean(|A|,|B|): R +*",
         "*saved means, heat map and report to *",
     ])
     assert "test_differ(assert_same_image)" in out  # the traceback points at the caller's line...
@@ -82,5 +83,41 @@ def test_options_pass_through(assert_same_image):
     assert assert_same_image(render(1), render(2), policy="reference-floor").policy == "reference-floor"
 ''')
     # No -p option: the plugin must come from the installed pytest11 entry point.
+    result = pytester.runpytest_subprocess("-p", "no:cacheprovider")
+    result.assert_outcomes(passed=3)
+
+
+def test_arrays_files_and_headers(pytester):
+    """NumPy means with variance and spp alongside, EXR files, a clear error without them, refused headers."""
+    pytester.makepyfile(HELPERS + '''
+import dataclasses
+import pytest
+from mcrt.compare import HeaderMismatch, image
+from mcrt.imageio import write_exr
+from mcrt.stats import StatsError
+
+def test_arrays(assert_same_image):
+    a, b = render(1), render(2)
+    c = assert_same_image(a.mean, b.mean, variance_a=a.variance, spp_a=a.spp, variance_b=b.variance, spp_b=b.spp)
+    assert c.passed
+    assert assert_same_image(image(a.mean, a.variance, a.spp), b).passed
+    with pytest.raises(StatsError, match="image A is a bare array: give its per-sample variance and spp"):
+        assert_same_image(a.mean, b)
+    with pytest.raises(StatsError, match="spp"):
+        assert_same_image(a.mean, b, variance_a=a.variance)
+
+def test_files(assert_same_image, tmp_path):
+    write_exr(tmp_path / "a.exr", render(1))
+    assert assert_same_image(tmp_path / "a.exr", str(tmp_path / "a.exr")).passed
+
+def test_headers(assert_same_image):
+    a, b = render(1), dataclasses.replace(render(2), camera="far")
+    a.camera = "near"
+    with pytest.raises(HeaderMismatch, match="differ in camera: near against far"):
+        assert_same_image(a, b)
+    assert assert_same_image(a, b, allow_mismatch=("camera",)).passed
+    with pytest.raises(HeaderMismatch, match="max_depth: 8 against 7"):
+        assert_same_image(a, dataclasses.replace(render(2), max_depth=7))
+''')
     result = pytester.runpytest_subprocess("-p", "no:cacheprovider")
     result.assert_outcomes(passed=3)

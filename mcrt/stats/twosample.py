@@ -208,7 +208,7 @@ class Comparison:
             parts.append(f"largest effect {100 * e.rel_diff:+.2f} % at tile ({e.ty},{e.tx}) {e.channel}")
             parts.append(f"min p {self.min_p:.3g}")
         g = ", ".join(f"{c} {100 * v:+.3f} %" for c, v in zip(self.channel_names, self.global_rel_diff))
-        parts.append(f"whole-image A vs B: {g}")
+        parts.append(f"whole-image (A - B) / mean(|A|, |B|): {g}")
         return "; ".join(parts)
 
     def to_dict(self) -> dict:
