@@ -44,32 +44,53 @@ Checks (:data:`CHECKS`), each worth its points, all or nothing except
   against the assignment's reference; the check scores its points times the
   image rubric's share.
 
-Every call runs in a fresh subprocess (``python -I mcrt/grade/_sandbox.py``)
-in a temporary folder that holds a copy of the student's files and the
-inputs, with resource limits that the runner sets on itself before NumPy or
-the student's code loads (``RLIMIT_CPU`` at the timeout plus a second,
-``RLIMIT_AS`` at ``memory_mb``, ``RLIMIT_FSIZE`` 256 MiB, no core files;
-one BLAS thread), a wall-clock timeout that kills its whole process group
-(its own session), a minimal environment (``HOME`` and ``TMPDIR`` in
-the folder, no inherited secrets) and the sandbox of
-:mod:`mcrt.grade._sandbox` (Landlock: read-only system, writable folder,
-unreadable grader files; an audit hook refusing processes, sockets and
-writes elsewhere). Running as root, it also drops to ``nobody`` when the
-Python installation is readable by others. A crash, a hang, a memory blow-up
-or a refused operation is a graded failure of that check, with the
-student's traceback.
+Every call runs in a fresh process (``python -I -B mcrt/grade/_sandbox.py``)
+inside bubblewrap (``bwrap``, Debian's package ``bubblewrap``): new PID,
+network, IPC and UTS namespaces (and a user namespace when the grader is not
+root), so a process the student forks dies with the call and nothing leaves
+the sandbox's own loopback; an unprivileged uid, one per call, even when the
+grader runs as root (there bubblewrap runs privileged and the runner, given
+only CAP_SETUID and CAP_SETGID, switches to it first thing); read-only binds
+of only what the module may read (the Python installation and its packages
+without mcrt itself, /usr and the loader's files, the call's inputs: never the
+references, the grader, other students' folders or /etc); a tmpfs of
+:data:`DISK_LIMIT` bytes as its only writable folder (the disk quota);
+``--die-with-parent`` and ``--new-session``. The runner then sets its
+resource limits (:func:`_limits`: CPU time, address space, file size,
+processes, open files, no core files), installs a seccomp filter (no exec, no
+new namespaces) and an audit hook, before NumPy or the student's code loads;
+a wall-clock timeout kills the whole process group. The grader never opens a
+path the student could have made: the student's output goes to files it
+opened itself and unlinked (a link or a FIFO planted in the work folder
+changes nothing), results are capped at :data:`OUTPUT_LIMIT` before they are
+decoded, and a submission folder is copied without following links (a link
+is skipped with a message) and capped in size.
+
+Where bubblewrap is missing or namespaces are forbidden (a container that
+refuses them: probed by running ``bwrap`` once), the grader says so on
+stderr and in the class summary and falls back to the best it has: the same
+rlimits, seccomp filter and audit hook, Landlock (read-only system, writable
+work folder, unreadable grader files) and, as root, ``nobody`` when the
+Python installation is readable by others. ``MCRT_SANDBOX=bwrap`` makes a
+missing bubblewrap an error, ``MCRT_SANDBOX=fallback`` forces the fallback.
+A crash, a hang, a memory blow-up or a refused operation is a graded failure
+of that check, with the student's traceback.
 """
 
 from __future__ import annotations
 
+import io
+import itertools
 import json
 import os
 import shutil
 import signal
 import stat
+import struct
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
@@ -81,10 +102,18 @@ from mcrt.grade.assignment import Assignment
 from mcrt.grade.grader import StudentResult, TestResult
 
 RUNNER = Path(__file__).with_name("_sandbox.py")
-FSIZE_LIMIT = 256 << 20
-OUTPUT_LIMIT = 64 << 20
+FSIZE_LIMIT = 128 << 20  # any one file the student's process writes (its stdout included)
+DISK_LIMIT = 256 << 20  # the sandbox's tmpfs: all it may write together
+OUTPUT_LIMIT = 64 << 20  # the results of one check's calls together, as the grader reads them
+TRAILER_LIMIT = 4 << 20  # their JSON description (tracebacks, violations)
+NPROC_LIMIT = 16  # processes and threads of the sandbox's uid
+NOFILE_LIMIT = 256
+SUBMISSION_LIMIT = 32 << 20  # bytes of a submission folder copied into the sandbox
+SUBMISSION_FILES = 2000
 STDIO_TAIL = 4000
 NOBODY = 65534
+UID_BASE = 1_500_000_000  # one unprivileged uid per call above this (no such user on the system)
+_uids = itertools.count()
 
 CHECK_TITLES = {
     "sample_cosine_hemisphere": "sample_cosine_hemisphere: cosine-weighted directions",
@@ -109,6 +138,7 @@ class CallResult:
     sandbox: dict = field(default_factory=dict)
     seconds: float = 0.0
     stdout: str = ""
+    notes: list = field(default_factory=list)  # what of the submission was not copied, and why
 
 
 def _read_roots() -> list[str]:
@@ -117,25 +147,34 @@ def _read_roots() -> list[str]:
     Never the project (references, the grader, other output) nor any folder
     holding it; inside the project only the virtual environment. Of /proc
     only cpuinfo and meminfo here; the runner adds its own /proc/<pid> (never
-    the grader's, whose environment would be readable there).
+    the grader's, whose environment would be readable there). Used by the
+    fallback (Landlock); bubblewrap binds :func:`_python_roots` and system
+    folders instead.
     """
+    return sorted(set(_python_roots()) | _existing({"/usr", "/lib", "/lib64", "/lib32", "/bin", "/sbin", "/etc", "/sys",
+                                                    "/opt", "/proc/cpuinfo", "/proc/meminfo", "/dev/urandom", "/dev/zero"}))
+
+
+def _existing(cands) -> set[str]:
+    return {os.path.realpath(c) for c in cands if os.path.exists(c)}
+
+
+def _python_roots() -> list[str]:
+    """The Python installation, the virtual environment and the folders of sys.path, never the project."""
     repo = Path(__file__).resolve().parent.parent.parent
     venv = Path(sys.prefix).resolve()
-    cands = {sys.prefix, sys.base_prefix, sys.exec_prefix, sys.base_exec_prefix,
-             "/usr", "/lib", "/lib64", "/lib32", "/bin", "/sbin", "/etc", "/sys", "/opt",
-             "/proc/cpuinfo", "/proc/meminfo", "/dev/urandom", "/dev/zero"}  # /proc/<pid>: added by the runner
+    cands = {sys.prefix, sys.base_prefix, sys.exec_prefix, sys.base_exec_prefix, os.path.dirname(os.path.realpath(sys.executable))}
     cands |= {p for p in sys.path if p and os.path.isdir(p)}
     out = set()
-    for c in cands:
-        if not os.path.exists(c):
-            continue
-        r = Path(os.path.realpath(c))
+    for c in _existing(cands):
+        r = Path(c)
         if r == Path("/") or r == repo or repo.is_relative_to(r):
             continue  # an ancestor of the project would expose it
         if r.is_relative_to(repo) and not r.is_relative_to(venv):
             continue
         out.add(str(r))
-    return sorted(out)
+    # The outermost folders only (a bind covers what is under it).
+    return sorted(r for r in out if not any(r != o and Path(r).is_relative_to(o) for o in out))
 
 
 def _world_traversable(path: str) -> bool:
@@ -149,6 +188,14 @@ def _world_traversable(path: str) -> bool:
     return True
 
 
+def _other_readable(path: str) -> bool:
+    try:
+        m = os.stat(path).st_mode
+    except OSError:
+        return False
+    return bool(m & stat.S_IROTH) and (not stat.S_ISDIR(m) or bool(m & stat.S_IXOTH))
+
+
 def _can_drop_privileges() -> bool:
     if os.geteuid() != 0:
         return False
@@ -158,46 +205,336 @@ def _can_drop_privileges() -> bool:
 def _limits(cpu_s: float, memory_mb: int) -> dict:
     """Resource limits the runner sets on itself before NumPy and the student's code load."""
     cpu = int(cpu_s) + 1
-    return {"RLIMIT_CPU": cpu, "RLIMIT_AS": int(memory_mb) << 20, "RLIMIT_FSIZE": FSIZE_LIMIT, "RLIMIT_CORE": 0}
+    return {"RLIMIT_CPU": cpu, "RLIMIT_AS": int(memory_mb) << 20, "RLIMIT_FSIZE": FSIZE_LIMIT, "RLIMIT_CORE": 0,
+            "RLIMIT_NPROC": NPROC_LIMIT, "RLIMIT_NOFILE": NOFILE_LIMIT}
+
+
+# --------------------------------------------------------------------------
+# Isolation: bubblewrap, or the fallback (said so, never silently)
+# --------------------------------------------------------------------------
+
+
+@dataclass
+class Isolation:
+    kind: str  # "bubblewrap" or "fallback"
+    detail: str  # one line for stderr and the class summary
+    bwrap: str | None = None
+    options: frozenset = frozenset()  # optional bwrap options this version has
+
+
+_ISOLATION: Isolation | None = None
+_ISOLATION_LOCK = threading.Lock()
+_NS_FLAGS = ["--unshare-pid", "--unshare-net", "--unshare-ipc", "--unshare-uts", "--unshare-cgroup-try"]
+
+
+def _probe_bwrap() -> Isolation:
+    exe = shutil.which("bwrap")
+    if exe is None:
+        return Isolation("fallback", "bubblewrap (bwrap) is not installed (apt-get install bubblewrap)")
+    try:
+        helptext = subprocess.run([exe, "--help"], capture_output=True, text=True, timeout=10).stdout
+    except (OSError, subprocess.SubprocessError) as e:
+        return Isolation("fallback", f"bwrap does not run ({e})")
+    opts = frozenset(o for o in ("--size", "--perms", "--disable-userns", "--die-with-parent", "--new-session")
+                     if o in helptext)
+    if not {"--perms", "--die-with-parent", "--new-session"} <= opts:
+        return Isolation("fallback", f"{exe} is too old (no --perms, --die-with-parent or --new-session; 0.5 or later needed)")
+    # What the calls use: as root a privileged bwrap without a user namespace, else --unshare-all.
+    ns = _NS_FLAGS if os.geteuid() == 0 else ["--unshare-all"]
+    argv = [exe, *ns, "--die-with-parent", "--new-session", "--ro-bind", "/", "/", "--proc", "/proc", "--dev", "/dev", "true"]
+    try:
+        p = subprocess.run(argv, capture_output=True, text=True, timeout=30, stdin=subprocess.DEVNULL)
+    except (OSError, subprocess.SubprocessError) as e:
+        return Isolation("fallback", f"bwrap failed to start ({e})")
+    if p.returncode != 0:
+        why = (p.stderr.strip().splitlines() or [f"exit code {p.returncode}"])[-1]
+        return Isolation("fallback", f"bwrap cannot create namespaces here ({why})")
+    ver = subprocess.run([exe, "--version"], capture_output=True, text=True, timeout=10).stdout.strip() or "bubblewrap"
+    quota = "" if "--size" in opts else "; this bwrap has no --size: no disk quota beyond the file-size limit"
+    who = "an unprivileged uid"
+    if os.geteuid() == 0 and not all(_other_readable(r) for r in _python_roots()):
+        who = "uid 0 without capabilities (the Python installation is not readable by others, so no other uid can run it)"
+    return Isolation("bubblewrap", f"{ver}: PID, network, IPC and UTS namespaces, {who}, read-only "
+                                   f"system, a {DISK_LIMIT >> 20} MiB tmpfs as the only writable folder{quota}", exe, opts)
+
+
+def isolation() -> Isolation:
+    """How student code is isolated here (probed once; ``MCRT_SANDBOX``: auto, bwrap, fallback)."""
+    global _ISOLATION
+    with _ISOLATION_LOCK:
+        if _ISOLATION is None:
+            want = os.environ.get("MCRT_SANDBOX", "auto").strip().lower() or "auto"
+            if want in ("fallback", "none", "off"):
+                iso = Isolation("fallback", f"MCRT_SANDBOX={want} asks for no bubblewrap")
+            else:
+                iso = _probe_bwrap()
+                if want == "bwrap" and iso.kind != "bubblewrap":
+                    raise RuntimeError(f"MCRT_SANDBOX=bwrap, but {iso.detail}")
+            if iso.kind == "fallback":
+                who = ("a separate uid (nobody)" if _can_drop_privileges() else
+                       "root: the Python installation is not readable by others" if os.geteuid() == 0 else
+                       f"the grader's own uid {os.geteuid()}")
+                iso.detail = (f"WARNING: student code is NOT isolated by namespaces: {iso.detail}. Falling back to "
+                              f"rlimits, seccomp, Landlock and an audit hook, running as {who}; no disk quota, and "
+                              "processes it forks and its network traffic are not contained by namespaces")
+                print(f"mcrt grade: {iso.detail}", file=sys.stderr, flush=True)
+            _ISOLATION = iso
+        return _ISOLATION
+
+
+def _sandbox_uid() -> int:
+    return UID_BASE + (os.getpid() % 4096) * 4096 + next(_uids) % 4096
+
+
+def _bwrap_argv(iso: Isolation, indir: Path, result_fd: int, uid: int | None) -> list[str]:
+    """bwrap's command line: what the module sees is exactly what is bound here."""
+    root = os.geteuid() == 0
+    argv = [iso.bwrap, *_NS_FLAGS, "--die-with-parent", "--new-session", "--hostname", "sandbox"]
+    if root:
+        if uid is not None:
+            argv += ["--cap-add", "CAP_SETUID", "--cap-add", "CAP_SETGID"]
+    else:
+        argv += ["--unshare-user", "--uid", str(NOBODY), "--gid", str(NOBODY)]
+        if "--disable-userns" in iso.options:
+            argv.append("--disable-userns")
+    made: set[str] = set()
+
+    def parents(dest: str) -> None:
+        for q in reversed(Path(dest).parents):
+            s = str(q)
+            if s != "/" and s not in made:
+                argv.extend(["--perms", "0755", "--dir", s])
+                made.add(s)
+
+    argv += ["--ro-bind", "/usr", "/usr"]
+    made.add("/usr")
+    for d in ("/bin", "/sbin", "/lib", "/lib64", "/lib32"):
+        if os.path.islink(d):
+            argv += ["--symlink", os.readlink(d), d]
+        elif os.path.isdir(d):
+            argv += ["--ro-bind", d, d]
+        made.add(d)
+    for f in ("/etc/ld.so.cache", "/etc/ld.so.conf", "/etc/localtime"):
+        if os.path.isfile(f):
+            parents(f)
+            argv += ["--ro-bind", f, f]
+    masks = []
+    for r in _python_roots():
+        if not any(Path(r).is_relative_to(m) for m in made):
+            parents(r)
+            argv += ["--ro-bind", r, r]
+            made.add(r)
+        for p in sys.path:
+            if p and Path(p).is_relative_to(r) and os.path.isdir(os.path.join(p, "mcrt")):
+                masks.append(os.path.join(p, "mcrt"))  # the grader's package (its references) stays unreadable
+    for m in sorted(set(masks)):
+        argv += ["--size", "4096"] if "--size" in iso.options else []
+        argv += ["--tmpfs", m, "--remount-ro", m]
+    parents("/sandbox/x")
+    argv += ["--ro-bind", str(RUNNER), "/sandbox/runner.py", "--ro-bind", str(indir), "/sandbox/in"]
+    if "--size" in iso.options:
+        argv += ["--size", str(DISK_LIMIT)]
+    argv += ["--perms", "1777", "--tmpfs", "/sandbox/work",
+             "--proc", "/proc", "--dev", "/dev", "--chdir", "/sandbox/work", "--",
+             sys.executable, "-I", "-B", "/sandbox/runner.py", "/sandbox/in", "/sandbox/work", str(result_fd)]
+    return argv
+
+
+# --------------------------------------------------------------------------
+# Copying the submission, reading what comes back: never a link, never a special file
+# --------------------------------------------------------------------------
+
+
+def copy_submission(src: Path, dest: Path, *, limit: int = SUBMISSION_LIMIT, max_files: int = SUBMISSION_FILES) -> list[str]:
+    """Copy a student's file or folder into ``dest`` (a new folder) without following links.
+
+    Regular files and folders only: a symbolic link, a FIFO, a socket or a
+    device is skipped, and so is what exceeds ``limit`` bytes or
+    ``max_files`` files in all; returns one message per thing skipped.
+    Names starting with a dot and ``__pycache__`` are left out silently.
+    """
+    notes: list[str] = []
+    budget = {"bytes": limit, "files": max_files}
+    dest.mkdir(mode=0o755)
+
+    def skip(rel: str, why: str) -> None:
+        if len(notes) < 20:
+            notes.append(f"{rel}: {why}, not copied")
+        elif len(notes) == 20:
+            notes.append("(more files skipped)")
+
+    def copy_file(path: Path, rel: str, out: Path) -> None:
+        if budget["files"] <= 0:
+            return skip(rel, f"more than {max_files} files")
+        try:
+            fd = os.open(path, os.O_RDONLY | os.O_NOFOLLOW | os.O_NONBLOCK | os.O_CLOEXEC)
+        except OSError as e:
+            return skip(rel, "a symbolic link (links are not followed)" if os.path.islink(path) else f"unreadable ({e.strerror})")
+        try:
+            st = os.fstat(fd)
+            if not stat.S_ISREG(st.st_mode):
+                return skip(rel, "not a regular file")
+            if st.st_size > budget["bytes"]:
+                return skip(rel, f"over the {limit >> 20} MiB a submission may hold")
+            budget["files"] -= 1
+            with os.fdopen(os.open(out, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_NOFOLLOW, 0o644), "wb") as w:
+                left = st.st_size
+                while left > 0:
+                    chunk = os.read(fd, min(left, 1 << 20))
+                    if not chunk:
+                        break
+                    w.write(chunk)
+                    left -= len(chunk)
+            budget["bytes"] -= st.st_size - left
+        finally:
+            os.close(fd)
+
+    def walk(folder: Path, rel: str, out: Path, depth: int) -> None:
+        try:
+            entries = sorted(os.scandir(folder), key=lambda e: e.name)
+        except OSError as e:
+            return skip(rel or ".", f"unreadable ({e.strerror})")
+        for e in entries:
+            if e.name.startswith(".") or e.name == "__pycache__":
+                continue
+            r = f"{rel}{e.name}"
+            if e.is_symlink():
+                try:
+                    target = os.readlink(e.path)
+                except OSError:
+                    target = "?"
+                skip(r, f"a symbolic link (to {target}; links are not followed)")
+            elif e.is_dir(follow_symlinks=False):
+                if depth >= 16:
+                    skip(r, "nested too deep")
+                    continue
+                (out / e.name).mkdir(mode=0o755)
+                walk(Path(e.path), r + "/", out / e.name, depth + 1)
+            elif e.is_file(follow_symlinks=False):
+                copy_file(Path(e.path), r, out / e.name)
+            else:
+                skip(r, "not a regular file (a FIFO, socket or device)")
+
+    st = os.lstat(src)
+    if stat.S_ISLNK(st.st_mode):
+        skip(src.name, "a symbolic link (links are not followed)")
+    elif stat.S_ISDIR(st.st_mode):
+        walk(src, "", dest, 0)
+    elif stat.S_ISREG(st.st_mode):
+        copy_file(src, src.name, dest / src.name)
+    else:
+        skip(src.name, "not a regular file")
+    return notes
+
+
+def _read_capped(f, limit: int) -> bytes | None:
+    """All of an open regular file, or None when it is not one or is over ``limit`` bytes."""
+    st = os.fstat(f.fileno())
+    if not stat.S_ISREG(st.st_mode) or st.st_size > limit:
+        return None
+    f.seek(0)
+    return f.read(limit + 1)[:limit]
+
+
+def _tail_fd(f) -> str:
+    try:
+        st = os.fstat(f.fileno())
+        if not stat.S_ISREG(st.st_mode):
+            return ""
+        f.seek(max(0, st.st_size - STDIO_TAIL))
+        return f.read(STDIO_TAIL).decode("utf-8", "replace")
+    except OSError:
+        return ""
+
+
+def _decode_npy(blob: bytes):
+    """A float64 .npy of exactly the declared size, without pickles and without trusting its header's size."""
+    from numpy.lib import format as npformat
+
+    bio = io.BytesIO(blob)
+    version = npformat.read_magic(bio)
+    read = npformat.read_array_header_1_0 if version == (1, 0) else npformat.read_array_header_2_0
+    shape, fortran, dtype = read(bio, max_header_size=10000)
+    if dtype != np.dtype("<f8"):
+        raise ValueError(f"unexpected type {dtype}")
+    count = 1
+    for n in shape:
+        count *= int(n)
+    if count * 8 != len(blob) - bio.tell():
+        raise ValueError("the data does not match its declared shape")
+    arr = np.frombuffer(blob, dtype="<f8", offset=bio.tell())
+    return arr.reshape(shape, order="F" if fortran else "C").copy()
+
+
+def _parse_results(raw: bytes | None) -> dict | None:
+    """The runner's answer (see mcrt.grade._sandbox); None when it is missing or malformed."""
+    if raw is None or len(raw) < 8:
+        return None
+    (n,) = struct.unpack("<Q", raw[-8:])
+    if n > min(TRAILER_LIMIT, len(raw) - 8):
+        return None
+    try:
+        data = json.loads(raw[len(raw) - 8 - n:len(raw) - 8])
+    except ValueError:
+        return None
+    if not isinstance(data, dict):
+        return None
+    data["_blobs"] = memoryview(raw)[:len(raw) - 8 - n]
+    return data
 
 
 def run_student(module_src: Path, module_name: str, function: str, calls: list[dict], arrays: dict[str, np.ndarray], *,
                 timeout: float, memory_mb: int, first_of_tuple: bool = False) -> CallResult:
     """Call ``function`` of the student's module once per entry of ``calls`` in a sandboxed subprocess.
 
-    ``module_src`` is the student's file or folder (copied into a fresh
-    temporary folder); ``arrays`` are saved there as ``.npy`` files that
-    ``calls`` refer to with ``{"npy": name}``.
+    ``module_src`` is the student's file or folder (copied, without following
+    links, into a fresh temporary folder); ``arrays`` are saved there as
+    ``.npy`` files that ``calls`` refer to with ``{"npy": name}``.
     """
     t0 = time.monotonic()
-    work = Path(tempfile.mkdtemp(prefix="mcrt-code-"))
-    drop = _can_drop_privileges()
+    iso = isolation()
+    tmp = Path(tempfile.mkdtemp(prefix="mcrt-code-"))
     try:
-        dest = work / "student"
-        if module_src.is_dir():
-            shutil.copytree(module_src, dest, symlinks=False, ignore=shutil.ignore_patterns("__pycache__", ".*"))
-        else:
-            dest.mkdir()
-            shutil.copy2(module_src, dest / module_src.name)
+        indir = tmp / "in"
+        indir.mkdir(mode=0o755)
+        notes = copy_submission(Path(module_src), indir / "student")
         for name, arr in arrays.items():
-            np.save(work / name, np.ascontiguousarray(arr), allow_pickle=False)
-        task = {"module": f"student/{module_name}", "function": function, "calls": calls,
-                "read_roots": _read_roots(), "first_of_tuple": first_of_tuple, "limits": _limits(timeout, memory_mb)}
-        (work / "input.json").write_text(json.dumps(task))
-        if drop:
-            for root, dirs, files in os.walk(work):
-                for n in [root, *(os.path.join(root, d) for d in dirs), *(os.path.join(root, f) for f in files)]:
-                    os.chown(n, NOBODY, NOBODY)
-        env = {"PATH": "/usr/bin:/bin", "HOME": str(work), "TMPDIR": str(work), "LANG": "C.UTF-8",
+            np.save(indir / name, np.ascontiguousarray(arr), allow_pickle=False)
+        bwrap = iso.kind == "bubblewrap"
+        uid = None
+        if os.geteuid() == 0 and bwrap and all(_other_readable(r) for r in _python_roots()):
+            uid = _sandbox_uid()
+        task = {"module": f"student/{module_name}", "function": function, "calls": calls, "first_of_tuple": first_of_tuple,
+                "read_roots": [] if bwrap else _read_roots(), "limits": _limits(timeout, memory_mb), "uid": uid,
+                "landlock": not bwrap, "output_limit": OUTPUT_LIMIT}
+        (indir / "input.json").write_text(json.dumps(task))
+        for dirpath, dirs, files in os.walk(indir):
+            os.chmod(dirpath, 0o755)
+            for f in files:
+                os.chmod(os.path.join(dirpath, f), 0o644)
+        env = {"PATH": "/usr/bin:/bin", "LANG": "C.UTF-8",
                "PYTHONDONTWRITEBYTECODE": "1", "PYTHONHASHSEED": "0", "OMP_NUM_THREADS": "1",
                "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1", "NUMEXPR_NUM_THREADS": "1"}
-        ids = {"user": NOBODY, "group": NOBODY, "extra_groups": []} if drop else {}
-        # No preexec_fn (unsafe with the threads that grade students in parallel): a new session for
-        # killing the whole group, and the user switch, are done by Popen itself; the runner sets its
-        # own resource limits before anything else.
-        with open(work / "stdout.txt", "wb") as out:
-            proc = subprocess.Popen([sys.executable, "-I", str(RUNNER), str(work)], cwd=work, env=env, stdin=subprocess.DEVNULL,
-                                    stdout=out, stderr=subprocess.STDOUT, start_new_session=True, close_fds=True, **ids)
+        ids: dict = {}
+        with tempfile.TemporaryFile(dir=tmp) as out, tempfile.TemporaryFile(dir=tmp) as resf:
+            if bwrap:
+                env.update({"HOME": "/sandbox/work", "TMPDIR": "/sandbox/work"})
+                argv, cwd = _bwrap_argv(iso, indir, resf.fileno(), uid), tmp
+            else:
+                work = tmp / "work"
+                work.mkdir()
+                if _can_drop_privileges():
+                    os.chmod(tmp, 0o711)
+                    os.chown(work, NOBODY, NOBODY)
+                    ids = {"user": NOBODY, "group": NOBODY, "extra_groups": []}
+                env.update({"HOME": str(work), "TMPDIR": str(work)})
+                argv = [sys.executable, "-I", "-B", str(RUNNER), str(indir), str(work), str(resf.fileno())]
+                cwd = work
+            # No preexec_fn (unsafe with the threads that grade students in parallel): a new session for
+            # killing the whole group, and the user switch, are done by Popen itself; the runner sets its
+            # own resource limits before anything else.
+            proc = subprocess.Popen(argv, cwd=cwd, env=env, stdin=subprocess.DEVNULL, stdout=out, stderr=subprocess.STDOUT,
+                                    start_new_session=True, close_fds=True, pass_fds=(resf.fileno(),), **ids)
             try:
                 code = proc.wait(timeout=timeout)
                 timed_out = False
@@ -210,36 +547,41 @@ def run_student(module_src: Path, module_name: str, function: str, calls: list[d
                 except (ProcessLookupError, PermissionError):
                     pass
                 proc.wait()
-        stdout = _tail(work / "stdout.txt")
+            stdout = _tail_fd(out)
+            raw = None if timed_out else _read_capped(resf, OUTPUT_LIMIT + TRAILER_LIMIT + 8)
+            too_big = not timed_out and raw is None and os.fstat(resf.fileno()).st_size > 0
         seconds = time.monotonic() - t0
         if timed_out:
             return CallResult(False, [], [], f"stopped after {timeout:g} s (time limit): an infinite loop, or far too slow",
-                              seconds=seconds, stdout=stdout)
-        outp = work / "output.json"
-        if not outp.is_file() or outp.stat().st_size > OUTPUT_LIMIT:
-            why = _exit_reason(code, memory_mb)
+                              seconds=seconds, stdout=stdout, notes=notes)
+        data = _parse_results(raw)
+        if data is None:
+            why = (f"its results exceed {OUTPUT_LIMIT >> 20} MiB" if too_big else _exit_reason(code, memory_mb))
             return CallResult(False, [], [], f"the module's process ended without returning results ({why})",
-                              seconds=seconds, stdout=stdout)
-        try:
-            data = json.loads(outp.read_text())
-        except (ValueError, OSError):
-            return CallResult(False, [], [], "the module's process left unreadable results", seconds=seconds, stdout=stdout)
-        res = CallResult(True, [], [], violations=[str(v)[:300] for v in data.get("violations", [])][:20],
-                         sandbox=data.get("sandbox", {}), seconds=seconds, stdout=stdout)
+                              seconds=seconds, stdout=stdout, notes=notes)
+        blobs = data.pop("_blobs")
+        viol = data.get("violations", [])
+        res = CallResult(True, [], [], violations=[str(v)[:300] for v in (viol if isinstance(viol, list) else [])][:20],
+                         sandbox=data.get("sandbox", {}) if isinstance(data.get("sandbox"), dict) else {},
+                         seconds=seconds, stdout=stdout, notes=notes)
+        res.sandbox["isolation"] = iso.kind
         if "import_error" in data:
             res.ok = False
-            err = str(data["import_error"])
+            err = str(data["import_error"])[:6000]
             if err.startswith("the module has no function"):
                 res.message, res.errors = err, []
             else:
                 res.message, res.errors = "importing the module failed", [err]
             return res
-        for r in data.get("results", []):
-            if isinstance(r, dict) and "npy" in r and isinstance(r["npy"], str) and "/" not in r["npy"]:
+        results = data.get("results", [])
+        for r in (results if isinstance(results, list) else [])[:len(calls)]:
+            loc = r.get("npy") if isinstance(r, dict) else None
+            if isinstance(loc, list) and len(loc) == 2 and all(isinstance(x, int) and x >= 0 for x in loc) \
+                    and loc[0] + loc[1] <= len(blobs):
                 try:
-                    res.outputs.append(np.load(work / r["npy"], allow_pickle=False))
+                    res.outputs.append(_decode_npy(bytes(blobs[loc[0]:loc[0] + loc[1]])))
                     res.errors.append(None)
-                except (ValueError, OSError) as e:
+                except (ValueError, OSError, SyntaxError) as e:
                     res.outputs.append(None)
                     res.errors.append(f"the result could not be read back as numbers ({e})")
             else:
@@ -250,16 +592,7 @@ def run_student(module_src: Path, module_name: str, function: str, calls: list[d
             res.errors.append("no result")
         return res
     finally:
-        shutil.rmtree(work, ignore_errors=True)
-
-
-def _tail(p: Path) -> str:
-    try:
-        with open(p, "rb") as f:
-            f.seek(max(0, p.stat().st_size - STDIO_TAIL))
-            return f.read().decode("utf-8", "replace")
-    except OSError:
-        return ""
+        shutil.rmtree(tmp, ignore_errors=True)
 
 
 def _exit_reason(code, memory_mb) -> str:
@@ -547,18 +880,33 @@ def check_render(run, params: dict, a: Assignment, ctx, scene_dict: dict) -> tup
 
 
 def find_module(src: Path, module: str | None) -> tuple[Path | None, str | None, str]:
-    """(what to copy, module file name inside it, problem)."""
-    if src.is_file():
+    """(what to copy, module file name inside it, problem); a link is never followed."""
+    try:
+        st = os.lstat(src)
+    except OSError:
+        return None, None, "no such file or folder"
+    if stat.S_ISLNK(st.st_mode):
+        return None, None, f"{src.name} is a symbolic link (links are not followed: hand in the file itself)"
+    if stat.S_ISREG(st.st_mode):
         if src.suffix != ".py":
             return None, None, f"{src.name} is not a Python file (.py)"
         return src, src.name, ""
-    if not src.is_dir():
-        return None, None, "no such file or folder"
+    if not stat.S_ISDIR(st.st_mode):
+        return None, None, f"{src.name} is not a regular file or folder"
+
+    def regular(p: Path) -> bool:
+        try:
+            return stat.S_ISREG(os.lstat(p).st_mode)
+        except OSError:
+            return False
+
     if module:
-        if (src / module).is_file():
+        if regular(src / module):
             return src, module, ""
+        if os.path.islink(src / module):
+            return None, None, f"{module} is a symbolic link (links are not followed: hand in the file itself)"
         return None, None, f"the folder has no {module} (the assignment asks for that file)"
-    pys = sorted(p.name for p in src.iterdir() if p.suffix == ".py" and not p.name.startswith("."))
+    pys = sorted(p.name for p in src.iterdir() if p.suffix == ".py" and not p.name.startswith(".") and regular(p))
     if len(pys) == 1:
         return src, pys[0], ""
     if not pys:
@@ -578,6 +926,22 @@ def grade_code(student: str, src: Path, a: Assignment, *, ctx=None, timeout: flo
     notes: list[str] = []
     diagnosis: list = []
     root, mod, problem = find_module(Path(src), spec.module)
+    stage = None
+    if root is not None:
+        # Copied once, without following links: every call then copies this copy, never the student's folder.
+        stage = Path(tempfile.mkdtemp(prefix="mcrt-sub-"))
+        skipped = copy_submission(root, stage / "s")
+        notes += [f"submission: {n}" for n in skipped]
+        root = stage / "s" / root.name if root.is_file() else stage / "s"
+    try:
+        return _grade_code_checks(student, a, root, mod, problem, ctx, to, mem, tests, details, notes, diagnosis, t0)
+    finally:
+        if stage is not None:
+            shutil.rmtree(stage, ignore_errors=True)
+
+
+def _grade_code_checks(student, a, root, mod, problem, ctx, to, mem, tests, details, notes, diagnosis, t0):
+    spec = a.code
     scene = None
     for chk in spec.checks:
         title = CHECK_TITLES.get(chk.name, chk.name)
@@ -626,6 +990,7 @@ def grade_code(student: str, src: Path, a: Assignment, *, ctx=None, timeout: flo
     summary = (f"Full marks: {shown}/{maxs:g}." if not failed else
                f"{shown}/{maxs:g}. " + "; ".join(f"{t.name}: {t.output.splitlines()[0][:160]}" for t in failed[:2]))
     details["mode"] = "code"
+    details["sandbox"] = isolation().detail
     res = StudentResult(student, "graded", score, maxs, tests, summary, notes, diagnosis, details)
     res.elapsed = time.perf_counter() - t0
     return res
@@ -639,6 +1004,7 @@ def discover_code(path, *, single: bool = False, student: str | None = None) -> 
         raise FileNotFoundError(f"{root}: no such file or folder")
     if root.is_file() or single:
         return [(safe_id(student or (root.stem if root.is_file() else root.name)), root)]
+    # Links and special files stay in the list: find_module refuses each with its message (never followed, never opened).
     entries = sorted((p for p in root.iterdir() if not p.name.startswith((".", "__"))), key=lambda p: p.name)
     ids = _unique([safe_id(p.stem if p.is_file() else p.name) for p in entries])
     return list(zip(ids, entries))
@@ -660,6 +1026,8 @@ def grade_code_class(submissions, a: Assignment, out, *, jobs: int = 1, timeout:
     out = Path(out)
     subs = discover_code(submissions, single=single, student=student)
     log(f"mcrt grade (code): {len(subs)} submission(s)")
+    iso = isolation()  # a fallback is announced on stderr there
+    log(f"sandbox: {iso.detail}")
     ctx = context
     if ctx is None and any(c.name == "render" for c in a.code.checks):
         from mcrt.grade.expected import prepare_context
@@ -683,5 +1051,5 @@ def grade_code_class(submissions, a: Assignment, out, *, jobs: int = 1, timeout:
     with ThreadPoolExecutor(max_workers=max(1, jobs)) as ex:
         results = list(ex.map(one, subs))
     elapsed = time.perf_counter() - t0
-    summary = write_class(results, a, out, elapsed=elapsed, criteria=crit)
+    summary = write_class(results, a, out, elapsed=elapsed, criteria=crit, context_note=f"Sandbox: {iso.detail}.")
     return ClassResult(results, summary, out, elapsed, ctx)
