@@ -14,7 +14,9 @@ is not used because it can neither cancel a running task nor survive a dead
 worker (``BrokenProcessPool`` takes every pending student with it).
 
 Workers run with an address-space limit (``memory_mb``) and one BLAS/OpenMP
-thread each.
+thread each, importing ``mcrt`` from where this process did (an installed
+package or a checkout; never a folder named ``mcrt`` in the working folder,
+such as an unpacked autograder's).
 """
 
 from __future__ import annotations
@@ -78,6 +80,9 @@ def grade_class(submissions: str | os.PathLike, assignment: Assignment, out: str
     results = run_pool(subs, ctx, out, jobs=jobs, timeout=timeout or assignment.timeout, memory_mb=memory_mb, log=log)
     elapsed = time.perf_counter() - t0
     note = f"Reference: {src}."
+    odd = [f"{s.student} ({s.special})" for s in subs if getattr(s, "special", None)]
+    if odd:  # links, FIFOs, devices where a hand-in should be: never opened, graded 0, and said here
+        note += " Not regular files, never followed or opened (graded 0): " + ", ".join(odd) + "."
     from mcrt.grade.diagnose import catalogue_power
 
     try:
@@ -93,15 +98,29 @@ def grade_class(submissions: str | os.PathLike, assignment: Assignment, out: str
 # --------------------------------------------------------------------------
 
 
+def worker_command() -> list[str]:
+    """The worker's command line: this interpreter (with ``-S`` if this one has it), and ``-P`` so that the
+    working folder (which may hold a folder named ``mcrt``) never shadows the package."""
+    return [sys.executable, *(["-S"] if sys.flags.no_site else []), "-P", "-m", "mcrt.grade._worker"]
+
+
+def worker_env() -> dict[str, str]:
+    """The environment of a worker: one thread per library, and the folder this ``mcrt`` package was imported from
+    first on PYTHONPATH, so that the worker runs the same code, installed or in a checkout."""
+    import mcrt
+
+    env = dict(os.environ, **_THREAD_ENV)
+    home = str(Path(mcrt.__file__).resolve().parent.parent)
+    env["PYTHONPATH"] = home + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
+    return env
+
+
 class _Worker:
     """One ``python -m mcrt.grade._worker`` process and the student it is grading."""
 
     def __init__(self, ctx: Context, out: Path, memory_mb: int, log_file):
-        env = dict(os.environ, **_THREAD_ENV)
-        root = str(Path(__file__).resolve().parent.parent.parent)
-        env["PYTHONPATH"] = root + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
-        self.proc = subprocess.Popen([sys.executable, "-m", "mcrt.grade._worker"], stdin=subprocess.PIPE,
-                                     stdout=subprocess.PIPE, stderr=log_file, env=env, cwd=root)
+        self.proc = subprocess.Popen(worker_command(), stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=log_file,
+                                     env=worker_env())
         self.task: tuple[int, Submission] | None = None
         self.started = 0.0
         write_message(self.proc.stdin, (ctx, str(out), memory_mb))

@@ -143,30 +143,115 @@ def _json_safe(x):
     return x
 
 
+#: What a student can do about a failed criterion (results.json, per test); ``{...}`` from the assignment.
+ADVICE = {
+    "readable": "Save your render in one of the accepted formats and check that it opens in an image viewer before you upload it.",
+    "resolution": "Render at exactly {width}x{height} pixels.",
+    "finite": "Look for divisions by a zero pdf or length and for normalised zero vectors; a NaN pixel usually has one bad path.",
+    "non_negative": "Radiance is never negative: look for a sign error (a cosine or a normal pointing the wrong way).",
+    "linear": "Write linear radiance to EXR/PFM/HDR (no gamma); a PNG gets the sRGB curve once (or declare `linear = true`).",
+    "orientation": "Row 0 of the file is the top of the image and column 0 its left; check your loops and camera vectors.",
+    "camera": "Render with the '{camera}' camera of the scene.",
+    "exposure": "Do not scale the image; check the light's radiance and that you divide by the number of samples.",
+    "noise": "Render with at least {min_spp} samples per pixel and declare them (`spp = N` in manifest.toml); if you did, "
+             "your estimator has more variance than it should.",
+    "unbiased": "Start with the closest bug named below, in the part of the image the map shows.",
+    "unbiased/undiagnosed": "Look at the part of the image the map shows and at the estimator terms that light it.",
+}
+
+_MD_SPECIAL = str.maketrans({c: "\\" + c for c in "\\`*_[]<>#|~"})
+
+
+def md_text(text: str) -> str:
+    """``text`` as Markdown: one line escaped; several lines (a traceback, a table) in a fenced block."""
+    text = str(text)
+    if "\n" in text.strip():
+        fence = "~~~~" if "```" in text else "```"
+        return f"{fence}text\n{text.strip()}\n{fence}"
+    return text.translate(_MD_SPECIAL)
+
+
+def difference_map(fig: dict, limit: int = 24) -> str | None:
+    """Where the image differs, as text: the relative difference of each base tile in per cent (luminance),
+    penalised tiles marked ``*``, top row first; None without figures or for grids above ``limit`` tiles."""
+    rel, pen = fig.get("rel_tiles"), fig.get("penalised")
+    if rel is None or np.ndim(rel) != 2 or max(np.shape(rel)) > limit:
+        return None
+    rel = np.clip(np.nan_to_num(np.asarray(rel, np.float64)) * 100, -999, 999)
+    pen = np.zeros(rel.shape, bool) if pen is None else np.asarray(pen, bool)
+    rows = [" ".join(f"{int(round(v)):+4d}{'*' if p else ' '}" for v, p in zip(r, pr)) for r, pr in zip(rel, pen)]
+    tile = fig.get("tile", 0)
+    head = (f"Relative difference from the reference per {tile}x{tile}-pixel tile, in % (minus: too dark, plus: too "
+            "bright; \\* penalised), top row first:")
+    return head + "\n\n```text\n" + "\n".join(rows) + "\n```"
+
+
+def _advice(name: str, assignment) -> str:
+    """ADVICE[name] (Markdown, written here) with the assignment's numbers."""
+    text = ADVICE.get(name, "")
+    try:
+        return text.format(width=assignment.width, height=assignment.height, camera=assignment.camera, min_spp=assignment.min_spp)
+    except (AttributeError, KeyError, IndexError, ValueError):
+        return text
+
+
+def _diagnosis_md(res) -> list[str]:
+    lines = []
+    for i, d in enumerate(res.diagnosis[:2], 1):
+        expl = (f" (explains {100 * d['explained']:.0f} % of the difference)"
+                if isinstance(d.get("explained"), (int, float)) and d["explained"] > 0 else "")
+        where = f" This bug would make the image {d['where']}." if d.get("where") else ""
+        lines.append(f"{i}. **{md_text(d['mutant'])}**: {md_text(str(d.get('description', '')).rstrip('.') + expl + '.' + where)}")
+    return lines
+
+
+def test_output_md(t, res, assignment) -> str:
+    """One test's output for results.json (Markdown): the check's message, what to do when it failed, and for
+    the bias test the closest catalogued bugs and the map of where the image differs."""
+    parts = [md_text(t.output)]
+    key = "unbiased/undiagnosed" if t.name == "unbiased" and not res.diagnosis else t.name
+    if t.status == "failed" and t.max_score > 0 and _advice(key, assignment):
+        parts.append(f"**What to do:** {_advice(key, assignment)}")
+    if t.name in ("unbiased", "noise") and t.status == "failed":
+        if res.diagnosis and (t.name == "unbiased" or not any(x.name == "unbiased" and x.status == "failed" for x in res.tests)):
+            parts.append("**Closest bugs of the catalogue:**\n\n" + "\n".join(_diagnosis_md(res)))
+        m = difference_map(res.figures) if t.name == "unbiased" else None
+        if m:
+            parts.append(m)
+    return "\n\n".join(parts)
+
+
 def results_json(res, assignment) -> dict:
-    """Gradescope's results.json for one student."""
+    """Gradescope's results.json for one student.
+
+    Everything a student needs is in the file itself, since Gradescope shows
+    them nothing else: the top-level ``output`` and each test's ``output`` are
+    Markdown (``output_format`` and ``test_output_format`` "md"), with the
+    diagnosis, the map of where the image differs and what to do.
+    """
     tests = []
     for t in res.tests:
         tests.append({
-            "name": t.title, "score": t.score, "max_score": t.max_score, "output": t.output,
-            "visibility": t.visibility, "status": "passed" if t.status in ("passed", "info") else "failed",
-            "tags": [t.name],
+            "name": t.title, "score": t.score, "max_score": t.max_score, "output": test_output_md(t, res, assignment),
+            "output_format": "md", "visibility": t.visibility,
+            "status": "passed" if t.status in ("passed", "info") else "failed", "tags": [t.name],
         })
-    lines = [res.summary]
+    lines = [md_text(res.summary)]
     if res.diagnosis:
-        lines.append("")
-        lines.append("Closest bugs of the catalogue:")
-        for i, d in enumerate(res.diagnosis[:2], 1):
-            lines.append(f"{i}. {d['mutant']}: {d['description']}" + (f" Expected effect: {d['where']}." if d.get("where") else ""))
+        lines += ["", "**Closest bugs of the catalogue:**", "", *_diagnosis_md(res)]
+    m = difference_map(res.figures)
+    if m and any(t.name == "unbiased" and t.status == "failed" for t in res.tests):
+        lines += ["", m]
     if res.notes:
         lines.append("")
-        lines += [f"Note: {n}" for n in res.notes]
+        lines += [f"- Note: {md_text(n)}" if "\n" not in n.strip() else f"Note:\n\n{md_text(n)}" for n in res.notes]
     return _json_safe({
         "score": res.score,
         "max_score": res.max_score,
         "execution_time": round(res.elapsed, 3),
         "output": "\n".join(lines),
-        "output_format": "text",
+        "output_format": "md",
+        "test_output_format": "md",
         "visibility": "visible",
         "stdout_visibility": "hidden",
         "tests": tests,
