@@ -61,7 +61,40 @@ def render_to_files(result, out: Path, exposure: float = 0.0) -> tuple[Path, Pat
     return out, png
 
 
+def _render_mitsuba_scene(args) -> int:
+    """``mcrt render --mitsuba-scene FILE.xml``: any Mitsuba scene, any integrator, through render_with_variance."""
+    from mcrt.mitsuba import render_with_variance
+    from mcrt.validate_integrator import load_scene_arg, parse_integrator
+
+    refused = [o for o, v in (("--scene", args.scene), ("--camera", args.camera), ("--preset", args.preset),
+                              ("--mutant", args.mutant), ("--light-samples", args.light_samples))
+               if v is not None] + (["--renderer"] if args.renderer != "mcrt" else [])
+    if refused:
+        print(f"mcrt render: {refused[0]} does not apply to --mitsuba-scene (the scene file holds it)", file=sys.stderr)
+        return EXIT_UNUSABLE
+    try:
+        scene = load_scene_arg(args.mitsuba_scene)
+        spec = parse_integrator(args.integrator) if args.integrator else None
+        result = render_with_variance(scene, integrator=spec, spp=args.spp, seed=args.seed or 0,
+                                      width=args.width or args.res, height=args.height or args.res,
+                                      max_depth=args.max_depth, backend=args.backend, progress=True)
+    except (ValueError, RuntimeError) as e:
+        print(f"mcrt render: {args.mitsuba_scene}: {' '.join(str(e).split())}", file=sys.stderr)
+        return EXIT_UNUSABLE
+    exr, png = render_to_files(result, Path(args.output), args.exposure)
+    h, w = result.mean.shape[:2]
+    print(f"{result.renderer}: {w}x{h}, {result.spp} spp, seed {result.seed}, max depth {result.max_depth}, "
+          f"camera {result.camera}, scene hash {result.scene_hash}: {result.wall_time:.2f} s")
+    print(f"wrote {exr} and {png}")
+    return EXIT_OK
+
+
 def cmd_render(args) -> int:
+    if args.mitsuba_scene is not None:
+        return _render_mitsuba_scene(args)
+    if args.integrator is not None:
+        print("mcrt render: --integrator needs --mitsuba-scene (the canonical scene's renderers: --renderer)", file=sys.stderr)
+        return EXIT_UNUSABLE
     scene = _load(args)
     s = _settings(args, scene)
     from mcrt.render import render
@@ -84,7 +117,7 @@ def cmd_compare(args) -> int:
 
     return compare_files(args.a, args.b, policy=args.policy, alpha=args.alpha, tile=args.tile, heatmap=args.heatmap,
                          json_path=args.json, assume_variance_from_other=args.assume_variance_from == "other",
-                         spp_a=args.spp_a, spp_b=args.spp_b)
+                         spp_a=args.spp_a, spp_b=args.spp_b, allow_mismatch=tuple(args.allow_mismatch))
 
 
 def cmd_scene(args) -> int:
@@ -142,6 +175,15 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--intersector", choices=("convex", "triangles"), default="convex", help="mcrt's intersection code (triangles: brute-force cross-check)")
     p.add_argument("--exposure", type=float, default=0.0, help="PNG preview exposure in stops")
     p.add_argument("-o", "--output", default="out.exr", help="output EXR (the PNG preview goes beside it)")
+    # Any Mitsuba scene (mcrt.mitsuba.render_with_variance); --res/--width/--height, --spp, --seed, --max-depth apply.
+    mitsuba_help = {
+        "--mitsuba-scene": ("FILE", "render this Mitsuba XML scene (or cornell-box) with its own or --integrator's "
+                                    "integrator, variance from per-sample moments (default: none, the mcrt scene)"),
+        "--integrator": ("NAME", "with --mitsuba-scene: the integrator replacing the scene's, a plugin name (keeps the "
+                                 "scene's max depth) or NAME:key=value,... (default: the scene's)"),
+    }
+    for flag, (metavar, text) in mitsuba_help.items():
+        p.add_argument(flag, default=None, metavar=metavar, help=text)
     p.set_defaults(func=cmd_render)
 
     p = sub.add_parser("compare", help="two-sample test of two renders (exit 0 consistent, 1 different, 2 unusable)")
@@ -159,8 +201,13 @@ def build_parser() -> argparse.ArgumentParser:
                    help="the same as --policy reference-floor")
     p.add_argument("--assume-variance-from", choices=("other",), default=None,
                    help="an image without per-sample variance borrows the other's (an approximation)")
-    p.add_argument("--spp-a", type=int, default=None, help="spp of image A, where its file does not record it")
-    p.add_argument("--spp-b", type=int, default=None, help="spp of image B, where its file does not record it")
+    p.add_argument("--spp-a", type=int, default=None, help="spp of image A, where its file does not record it "
+                                                           "(a Mitsuba 'moment' EXR needs it; default: the file's)")
+    p.add_argument("--spp-b", type=int, default=None, help="spp of image B, as --spp-a (default: the file's)")
+    p.add_argument("--allow-mismatch", action="append", default=[], metavar="FIELD",
+                   choices=("camera", "scene_hash", "max_depth", "all"),
+                   help="compare even though the files record a different camera, scene_hash or max_depth "
+                        "(repeatable; all: every one; default: refuse, exit 2)")
     p.set_defaults(func=cmd_compare)
 
     p = sub.add_parser("main", help="the main job: the convergence report of the canonical scene, and mcrt beside Mitsuba")
@@ -181,7 +228,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("mutants", help="list the bug catalogue")
     p.set_defaults(func=cmd_mutants)
 
-    from mcrt import bench, hardcases, reference, report, reports, threeway, validate
+    from mcrt import bench, hardcases, reference, report, reports, threeway, validate, validate_integrator
     from mcrt.grade.cli import register as register_grade
 
     report.register(sub)
@@ -192,6 +239,7 @@ def build_parser() -> argparse.ArgumentParser:
     bench.register(sub)
     threeway.register(sub)
     reports.register(sub)
+    validate_integrator.register(sub)
     return ap
 
 

@@ -33,6 +33,29 @@ DATA_DIR = Path(_data.__file__).resolve().parent
 SCENE_DIR = DATA_DIR / "scenes"
 CANONICAL = SCENE_DIR / "canonical.toml"
 
+# -- What float32 paths can carry ---------------------------------------------
+# Both renderers trace in float32 (largest value FLT_MAX = 3.4e38). Scene files
+# are refused at load time when a value would overflow it during a render:
+#
+# * a coordinate or length C: squared distances of points up to 2C apart
+#   (3 components, 12 C^2) appear in every intersection and light sample, and
+#   products with an area or a cosine follow; with a headroom of 10^6 for
+#   those, 12 C^2 * 10^6 <= FLT_MAX, so |C| <= sqrt(FLT_MAX / 1.2e7) ~ 5.3e15;
+# * samples per pixel: the tracer's sample counters are 32-bit; at most 2^31 - 1;
+# * a radiance L: the per-sample variance sums squares of samples over spp
+#   samples, each sample at most L times a throughput and geometry factor
+#   (headroom 10^6: 1/d^2 near the light, light_samples, 1/pdf), so
+#   spp_max (10^6 L)^2 <= FLT_MAX, L <= sqrt(FLT_MAX / SPP_MAX) / 10^6 ~ 4.0e8;
+# * an image side: at most 16384 pixels (pixel indices times the 3 channels and the
+#   tracer's accumulation slots stay inside 32-bit integers; 16384^2 float32 RGB is 3 GiB).
+FLT_MAX = float(np.finfo(np.float32).max)
+_HEADROOM = 1e6
+COORD_MAX = math.sqrt(FLT_MAX / (12.0 * _HEADROOM))
+SPP_MAX = 2**31 - 1
+RADIANCE_MAX = math.sqrt(FLT_MAX / SPP_MAX) / _HEADROOM
+MAX_SIDE = 16384
+SEED_MAX = 2**64 - 1
+
 # Relative tolerance for "touching is allowed" checks (object on the floor,
 # light against a wall), scaled by the size of the room.
 _TOUCH = 1e-6
@@ -417,9 +440,15 @@ class _Reader:
     def number(self, v: Any, where: str, *, lo: float | None = None, hi: float | None = None, positive: bool = False) -> float:
         if isinstance(v, bool) or not isinstance(v, (int, float)):
             raise self.fail(where, f"must be a number, got {v!r}")
-        v = float(v)
+        try:
+            v = float(v)
+        except OverflowError:  # an integer beyond float64
+            raise self.fail(where, f"must be finite, got an integer of {len(str(abs(v)))} digits") from None
         if not math.isfinite(v):
             raise self.fail(where, f"must be finite, got {v}")
+        if abs(v) > COORD_MAX:
+            raise self.fail(where, f"{v:g} is beyond +-{COORD_MAX:.2g}, the largest value whose squared distances "
+                            "float32 paths can carry (sqrt(FLT_MAX / 1.2e7), with 10^6 of headroom)")
         if positive and v <= 0:
             raise self.fail(where, f"must be positive, got {v}")
         if lo is not None and v < lo or hi is not None and v > hi:
@@ -431,15 +460,22 @@ class _Reader:
             raise self.fail(where, f"must be a list of {n} numbers, got {v!r}")
         return tuple(self.number(x, f"{where}[{i}]", **kw) for i, x in enumerate(v))
 
-    def integer(self, v: Any, where: str, lo: int) -> int:
+    def integer(self, v: Any, where: str, lo: int, hi: int | None = None, why: str = "") -> int:
         if isinstance(v, bool) or not isinstance(v, int) or v < lo:
-            raise self.fail(where, f"must be an integer >= {lo}, got {v!r}")
+            raise self.fail(where, f"must be an integer >= {lo}, got {_short_repr(v)}")
+        if hi is not None and v > hi:
+            raise self.fail(where, f"must be at most {hi}{why}, got {v}")
         return v
 
     def albedo(self, v: Any, where: str) -> Vec3:
         return self.vec(v, where, 3, lo=0.0, hi=1.0)
 
     def radiance(self, v: Any, where: str) -> Vec3:
+        for i, x in enumerate(v if isinstance(v, list) and len(v) == 3 else []):
+            if isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x) and x > RADIANCE_MAX:
+                raise self.fail(f"{where}[{i}]", f"{x:g} is beyond {RADIANCE_MAX:.2g}, the largest radiance whose samples "
+                                f"and their squares (for the variance) stay finite in float32 at up to {SPP_MAX} spp "
+                                "(sqrt(FLT_MAX / spp_max) / 10^6 of headroom)")
         return self.vec(v, where, 3, lo=0.0)
 
     def material(self, d: Any, where: str) -> Material:
@@ -454,12 +490,26 @@ class _Reader:
         raise self.fail(f"{where}.type", f"unknown material {d['type']!r} (lambertian or mirror)")
 
 
+def _short_repr(v: Any) -> str:
+    try:
+        t = repr(v)
+    except (RecursionError, ValueError):  # a deeply nested list; an integer too long to print
+        return f"a {type(v).__name__}"
+    return t if len(t) <= 80 else t[:77] + "..."
+
+
 def _check_settings(s: RenderSettings, where: str) -> None:
     r = _Reader(where.split(": ")[0])
     field_where = where.split(": ", 1)[1] if ": " in where else where
-    for name in ("width", "height", "spp", "light_samples", "rr_depth"):
-        r.integer(getattr(s, name), f"{field_where}.{name}", 1)
-    r.integer(s.seed, f"{field_where}.seed", 0)
+    if not isinstance(s.camera, str) or not s.camera:
+        raise r.fail(f"{field_where}.camera", f"must be a camera's name, got {_short_repr(s.camera)}")
+    side = f" (the largest image side mcrt renders: 32-bit pixel indices, {MAX_SIDE}^2 RGB float32 is 3 GiB)"
+    r.integer(s.width, f"{field_where}.width", 1, MAX_SIDE, side)
+    r.integer(s.height, f"{field_where}.height", 1, MAX_SIDE, side)
+    r.integer(s.spp, f"{field_where}.spp", 1, SPP_MAX, " (the tracer's sample counters are 32-bit)")
+    r.integer(s.light_samples, f"{field_where}.light_samples", 1, 1 << 16, " (shadow rays per vertex)")
+    r.integer(s.rr_depth, f"{field_where}.rr_depth", 1, 1 << 16)
+    r.integer(s.seed, f"{field_where}.seed", 0, SEED_MAX, " (seeds are 64-bit)")
     if isinstance(s.max_depth, bool) or not isinstance(s.max_depth, int) or (s.max_depth < 1 and s.max_depth != -1):
         raise r.fail(f"{field_where}.max_depth", f"must be -1 (unbounded) or an integer >= 1, got {s.max_depth!r}")
 
@@ -468,14 +518,24 @@ def load_scene(path: str | Path = CANONICAL) -> Scene:
     """Load and validate a scene file; raise :class:`SceneError` naming file and field."""
     path = Path(path)
     try:
-        text = path.read_text()
+        raw = path.read_bytes()
     except OSError as e:
         raise SceneError(f"{path}: cannot read: {e.strerror or e}") from None
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as e:
+        line = raw[: e.start].count(b"\n") + 1
+        raise SceneError(f"{path}: not valid UTF-8 (byte 0x{raw[e.start]:02x} on line {line}); TOML files are UTF-8") from None
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as e:
         raise SceneError(f"{path}: not valid TOML: {e}") from None
-    return scene_from_dict(data, str(path))
+    except RecursionError:
+        raise SceneError(f"{path}: not valid TOML: arrays or tables nested too deeply to read") from None
+    try:
+        return scene_from_dict(data, str(path))
+    except RecursionError:
+        raise SceneError(f"{path}: a value is nested too deeply (arrays inside arrays hundreds of levels deep)") from None
 
 
 def scene_from_dict(data: dict, path: str = "<memory>") -> Scene:
@@ -504,7 +564,10 @@ def scene_from_dict(data: dict, path: str = "<memory>") -> Scene:
     presets = r.table(data.get("presets", {}), "presets", set(), set(data.get("presets", {})) if isinstance(data.get("presets", {}), dict) else set())
     for k, p in presets.items():
         r.table(p, f"presets.{k}", set(), set(RenderSettings.__dataclass_fields__))
-        _check_settings(replace(settings, **p), f"{path}: presets.{k}")
+        ps = replace(settings, **p)
+        _check_settings(ps, f"{path}: presets.{k}")
+        if ps.camera not in cameras:
+            raise r.fail(f"presets.{k}.camera", f"no camera named {ps.camera!r} (have {', '.join(cameras)})")
     return Scene(
         name=str(data.get("name", Path(path).stem)),
         description=str(data.get("description", "")),

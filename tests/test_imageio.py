@@ -120,6 +120,44 @@ def test_y_only_exr_names_channels(tmp_path):
     assert "grey.exr" in msg and "Y, Z" in msg and "\n" not in msg
 
 
+
+def _moment_exr(path, m1, m2, header=None):
+    """An EXR laid out as Mitsuba's 'moment' integrator writes it: R, G, B and the nested XYZ moments."""
+    rgb = m1 @ imageio.XYZ_TO_RGB.T
+    ch = {c: np.ascontiguousarray(rgb[..., i], np.float32) for i, c in enumerate("RGB")}
+    for i, c in enumerate("XYZ"):
+        ch[f"nested.{c}"] = np.ascontiguousarray(m1[..., i], np.float32)
+        ch[f"m2_nested.{c}"] = np.ascontiguousarray(m2[..., i], np.float32)
+    OpenEXR.File({"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage, **(header or {})}, ch).write(str(path))
+
+
+def test_read_mitsuba_moment_exr(tmp_path):
+    """nested.X/Y/Z and m2_nested.X/Y/Z: mean by the XYZ -> linear sRGB matrix, variance (m2 - m1^2) n / (n - 1), bounded."""
+    g = rng()
+    m1 = g.uniform(0.1, 1.0, (6, 5, 3))
+    var_xyz = g.uniform(0.01, 0.2, (6, 5, 3))
+    n = 64
+    m2 = var_xyz * (n - 1) / n + m1 * m1  # what a film of n samples holds
+    _moment_exr(tmp_path / "m.exr", m1, m2)
+    r = read_exr(tmp_path / "m.exr", spp=n)
+    M = imageio.XYZ_TO_RGB
+    assert np.allclose(M, [[3.240479, -1.537150, -0.498535], [-0.969256, 1.875991, 0.041556], [0.055648, -0.204043, 1.057311]])
+    assert r.spp == n and np.allclose(r.mean, m1 @ M.T, rtol=1e-5, atol=1e-6)
+    assert np.allclose(r.variance, (np.sqrt(var_xyz) @ np.abs(M).T) ** 2, rtol=1e-3)
+    assert "n = 64" in r.extra["exr.moment"] and "exr.ignored_channels" not in r.extra
+    # Without spp the factor n / (n - 1) cannot be applied: noted, and spp stays unknown (0).
+    u = read_exr(tmp_path / "m.exr")
+    assert u.spp == 0 and "spp unknown" in u.extra["exr.moment"] and np.all(u.variance < r.variance)
+    # A file that records its spp needs none given.
+    _moment_exr(tmp_path / "s.exr", m1, m2, {"spp": n})
+    assert np.array_equal(read_exr(tmp_path / "s.exr").variance, r.variance)
+    # Incomplete moments are named.
+    ch = {"nested.X": np.ones((2, 2), np.float32), "nested.Y": np.ones((2, 2), np.float32)}
+    OpenEXR.File({"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}, ch).write(str(tmp_path / "i.exr"))
+    with pytest.raises(ImageError, match="incomplete moment channels, missing nested.Z"):
+        read_exr(tmp_path / "i.exr")
+
+
 @pytest.mark.parametrize("fraction", [0.02, 0.5, 0.97])
 def test_truncated_exr(tmp_path, fraction):
     path = tmp_path / "cut.exr"
@@ -334,8 +372,11 @@ def png_filter(rows: np.ndarray, bpp: int, ftype: int) -> np.ndarray:
     return ((x - pred) % 256).astype(np.uint8)
 
 
+ADAM7 = ((0, 0, 8, 8), (4, 0, 8, 8), (0, 4, 4, 8), (2, 0, 4, 4), (0, 2, 2, 4), (1, 0, 2, 2), (0, 1, 1, 2))
+
+
 def write_png16(path, samples: np.ndarray, color_type: int, interlace: bool = False) -> None:
-    """A 16-bit PNG written by hand, cycling through all five filter types."""
+    """A 16-bit PNG written by hand (as a student's tracer might), cycling through all five filter types."""
     h, w, c = samples.shape
     bpp = 2 * c
 
@@ -349,7 +390,7 @@ def write_png16(path, samples: np.ndarray, color_type: int, interlace: bool = Fa
         return out
 
     if interlace:
-        raw = b"".join(encode(samples[ys::dy, xs::dx]) for xs, ys, dx, dy in imageio._ADAM7 if xs < w and ys < h)
+        raw = b"".join(encode(samples[ys::dy, xs::dx]) for xs, ys, dx, dy in ADAM7 if xs < w and ys < h)
     else:
         raw = encode(samples)
 
@@ -417,7 +458,26 @@ def test_read_image_dispatch(tmp_path):
     assert read_image(tmp_path / "a.png", linear_png=True).mean[0, 0, 2] == pytest.approx(tonemap(img)[0, 0, 2] / 255)
 
 
-@pytest.mark.parametrize("name", ["a.jpg", "noext", "a.exr.bak"])
+def test_png16_read_by_pypng_not_by_hand(tmp_path):
+    """The hand-written 16-bit decoder is gone: pypng decodes, and a file pypng writes reads back exactly."""
+    import png
+
+    assert not hasattr(imageio, "_png_unfilter") and not hasattr(imageio, "_ADAM7")
+    samples = rng().integers(0, 65536, (9, 7, 4)).astype(np.uint16)
+    path = tmp_path / "p.png"
+    png.from_array(samples.reshape(9, -1), "RGBA;16").save(str(path))
+    lin = read_png(path, linear=True)
+    np.testing.assert_array_equal(np.round(lin.astype(np.float64) * 65535).astype(np.int64), samples[..., :3])
+
+
+def test_jpeg_refused_with_reason(tmp_path):
+    path = tmp_path / "a.jpg"
+    Image.fromarray(np.full((8, 8, 3), 128, np.uint8)).save(path, quality=95)
+    with pytest.raises(ImageError, match="a.jpg: JPEG is not accepted: its lossy compression"):
+        read_image(path)
+
+
+@pytest.mark.parametrize("name", ["noext", "a.exr.bak", "a.webp"])
 def test_unknown_extension(tmp_path, name):
     path = tmp_path / name
     path.write_bytes(b"whatever")

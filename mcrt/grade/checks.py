@@ -12,6 +12,7 @@ Nothing here raises on bad student data.
 from __future__ import annotations
 
 import os
+import stat
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -35,20 +36,34 @@ class Loaded:
     """The renders of one hand-in at their own resolution (float64, (H, W, 3))."""
 
     images: list[np.ndarray]
-    files: list[str]
+    files: list[str]  # as shown to the student: valid UTF-8 (a byte that is not becomes U+FFFD)
     fmt: str  # float, half, rgbe, png8, png16 (+ '-linear' for PNGs declared linear)
     spp_file: int | None = None  # from our EXR attributes
     camera_file: str | None = None
     notes: list[str] = field(default_factory=list)
 
 
+def _shown(text: str) -> str:
+    """``text`` as valid UTF-8: surrogate-escaped bytes of a file name become U+FFFD."""
+    return str(text).encode("utf-8", "surrogateescape").decode("utf-8", "replace")
+
+
 def _short(msg: str, path: str) -> str:
-    """An ImageError message with the file's folder removed (students see their file name)."""
-    return msg.replace(os.fspath(path), Path(path).name)
+    """An ImageError message with the file's folder removed (students see their file name), valid UTF-8."""
+    return _shown(msg.replace(os.fspath(path), Path(path).name))
 
 
-def _format(path: str, img: np.ndarray, linear_png: bool) -> str:
+def _format(path: str, img: np.ndarray, linear_png: bool, extra: dict | None = None) -> str:
+    """The quantisation of the file: float, half, rgbe, png8 or png16 (+ '-linear').
+
+    8- and 16-bit display formats other than PNG (PPM, BMP, TGA) quantise
+    like a PNG of the same depth, so they get the same names (the noise
+    model, clipping and encoding checks treat them alike).
+    """
     ext = Path(path).suffix.lower()
+    bits = (extra or {}).get("file.bits")
+    if bits in ("8", "16"):
+        return f"png{bits}" + ("-linear" if linear_png else "")
     if ext == ".exr":
         finite = np.isfinite(img)
         x = img[finite]
@@ -70,21 +85,44 @@ def _format(path: str, img: np.ndarray, linear_png: bool) -> str:
 
 def _read_one(p: str, linear_png: bool):
     """(the render, None) or (None, why the file cannot be used)."""
-    name = Path(p).name
+    name = _shown(Path(p).name)
     try:
-        size = os.path.getsize(p)
+        st = os.lstat(p)
     except OSError as e:
-        return None, f"{name}: cannot read ({e.strerror or e})"
+        return None, f"{name}: cannot read ({_shown(e.strerror or e)})"
+    if not stat.S_ISREG(st.st_mode):  # links and special files are never followed or opened
+        kind = "a symbolic link" if stat.S_ISLNK(st.st_mode) else "a FIFO (named pipe)" if stat.S_ISFIFO(st.st_mode) \
+            else "a folder" if stat.S_ISDIR(st.st_mode) else "a special file"
+        return None, f"{name}: is {kind}, not a regular file; hand in the image file itself"
+    size = st.st_size
     if size > MAX_FILE_BYTES:
         return None, f"{name}: {size / 2**20:.0f} MiB is larger than the {MAX_FILE_BYTES >> 20} MiB limit"
     if size == 0:
         return None, f"{name}: the file is empty"
     try:
+        if _shown(p) != p:  # a name that is not UTF-8: some decoders cannot open it, so read a copy
+            return _read_copy(p, name, linear_png)
         return read_image(p, linear_png=linear_png), None
     except ImageError as e:
         return None, _short(str(e), p)
-    except (OSError, ValueError, MemoryError) as e:
-        return None, f"{name}: cannot be read ({' '.join(str(e).split())[:160]})"
+    except (OSError, ValueError, MemoryError, RecursionError) as e:
+        return None, f"{name}: cannot be read ({_shown(' '.join(str(e).split())[:160])})"
+
+
+def _read_copy(p: str, name: str, linear_png: bool):
+    """Read a file whose name is not valid UTF-8 through a copy with a plain name (same extension); messages name the original."""
+    import shutil
+    import tempfile
+
+    ext = "".join(ch for ch in Path(_shown(p)).suffix if ch.isascii() and (ch.isalnum() or ch == "."))
+    with tempfile.TemporaryDirectory(prefix="mcrt-grade-") as d:
+        tmp = os.path.join(d, "render" + ext)
+        with open(p, "rb") as src, open(tmp, "wb") as dst:
+            shutil.copyfileobj(src, dst)
+        try:
+            return read_image(tmp, linear_png=linear_png), None
+        except ImageError as e:
+            return None, _shown(str(e).replace(tmp, name))
 
 
 def read_renders(paths: list[str], linear_png: bool) -> tuple[Loaded | None, str | None]:
@@ -101,8 +139,10 @@ def read_renders(paths: list[str], linear_png: bool) -> tuple[Loaded | None, str
             continue
         img = np.asarray(r.mean, dtype=np.float64)
         if k == 0:
-            fmt = _format(p, r.mean, linear_png)
-            spp = r.spp or None
+            fmt = _format(p, r.mean, linear_png, r.extra)
+            if r.spp < 0:
+                notes.append(f"{_shown(name)}: the file's spp attribute must be a positive integer, got {r.spp}; ignored")
+            spp = r.spp if r.spp > 0 else None
             cam = r.camera or None
         elif img.shape != images[0].shape:
             notes.append(f"second render {name} is {img.shape[1]}x{img.shape[0]}, the first "
@@ -113,7 +153,7 @@ def read_renders(paths: list[str], linear_png: bool) -> tuple[Loaded | None, str
                          "(same seed?); graded the first alone")
             continue
         images.append(img)
-        files.append(p)
+        files.append(_shown(p))
     return Loaded(images, files, fmt, spp, cam, notes), None
 
 

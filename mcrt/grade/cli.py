@@ -1,7 +1,8 @@
-"""``mcrt grade``: the command line of the grading harness.
+"""``mcrt grade`` and ``mcrt check``: the command line of the grading harness.
 
     mcrt grade SUBMISSIONS --assignment assignment.toml --out DIR [--jobs N] [--timeout S]
                [--mode image|code] [--cache DIR] [--single [--student ID]] [--prepare]
+    mcrt check RENDER [--assignment NAME_OR_FILE] [--out DIR] [--cache DIR]
 
 Exit codes (those of every mcrt command, mcrt.exitcodes): 0 every student
 was graded (whatever their scores), 1 some students could not be graded
@@ -40,12 +41,119 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def register(subparsers) -> argparse.ArgumentParser:
-    """Add the ``grade`` sub-command to an ``argparse`` sub-parsers object."""
+    """Add the ``grade`` and ``check`` sub-commands to an ``argparse`` sub-parsers object; returns ``grade``'s parser."""
     p = subparsers.add_parser("grade", help="grade students' renders (or Python code) against the reference, Gradescope-ready",
                               description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     add_arguments(p)
     p.set_defaults(func=run)
+    c = subparsers.add_parser("check", help="a student's own check: the course assignment's feedback on one render",
+                              description=CHECK_DOC, formatter_class=argparse.RawDescriptionHelpFormatter)
+    add_check_arguments(c)
+    c.set_defaults(func=run_check)
     return p
+
+
+# --------------------------------------------------------------------------
+# mcrt check: one student, one file, the course's feedback
+# --------------------------------------------------------------------------
+
+#: The assignment ``mcrt check`` uses by default: the course's 800 x 800 hand-ins.
+DEFAULT_CHECK_ASSIGNMENT = "course2023_800"
+
+CHECK_DOC = """Grade your own render the way the course grades it, and print the feedback.
+
+    mcrt check my_render.ppm
+    mcrt check my_render.exr --assignment course2023 --out feedback/
+
+RENDER is read at its own resolution (for the default assignment 800 x 800,
+box-filtered to 100 x 100 for the comparison): OpenEXR, PFM, Radiance HDR,
+PNG (8 or 16 bit), PPM (P3 or P6, 8 or 16 bit), BMP or TGA; 8- and 16-bit
+files are taken as sRGB-encoded unless a manifest beside the file
+(RENDER's stem + .toml, e.g. my_render.toml) says `linear = true`. The
+manifest may also declare `spp = N`. JPEG is refused (lossy). The first
+run renders and caches the references and the bug catalogue (a few
+minutes); later checks take seconds.
+
+Exit codes: 0 full marks, 1 fewer than full marks (the feedback says why,
+also for a file that cannot be read), 2 unusable input (no such file, a bad
+assignment, a bad option).
+"""
+
+
+def add_check_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("render", help="your render: one image file (a manifest RENDER-stem.toml beside it is read too)")
+    p.add_argument("--assignment", "-a", default=DEFAULT_CHECK_ASSIGNMENT,
+                   help="assignment: a name from the package's assignments (course2023_800: 800 x 800 hand-ins; "
+                   "course2023: 64 x 64) or an assignment file (default: %(default)s)")
+    p.add_argument("--out", "-o", default=None, help="also write results.json and feedback.html (heat maps, diagnosis) "
+                   "to OUT/<name>/ (default: none, only the text on stdout)")
+    p.add_argument("--cache", default=None, help="folder for the cached references and bug catalogue (default: "
+                   "$MCRT_CACHE/grade or ~/.cache/mcrt/grade)")
+    p.add_argument("--quiet", "-q", action="store_true", help="no progress lines on stderr (default: off)")
+
+
+def resolve_assignment(value: str) -> Path:
+    """An assignment file: a path as given, else a name in the package's assignments (mcrt.data.assignments)."""
+    from mcrt.scene import DATA_DIR
+
+    p = Path(value)
+    if p.exists() or p.suffix == ".toml" and (p.is_absolute() or len(p.parts) > 1):
+        return p
+    packaged = DATA_DIR / "assignments" / (value if value.endswith(".toml") else value + ".toml")
+    return packaged if packaged.exists() else p
+
+
+def run_check(args) -> int:
+    from mcrt.grade.assignment import AssignmentError, load_assignment
+    from mcrt.grade.submissions import discover, shown
+
+    log = (lambda s: None) if args.quiet else (lambda s: print(s, file=sys.stderr, flush=True))
+    try:
+        a = load_assignment(resolve_assignment(args.assignment))
+    except AssignmentError as e:
+        print(f"mcrt check: {e}", file=sys.stderr)
+        return EXIT_UNUSABLE
+    render = Path(args.render)
+    if not render.exists() and not render.is_symlink():
+        print(f"mcrt check: {shown(args.render)}: no such file", file=sys.stderr)
+        return EXIT_UNUSABLE
+    if render.is_dir():
+        print(f"mcrt check: {shown(args.render)}: is a folder; give one image file (mcrt grade --single grades a folder)",
+              file=sys.stderr)
+        return EXIT_UNUSABLE
+    from mcrt.grade.expected import prepare_context
+    from mcrt.grade.grader import grade_submission
+
+    try:
+        ctx = prepare_context(a, args.cache, log=log)
+        sub = discover(render)[0]
+        res = grade_submission(sub, ctx)
+    except (OSError, RuntimeError, ValueError) as e:
+        print(f"mcrt check: {shown(str(e))}", file=sys.stderr)
+        return EXIT_UNUSABLE
+    if args.out:
+        from mcrt.grade.report import write_student
+
+        d = write_student(res, a, Path(args.out))
+        log(f"wrote {d / 'results.json'} and {d / 'feedback.html'}")
+    print(format_check(res, a, render))
+    return EXIT_OK if res.score >= res.max_score - 1e-9 else EXIT_FAILED
+
+
+def format_check(res, a, render: Path) -> str:
+    """The feedback of one result as plain text: the score, then each criterion with its points and message."""
+    from mcrt.grade.submissions import shown
+
+    lines = [f"{shown(render.name)}: {res.score:g} / {res.max_score:g} points ({a.title}; {a.width}x{a.height}, "
+             f"graded at {a.grade_width}x{a.grade_height})", shown(res.summary), ""]
+    for t in res.tests:
+        mark = {"passed": "ok  ", "failed": "FAIL", "info": "info", "not graded": "--  "}.get(t.status, t.status)
+        pts = f"{t.score:g}/{t.max_score:g}" if t.max_score else "-"
+        lines.append(f"[{mark}] {t.title} ({pts})")
+        lines.extend("       " + ln for ln in shown(t.output).splitlines() if ln.strip())
+    if res.notes:
+        lines += ["", "Notes:"] + [f"  - {shown(n)}" for n in res.notes if str(n).strip()]
+    return "\n".join(lines)
 
 
 def run(args) -> int:

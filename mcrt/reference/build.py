@@ -6,6 +6,7 @@ import contextlib
 import datetime as _dt
 import os
 import platform
+import secrets
 import sys
 import time
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
@@ -16,7 +17,7 @@ from typing import Any, Iterator
 import numpy as np
 
 from mcrt.film import Progress, RenderResult, merge
-from mcrt.reference.manifest import manifest_lock, read_manifest, remove_stale_temps, sha256_file, write_manifest
+from mcrt.reference.manifest import commit_reference, remove_stale_temps, sha256_file
 from mcrt.reference.spec import (CHUNK_DIR_NAME, DEFAULT_BASE_SEED, DEFAULT_SPP, DEFAULT_WORKERS, REFERENCE_DIR, chunk_seed,
                                  chunk_sizes, chunk_spp_for, display_path, rebuild_command, reference_key, resolve_scene,
                                  size_of)
@@ -178,8 +179,9 @@ def build_reference(
     BuildResult
         With the chunk indices rendered by this call and those reused.
 
-    The merged reference ``<directory>/<key>.exr`` and the manifest are
-    replaced atomically. Interrupting the build (KeyboardInterrupt, a killed
+    The merged reference ``<directory>/<key>.exr`` and its manifest entry are
+    replaced together or not at all (:func:`mcrt.reference.manifest.commit_reference`:
+    a crash between the two writes leaves the previous pair or the new one). Interrupting the build (KeyboardInterrupt, a killed
     process, a write error) keeps every finished chunk; calling it again
     renders only the missing ones.
     """
@@ -265,15 +267,17 @@ def build_reference(
         extra=extra,
     )
     path = directory / f"{key}.exr"
-    write_exr(path, merged)
+    # Written under a temporary name; commit_reference renames it into place together with the manifest.
+    staged = directory / f".{path.name}.{os.getpid()}.{secrets.token_hex(4)}.tmp"
+    write_exr(staged, merged)
     wall = time.perf_counter() - t_start
 
     machine = machine_info()
     hosts = sorted({c.extra.get("host", machine["host"]) for c in ordered})
     entry = {
         "file": path.name,
-        "sha256": sha256_file(path),
-        "bytes": path.stat().st_size,
+        "sha256": sha256_file(staged),
+        "bytes": staged.stat().st_size,
         "scene": scene.name,
         "scene_file": display_path(scene.path),
         "scene_hash": scene_hash,
@@ -300,10 +304,11 @@ def build_reference(
         "date": _dt.datetime.now(_dt.timezone.utc).replace(microsecond=0).isoformat(),
         "command": command,
     }
-    with manifest_lock(directory):
-        data = read_manifest(directory)
-        data["references"][key] = entry
-        write_manifest(directory, data)
+    try:
+        commit_reference(directory, staged, key, entry)
+    finally:
+        with contextlib.suppress(OSError):
+            staged.unlink()  # gone after a commit; a failed one leaves the previous reference and manifest
     if not keep_chunks:
         for t in tasks:
             with contextlib.suppress(OSError):

@@ -1,4 +1,16 @@
-"""reference/manifest.json and the files beside it: checksums, atomic writes, the manifest lock."""
+"""reference/manifest.json and the files beside it: checksums, atomic writes, the manifest lock.
+
+A reference and its manifest entry are replaced together or not at all
+(:func:`commit_reference`): the new EXR is written under a temporary name,
+the new manifest is written as a journal (``.manifest.pending.json``, which
+also records the new file's SHA-256), then the EXR is renamed into place,
+then the manifest, then the journal is removed. :func:`read_manifest`
+resolves a journal left by a crash without changing anything: if the file
+on disk is the journal's (its checksum matches), the journal is the
+manifest; otherwise the rename never happened and the old manifest still
+describes the old file. The next commit, under the lock, finishes or drops
+the journal (:func:`recover_pending`).
+"""
 
 from __future__ import annotations
 
@@ -62,6 +74,9 @@ def read_manifest(directory: str | os.PathLike = REFERENCE_DIR) -> dict[str, Any
     A missing manifest reads as an empty one; an unreadable one raises
     :class:`CorruptReference`.
     """
+    pending = _pending_manifest(Path(directory))
+    if pending is not None:
+        return pending
     path = Path(directory) / MANIFEST_NAME
     if not path.exists():
         return {"schema": SCHEMA, "references": {}}
@@ -77,6 +92,77 @@ def read_manifest(directory: str | os.PathLike = REFERENCE_DIR) -> dict[str, Any
 def write_manifest(directory: Path, data: dict[str, Any]) -> None:
     data = {"schema": SCHEMA, "references": dict(sorted(data["references"].items()))}
     _atomic_write_text(directory / MANIFEST_NAME, json.dumps(data, indent=2) + "\n")
+
+
+#: The journal of a commit in progress (see the module docstring).
+PENDING_NAME = ".manifest.pending.json"
+
+
+def _pending_manifest(directory: Path) -> dict[str, Any] | None:
+    """The journal's manifest if the file it commits is on disk (the rename happened), else None."""
+    path = directory / PENDING_NAME
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+        file, digest = data["pending"]["file"], data["pending"]["sha256"]
+        if data.get("schema") != SCHEMA or not isinstance(data.get("references"), dict):
+            return None
+    except (OSError, ValueError, KeyError, TypeError):
+        return None
+    try:
+        if sha256_file(directory / file) != digest:
+            return None
+    except OSError:
+        return None
+    return {"schema": SCHEMA, "references": data["references"]}
+
+
+def recover_pending(directory: Path) -> None:
+    """Finish (the file was renamed) or drop (it was not) a commit a crash interrupted; call under :func:`manifest_lock`."""
+    path = directory / PENDING_NAME
+    if not path.exists():
+        return
+    data = _pending_manifest(directory)
+    if data is not None:
+        write_manifest(directory, data)
+    with contextlib.suppress(OSError):
+        path.unlink()
+
+
+def _replace_file(src: Path, dst: Path) -> None:
+    os.replace(src, dst)
+    with contextlib.suppress(OSError):  # make the rename durable before the manifest names the new file
+        fd = os.open(dst.parent, os.O_RDONLY)
+        try:
+            os.fsync(fd)
+        finally:
+            os.close(fd)
+
+
+def commit_reference(directory: Path, staged: Path, key: str, entry: dict[str, Any]) -> None:
+    """Move ``staged`` to ``directory / entry['file']`` and record ``entry`` under ``key``: both or neither.
+
+    ``entry['sha256']`` must be the staged file's checksum. A crash at any
+    point leaves either the previous reference with the previous manifest
+    or the new reference with the new manifest (see the module docstring).
+    """
+    directory = Path(directory)
+    target = directory / entry["file"]
+    with manifest_lock(directory):
+        recover_pending(directory)
+        data = read_manifest(directory)
+        data["references"][key] = entry
+        journal = {"schema": SCHEMA, "references": dict(sorted(data["references"].items())),
+                   "pending": {"key": key, "file": entry["file"], "sha256": entry["sha256"]}}
+        _atomic_write_text(directory / PENDING_NAME, json.dumps(journal, indent=2) + "\n")
+        try:
+            _replace_file(staged, target)
+        except BaseException:
+            with contextlib.suppress(OSError):
+                (directory / PENDING_NAME).unlink()
+            raise
+        write_manifest(directory, data)
+        with contextlib.suppress(OSError):
+            (directory / PENDING_NAME).unlink()
 
 
 
