@@ -231,8 +231,12 @@ class _Grader:
             return
         self.notes += loaded.notes
         names = ", ".join(Path(f).name for f in loaded.files)
-        kinds = {"float": "32-bit float", "half": "16-bit half float", "rgbe": "RGBE", "png8": "8-bit sRGB PNG",
-                 "png16": "16-bit sRGB PNG", "png8-linear": "8-bit linear PNG", "png16-linear": "16-bit linear PNG"}
+        # Integer images of every container (PNG, PPM, BMP, TGA) share the formats png8 and png16; name the container.
+        container = {".ppm": "PPM", ".pgm": "PGM", ".pnm": "PNM", ".bmp": "BMP", ".tga": "TGA"}.get(
+            Path(loaded.files[0]).suffix.lower(), "PNG")
+        kinds = {"float": "32-bit float", "half": "16-bit half float", "rgbe": "RGBE", "png8": f"8-bit sRGB {container}",
+                 "png16": f"16-bit sRGB {container}", "png8-linear": f"8-bit linear {container}",
+                 "png16-linear": f"16-bit linear {container}"}
         h, w = loaded.images[0].shape[:2]
         self.rubric.passed("readable", f"read {names} ({kinds.get(loaded.fmt, loaded.fmt)}, {w}x{h}"
                            f"{', two independent renders' if len(loaded.images) == 2 else ''})")

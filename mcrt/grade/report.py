@@ -275,13 +275,15 @@ def write_student(res, assignment, out_dir: Path) -> Path:
     d = Path(out_dir) / res.student
     d.mkdir(parents=True, exist_ok=True)
     write_json_atomic(d / "results.json", results_json(res, assignment))
+    tmp = d / f".feedback.html.{os.getpid()}.tmp"
     try:
         page = feedback_html(res, assignment)
-        tmp = d / f".feedback.html.{os.getpid()}.tmp"
-        tmp.write_text(page, encoding="utf-8")
+        tmp.write_text(page, encoding="utf-8", errors="replace")
         os.replace(tmp, d / "feedback.html")
     except Exception as e:  # noqa: BLE001 - the page is a courtesy; results.json is what counts
-        (d / "feedback.html").write_text(f"<p>feedback page could not be written: {html.escape(str(e))}</p>")
+        tmp.unlink(missing_ok=True)
+        (d / "feedback.html").write_text(f"<p>feedback page could not be written: {html.escape(str(e))}</p>",
+                                         encoding="utf-8", errors="replace")
     return d
 
 
@@ -372,7 +374,7 @@ def write_class(results: list, assignment, out_dir: Path, *, elapsed: float = 0.
     crit = [c[0] for c in criteria]
     maxs = sum(c[1] for c in criteria)
     tmp = out / f".grades.csv.{os.getpid()}.tmp"
-    with open(tmp, "w", newline="") as f:
+    with open(tmp, "w", newline="", encoding="utf-8", errors="replace") as f:
         w = csv.writer(f)
         w.writerow(["student", "status", "score", "max_score", *crit, "diagnosis", "summary", "seconds"])
         for r in sorted(results, key=lambda r: r.student):
