@@ -434,3 +434,19 @@ def test_the_fallback_is_announced(tmp_path):
     assert "NOT isolated" in (tmp_path / "out" / "summary.md").read_text()
     assert json.loads((tmp_path / "out" / "good" / "results.json").read_text())["score"] == 10
     assert list(tmpdir.iterdir()) == []
+
+
+def test_every_python_root_is_bound_whatever_folders_share_a_parent(monkeypatch, tmp_path):
+    """A root under a folder that an earlier root's bind needed as an empty parent is still bound.
+
+    Seen in a checkout under /tmp: the dependencies (/tmp/x/.venv/...) sorted before the
+    Gradescope venv (/tmp/pytest-.../venv), whose bind was skipped because /tmp had been made
+    as a parent, and the module's interpreter was then missing in the sandbox.
+    """
+    first, second = tmp_path / "a" / "site-packages", tmp_path / "b" / "venv"
+    first.mkdir(parents=True)
+    second.mkdir(parents=True)
+    monkeypatch.setattr(codemode, "_python_roots", lambda: [str(first), str(second)])
+    argv = codemode._bwrap_argv(codemode.Isolation("bubblewrap", "", "bwrap"), tmp_path, 3, None)
+    binds = {argv[i + 1] for i, a in enumerate(argv) if a == "--ro-bind"}
+    assert {str(first), str(second)} <= binds

@@ -297,33 +297,34 @@ def _bwrap_argv(iso: Isolation, indir: Path, result_fd: int, uid: int | None) ->
         argv += ["--unshare-user", "--uid", str(NOBODY), "--gid", str(NOBODY)]
         if "--disable-userns" in iso.options:
             argv.append("--disable-userns")
-    made: set[str] = set()
+    made: set[str] = set()  # folders created empty in the sandbox to hold a bind
+    bound: set[str] = set()  # folders bound from outside: what lies under them is visible already
 
     def parents(dest: str) -> None:
         for q in reversed(Path(dest).parents):
             s = str(q)
-            if s != "/" and s not in made:
+            if s != "/" and s not in made and not any(q.is_relative_to(b) for b in bound):
                 argv.extend(["--perms", "0755", "--dir", s])
                 made.add(s)
 
     argv += ["--ro-bind", "/usr", "/usr"]
-    made.add("/usr")
+    bound.add("/usr")
     for d in ("/bin", "/sbin", "/lib", "/lib64", "/lib32"):
         if os.path.islink(d):
             argv += ["--symlink", os.readlink(d), d]
         elif os.path.isdir(d):
             argv += ["--ro-bind", d, d]
-        made.add(d)
+        bound.add(d)
     for f in ("/etc/ld.so.cache", "/etc/ld.so.conf", "/etc/localtime"):
         if os.path.isfile(f):
             parents(f)
             argv += ["--ro-bind", f, f]
     masks = []
     for r in _python_roots():
-        if not any(Path(r).is_relative_to(m) for m in made):
+        if not any(Path(r).is_relative_to(b) for b in bound):
             parents(r)
             argv += ["--ro-bind", r, r]
-            made.add(r)
+            bound.add(r)
         for p in sys.path:
             if p and Path(p).is_relative_to(r) and os.path.isdir(os.path.join(p, "mcrt")):
                 masks.append(os.path.join(p, "mcrt"))  # the grader's package (its references) stays unreadable
