@@ -15,15 +15,16 @@ from mcrt.exitcodes import EXIT_FAILED, EXIT_OK, EXIT_UNUSABLE
 
 def _add_render_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--scene", default=None, help="scene file (default: reference/scenes/canonical.toml)")
-    p.add_argument("--camera", default=None, help="camera name from the scene file (near, far)")
-    p.add_argument("--res", type=int, default=None, help="square resolution N (N x N)")
-    p.add_argument("--width", type=int, default=None)
-    p.add_argument("--height", type=int, default=None)
-    p.add_argument("--spp", type=int, default=None, help="samples per pixel")
-    p.add_argument("--seed", type=int, default=None)
-    p.add_argument("--max-depth", type=int, default=None, help="longest path in segments (1: emitters only, 2: direct light, -1: unbounded)")
-    p.add_argument("--preset", default=None, help="named settings from the scene file (e.g. course2023)")
-    p.add_argument("--backend", choices=("llvm", "cuda"), default="llvm")
+    p.add_argument("--camera", default=None, help="camera name from the scene file, e.g. near or far (default: the file's)")
+    p.add_argument("--res", type=int, default=None, help="square resolution N (N x N) (default: the scene file's)")
+    p.add_argument("--width", type=int, default=None, help="image width, overrides --res (default: the scene file's)")
+    p.add_argument("--height", type=int, default=None, help="image height, overrides --res (default: the scene file's)")
+    p.add_argument("--spp", type=int, default=None, help="samples per pixel (default: the scene file's)")
+    p.add_argument("--seed", type=int, default=None, help="random seed; equal seeds give equal images bit for bit (default: the scene file's)")
+    p.add_argument("--max-depth", type=int, default=None,
+                   help="longest path in segments (1: emitters only, 2: direct light, -1: unbounded; default: the scene file's)")
+    p.add_argument("--preset", default=None, help="named settings from the scene file, e.g. course2023 (default: none)")
+    p.add_argument("--backend", choices=("llvm", "cuda"), default="llvm", help="Dr.Jit backend: llvm on the CPU, cuda on a GPU (default: llvm)")
 
 
 def _settings(args, scene):
@@ -169,12 +170,12 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("render", help="render a scene to EXR (mean + per-sample variance) and a PNG preview")
     _add_render_options(p)
     p.add_argument("--renderer", choices=("mcrt", "plugin", "mitsuba"), default="mcrt",
-                   help="mcrt: the standalone tracer; mitsuba: Mitsuba's path integrator; plugin: mcrt's estimator inside Mitsuba")
-    p.add_argument("--light-samples", type=int, default=None, help="shadow rays per diffuse vertex (mcrt, plugin)")
-    p.add_argument("--mutant", action="append", metavar="NAME", help="switch on a catalogued bug (mcrt, plugin; repeatable; see `mcrt mutants`)")
-    p.add_argument("--intersector", choices=("convex", "triangles"), default="convex", help="mcrt's intersection code (triangles: brute-force cross-check)")
-    p.add_argument("--exposure", type=float, default=0.0, help="PNG preview exposure in stops")
-    p.add_argument("-o", "--output", default="out.exr", help="output EXR (the PNG preview goes beside it)")
+                   help="mcrt: the standalone tracer; mitsuba: Mitsuba's path integrator; plugin: mcrt's estimator inside Mitsuba (default: mcrt)")
+    p.add_argument("--light-samples", type=int, default=None, help="shadow rays per diffuse vertex (mcrt, plugin; default: the scene file's)")
+    p.add_argument("--mutant", action="append", metavar="NAME", help="switch on a catalogued bug (mcrt, plugin; repeatable; see `mcrt mutants`; default: none)")
+    p.add_argument("--intersector", choices=("convex", "triangles"), default="convex", help="mcrt's intersection code (triangles: brute-force cross-check; default: convex)")
+    p.add_argument("--exposure", type=float, default=0.0, help="PNG preview exposure in stops (default: 0)")
+    p.add_argument("-o", "--output", default="out.exr", help="output EXR; the PNG preview goes beside it (default: out.exr)")
     # Any Mitsuba scene (mcrt.mitsuba.render_with_variance); --res/--width/--height, --spp, --seed, --max-depth apply.
     mitsuba_help = {
         "--mitsuba-scene": ("FILE", "render this Mitsuba XML scene (or cornell-box) with its own or --integrator's "
@@ -187,20 +188,21 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_render)
 
     p = sub.add_parser("compare", help="two-sample test of two renders (exit 0 consistent, 1 different, 2 unusable)")
-    p.add_argument("a")
-    p.add_argument("b")
-    p.add_argument("--alpha", type=float, default=0.01, help="family-wise error rate (Holm)")
-    p.add_argument("--tile", type=int, default=8, help="tile size in pixels")
-    p.add_argument("--heatmap", default=None, help="write a PNG of the per-tile statistic here")
-    p.add_argument("--json", default=None, help="write the comparison (every tile's statistic) as JSON here")
+    p.add_argument("a", help="image A: the render under test (EXR with variance, PFM, HDR, PNG, ...)")
+    p.add_argument("b", help="image B: the other render, or the reference with --policy reference-floor")
+    p.add_argument("--alpha", type=float, default=0.01, help="family-wise error rate (Holm; default: 0.01)")
+    p.add_argument("--tile", type=int, default=8, help="tile size in pixels (default: 8)")
+    p.add_argument("--heatmap", default=None, help="write a PNG of the per-tile statistic here (default: none)")
+    p.add_argument("--json", default=None, help="write the comparison (every tile's statistic) as JSON here (default: none)")
     # The names of mcrt.stats.policy.POLICIES (not imported here: mcrt.stats loads SciPy; tests/test_stats.py checks them).
     p.add_argument("--policy", choices=("independent", "reference-floor"), default="independent",
                    help="independent: two independent renders, each with its own variance; reference-floor: B is a "
-                        "high-spp reference of the same estimator and A's per-sample variance is raised to B's where lower")
+                        "high-spp reference of the same estimator and A's per-sample variance is raised to B's where lower "
+                        "(default: independent)")
     p.add_argument("--reference-variance-floor", dest="policy", action="store_const", const="reference-floor",
-                   help="the same as --policy reference-floor")
+                   help="the same as --policy reference-floor (default: off)")
     p.add_argument("--assume-variance-from", choices=("other",), default=None,
-                   help="an image without per-sample variance borrows the other's (an approximation)")
+                   help="an image without per-sample variance borrows the other's, an approximation (default: refuse, exit 2)")
     p.add_argument("--spp-a", type=int, default=None, help="spp of image A, where its file does not record it "
                                                            "(a Mitsuba 'moment' EXR needs it; default: the file's)")
     p.add_argument("--spp-b", type=int, default=None, help="spp of image B, as --spp-a (default: the file's)")
@@ -211,18 +213,18 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_compare)
 
     p = sub.add_parser("main", help="the main job: the convergence report of the canonical scene, and mcrt beside Mitsuba")
-    p.add_argument("--scene", default=None)
-    p.add_argument("--camera", default="near")
-    p.add_argument("--res", type=int, default=128)
-    p.add_argument("--spp", type=int, default=256)
-    p.add_argument("--seed", type=int, default=1)
-    p.add_argument("--alpha", type=float, default=0.01)
-    p.add_argument("--backend", choices=("llvm", "cuda"), default="llvm")
-    p.add_argument("--out", default="reports/canonical")
+    p.add_argument("--scene", default=None, help="scene file of the side-by-side renders (default: reference/scenes/canonical.toml)")
+    p.add_argument("--camera", default="near", help="camera of the side-by-side renders (default: near)")
+    p.add_argument("--res", type=int, default=128, help="their square resolution (default: 128)")
+    p.add_argument("--spp", type=int, default=256, help="their samples per pixel (default: 256)")
+    p.add_argument("--seed", type=int, default=1, help="their seed (default: 1)")
+    p.add_argument("--alpha", type=float, default=0.01, help="family-wise error rate of their comparison (default: 0.01)")
+    p.add_argument("--backend", choices=("llvm", "cuda"), default="llvm", help="Dr.Jit backend (default: llvm)")
+    p.add_argument("--out", default="reports/canonical", help="report folder (default: reports/canonical)")
     p.set_defaults(func=cmd_main)
 
     p = sub.add_parser("scene", help="validate a scene file and print its hash")
-    p.add_argument("scene", nargs="?", default=None)
+    p.add_argument("scene", nargs="?", default=None, help="scene file (default: reference/scenes/canonical.toml)")
     p.set_defaults(func=cmd_scene)
 
     p = sub.add_parser("mutants", help="list the bug catalogue")

@@ -62,17 +62,18 @@ def three_way(scene, settings, *, mutants=(), backend="llvm", alpha=0.01, tile=8
 
 def register(sub) -> None:
     p = sub.add_parser("threeway", help="render with mcrt, the plugin and Mitsuba; say whether a disagreement is geometry or estimator")
-    p.add_argument("--scene", default=None)
-    p.add_argument("--camera", default=None)
-    p.add_argument("--res", type=int, default=64)
-    p.add_argument("--spp", type=int, default=1024)
-    p.add_argument("--seed", type=int, default=1)
-    p.add_argument("--max-depth", type=int, default=None)
-    p.add_argument("--light-samples", type=int, default=None)
-    p.add_argument("--mutant", action="append", metavar="NAME", help="a catalogued bug in mcrt's estimator (both standalone and plugin)")
-    p.add_argument("--alpha", type=float, default=0.01)
-    p.add_argument("--tile", type=int, default=8)
-    p.add_argument("--backend", choices=("llvm", "cuda"), default="llvm")
+    p.add_argument("--scene", default=None, help="scene file (default: reference/scenes/canonical.toml)")
+    p.add_argument("--camera", default=None, help="camera name (default: the scene file's)")
+    p.add_argument("--res", type=int, default=64, help="square resolution (default: 64)")
+    p.add_argument("--spp", type=int, default=1024, help="samples per pixel of each render (default: 1024)")
+    p.add_argument("--seed", type=int, default=1, help="seed of mcrt's render; the plugin's is seed + 1, Mitsuba's seed + 2 (default: 1)")
+    p.add_argument("--max-depth", type=int, default=None, help="longest path in segments, -1 unbounded (default: the scene file's)")
+    p.add_argument("--light-samples", type=int, default=None, help="shadow rays per diffuse vertex (default: the scene file's)")
+    p.add_argument("--mutant", action="append", metavar="NAME",
+                   help="a catalogued bug in mcrt's estimator, on both of its hosts (repeatable; default: none)")
+    p.add_argument("--alpha", type=float, default=0.01, help="family-wise error rate of each comparison (default: 0.01)")
+    p.add_argument("--tile", type=int, default=8, help="tile size in pixels (default: 8)")
+    p.add_argument("--backend", choices=("llvm", "cuda"), default="llvm", help="Dr.Jit backend (default: llvm)")
     p.set_defaults(func=cmd_threeway)
 
 

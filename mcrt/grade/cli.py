@@ -22,22 +22,24 @@ from mcrt.exitcodes import EXIT_FAILED, EXIT_OK, EXIT_UNUSABLE
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("submissions", nargs="?", help="one student's file, a folder of students (a file or sub-folder each), "
                    "or with --single one student's folder")
-    p.add_argument("--assignment", "-a", required=True, help="assignment file (see reference/assignments/course2023.toml)")
+    p.add_argument("--assignment", "-a", required=True, help="assignment file (see reference/assignments/course2023.toml; required, no default)")
     p.add_argument("--out", "-o", default=None, help="output folder: DIR/<student>/results.json, feedback.html, DIR/grades.csv, "
-                   "DIR/summary.md (required unless --prepare)")
-    p.add_argument("--mode", choices=("image", "code"), default="image", help="grade images (default) or Python modules")
+                   "DIR/summary.md (default: none; required unless --prepare)")
+    p.add_argument("--mode", choices=("image", "code"), default="image", help="grade images or Python modules (default: image)")
     p.add_argument("--jobs", "-j", type=int, default=1, help="students graded in parallel (worker processes; 0: in this "
-                   "process, without timeouts)")
+                   "process, without timeouts; default: 1)")
     p.add_argument("--timeout", type=float, default=None, help="seconds per student (default: the assignment's grading.timeout; "
                    "in code mode, per check: code.timeout)")
-    p.add_argument("--memory", type=int, default=None, help="memory limit per worker or student process in MiB")
+    p.add_argument("--memory", type=int, default=None, help="memory limit per worker or student process in MiB (default: 4096 in image mode; in code "
+                   "mode the assignment's code.memory_mb, else 2048)")
     p.add_argument("--cache", default=None, help="folder for the cached expected images (default: $MCRT_CACHE/grade or "
                    "~/.cache/mcrt/grade)")
-    p.add_argument("--single", action="store_true", help="SUBMISSIONS is one student's folder (Gradescope's /autograder/submission)")
+    p.add_argument("--single", action="store_true", help="SUBMISSIONS is one student's folder (Gradescope's /autograder/submission) "
+                   "(default: off)")
     p.add_argument("--student", default=None, help="student id with --single (default: the folder's name)")
     p.add_argument("--prepare", action="store_true", help="only render and cache the references and the bug catalogue, then "
-                   "exit (for an autograder image's setup)")
-    p.add_argument("--quiet", "-q", action="store_true", help="no progress lines")
+                   "exit, for an autograder image's setup (default: off)")
+    p.add_argument("--quiet", "-q", action="store_true", help="no progress lines (default: off)")
 
 
 def register(subparsers) -> argparse.ArgumentParser:

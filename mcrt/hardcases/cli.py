@@ -28,14 +28,14 @@ def register(subparsers) -> None:
                     "moved and scaled) and how fireflies slow convergence. Writes index.md, data.json and one image per case.",
     )
     p.add_argument("--case", action="append", metavar="NAME", help="run only this case (repeatable; default: all; --list shows them)")
-    p.add_argument("--list", action="store_true", help="list the catalogue and exit")
+    p.add_argument("--list", action="store_true", help="list the catalogue and exit (default: off)")
     p.add_argument("--spp", type=int, default=512, help="samples per pixel of each renderer at equal spp (default 512)")
     p.add_argument("--ref-spp", type=int, default=4096, help="samples per pixel of the Mitsuba reference (default 4096)")
     p.add_argument("--res", type=int, default=64, help="square resolution (default 64)")
     p.add_argument("--limits", choices=("auto", "yes", "no"), default="auto",
-                   help="also measure float32's limits (moved/scaled scenes); auto: only when all cases run")
+                   help="also measure float32's limits (moved/scaled scenes); auto: only when all cases run (default: auto)")
     p.add_argument("--convergence", choices=("auto", "yes", "no"), default="auto",
-                   help=f"also measure convergence on the firefly cases ({', '.join(CONVERGENCE_CASES)}); auto: only when all cases run")
+                   help=f"also measure convergence on the firefly cases ({', '.join(CONVERGENCE_CASES)}); auto: only when all cases run (default: auto)")
     p.add_argument("--out", default=str(REPORT_DIR), help="report folder (default reports/hardcases)")
     p.set_defaults(func=cmd_hardcases)
 

@@ -49,8 +49,8 @@ def register(subparsers) -> None:
     b.add_argument("--scene", default=None, help="scene file (default: reference/scenes/canonical.toml)")
     b.add_argument("--camera", nargs="+", default=None, help="camera name(s) from the scene file (default: near)")
     b.add_argument("--res", nargs="+", type=int, default=None, help="square resolution(s) N (N x N) (default: 64)")
-    b.add_argument("--width", type=int, default=None, help="width, for a non-square reference (with --height)")
-    b.add_argument("--height", type=int, default=None, help="height, for a non-square reference (with --width)")
+    b.add_argument("--width", type=int, default=None, help="width, for a non-square reference (with --height) (default: none, square sizes from --res)")
+    b.add_argument("--height", type=int, default=None, help="height, for a non-square reference (with --width) (default: none, square sizes from --res)")
     b.add_argument("--max-depth", nargs="+", type=_parse_depth, default=None,
                    help="longest path(s) in segments: 1 emitters only, 2 direct light, -1 unbounded (default: 8)")
     b.add_argument("--spp", type=int, default=None,
@@ -61,12 +61,14 @@ def register(subparsers) -> None:
                    help=f"local worker processes (default {DEFAULT_WORKERS}: Dr.Jit already uses every core in one process)")
     b.add_argument("--threads", type=int, default=None, help="Dr.Jit threads per local worker (default: cores / workers)")
     b.add_argument("--scheduler", default=None, metavar="ADDRESS",
-                   help="Dask scheduler address (tcp://host:8786): render the chunks on that cluster")
+                   help="Dask scheduler address (tcp://host:8786): render the chunks on that cluster "
+                        "(default: none, local worker processes)")
     b.add_argument("--standard", action="store_true",
-                   help="build every committed reference (canonical scene) with its committed spp; other selections are ignored")
+                   help="build every committed reference (canonical scene) with its committed spp; other selections are ignored "
+                        "(default: off)")
     b.add_argument("--backend", choices=("llvm", "cuda"), default="llvm", help="Mitsuba variant: llvm_ad_rgb or cuda_ad_rgb (default: %(default)s)")
     b.add_argument("--dir", default=str(REFERENCE_DIR), help="reference folder (default: reference/)")
-    b.add_argument("--quiet", action="store_true", help="no progress output")
+    b.add_argument("--quiet", action="store_true", help="no progress output (default: off)")
     b.set_defaults(func=cmd_build)
 
     v = sub.add_parser(
@@ -82,17 +84,17 @@ def register(subparsers) -> None:
     v.add_argument("--seed", type=int, default=VERIFY_BASE_SEED, help="base seed of the fresh renders (default: %(default)s)")
     v.add_argument("--alpha", type=float, default=0.01, help="family-wise error rate per reference (Holm) (default: %(default)s)")
     v.add_argument("--tile", type=int, default=8, help="tile size in pixels (default: %(default)s)")
-    v.add_argument("--checksums-only", action="store_true", help="only check files, checksums and scene hashes (no rendering)")
+    v.add_argument("--checksums-only", action="store_true", help="only check files, checksums and scene hashes, no rendering (default: off)")
     v.add_argument("--backend", choices=("llvm", "cuda"), default="llvm", help="Mitsuba variant of the fresh renders (default: %(default)s)")
     v.add_argument("--dir", default=str(REFERENCE_DIR), help="reference folder (default: reference/)")
-    v.add_argument("--quiet", action="store_true", help="no progress output")
+    v.add_argument("--quiet", action="store_true", help="no progress output (default: off)")
     v.set_defaults(func=cmd_verify)
 
     ls = sub.add_parser("list", help="table of the references in the manifest, with their status",
                         description="Summary table of reference/manifest.json: size, spp, noise, versions and status "
                                     "(ok, missing, checksum, stale, no scene). Renders nothing.")
     ls.add_argument("--dir", default=str(REFERENCE_DIR), help="reference folder (default: reference/)")
-    ls.add_argument("--json", action="store_true", help="print the rows as JSON instead of a table")
+    ls.add_argument("--json", action="store_true", help="print the rows as JSON instead of a table (default: off, a table)")
     ls.set_defaults(func=cmd_list)
 
 

@@ -43,30 +43,35 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--preset", default="canonical", choices=sorted(PRESETS),
                    help="named settings to start from (default canonical): " + "; ".join(f"{k}: {v}" for k, v in PRESET_HELP.items()))
     p.add_argument("--scene", default=None, help="scene file (default: reference/scenes/canonical.toml)")
-    p.add_argument("--camera", default=None, help="camera name from the scene file (near, far)")
-    p.add_argument("--res", type=_positive, default=None, help="square resolution N (N x N)")
+    p.add_argument("--camera", default=None, help="camera name from the scene file, near or far (default: the preset's; canonical: near)")
+    p.add_argument("--res", type=_positive, default=None, help="square resolution N (N x N) (default: the preset's; canonical: 64)")
     p.add_argument("--spp-ladder", type=_ladder, default=None, metavar="LIST",
-                   help="samples per pixel of each rung: 1,2,4,8 or 1..1024 (powers of two) or a mix (1..16,100)")
-    p.add_argument("--seeds", type=_positive, default=None, metavar="N", help="renders per (renderer, spp): seeds 1..N")
+                   help="samples per pixel of each rung: 1,2,4,8 or 1..1024 (powers of two) or a mix (1..16,100) "
+                        "(default: the preset's; canonical: 1..1024)")
+    p.add_argument("--seeds", type=_positive, default=None, metavar="N", help="renders per (renderer, spp): seeds 1..N (default: the preset's; canonical: 3)")
     p.add_argument("--first-seed", type=int, default=None, metavar="S", help="first seed (seeds S..S+N-1; default 1)")
     p.add_argument("--renderers", default=None, metavar="LIST",
-                   help="comma-separated: mcrt, mitsuba, plugin, each optionally with :kN shadow rays (mcrt:k30)")
-    p.add_argument("--max-depth", type=_depth, default=None, help="longest path in segments (-1: unbounded)")
-    p.add_argument("--light-samples", type=_positive, default=None, help="shadow rays per diffuse vertex (mcrt, plugin) unless :kN")
+                   help="comma-separated: mcrt, mitsuba, plugin, each optionally with :kN shadow rays (mcrt:k30) "
+                        "(default: the preset's; canonical: mcrt,mitsuba,plugin)")
+    p.add_argument("--max-depth", type=_depth, default=None, help="longest path in segments (-1: unbounded; default: the preset's; canonical: 8)")
+    p.add_argument("--light-samples", type=_positive, default=None, help="shadow rays per diffuse vertex (mcrt, plugin) unless :kN (default: the preset's; canonical: 1)")
     p.add_argument("--equal-time", action=argparse.BooleanOptionalAction, default=None,
-                   help="the first renderer renders the ladder, the others the spp that takes them the same time")
+                   help="the first renderer renders the ladder, the others the spp that takes them the same time "
+                        "(default: the preset's; canonical: off, course2023: on)")
     p.add_argument("--baseline", default=None, help="renderer that efficiency ratios divide by (default: mitsuba, else the last)")
     p.add_argument("--reference", choices=("auto", "committed", "render"), default=None,
-                   help="auto: the committed Mitsuba reference if there is one, else a cached render; committed: only that; render: always render")
+                   help="auto: the committed Mitsuba reference if there is one, else a cached render; committed: only that; render: always render "
+                        "(default: the preset's; canonical: auto)")
     p.add_argument("--reference-renderer", default=None, help="renderer of a rendered reference (default mitsuba)")
     p.add_argument("--reference-spp", type=_positive, default=None, help="spp of a rendered reference (default 8 x the largest rung)")
     p.add_argument("--strip-spp", type=_ladder, default=None, metavar="LIST", help="rungs shown in the image strip (default: first, middle, last)")
     p.add_argument("--cache-dir", default=None, help="where rendered references are cached (default $XDG_CACHE_HOME/mcrt/report-references)")
-    p.add_argument("--no-svg", action="store_true", help="write plots as PNG only")
-    p.add_argument("--backend", choices=("llvm", "cuda"), default=None)
+    p.add_argument("--no-svg", action="store_true", help="write plots as PNG only (default: off, SVG and PNG)")
+    p.add_argument("--backend", choices=("llvm", "cuda"), default=None,
+                   help="Dr.Jit backend: llvm on the CPU, cuda on a GPU (default: the preset's; every preset: llvm)")
     p.add_argument("--name", default=None, help="report name (default: the preset's); the folder is reports/<name> unless --out")
     p.add_argument("--out", default=None, help="output folder (default reports/<name>)")
-    p.add_argument("--quiet", action="store_true", help="no progress output")
+    p.add_argument("--quiet", action="store_true", help="no progress output (default: off)")
 
 
 def config_from_args(args):

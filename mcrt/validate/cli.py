@@ -99,36 +99,37 @@ def register(subparsers) -> None:
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
     p.add_argument("--scene", default=None, help="scene file (default: reference/scenes/canonical.toml)")
-    p.add_argument("--seeds", type=int, default=200, help="false-alarm trials (independent seeds of correct renders)")
-    p.add_argument("--power-seeds", type=int, default=20, help="seeds per mutant in the power study")
-    p.add_argument("--spp", type=int, default=1024, help="samples per pixel per side (the default suite's budget)")
-    p.add_argument("--res", type=int, default=64, help="square resolution N (N x N)")
-    p.add_argument("--camera", default="near", help="camera name from the scene file")
-    p.add_argument("--max-depth", type=int, default=8, help="longest path in segments")
-    p.add_argument("--alpha", type=float, default=0.01, help="family-wise error rate of one comparison (Holm)")
-    p.add_argument("--tile", type=int, default=8, help="tile size in pixels of the test under study")
+    p.add_argument("--seeds", type=int, default=200, help="false-alarm trials (independent seeds of correct renders) (default: %(default)s)")
+    p.add_argument("--power-seeds", type=int, default=20, help="seeds per mutant in the power study (default: %(default)s)")
+    p.add_argument("--spp", type=int, default=1024, help="samples per pixel per side, the default suite's budget (default: %(default)s)")
+    p.add_argument("--res", type=int, default=64, help="square resolution N (N x N) (default: %(default)s)")
+    p.add_argument("--camera", default="near", help="camera name from the scene file (default: %(default)s)")
+    p.add_argument("--max-depth", type=int, default=8, help="longest path in segments (default: %(default)s)")
+    p.add_argument("--alpha", type=float, default=0.01, help="family-wise error rate of one comparison (Holm) (default: %(default)s)")
+    p.add_argument("--tile", type=int, default=8, help="tile size in pixels of the test under study (default: %(default)s)")
     p.add_argument("--against", choices=Opponent.KINDS, default="mitsuba",
                    help="opponent: a fresh independent Mitsuba render per trial, the committed reference, or the committed "
-                        "reference with the tested render's variance floored at the reference's (as `mcrt reference verify` tests)")
-    p.add_argument("--only", choices=("false-alarms", "power"), default=None, help="run one study only")
+                        "reference with the tested render's variance floored at the reference's (as `mcrt reference verify` tests) (default: %(default)s)")
+    p.add_argument("--only", choices=("false-alarms", "power"), default=None, help="run one study only (default: %(default)s, both studies)")
     p.add_argument("--mutant", action="append", metavar="NAME", default=None,
                    help="power study for this mutant only (repeatable; default: the whole catalogue, see `mcrt mutants`)")
     p.add_argument("--extra-tiles", type=_int_list, default=list(DEFAULT_EXTRA_TILES),
-                   help="other tile sizes evaluated on the same renders (comma-separated; 'none')")
+                   help="other tile sizes evaluated on the same renders (comma-separated; 'none') (default: %(default)s)")
     p.add_argument("--escalate-spp", type=_int_list, default=list(ESCALATION_SPP),
-                   help="larger budgets tried, in order, for mutants below the goal (comma-separated; 'none')")
+                   help="larger budgets tried, in order, for mutants below the goal (comma-separated; 'none') (default: %(default)s)")
     p.add_argument("--followup", type=_followup, action="append", default=None, metavar="KEY=VALUE",
                    help="another configuration tried for mutants below the goal (repeatable; camera=, res=, max_depth=; "
                         "'none' for no follow-ups; default: max_depth=2 and camera=far)")
     p.add_argument("--effect-spp", type=int, default=DEFAULT_EFFECT_SPP,
-                   help="spp of the effect-size renders of mutants below the goal (0: skip)")
-    p.add_argument("--backend", choices=("llvm", "cuda"), default="llvm")
+                   help="spp of the effect-size renders of mutants below the goal (0: skip) (default: %(default)s)")
+    p.add_argument("--backend", choices=("llvm", "cuda"), default="llvm",
+                   help="Dr.Jit backend: llvm on the CPU, cuda on a GPU (default: %(default)s)")
     p.add_argument("--out", default=None,
                    help="report folder (default: " + "; ".join(f"{v} against {k}" for k, v in DEFAULT_OUT.items()) + ")")
     p.add_argument("--readme-only", action="store_true",
                    help="run no study: rewrite README.md of the folder --out (default reports/validation) from the JSON "
                         "reports in it and its sub-folders")
-    p.add_argument("--quiet", action="store_true", help="no progress lines")
+    p.add_argument("--quiet", action="store_true", help="no progress lines (default: %(default)s)")
     p.set_defaults(func=cmd_validate)
 
 
