@@ -38,7 +38,8 @@ The host
 - ``light_pdf_area(hit, o, active)``: the area density with which
   ``sample_light`` would have chosen a hit light point (for MIS);
 - ``occluded(o, d, tmax, active) -> Bool``: whether anything but the light
-  blocks o + t d for 0 < t < tmax (tmax = inf: anything at all);
+  blocks o + t d for 0 < t < tmax (tmax None: the whole ray, which always
+  meets something in a closed scene);
 - ``spawn_origin(hit)``: the origin of rays leaving a hit, offset against
   self-intersection on the side the ray arrived from;
 - the array types ``Float``, ``UInt32``, ``Bool``, ``Vector3f``, ``Spectrum``
@@ -327,7 +328,7 @@ class PathEstimator:
         cos_y = ls.cos_y if opt.light_one_sided else dr.abs(ls.cos_y)
         valid = active & (cos_x > 0) & (cos_y > 0)
         g = self.geometry_term(cos_x, cos_y, ls.inv_dist)
-        tmax = ls.dist2 * ls.inv_dist * SHADOW_TMAX_SCALE if opt.shadow_bounded else dr.inf
+        tmax = ls.dist2 * ls.inv_dist * SHADOW_TMAX_SCALE if opt.shadow_bounded else None
         blocked = host.occluded(origin, ls.wi, tmax, valid)
         if opt.mis:
             p_light = solid_angle_pdf(ls.pdf_area, ls.dist2, cos_y)

@@ -56,9 +56,8 @@ class McrtHost:
         return self.light.pdf_area
 
     def occluded(self, o, d, tmax, active=True):
-        """Whether an object blocks o + t d, 0 < t < tmax; tmax = inf also tests the room (it always blocks)."""
-        unbounded = isinstance(tmax, float) and tmax == dr.inf
-        if unbounded:
+        """Whether an object blocks o + t d, 0 < t < tmax; tmax None also tests the room (it always blocks)."""
+        if tmax is None:
             return self.geo.occluded(o, d, self.m.Float(dr.inf), include_room=True)
         return self.geo.occluded(o, d, tmax, active=active)
 

@@ -87,7 +87,7 @@ class MitsubaHost:
 
     def occluded(self, o, d, tmax, active=True):
         ray = mi.Ray3f(o, d)
-        if not (isinstance(tmax, float) and tmax == dr.inf):
+        if tmax is not None:
             ray.maxt = tmax
         return self.scene.ray_test(ray, active)
 

@@ -48,14 +48,14 @@ def _define_class():
         def __init__(self, props):
             super().__init__(props)
             try:
+                self.mutants = parse_mutants(props.get("mutant", ""))
                 self.options = EstimatorOptions(
                     max_depth=int(props.get("max_depth", 8)), light_samples=int(props.get("light_samples", 1)),
                     rr_depth=int(props.get("rr_depth", 5)), mis=bool(props.get("mis", False)),
-                    hide_emitters=self.hide_emitters, **estimator_overrides(parse_mutants(props.get("mutant", ""))),
+                    hide_emitters=self.hide_emitters, **estimator_overrides(self.mutants),
                 )
             except ValueError as e:
                 raise ValueError(str(e) if str(e).startswith("mcrt integrator:") else f"mcrt integrator: {e}") from None
-            self.mutants = parse_mutants(props.get("mutant", ""))
 
         def to_string(self) -> str:
             o = self.options
