@@ -103,6 +103,7 @@ def cmd_render(args) -> int:
     options = {"mutants": tuple(args.mutant)} if args.mutant else {}
     if args.intersector != "convex":
         options["intersector"] = args.intersector
+    options.update(_trick_flags(args))
     result = render(scene, s, renderer=args.renderer, backend=args.backend, **options)
     exr, png = render_to_files(result, Path(args.output), args.exposure)
     compile_note = f", of which JIT compilation {result.compile_time:.2f} s" if result.compile_time else ""
@@ -111,6 +112,26 @@ def cmd_render(args) -> int:
           f"{result.wall_time:.2f} s{compile_note}; {paths / max(result.wall_time, 1e-9) / 1e6:.2f} M paths/s")
     print(f"wrote {exr} and {png}")
     return EXIT_OK
+
+
+def _trick_flags(args) -> dict:
+    """The efficiency tricks given on the command line (mcrt.tricks.options), as renderer options."""
+    names = ("roulette", "roulette_survival", "roulette_start", "light_sampling", "adaptive", "denoise")
+    return {n: getattr(args, n) for n in names if getattr(args, n, None) not in (None, False)}
+
+
+def _add_trick_flags(p: argparse.ArgumentParser) -> None:
+    g = p.add_argument_group("efficiency tricks (renderer mcrt; measured by `mcrt tricks`)")
+    g.add_argument("--roulette", choices=("unbiased", "course2023"), default=None,
+                   help="unbiased: survive with q and divide by it; course2023: absorb with 0.75, survivors times 0.8 "
+                        "(biased) (default: unbiased)")
+    g.add_argument("--roulette-survival", type=float, default=None, metavar="Q",
+                   help="fixed survival probability (default: the scheme's, min(max throughput, 0.95) or 0.25)")
+    g.add_argument("--roulette-start", type=int, default=None, metavar="DEPTH",
+                   help="first depth roulette runs at (default: the scheme's, the scene's rr_depth or 1)")
+    g.add_argument("--light-sampling", choices=("area", "solid_angle"), default=None,
+                   help="points on the light uniform in area, or uniform in its solid angle (spherical rectangle) "
+                        "(default: area)")
 
 
 def cmd_compare(args) -> int:
@@ -174,6 +195,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--light-samples", type=int, default=None, help="shadow rays per diffuse vertex (mcrt, plugin; default: the scene file's)")
     p.add_argument("--mutant", action="append", metavar="NAME", help="switch on a catalogued bug (mcrt, plugin; repeatable; see `mcrt mutants`; default: none)")
     p.add_argument("--intersector", choices=("convex", "triangles"), default="convex", help="mcrt's intersection code (triangles: brute-force cross-check; default: convex)")
+    _add_trick_flags(p)
     p.add_argument("--exposure", type=float, default=0.0, help="PNG preview exposure in stops (default: 0)")
     p.add_argument("-o", "--output", default="out.exr", help="output EXR; the PNG preview goes beside it (default: out.exr)")
     # Any Mitsuba scene (mcrt.mitsuba.render_with_variance); --res/--width/--height, --spp, --seed, --max-depth apply.

@@ -27,6 +27,10 @@ with probability q = min(max(throughput), 0.95) and divides the throughput by q.
 Where a lit surface nearly touches the light, area sampling alone has
 unbounded variance (the 1/d^2); there (``mis``) light samples and the cosine
 direction are combined by the balance heuristic, in solid angle.
+Sampling the light uniformly in the solid angle Omega it subtends instead
+(``light_sampling='solid_angle'``, a spherical rectangle) has the area
+density p_A = cos(theta_y) / (d^2 Omega), so the sample's weight
+Le V cos(theta_x) Omega is bounded without MIS.
 
 The host
 --------
@@ -66,6 +70,10 @@ from mcrt.light import solid_angle_pdf
 from mcrt.sampling import balance_heuristic, cosine_hemisphere_pdf
 
 UNBOUNDED = 2**32 - 1
+
+#: Light sampling strategies: uniform in area on the light, or uniform in the solid angle it subtends
+#: (the spherical rectangle of :func:`mcrt.sampling.square_to_spherical_rectangle`).
+LIGHT_SAMPLING = ("area", "solid_angle")
 
 #: Shadow rays stop this fraction short of the light point, so that they never hit the light itself.
 SHADOW_TMAX_SCALE = 1.0 - 2.0**-12
@@ -128,6 +136,11 @@ class EstimatorOptions:
     shadow_bounded: bool = True  # shadow rays stop short of the light point
     light_one_sided: bool = True  # the light emits from the side its normal points to only
 
+    # Efficiency tricks (mcrt.tricks); the defaults are the estimator above.
+    roulette_survival: float | None = None  # fixed survival probability; None: the scheme's (min(max beta, 0.95); 0.25)
+    roulette_start: int | None = None  # first depth roulette runs at; None: the scheme's (rr_depth; 1)
+    light_sampling: str = "area"  # 'area': uniform on the light; 'solid_angle': uniform in its solid angle
+
     def __post_init__(self):
         if self.max_depth < -1:
             raise ValueError(f"max_depth must be -1 (unbounded) or >= 0, got {self.max_depth}")
@@ -141,6 +154,16 @@ class EstimatorOptions:
             raise ValueError("count_emission must be 'unsampled' or 'always'")
         if self.roulette not in ("unbiased", "course2023"):
             raise ValueError("roulette must be 'unbiased' or 'course2023'")
+        if self.roulette_survival is not None and not 0.0 < self.roulette_survival <= 1.0:
+            raise ValueError(f"roulette_survival must be in (0, 1], got {self.roulette_survival}")
+        if self.roulette_start is not None and self.roulette_start < 1:
+            raise ValueError(f"roulette_start must be >= 1, got {self.roulette_start}")
+        if self.light_sampling not in LIGHT_SAMPLING:
+            raise ValueError(f"light_sampling must be one of {', '.join(LIGHT_SAMPLING)}, got {self.light_sampling!r}")
+        if self.light_sampling == "solid_angle" and self.mis:
+            # Its weight Le cos_x Omega is bounded, which is what MIS is there for; the MIS weight of a
+            # light hit would need the solid angle seen from the ray's origin, which no host provides.
+            raise ValueError("solid-angle light sampling runs without MIS (its weight is bounded)")
 
     @property
     def depth_limit(self) -> int:
@@ -162,13 +185,15 @@ class PathEstimator:
     def __init__(self, host, options: EstimatorOptions):
         self.host, self.opt = host, options
         self.max_depth = options.depth_limit
+        if options.light_sampling == "solid_angle" and not hasattr(host, "sample_light_solid_angle"):
+            raise ValueError(f"{type(host).__name__} has no solid-angle light sampling (mcrt's own host has)")
         # Whether light found by a diffuse bounce counts: only then does a
         # path whose last vertex is diffuse need its final segment traced.
         self.diffuse_sees_emission = options.mis or host.has_unsampled_emission or options.count_emission == "always"
 
     # ------------------------------------------------------------------
     @dr.syntax
-    def path_sums(self, o, d, sampler, paths=1, camera_ray=None, active=True):
+    def path_sums(self, o, d, sampler, paths=1, camera_ray=None, active=True, new_path=None):
         """Sums of x and x^2 over ``paths`` radiance samples x traced in turn by each lane.
 
         The first path starts along the rays (o, d). Where ``camera_ray(u, v)``
@@ -178,7 +203,10 @@ class PathEstimator:
         The new path's camera jitter reuses the two numbers the ended path
         drew for its next direction: a path ends at the light, at the depth
         limit or by roulette, none of which depends on them, and it never
-        traced that direction. ``paths`` (UInt32) counts the lane's paths,
+        traced that direction. Where ``new_path(restart, sampler)`` is
+        given instead, it starts the next path of the lanes in ``restart``
+        (it may reseed their random streams) and returns the camera rays
+        (o, d) of every lane. ``paths`` (UInt32) counts the lane's paths,
         at least one. Returns (sum x, sum x^2, hit), ``hit`` whether the
         first ray hit anything.
         """
@@ -239,12 +267,15 @@ class PathEstimator:
             sum_x = dr.select(ended, sum_x + L, sum_x)
             sum_x2 = dr.select(ended, dr.fma(L, L, sum_x2), sum_x2)
             L = dr.select(ended, 0.0, L)
-            if camera_ray is None:
+            if camera_ray is None and new_path is None:
                 active = alive
             else:
                 restart = ended & (left > 0)
                 left = dr.select(restart, left - 1, left)
-                o_new, d_new = camera_ray(u1, u2)
+                if new_path is None:
+                    o_new, d_new = camera_ray(u1, u2)
+                else:
+                    o_new, d_new = new_path(restart, sampler)
                 o = dr.select(restart, o_new, o)
                 d = dr.select(restart, d_new, d)
                 beta = dr.select(restart, 1.0, beta)
@@ -290,12 +321,24 @@ class PathEstimator:
         return dr.select(mirror, r, d_next), dr.select(mirror, hit.color, weight), mirror
 
     def roulette(self, beta, depth, diffuse, alive, sampler):
-        """Unbiased Russian roulette: survive with q = min(max beta, 0.95), then beta /= q."""
-        if self.opt.roulette == "course2023":
-            survive = sampler.next_1d() >= 0.75
+        """Russian roulette from depth ``roulette_start`` (default ``rr_depth``): survive with q, then beta /= q.
+
+        Unbiased: E[beta'] = q (beta / q) = beta, with q = min(max beta, 0.95)
+        from the throughput, or the fixed ``roulette_survival``. The 2023
+        course's scheme (``roulette='course2023'``) instead absorbs a path at
+        a diffuse vertex with probability 1 - q = 0.75 and multiplies a
+        survivor by 0.8 (E[beta'] = 0.2 beta: biased), at every diffuse
+        vertex unless ``roulette_start`` is given.
+        """
+        opt = self.opt
+        if opt.roulette == "course2023":
+            absorb = 0.75 if opt.roulette_survival is None else 1.0 - opt.roulette_survival
+            survive = sampler.next_1d() >= absorb
+            if opt.roulette_start is not None:
+                diffuse = diffuse & (depth >= opt.roulette_start)
             return dr.select(diffuse, beta * 0.8, beta), alive & (~diffuse | survive)
-        q = dr.minimum(_max_component(beta), 0.95)
-        roulette = alive & (depth >= self.opt.rr_depth)
+        q = dr.minimum(_max_component(beta), 0.95) if opt.roulette_survival is None else opt.roulette_survival
+        roulette = alive & (depth >= (opt.rr_depth if opt.roulette_start is None else opt.roulette_start))
         survive = sampler.next_1d() < q
         return dr.select(roulette, beta * dr.rcp(q), beta), alive & (~roulette | survive)
 
@@ -323,7 +366,8 @@ class PathEstimator:
         sampling's share of it).
         """
         host, opt = self.host, self.opt
-        ls = host.sample_light(origin, sampler.next_1d(), sampler.next_1d(), active)
+        sample = host.sample_light if opt.light_sampling == "area" else host.sample_light_solid_angle
+        ls = sample(origin, sampler.next_1d(), sampler.next_1d(), active)
         cos_x = dr.dot(n, ls.wi)
         cos_y = ls.cos_y if opt.light_one_sided else dr.abs(ls.cos_y)
         valid = active & (cos_x > 0) & (cos_y > 0)

@@ -51,6 +51,10 @@ class McrtHost:
         """A point uniform on the light (pdf_area 1/A), seen from x."""
         return self.light.sample(x, u1, u2)
 
+    def sample_light_solid_angle(self, x, u1, u2, active=True):
+        """A point on the light uniform in its solid angle seen from x (pdf_area cos_y / (d^2 Omega))."""
+        return self.light.sample_solid_angle(x, u1, u2)
+
     def light_pdf_area(self, hit, active=True):
         """The area density of the light sample at a hit light point: 1/A."""
         return self.light.pdf_area

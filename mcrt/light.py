@@ -15,6 +15,13 @@ direction w = (y - x) / d, the same density in solid angle is
 
 (:func:`solid_angle_pdf`). Next-event estimation weights a sample by
 Le cos(theta_x) cos(theta_y) / (d^2 pdf_area) (:mod:`mcrt.estimator`).
+
+Sampling it instead uniformly in the solid angle Omega(x) it subtends at x
+(:meth:`RectangleLight.sample_solid_angle`, a spherical rectangle of
+:func:`mcrt.sampling.square_to_spherical_rectangle`) gives the point the
+area density pdf_area(y) = cos(theta_y) / (d^2 Omega(x)), which makes the
+weight Le cos(theta_x) Omega(x): bounded near the light, where the area
+sampling's 1 / d^2 is not.
 """
 
 from __future__ import annotations
@@ -24,6 +31,7 @@ from dataclasses import dataclass
 import drjit as dr
 import numpy as np
 
+from mcrt.sampling import square_to_spherical_rectangle
 from mcrt.scene import Light, Scene
 
 
@@ -83,6 +91,20 @@ class RectangleLight:
         inv_dist = dr.rsqrt(dist2)
         wi = wi * inv_dist
         return LightSample(wi, dist2, inv_dist, self.cos_toward(wi), self.emitted(), self.pdf_area)
+
+    def sample_solid_angle(self, x, u1, u2) -> LightSample:
+        """A point whose direction from x is uniform in the light's solid angle, with area density cos_y / (d^2 Omega)."""
+        m = self.m
+        cx, cy, cz = self.center
+        hx, hy = self.half
+        x0, y0 = (cx - hx) - x.x, (cy - hy) - x.y
+        xu, yv, omega = square_to_spherical_rectangle(u1, u2, x0, y0, cz - x.z, x0 + 2.0 * hx, y0 + 2.0 * hy)
+        wi = m.Array3f(xu, yv, cz - x.z)
+        dist2 = dr.squared_norm(wi)
+        inv_dist = dr.rsqrt(dist2)
+        wi = wi * inv_dist
+        cos_y = self.cos_toward(wi)
+        return LightSample(wi, dist2, inv_dist, cos_y, self.emitted(), cos_y * dr.rcp(dist2 * omega))
 
 
 def needs_mis(scene: Scene) -> bool:

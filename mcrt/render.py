@@ -30,6 +30,7 @@ from typing import Callable
 
 from mcrt.film import RenderResult
 from mcrt.scene import RenderSettings, Scene
+from mcrt.tricks.options import TRICK_OPTIONS
 
 #: Options that every renderer takes, with their defaults.
 COMMON_OPTIONS = {"backend": "llvm", "progress": True, "spp_per_pass": None}
@@ -76,7 +77,7 @@ RENDERERS: dict[str, Renderer] = {
     r.name: r
     for r in (
         Renderer("mcrt", "the standalone Dr.Jit tracer", "mcrt", "mcrt",
-                 {"mutants": (), "intersector": "convex", "mis": None, "precision_guard": True}, _tracer),
+                 {"mutants": (), "intersector": "convex", "mis": None, "precision_guard": True, **TRICK_OPTIONS}, _tracer),
         Renderer("plugin", "mcrt's estimator as the Mitsuba integrator 'mcrt'", "mitsuba", "mcrt",
                  {"mutants": (), "mis": None}, _plugin),
         Renderer("mitsuba", "Mitsuba 3's path integrator", "mitsuba", "mitsuba", {"integrator": "path"}, _mitsuba),

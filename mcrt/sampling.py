@@ -16,6 +16,10 @@ formulas run on NumPy arrays, which the chi-square tests use.
 - Uniform hemisphere: cos(theta) = u1; pdf_solid_angle = 1 / (2 pi).
 - Uniform point in the unit ball: radius u1^(1/3), a uniform direction.
 
+- Uniform in the solid angle of a rectangle (a spherical rectangle, Urena,
+  Fajardo and King 2013): :func:`square_to_spherical_rectangle`;
+  pdf_solid_angle = 1 / Omega.
+
 Multiple importance sampling combines two strategies by the balance
 heuristic (:func:`balance_heuristic`). Points on the light and their
 densities are in :mod:`mcrt.light`; the BSDFs that use these warps in
@@ -112,3 +116,52 @@ def balance_heuristic(n_a, pdf_a, n_b, pdf_b):
     """
     a = n_a * pdf_a
     return a / dr.fma(n_b, pdf_b, a)
+
+
+def square_to_spherical_rectangle(u1, u2, x0, y0, z0, x1, y1):
+    r"""A direction uniform in the solid angle of a rectangle, as its point on the rectangle, and that solid angle.
+
+    The rectangle is [x0, x1] x [y0, y1] in the plane z = z0 of a frame
+    whose origin is the receiver (x0 < x1, y0 < y1, z0 < 0: a receiver
+    above the plane is mirrored below it first). After Urena, Fajardo and
+    King (2013): the planes through the origin and the four edges have unit
+    normals n_i with z components
+
+        n0z = -y0 / sqrt(z0^2 + y0^2),  n1z = x1 / sqrt(z0^2 + x1^2),
+        n2z = y1 / sqrt(z0^2 + y1^2),   n3z = -x0 / sqrt(z0^2 + x0^2),
+
+    and inner angles g_i = acos(-n_iz n_(i+1)z); the solid angle is
+    Omega = g0 + g1 + g2 + g3 - 2 pi (Girard). u1 picks the angle
+    a = u1 Omega - g2 - g3 that cuts off the fraction u1 of Omega, whose
+    edge plane meets the rectangle at x = xu; along that line, u2 is
+    uniform in the sine of the elevation, which is uniform in solid angle:
+
+        xu = -cu z0 / sqrt(1 - cu^2),  cu = sign(fu) / sqrt(fu^2 + n0z^2),  fu = (cos(a) n0z - n2z) / sin(a),
+        yv = hv d / sqrt(1 - hv^2),    hv = h0 + u2 (h1 - h0),  h_k = y_k / sqrt(d^2 + y_k^2),  d^2 = xu^2 + z0^2.
+
+    Returns (xu, yv, Omega); the point's density on the rectangle is
+    cos(theta_y) / (dist^2 Omega).
+    """
+    z0 = -dr.abs(z0)
+    zz = z0 * z0
+    n0z = -y0 * dr.rsqrt(zz + y0 * y0)
+    n1z = x1 * dr.rsqrt(zz + x1 * x1)
+    n2z = y1 * dr.rsqrt(zz + y1 * y1)
+    n3z = -x0 * dr.rsqrt(zz + x0 * x0)
+    g0 = dr.acos(dr.clip(-n0z * n1z, -1.0, 1.0))
+    g1 = dr.acos(dr.clip(-n1z * n2z, -1.0, 1.0))
+    g2 = dr.acos(dr.clip(-n2z * n3z, -1.0, 1.0))
+    g3 = dr.acos(dr.clip(-n3z * n0z, -1.0, 1.0))
+    omega = g0 + g1 + g2 + g3 - 2.0 * math.pi
+    a = u1 * omega - (g2 + g3)
+    sin_a, cos_a = dr.sincos(a)
+    fu = (cos_a * n0z - n2z) / sin_a
+    cu = dr.clip(dr.copysign(dr.rsqrt(fu * fu + n0z * n0z), fu), -1.0 + 2.0**-23, 1.0 - 2.0**-23)
+    xu = dr.clip(-(cu * z0) * dr.rsqrt(1.0 - cu * cu), x0, x1)
+    d2 = xu * xu + zz
+    h0 = y0 * dr.rsqrt(d2 + y0 * y0)
+    h1 = y1 * dr.rsqrt(d2 + y1 * y1)
+    hv = dr.fma(u2, h1 - h0, h0)
+    hv2 = hv * hv
+    yv = dr.select(hv2 < 1.0 - 1e-6, hv * dr.sqrt(d2) * dr.rsqrt(dr.maximum(1.0 - hv2, 1e-12)), y1)
+    return xu, dr.clip(yv, y0, y1), omega

@@ -27,6 +27,7 @@ from mcrt.mutants import camera_jitter, check_mutants, estimator_overrides, muta
 from mcrt.precision import check_precision
 from mcrt.rng import WeylRng
 from mcrt.scene import RenderSettings, Scene
+from mcrt.tricks.options import trick_options
 
 BACKENDS = ("llvm", "cuda")
 
@@ -79,6 +80,7 @@ class Tracer:
     mutants: frozenset = frozenset()
     precision_guard: bool = True
     mis: bool | None = None  # None: where the scene needs it (mcrt.light.needs_mis)
+    tricks: tuple = ()  # sorted (name, value) pairs of EstimatorOptions' efficiency tricks (mcrt.tricks.options)
 
     def __post_init__(self):
         import drjit as dr
@@ -89,9 +91,13 @@ class Tracer:
         if self.precision_guard:
             check_precision(scene)  # refuse scenes where float32 would silently give a wrong image
         self.geometry = Geometry(scene, self.m, self.intersector)
+        tricks, overrides = dict(self.tricks), estimator_overrides(self.mutants)
+        if set(tricks) & set(overrides):
+            raise ValueError(f"option {sorted(set(tricks) & set(overrides))[0]} is set both by a trick and by a mutant")
+        solid_angle = tricks.get("light_sampling") == "solid_angle"  # bounded weights: no MIS needed
         self.options = EstimatorOptions(
             max_depth=self.max_depth, light_samples=self.light_samples, rr_depth=self.rr_depth,
-            mis=needs_mis(scene) if self.mis is None else self.mis, **estimator_overrides(self.mutants),
+            mis=(needs_mis(scene) and not solid_angle) if self.mis is None else self.mis, **overrides, **tricks,
         )
         self.estimator = PathEstimator(McrtHost(self.geometry), self.options)
         self.camera_model = Pinhole(scene.camera(self.camera), self.width, self.height, jitter=camera_jitter(self.mutants))
@@ -213,20 +219,21 @@ def _tracer(scene: Scene, *args) -> Tracer:
 
 def render_tracer(scene: Scene, settings: RenderSettings, *, backend: str = "llvm", progress: bool = True,
                   spp_per_pass: int | None = None, mutants=(), intersector: str = "convex", mis: bool | None = None,
-                  precision_guard: bool = True) -> RenderResult:
+                  precision_guard: bool = True, **tricks) -> RenderResult:
     """Render ``scene`` at ``settings`` with the standalone tracer: mean and per-sample variance.
 
     Called through :func:`mcrt.render.render` (renderer ``mcrt``). ``mis``
     forces multiple importance sampling on or off (default: where the scene
     needs it). ``precision_guard=False`` renders scenes that
     :func:`mcrt.precision.check_precision` would refuse (only to measure
-    where float32 breaks).
+    where float32 breaks). ``tricks`` are the estimator's efficiency tricks
+    (:data:`mcrt.tricks.options.TRICK_OPTIONS`, off at their defaults).
     """
     import drjit as dr
 
     s = settings
     tracer = _tracer(scene, s.camera, s.width, s.height, s.max_depth, s.light_samples, s.rr_depth, backend, intersector,
-                     frozenset(mutants), precision_guard, mis)
+                     frozenset(mutants), precision_guard, mis, trick_options(tricks))
     per_pass = spp_per_pass or pass_size(s.width, s.height, s.spp)
     totals = run_passes(lambda k, n: tracer.pass_sums(s.seed, k, n), width=s.width, height=s.height, spp=s.spp,
                         spp_per_pass=per_pass, progress=Progress(s.spp, label="mcrt", enabled=progress))
@@ -249,6 +256,7 @@ def render_tracer(scene: Scene, settings: RenderSettings, *, backend: str = "llv
             "mis": str(tracer.options.mis).lower(),
             "rr_depth": str(s.rr_depth),
             "mutants": ",".join(sorted(tracer.mutants)),
+            **({"tricks": ",".join(f"{k}={v}" for k, v in tracer.tricks)} if tracer.tricks else {}),
             "drjit_version": dr.__version__,
             "mcrt_version": mcrt.__version__,
         },
