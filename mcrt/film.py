@@ -2,15 +2,17 @@
 
 A render is accumulated in passes of a few samples per pixel, so memory does
 not grow with spp. Each pass returns per-pixel sums of the samples x and of
-x^2 (float64, in Dr.Jit's memory, laid out (moment, pixel, channel)); the
-totals stay on the device, and from them the mean and the unbiased
-per-sample variance
+x^2 (float64, in Dr.Jit's memory); the totals stay on the device, and from
+them the mean and the unbiased per-sample variance
 
     mean = S1 / n,    var = (S2 - S1^2 / n) / (n - 1)
 
-are formed once at the end (:func:`run_passes`, the one pass loop of every
-renderer). Passes are independent given their seeds, so results merge
-exactly in any order (:func:`merge`).
+are formed once at the end. Two loops: :func:`run_passes` (every pixel in
+each pass, the Mitsuba renderers) and :func:`run_tiles` (mcrt's tracer:
+every pass of one tile of pixels before the next tile, so memory does not
+grow with the resolution either, beyond the output image). Passes are
+independent given their seeds, so results merge exactly in any order
+(:func:`merge`).
 """
 
 from __future__ import annotations
@@ -175,6 +177,7 @@ class PassTotals:
     spp: int
     wall_time: float  # every pass, JIT compilation included, after the device finished
     compile_time: float  # the part spent generating and compiling kernels (Dr.Jit's kernel history)
+    paths: int = 0  # paths traced (fewer than pixels x spp where run_tiles stopped early)
 
 
 def compile_seconds(history: list[dict]) -> float:
@@ -222,6 +225,81 @@ def run_passes(pass_sums: PassFn, *, width: int, height: int, spp: int, spp_per_
     finally:
         dr.set_flag(dr.JitFlag.KernelHistory, was_recording)
     return PassTotals(mean, var, done, wall, compile_seconds(history))
+
+
+def tile_mean_variance(s1, s2, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Mean and unbiased per-sample variance (float32, pixels x 3) of a tile from its device sums (three Float64 arrays each).
+
+    The formulas of :class:`Moments`, in one small Dr.Jit kernel, with the
+    count opaque as in :func:`mean_variance`.
+    """
+    import drjit as dr
+
+    Float64 = type(s1[0])
+    Float = dr.float32_array_t(Float64)
+    count = dr.opaque(Float64, n)
+    mean = [Float(a / count) for a in s1]
+    if n < 2:
+        var = [dr.zeros(Float, dr.width(a)) for a in s1]
+    else:
+        var = [Float(dr.maximum((b - a * a / count) / dr.opaque(Float64, n - 1), 0.0)) for a, b in zip(s1, s2)]
+    dr.eval(mean, var)
+    return np.stack([a.numpy() for a in mean], axis=1), np.stack([a.numpy() for a in var], axis=1)
+
+
+#: launch(acc, first_pixel, pixels, first_sample, n) -> acc: the tile's running sums after n more samples per pixel.
+LaunchFn = Callable[[object, int, int, int, int], object]
+
+
+def run_tiles(launch: LaunchFn, *, width: int, height: int, spp: int, tile_pixels: int, spp_per_pass: int,
+              progress: Progress, max_launches: int | None = None) -> PassTotals:
+    """Render tile by tile: every pass of one tile of consecutive pixels, then the next tile.
+
+    Memory is the output image and one tile's sums, whatever the resolution
+    and spp. ``launch`` adds ``n`` samples per pixel (those from
+    ``first_sample`` on) to the tile's running sums ``acc`` (None before the
+    first pass) and returns them, as (sums of x, sums of x^2), three evaluated
+    Float64 arrays each. A tile's mean and variance are formed on the device
+    and copied into the image when its last pass is done.
+    ``max_launches`` stops early (benchmarks time a prefix of a long render;
+    the image is then unfinished): ``PassTotals.paths`` counts the paths traced.
+    """
+    import drjit as dr
+
+    if spp_per_pass < 1 or tile_pixels < 1:
+        raise ValueError(f"spp_per_pass and tile_pixels must be >= 1, got {spp_per_pass} and {tile_pixels}")
+    pixels = width * height
+    mean, var = np.zeros((pixels, 3), np.float32), np.zeros((pixels, 3), np.float32)
+    passes = -(-spp // spp_per_pass)
+    total = -(-pixels // tile_pixels) * passes
+    was_recording = dr.flag(dr.JitFlag.KernelHistory)
+    dr.set_flag(dr.JitFlag.KernelHistory, True)
+    try:
+        dr.kernel_history_clear()
+        dr.sync_thread()
+        t0 = time.perf_counter()
+        launches, paths = 0, 0
+        for p0 in range(0, pixels, tile_pixels):
+            count, acc = min(tile_pixels, pixels - p0), None
+            for first in range(0, spp, spp_per_pass):
+                n = min(spp_per_pass, spp - first)
+                acc = launch(acc, p0, count, first, n)
+                launches, paths = launches + 1, paths + count * n
+                if progress.enabled:
+                    dr.sync_thread()  # the kernels run asynchronously: wait, so the time left is right
+                    progress.update(launches)
+                if max_launches is not None and launches >= max_launches:
+                    break
+            if max_launches is not None and launches >= max_launches:
+                dr.sync_thread()
+                break
+            mean[p0:p0 + count], var[p0:p0 + count] = tile_mean_variance(*acc, spp)
+        wall = time.perf_counter() - t0
+        history = dr.kernel_history()
+    finally:
+        dr.set_flag(dr.JitFlag.KernelHistory, was_recording)
+    shape = (height, width, 3)
+    return PassTotals(mean.reshape(shape), var.reshape(shape), spp, wall, compile_seconds(history), paths or pixels * spp)
 
 
 def samples_per_pass(width: int, height: int, spp: int, budget: int = 1 << 22) -> int:

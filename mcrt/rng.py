@@ -76,3 +76,48 @@ class WeylRng:
     def next_1d(self):
         bits = (self.next_uint32() >> 9) | FLOAT_ONE_BITS
         return dr.reinterpret_array(dr.float32_array_t(type(bits)), bits) - 1.0
+
+
+#: Golden-ratio multiplier (odd) that spreads consecutive sample indices over the 32-bit keys.
+SAMPLE_MULT = 0x9E3779B9
+
+
+class SampleStreams(WeylRng):
+    """Lanes whose random stream is that of one pixel sample: a function of (keys, pixel, sample) alone.
+
+    The stream of sample s of pixel p is the Weyl sequence above with
+
+        s_0 = mix(h0 + s G),    g = mix(h1 + s G) | 1,    h0 = mix(p ^ k0),  h1 = mix(p ^ k1),
+
+    G = SAMPLE_MULT. For a fixed sample, p -> s_0 is a bijection (no two
+    pixels start alike), and for a fixed pixel so is s -> s_0; the
+    increment differs too, so two samples' sequences do not run in step.
+    Which lane, launch or tile traces a sample does not enter: a render is
+    the same whatever its tiling. :meth:`restart` moves the lanes of a mask
+    on to their next sample (``sample`` + 1) and reseeds them.
+    """
+
+    DRJIT_STRUCT = {"state": object, "step": object, "sample": object, "h0": object, "h1": object}
+
+    def __init__(self, state=None, step=None, sample=None, h0=None, h1=None):
+        super().__init__(state, step)
+        self.sample, self.h0, self.h1 = sample, h0, h1
+
+    @classmethod
+    def start(cls, pixel, sample, key0, key1) -> SampleStreams:
+        """Streams of ``sample`` (UInt32 per lane) of ``pixel`` (UInt32 per lane) under the keys (opaque UInt32)."""
+        h0, h1 = mix32(pixel ^ key0), mix32(pixel ^ key1)
+        state, step = cls._seed(h0, h1, sample)
+        return cls(state, step, sample, h0, h1)
+
+    @staticmethod
+    def _seed(h0, h1, sample):
+        return mix32(h0 + sample * SAMPLE_MULT), mix32(h1 + sample * SAMPLE_MULT) | 1
+
+    def restart(self, mask) -> None:
+        """Where ``mask``: the lane's next sample, its stream from the start."""
+        sample = self.sample + 1
+        state, step = self._seed(self.h0, self.h1, sample)
+        self.state = dr.select(mask, state, self.state)
+        self.step = dr.select(mask, step, self.step)
+        self.sample = dr.select(mask, sample, self.sample)

@@ -6,6 +6,8 @@ function of its seed, so each test always passes or always fails.
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -45,24 +47,28 @@ def test_passes_do_not_reuse_samples(scene):
     assert np.mean(r.variance > 0) > 0.9
 
 
-@pytest.mark.parametrize("n", [3, 16, 40])
-def test_frozen_pass_replays_the_traced_kernel(scene, n):
-    """Passes are frozen (dr.freeze): a replay with new keys must equal a fresh trace of the same pass, bit for bit.
+@pytest.mark.parametrize("n,k,b", [(3, 4, 1), (16, 1, 16), (40, 4, 12)])
+def test_frozen_launch_replays_the_traced_kernel(scene, n, k, b):
+    """Launches are frozen (dr.freeze): a replay with new keys must equal a fresh trace of the same launch, bit for bit.
 
-    n = 3 pads lanes, 40 sums three slots per pixel; the first call records,
-    the second (another seed) replays, the third traces without freezing.
+    (3, 4, 1) pads a lane, (40, 4, 12) gives lanes 12, 12, 12 and 4 paths; the
+    first call records, the second (another seed) replays, the third traces
+    without freezing.
     """
     import drjit as dr
 
-    from mcrt.tracer import Tracer, stream_keys
+    from mcrt.tracer import Tracer, pixel_range, stream_keys
 
     tracer = Tracer(scene, "near", 12, 10, 8)
-    first = tracer.pass_sums(1, 0, n).numpy().copy()
-    replay = tracer.pass_sums(2, 0, n).numpy().copy()
-    assert tracer._frozen_pass.n_recordings == 1  # the second call replayed
-    traced = tracer._pass_kernel(*(dr.opaque(tracer.m.UInt32, k) for k in stream_keys(2, 0)), n).numpy()
-    assert np.array_equal(replay, traced)
-    assert not np.array_equal(first, replay)
+    pixels = pixel_range(tracer.m, 0, 120)
+    first = [a.numpy().copy() for v in tracer.launch(1, None, pixels, 0, n, k, b) for a in v]
+    replay = [a.numpy().copy() for v in tracer.launch(2, None, pixels, 0, n, k, b) for a in v]
+    assert tracer._frozen_launch.n_recordings == 1  # the second call replayed
+    zeros = dr.zeros(tracer.m.Float64, 120)
+    keys = [dr.opaque(tracer.m.UInt32, v) for v in (*stream_keys(2), 0, n)]
+    traced = tracer._launch_kernel(((zeros,) * 3, (zeros,) * 3), pixels, *keys, k, b, 120)
+    assert all(np.array_equal(r, t.numpy()) for r, t in zip(replay, (a for v in traced for a in v)))
+    assert not np.array_equal(first[0], replay[0])
 
 
 def test_mean_and_variance_follow_the_film_formulas(scene):
@@ -91,39 +97,91 @@ def test_mean_and_variance_follow_the_film_formulas(scene):
     assert np.all(one_var == 0) and np.all(one_mean >= 0)
 
 
-def test_pass_layout():
-    """Lanes per pixel and per in-kernel slot, and the paths each lane traces in turn.
+def test_lane_layout():
+    """Lanes per pixel and the paths each lane traces in turn.
 
-    A 256x256 pass of 16 samples is one lane per pixel with 16 paths; small
-    images keep MIN_LANES lanes where they have the samples; powers of two
-    up to a group, then whole groups.
+    One lane of up to PATHS_PER_LANE paths per pixel where the pixels fill
+    MIN_LANES lanes (256x256 and up); small images get more lanes per pixel
+    (a power of two), no more than the samples need.
     """
-    from mcrt.tracer import GROUP, MIN_LANES, PATHS_PER_LANE, pass_layout, pass_size
+    from mcrt.tracer import MIN_LANES, PATHS_PER_LANE, lane_layout
 
     big, small = 256 * 256, 64 * 64
-    assert [pass_layout(n, big) for n in (1, 3, 16, 17, 64, 1024)] == [(1, 1), (1, 1), (1, 1), (2, 2), (4, 4), (64, 16)]
-    assert [pass_layout(n, small) for n in (1, 3, 16, 40, 1024)] == [(1, 1), (4, 4), (16, 16), (16, 16), (64, 16)]
-    assert pass_layout(40, 12 * 10) == (48, 16)
-    for pixels in (1, 120, small, big):
-        for n in (1, 2, 3, 5, 16, 17, 40, 100, 255, 1024, 4096):
-            stride, group = pass_layout(n, pixels)
-            assert -(-n // stride) <= PATHS_PER_LANE  # no lane traces more than its share
-            assert stride * pixels >= min(MIN_LANES, n * pixels) or stride >= n
-            assert stride % group == 0 and (stride <= GROUP or group == GROUP)
-    assert pass_size(256, 256, 1000) % GROUP == 0 and pass_size(8, 8, 5) == 5
+    assert [lane_layout(big, n) for n in (1, 3, 16, 17, 1024)] == [(1, 1), (1, 3), (1, 16), (1, 16), (1, 16)]
+    assert [lane_layout(4096 * 4096, n) for n in (1, 1024)] == [(1, 1), (1, 16)]
+    assert [lane_layout(small, n) for n in (1, 3, 16, 40, 1024)] == [(1, 1), (4, 1), (16, 1), (16, 3), (16, 16)]
+    assert lane_layout(12 * 10, 40) == (64, 1)
+    for pixels in (1, 7, 120, small, big, 800 * 800):
+        for n in (1, 2, 5, 16, 100, 1000):
+            k, b = lane_layout(pixels, n)
+            assert b <= PATHS_PER_LANE and k & (k - 1) == 0
+            assert k * pixels >= min(MIN_LANES, pixels * n) or k >= n  # enough lanes where the samples allow
+            assert k < 2 * n  # lanes padded to a power of two at most
+
+
+def test_tiling_does_not_change_the_image(scene):
+    """Seeding depends on (seed, pixel, sample) alone: tiles of 37 pixels (the last one short) against one tile.
+
+    The same render (24x20, 40 spp, seed 9) in tiles of 37 pixels, of 1 pixel
+    and whole: mean and variance equal bit for bit. Other pass sizes deal
+    the same samples into other partial sums: equal to float32 rounding.
+    """
+    from mcrt.tracer import render_tracer
+
+    s = scene.settings(camera="near", width=24, height=20, spp=40, max_depth=8)
+    s = replace(s, seed=9)
+    whole = render_tracer(scene, s, progress=False)
+    for tile in (37, 1):
+        r = render_tracer(scene, s, progress=False, tile_pixels=tile)
+        assert np.array_equal(r.mean, whole.mean) and np.array_equal(r.variance, whole.variance), tile
+    for per_pass in (7, 16):
+        r = render_tracer(scene, s, progress=False, spp_per_pass=per_pass)
+        np.testing.assert_allclose(r.mean, whole.mean, rtol=1e-5, atol=1e-7)
+        np.testing.assert_allclose(r.variance, whole.variance, rtol=1e-3, atol=1e-6)
+    other = render_tracer(scene, replace(s, seed=10), progress=False)
+    assert not np.array_equal(other.mean, whole.mean)
+
+
+def test_pixel_sums_are_the_render_samples(scene):
+    """Tracer.pixel_sums: any pixel set, any sample range, the same samples as the render.
+
+    One sample per pixel is one path, summed exactly: a shuffled subset
+    with repeats gives the whole image's values bit for bit. Sample ranges
+    add up: [0, 24) = [0, 10) + [10, 24) to rounding, and the render of 24
+    spp (seed 4) is pixel_sums over all pixels, bit for bit.
+    """
+    from mcrt.tracer import Tracer, render_tracer
+
+    tracer = Tracer(scene, "near", 24, 20, 8)
+    everything = np.arange(24 * 20)
+    one, one2 = tracer.pixel_sums(4, everything, 5, 1)
+    subset = np.random.default_rng(0).choice(everything, 50)
+    part, part2 = tracer.pixel_sums(4, subset, 5, 1)
+    assert np.array_equal(part, one[subset]) and np.array_equal(part2, one2[subset]) and np.array_equal(one2, np.float32(one) ** 2)  # x^2 rounded to float32
+    s1, s2 = tracer.pixel_sums(4, everything, 0, 24)
+    a1, a2 = tracer.pixel_sums(4, everything, 0, 10)
+    b1, b2 = tracer.pixel_sums(4, everything, 10, 14)
+    np.testing.assert_allclose(a1 + b1, s1, rtol=1e-5) and np.testing.assert_allclose(a2 + b2, s2, rtol=1e-5)
+    assert not np.allclose(a1, b1)  # disjoint ranges, other samples
+    s = scene.settings(camera="near", width=24, height=20, spp=24, max_depth=8)
+    r = render_tracer(scene, replace(s, seed=4), progress=False)
+    assert np.array_equal(r.mean.reshape(-1, 3), (s1 / 24).astype(np.float32))
+    with pytest.raises(ValueError, match="pixel indices"):
+        tracer.pixel_sums(4, [24 * 20], 0, 1)
 
 
 @pytest.mark.parametrize("per_pass,res", [(3, 16), (36, 16), (40, 64)])
 def test_every_pixel_counts_its_paths_once(scene, per_pass, res):
     """Passes whose lanes do not divide the samples evenly, against one that does.
 
-    3 and 36 samples at 16x16 run 4 and 48 lanes per pixel, one path each, the
+    3 and 36 samples at 16x16 run 4 and 64 lanes per pixel, one path each, the
     extra lanes padding (counting them would brighten the image by 4/3 and
-    48/36); 40 samples at 64x64 run 16 lanes of 3 or 2 paths (dealing out
-    only 2 each would darken it by 32/40). Seed 5 against seed 6, level ALPHA.
+    64/36); 40 samples at 64x64 run 16 lanes of 3 paths, the last one of 1
+    (dealing out 3 to each would brighten it by 48/40). Seed 25 against seed 26,
+    level ALPHA.
     """
-    a = _render(scene, spp=2 * per_pass, spp_per_pass=per_pass, seed=5, width=res, height=res)
-    b = _render(scene, spp=256, seed=6, width=res, height=res)
+    a = _render(scene, spp=2 * per_pass, spp_per_pass=per_pass, seed=25, width=res, height=res)
+    b = _render(scene, spp=256, seed=26, width=res, height=res)
     assert a.spp == 2 * per_pass
     c = compare_images(a, b, alpha=ALPHA)
     assert c.passed, c.summary()
@@ -133,10 +191,10 @@ def test_every_pixel_counts_its_paths_once(scene, per_pass, res):
 def test_lanes_tracing_several_paths_agree_with_one_path_per_lane(scene, monkeypatch, paths_per_lane):
     """Path regeneration does not change the image: 16 or 4 paths per lane against one.
 
-    32x32 at 256 spp: with MIN_LANES lifted, 16 (or 64) lanes per pixel trace
-    16 (or 4) paths each, reusing the ended path's direction numbers for the
-    next jitter; with PATHS_PER_LANE = 1 every lane traces one path. Seeds 71
-    and 72, level ALPHA. Fresh tracers: the layout is fixed when a pass is
+    32x32 at 256 spp: with MIN_LANES = 16 * 1024 (or 64 * 1024), 16 (or 64)
+    lanes per pixel trace 16 (or 4) paths each, each sample from its own
+    stream; with PATHS_PER_LANE = 1 every lane traces one path. Seeds 71 and
+    72, level ALPHA. Fresh tracers: the layout is fixed when a launch is
     first traced.
     """
     import mcrt.tracer as tracer
@@ -149,10 +207,10 @@ def test_lanes_tracing_several_paths_agree_with_one_path_per_lane(scene, monkeyp
             monkeypatch.setattr(tracer, name, value)
         return _render(scene, spp=256, seed=seed)
 
-    a = render_with(71, MIN_LANES=1, PATHS_PER_LANE=paths_per_lane)
-    assert tracer.pass_layout(256, 32 * 32)[0] == 256 // paths_per_lane
+    a = render_with(71, MIN_LANES=1024 * 256 // paths_per_lane, PATHS_PER_LANE=paths_per_lane)
+    assert tracer.lane_layout(32 * 32, 256) == (256 // paths_per_lane, paths_per_lane)
     b = render_with(72, MIN_LANES=default_min_lanes, PATHS_PER_LANE=1)
-    assert tracer.pass_layout(256, 32 * 32)[0] == 256
+    assert tracer.lane_layout(32 * 32, 256) == (64, 1)  # 4 passes of 64
     c = compare_images(a, b, alpha=ALPHA)
     assert c.passed, c.summary()
 
