@@ -104,6 +104,8 @@ def cmd_render(args) -> int:
     if args.intersector != "convex":
         options["intersector"] = args.intersector
     options.update(_trick_flags(args))
+    if getattr(args, "bidirectional", False):
+        options["bidirectional"] = True
     result = render(scene, s, renderer=args.renderer, backend=args.backend, **options)
     exr, png = render_to_files(result, Path(args.output), args.exposure)
     compile_note = f", of which JIT compilation {result.compile_time:.2f} s" if result.compile_time else ""
@@ -132,6 +134,9 @@ def _add_trick_flags(p: argparse.ArgumentParser) -> None:
     g.add_argument("--light-sampling", choices=("area", "solid_angle"), default=None,
                    help="points on the light uniform in area, or uniform in its solid angle (spherical rectangle) "
                         "(default: area)")
+    g.add_argument("--bidirectional", action="store_true",
+                   help="light tracing for the paths eye-diffuse-...-mirror-light (the caustics next-event estimation "
+                        "cannot sample), the path tracer for the rest (mcrt.bidir; default: off)")
 
 
 def cmd_compare(args) -> int:
@@ -264,6 +269,9 @@ def build_parser() -> argparse.ArgumentParser:
     threeway.register(sub)
     reports.register(sub)
     validate_integrator.register(sub)
+    from mcrt.tricks.cli import register as register_tricks
+
+    register_tricks(sub)
     return ap
 
 

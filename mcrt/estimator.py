@@ -71,6 +71,9 @@ from mcrt.sampling import balance_heuristic, cosine_hemisphere_pdf
 
 UNBOUNDED = 2**32 - 1
 
+#: What the path tracer does with the paths eye D ... D S+ L (EstimatorOptions.mirror_caustics).
+MIRROR_CAUSTICS = ("all", "skip", "only")
+
 #: Light sampling strategies: uniform in area on the light, or uniform in the solid angle it subtends
 #: (the spherical rectangle of :func:`mcrt.sampling.square_to_spherical_rectangle`).
 LIGHT_SAMPLING = ("area", "solid_angle")
@@ -140,6 +143,9 @@ class EstimatorOptions:
     roulette_survival: float | None = None  # fixed survival probability; None: the scheme's (min(max beta, 0.95); 0.25)
     roulette_start: int | None = None  # first depth roulette runs at; None: the scheme's (rr_depth; 1)
     light_sampling: str = "area"  # 'area': uniform on the light; 'solid_angle': uniform in its solid angle
+    # Paths eye D ... D S+ L (first vertex diffuse, last a mirror): 'all' counts them; 'skip' leaves
+    # them to mcrt.bidir's light tracer; 'only' counts them alone (to check that light tracer).
+    mirror_caustics: str = "all"
 
     def __post_init__(self):
         if self.max_depth < -1:
@@ -160,6 +166,8 @@ class EstimatorOptions:
             raise ValueError(f"roulette_start must be >= 1, got {self.roulette_start}")
         if self.light_sampling not in LIGHT_SAMPLING:
             raise ValueError(f"light_sampling must be one of {', '.join(LIGHT_SAMPLING)}, got {self.light_sampling!r}")
+        if self.mirror_caustics not in MIRROR_CAUSTICS:
+            raise ValueError(f"mirror_caustics must be one of {', '.join(MIRROR_CAUSTICS)}, got {self.mirror_caustics!r}")
         if self.light_sampling == "solid_angle" and self.mis:
             # Its weight Le cos_x Omega is bounded, which is what MIS is there for; the MIS weight of a
             # light hit would need the solid angle seen from the ray's origin, which no host provides.
@@ -213,6 +221,7 @@ class PathEstimator:
         # Plain Python values only: dr.syntax treats the locals the loop reads as loop state.
         host = self.host
         spawn_offset, mis, brdf_inv_pi = self.opt.spawn_offset, self.opt.mis, self.opt.brdf_inv_pi
+        caustics = self.opt.mirror_caustics
 
         # ---- Loop state.
         L = host.Spectrum(0.0)  # radiance of the current path gathered so far
@@ -224,6 +233,7 @@ class PathEstimator:
         sum_x2 = host.Spectrum(0.0)  # and of x^2
         left = host.UInt32(paths - 1)  # paths the lane has still to start
         hit_first = host.Bool(False)  # the first ray hit something
+        eye_diffuse = host.Bool(False)  # the current path's first vertex is diffuse (mirror_caustics)
         active = host.Bool(active) & (self.max_depth > 0)  # the lane has a path in flight
 
         while dr.hint(active, label="mcrt_path"):
@@ -233,8 +243,10 @@ class PathEstimator:
                 hit_first |= hit.valid & (depth == 1)
 
             # ---- Emission.
-            L = dr.fma(beta, self.emitted(hit, specular, pdf_bsdf, depth, active), L)
-            if hit.emission is not None:
+            if caustics != "all":
+                eye_diffuse = dr.select(depth == 1, hit.reflects & ~hit.mirror, eye_diffuse)
+            L = dr.fma(beta, self.emitted(hit, specular, pdf_bsdf, depth, active, eye_diffuse=eye_diffuse), L)
+            if hit.emission is not None and caustics != "only":
                 L = dr.fma(beta, hit.emission, L)
 
             # ---- Stop where nothing reflects (the light) and at the depth limit.
@@ -247,7 +259,7 @@ class PathEstimator:
                 alive = alive & (hit.mirror | (depth + 1 < self.max_depth))
 
             # ---- Next-event estimation at diffuse vertices (depth + 1 <= max_depth holds here).
-            if host.has_diffuse:
+            if host.has_diffuse and caustics != "only":
                 f = lambertian_f(hit.color, inv_pi=brdf_inv_pi)
                 L = dr.fma(beta * f, self.direct_light(origin, hit.n, sampler, diffuse), L)
 
@@ -285,13 +297,15 @@ class PathEstimator:
         return sum_x, sum_x2, hit_first
 
     # ------------------------------------------------------------------
-    def emitted(self, hit, specular, pdf_bsdf, depth, active):
+    def emitted(self, hit, specular, pdf_bsdf, depth, active, eye_diffuse=False):
         """Le towards the ray where it meets a light's emitting side, weighted against light sampling.
 
         Without MIS it counts only where no light sample could have found it
         (from the eye, after a mirror). With MIS a hit after a diffuse bounce
         counts too, with the balance weight of the cosine direction against
-        K light samples, both densities in solid angle.
+        K light samples, both densities in solid angle. ``mirror_caustics``
+        drops (or keeps alone) the hits after a mirror on paths whose first
+        vertex was diffuse (``eye_diffuse``): the paths eye D ... D S+ L.
         """
         opt = self.opt
         cos_y = hit.light_cos if opt.light_one_sided else dr.abs(hit.light_cos)
@@ -307,6 +321,9 @@ class PathEstimator:
             weight = dr.select(specular, 1.0, balance_heuristic(1, pdf_bsdf, opt.light_samples, p_light))
         if opt.hide_emitters:
             counted = counted & (depth > 1)
+        if opt.mirror_caustics != "all":
+            caustic = specular & eye_diffuse  # after a mirror (specular at depth > 1: eye_diffuse is false at depth 1)
+            counted = counted & (caustic if opt.mirror_caustics == "only" else ~caustic)
         return dr.select(counted, hit.light_radiance * weight, 0.0)
 
     def scatter(self, d, hit, alive, u1, u2, sampler):

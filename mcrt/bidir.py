@@ -1,0 +1,358 @@
+r"""Bidirectional rendering: light tracing takes over the paths the path tracer finds only by chance.
+
+The paths it is for
+-------------------
+A path x0 (the eye), x1, ..., xk (on the light) of k segments belongs to the
+class C when its first vertex x1 is diffuse and its last scattering vertex
+x_{k-1} is a mirror. Going back from the light, the mirror chain then ends at a
+diffuse vertex, so C is the set of paths ``eye D ... D S+ L``: the caustics the
+mirror throws on the room (the ceiling lit by the light's image in the
+sphere). Next-event estimation cannot sample them (the mirror is in the way);
+the path tracer counts them only when a cosine-distributed bounce happens to
+reflect off the mirror into the light, which is where its fireflies come from.
+
+The partition
+-------------
+The path tracer keeps every path outside C as before
+(:class:`mcrt.estimator.EstimatorOptions` ``mirror_caustics='skip'`` drops the
+emission of class C), and a light tracer counts exactly the class C: each
+path is counted by one strategy that can sample it, a valid multiple
+importance sampling with binary weights, so the sum is unbiased.
+
+The light tracer
+----------------
+A light subpath starts at y0, uniform on the light (density 1/A), along a
+direction uniform in the cone of a mirror sphere seen from y0 (half-angle
+theta_s, sin theta_s = r / |c - y0|, density 1 / (2 pi (1 - cos theta_s)); one
+sphere chosen uniformly among several, the density their mixture): the first
+vertex of a class C path from the light is a mirror, and every direction that
+meets the sphere lies in its cone. Scenes with a mirror that is not a sphere
+draw the cosine direction about the light's normal (density cos / pi) instead.
+The subpath's weight starts at
+
+    Le cos(theta_0) / (p_A(y0) p_w(w0)),
+
+is multiplied by R at a mirror and by the albedo at a cosine-sampled diffuse
+bounce (the path tracer's :meth:`mcrt.estimator.PathEstimator.scatter`), and
+runs the path tracer's unbiased roulette. At each diffuse vertex y_j that
+follows one or more mirror vertices, the subpath is joined to the eye (a path
+of j + 1 segments, counted where j + 1 <= max_depth, the path tracer's
+rule), if the vertex is lit on the side facing the eye and nothing (the
+light's rectangle included) lies between them, into the pixel p that the
+direction from the eye crosses:
+
+    c_p = beta_j f(y_j) cos(theta_y) / d^2 W(w),    W(w) = 1 / (A_pix cos^3(theta)),
+
+with f = albedo / pi, d the distance to the eye, theta the angle between the
+direction and the camera's axis, and A_pix = (2 t_x / W)(2 t_y / H) the
+pixel's area on the image plane at distance 1 (t_x = tan(fov_x / 2)). W is
+the pixel's importance in solid angle: the path tracer draws its ray through a
+uniform point of the pixel's square on that plane, whose density in solid
+angle is 1 / (A_pix cos^3 theta) (dA = dw / cos^3 theta); in area measure,
+with the camera's cosine in the geometry term, it is the familiar
+1 / (A_pix cos^4 theta). With N light subpaths per pass, the pass estimates
+pixel p by sum c_p / N.
+
+Determinism and variance
+------------------------
+Splats land on any pixel in any order; they are added as 64-bit fixed-point
+integers (2^-SPLAT_BITS, far below any noise), so the sum does not depend on
+which thread adds first and a seed gives the same image bit for bit. The
+splats are no per-pixel samples, so the variance is that of batch means:
+pass k gives one estimate X_k of every pixel (the path tracer's n samples'
+mean plus the light tracer's splats over N), and with P passes
+
+    mean = (1/P) sum_k X_k,    Var(mean) = s_X^2 / P,    s_X^2 = sum_k (X_k - mean)^2 / (P - 1).
+
+The result reports spp = P n camera samples and the per-sample variance
+n s_X^2, so that variance / spp is Var(mean) as for every renderer; its
+degrees of freedom are P - 1 per pixel (BATCHES), which the project's tile
+tests pool over a tile's pixels.
+"""
+
+from __future__ import annotations
+
+import math
+
+import drjit as dr
+import numpy as np
+
+from mcrt.bsdf import lambertian_f
+from mcrt.film import Progress, RenderResult, run_passes
+from mcrt.sampling import coordinate_frame, cosine_about_normal, to_world
+from mcrt.scene import Mirror, RenderSettings, Scene, Sphere
+
+#: Passes (batches) a bidirectional render is split into, at most: the variance's degrees of freedom + 1.
+BATCHES = 32
+#: Fixed-point splats: a contribution is rounded to a multiple of 2^-SPLAT_BITS.
+SPLAT_BITS = 28
+#: Light subpaths per camera sample of the path tracer, by default.
+LIGHT_PATHS = 1.0
+#: The pass's light tracer draws its streams from pass indices past every camera pass's.
+_LIGHT_STREAMS = 1 << 40
+
+
+def pinhole_importance(cos_theta, pixel_area, *, cos_power: int = 3):
+    """W = 1 / (A_pix cos^3 theta): a pixel's importance per unit solid angle at the eye.
+
+    ``cos_power`` other than 3 is a wrong importance, kept as an argument
+    for the tests that must see it fail.
+    """
+    return dr.rcp(pixel_area * cos_theta**cos_power)
+
+
+class LightTracer:
+    """The light tracer of the module docstring for one :class:`mcrt.tracer.Tracer` (its scene, camera and estimator).
+
+    ``importance_cos_power`` is :func:`pinhole_importance`'s (3, the correct importance).
+    """
+
+    def __init__(self, tracer, *, importance_cos_power: int = 3):
+        self.tracer, self.m = tracer, tracer.m
+        self.estimator = tracer.estimator
+        self.host = tracer.estimator.host
+        self.max_depth = tracer.options.depth_limit
+        self.cos_power = importance_cos_power
+        cam = tracer.camera_model
+        self.width, self.height = cam.width, cam.height
+        self.eye, self.forward = cam.eye, cam.center
+        tx, ty = math.hypot(*cam.half_right), math.hypot(*cam.half_up)
+        self.right = tuple(x / tx for x in cam.half_right)
+        self.up = tuple(x / ty for x in cam.half_up)
+        self.tx, self.ty = tx, ty
+        self.pixel_area = (2.0 * tx / self.width) * (2.0 * ty / self.height)
+        self.cones = self._mirror_cones(tracer.geometry.scene)
+        self._frozen = dr.freeze(self._light_pass, limit=4, warn_after=64)
+
+    @staticmethod
+    def _mirror_cones(scene: Scene):
+        """(centre, radius) of the mirror spheres whose cones the first direction samples; None: cosine directions.
+
+        Cones need every mirror to be a sphere that the light lies outside of.
+        """
+        mirrors = [o for o in scene.objects if isinstance(o.material, Mirror)]
+        if not mirrors or not all(isinstance(o, Sphere) for o in mirrors):
+            return None
+        light = scene.light
+        lo = np.asarray(light.center, float) - np.array([light.size[0] / 2, light.size[1] / 2, 0.0])
+        hi = np.asarray(light.center, float) + np.array([light.size[0] / 2, light.size[1] / 2, 0.0])
+        for s in mirrors:
+            nearest = np.clip(np.asarray(s.center, float), lo, hi)
+            if np.linalg.norm(nearest - np.asarray(s.center, float)) <= s.radius * (1 + 1e-4):
+                return None
+        return [(tuple(float(x) for x in s.center), float(s.radius)) for s in mirrors]
+
+    # ------------------------------------------------------------------
+    def pass_splats(self, seed: int, pass_index: int, paths: int):
+        """Per-pixel sums (Int64, units of 2^-SPLAT_BITS, laid out (pixel, channel)) of ``paths`` light subpaths' splats."""
+        from mcrt.tracer import stream_keys
+
+        k0, k1 = stream_keys(seed, _LIGHT_STREAMS + pass_index)
+        return self._frozen(dr.opaque(self.m.UInt32, k0), dr.opaque(self.m.UInt32, k1), paths)
+
+    def _light_pass(self, key0, key1, paths: int):
+        from mcrt.rng import WeylRng
+
+        m = self.m
+        rng = WeylRng.seeded(m, paths, key0, key1)
+        acc = dr.zeros(m.Int64, 3 * self.width * self.height)
+        o, d, power, valid = self.emit(rng)
+        self.trace(o, d, power, rng, acc, valid)
+        dr.eval(acc)
+        return acc
+
+    def emit(self, rng):
+        """(origin, direction, Le cos / (p_A p_w), cos > 0) of light subpaths: a uniform light point, a direction towards the mirrors."""
+        m, light = self.m, self.host.light
+        u1, u2 = rng.next_1d(), rng.next_1d()
+        (cx, cy, cz), (hx, hy) = light.center, light.half
+        y0 = m.Array3f(dr.fma(u1, 2.0 * hx, cx - hx), dr.fma(u2, 2.0 * hy, cy - hy), cz)  # RectangleLight.sample's point
+        n = (0.0, 0.0, light.normal_z)
+        if self.cones is None:
+            d = m.Array3f(*cosine_about_normal(rng.next_1d(), rng.next_1d(), (m.Float(n[0]), m.Float(n[1]), m.Float(n[2]))))
+            pdf = dr.maximum(d.z * light.normal_z, 0.0) / math.pi
+        else:
+            d, pdf = self._sample_cones(y0, rng)
+        cos0 = d.z * light.normal_z
+        valid = cos0 > 0  # the light emits on its normal's side only
+        power = dr.select(valid, light.emitted() * (cos0 * light.area / pdf), 0.0)
+        origin = dr.fma(m.Array3f(*n), self.host.geo.offset(y0), y0)
+        return origin, d, power, valid
+
+    def _sample_cones(self, y0, rng):
+        """A direction uniform in the cone of one mirror sphere chosen uniformly, and the mixture's density."""
+        m = self.m
+        count = len(self.cones)
+        pick = m.UInt32(dr.minimum(rng.next_1d() * count, count - 1)) if count > 1 else m.UInt32(0)
+        axes, cos_maxes = [], []
+        for c, r in self.cones:
+            to_c = m.Array3f(*c) - y0
+            inv = dr.rsqrt(dr.squared_norm(to_c))
+            s2 = dr.square(r * inv)  # sin^2 theta_s
+            cos_maxes.append(dr.safe_sqrt(1.0 - s2))
+            axes.append((to_c * inv, s2))
+        axis = axes[0][0]
+        one_minus = axes[0][1] / (1.0 + cos_maxes[0])  # 1 - cos theta_s without cancellation
+        for k in range(1, count):
+            axis = dr.select(pick == k, axes[k][0], axis)
+            one_minus = dr.select(pick == k, axes[k][1] / (1.0 + cos_maxes[k]), one_minus)
+        cos_t = 1.0 - rng.next_1d() * one_minus
+        sin_t = dr.safe_sqrt((1.0 - cos_t) * (1.0 + cos_t))
+        sp, cp = dr.sincos(2.0 * math.pi * rng.next_1d())
+        s, t = coordinate_frame(axis.x, axis.y, axis.z)
+        d = m.Array3f(*to_world((sin_t * cp, sin_t * sp, cos_t), s, t, (axis.x, axis.y, axis.z)))
+        pdf = m.Float(0.0)
+        for k, ((a, s2), cm) in enumerate(zip(axes, cos_maxes)):
+            inside = (pick == k) | (dr.dot(d, a) >= cm)
+            pdf += dr.select(inside, 1.0 / (2.0 * math.pi * (s2 / (1.0 + cm))), 0.0)
+        return d, pdf * (1.0 / count)
+
+    @dr.syntax
+    def trace(self, o, d, power, rng, acc, active):
+        """Follow light subpaths from (o, d) with weight ``power``, splatting at diffuse vertices after a mirror."""
+        host, estimator, max_depth = self.host, self.estimator, self.max_depth
+        beta = host.Spectrum(1.0)  # product of the bounce weights since the light
+        depth = host.UInt32(0)  # segments traced from the light
+        mirrored = host.Bool(False)  # the subpath has met a mirror
+        active = host.Bool(active)
+        while dr.hint(active, label="mcrt_light_path"):
+            hit = host.intersect(o, d, active)
+            depth += 1
+            diffuse = active & hit.reflects & ~hit.mirror
+            # ---- Join to the eye: a path of depth + 1 segments.
+            self.splat(acc, hit, power * beta, diffuse & mirrored & (depth + 1 <= max_depth))
+            # ---- Continue: a class C path from the light begins with a mirror vertex.
+            alive = active & hit.reflects & (depth + 1 < max_depth) & (mirrored | hit.mirror)
+            d, weight, _ = estimator.scatter(d, hit, alive, rng.next_1d(), rng.next_1d(), rng)
+            beta *= weight
+            mirrored |= hit.mirror
+            o = host.spawn_origin(hit)
+            beta, alive = estimator.roulette(beta, depth, diffuse, alive, rng)
+            active = alive
+
+    def splat(self, acc, hit, value, active):
+        """Add value f cos(theta_y) / d^2 W to the pixel that sees the hit, where the eye sees its lit side."""
+        m, host = self.m, self.host
+        to_eye = m.Array3f(*self.eye) - hit.p
+        inv_d = dr.rsqrt(dr.squared_norm(to_eye))
+        w = to_eye * inv_d
+        cos_y = dr.dot(hit.n, w)
+        cos_cam = -dr.dot(m.Array3f(*self.forward), w)
+        ok = active & (cos_y > 0) & (cos_cam > 0)
+        # The film coordinates (s_x, s_y) of mcrt.camera.Pinhole.film, inverted.
+        sx = -dr.dot(m.Array3f(*self.right), w) / (self.tx * cos_cam)
+        sy = -dr.dot(m.Array3f(*self.up), w) / (self.ty * cos_cam)
+        col = (sx + 1.0) * (0.5 * self.width)
+        row = (1.0 - sy) * (0.5 * self.height)
+        ok &= (col >= 0) & (col < self.width) & (row >= 0) & (row < self.height)
+        # A closest hit rather than a shadow test: the light's rectangle blocks the eye too.
+        origin = host.spawn_origin(hit)
+        to_eye_o = m.Array3f(*self.eye) - origin
+        ok &= host.intersect(origin, w, ok).t > dr.norm(to_eye_o)
+        f = lambertian_f(hit.color, inv_pi=self.estimator.opt.brdf_inv_pi)
+        c = value * f * (cos_y * dr.square(inv_d) * pinhole_importance(cos_cam, self.pixel_area, cos_power=self.cos_power))
+        pixel = m.UInt32(dr.minimum(row, self.height - 1)) * self.width + m.UInt32(dr.minimum(col, self.width - 1))
+        for k in range(3):
+            fixed = m.Int64(dr.round(m.Float64(c[k]) * float(2**SPLAT_BITS)))
+            dr.scatter_reduce(dr.ReduceOp.Add, acc, fixed, pixel * 3 + k, ok)
+
+
+# ----------------------------------------------------------------------
+def batch_layout(spp: int, spp_per_pass: int | None = None) -> tuple[int, int]:
+    """(passes P, camera samples per pass n), P n >= spp: n = ``spp_per_pass``, by default the least giving P <= BATCHES.
+
+    The variance needs P >= 2.
+    """
+    n = spp_per_pass or -(-spp // BATCHES)
+    passes = -(-spp // n)
+    if passes < 2:
+        raise ValueError(f"a bidirectional render needs at least 2 passes (its variance comes from batches), "
+                         f"got spp {spp} in passes of {n}")
+    return passes, n
+
+
+class Bidirectional:
+    """Path tracer (class C dropped) plus light tracer: one pass gives one batch estimate X_k of every pixel."""
+
+    def __init__(self, tracer, light: LightTracer, *, light_paths: float, part: str):
+        self.tracer, self.light, self.part = tracer, light, part
+        self.light_paths = light_paths
+        self.size = 3 * tracer.width * tracer.height
+
+    def batch(self, seed: int, k: int, n: int):
+        """[X_k, X_k^2] (Float64, laid out (moment, pixel, channel)) of pass k with n camera samples per pixel."""
+        m = self.tracer.m
+        idx = dr.arange(m.UInt32, self.size)
+        x = dr.zeros(m.Float64, self.size)
+        if self.part in ("both", "path"):
+            x = dr.gather(m.Float64, self.tracer.pass_sums(seed, k, n), idx) * (1.0 / n)
+        if self.part in ("both", "light"):
+            paths = max(1, round(self.light_paths * n * self.tracer.width * self.tracer.height))
+            splats = self.light.pass_splats(seed, k, paths)
+            x = dr.fma(m.Float64(splats), 2.0**-SPLAT_BITS / paths, x)
+        out = dr.zeros(m.Float64, 2 * self.size)
+        dr.scatter(out, x, idx)
+        dr.scatter(out, x * x, idx + self.size)
+        dr.eval(out)
+        return out
+
+
+PARTS = ("both", "path", "light")
+
+
+def render_bidirectional(scene: Scene, settings: RenderSettings, *, backend: str = "llvm", progress: bool = True,
+                         spp_per_pass: int | None = None, intersector: str = "convex", mis: bool | None = None,
+                         precision_guard: bool = True, tricks: tuple = (), light_paths: float = LIGHT_PATHS,
+                         part: str = "both", importance_cos_power: int = 3) -> RenderResult:
+    """Render ``scene`` with the path tracer for every path outside class C and light tracing for class C.
+
+    Called by :func:`mcrt.tracer.render_tracer` with ``bidirectional=True``
+    (renderer ``mcrt``). ``light_paths`` light subpaths per camera sample;
+    ``part`` 'light' renders the light tracer's share alone (class C, to
+    compare with the path tracer's ``mirror_caustics='only'``), 'path' the
+    path tracer's; ``importance_cos_power`` as in :func:`pinhole_importance`.
+    ``tricks`` are the path tracer's (mcrt.tricks.options.trick_options).
+    The variance is that of batch means over passes of ``spp_per_pass``
+    camera samples (default: BATCHES passes, fewer where spp is smaller;
+    module docstring).
+    """
+    from mcrt.tracer import _tracer
+
+    if part not in PARTS:
+        raise ValueError(f"part must be one of {', '.join(PARTS)}, got {part!r}")
+    if light_paths <= 0:
+        raise ValueError(f"light_paths must be > 0, got {light_paths}")
+    s = settings
+    tricks = tuple(sorted((*tricks, ("mirror_caustics", "skip"))))
+    tracer = _tracer(scene, s.camera, s.width, s.height, s.max_depth, s.light_samples, s.rr_depth, backend, intersector,
+                     frozenset(), precision_guard, mis, tricks)
+    est = Bidirectional(tracer, LightTracer(tracer, importance_cos_power=importance_cos_power),
+                        light_paths=light_paths, part=part)
+    passes, n = batch_layout(s.spp, spp_per_pass)
+    totals = run_passes(lambda k, _: est.batch(s.seed, k, n), width=s.width, height=s.height, spp=passes,
+                        spp_per_pass=1, progress=Progress(passes, label="mcrt bidirectional", unit="batches",
+                                                          enabled=progress))
+    return RenderResult(
+        mean=totals.mean,
+        variance=totals.variance * n,
+        spp=passes * n,
+        seed=s.seed,
+        max_depth=s.max_depth,
+        renderer="mcrt",
+        scene_hash=scene.content_hash(),
+        camera=s.camera,
+        wall_time=totals.wall_time,
+        compile_time=totals.compile_time,
+        extra={
+            "backend": backend,
+            "intersector": intersector,
+            "light_samples": str(s.light_samples),
+            "mis": str(tracer.options.mis).lower(),
+            "rr_depth": str(s.rr_depth),
+            "bidirectional": part,
+            "light_paths": str(light_paths),
+            "batches": str(passes),
+            "variance": "batch means",
+            "drjit_version": dr.__version__,
+        },
+    )
