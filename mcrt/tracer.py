@@ -1,11 +1,19 @@
-"""The standalone tracer: camera samples, passes, moments -> RenderResult.
+"""The standalone tracer: camera samples, tiles, passes, moments -> RenderResult.
 
-One pass traces ``n`` samples for every pixel in one kernel launch: each pixel
-has a few consecutive lanes (:func:`pass_layout`), and each lane traces its
-share of the pixel's paths one after another. Each lane has its own random
-stream (mcrt.rng), keyed by a hash of (seed, pass), so a render is
-reproducible from its seed and renders with different seeds are independent.
-The per-pass seed and sample count enter the kernel as opaque values: a new
+A render runs tile by tile (:func:`mcrt.film.run_tiles`): a tile is a run of
+consecutive pixels (row-major), and each of its passes traces ``n`` samples
+of every pixel of the tile in one kernel launch. A pixel has ``k``
+consecutive lanes, and each lane traces up to ``b`` of the pixel's samples
+one after another (path regeneration; :func:`lane_layout` picks k and b so
+that a launch has enough lanes and each lane enough paths, whatever the
+resolution). Memory holds the output image and one tile's sums.
+
+Random numbers: the stream of sample s of pixel p is a function of (seed,
+p, s) alone (:class:`mcrt.rng.SampleStreams`); a lane moving on to its next
+sample reseeds. A tile's sums are added pass by pass in sample order, so an
+image does not depend on the tiling, bit for bit; another pass size deals
+the same samples into other float32 partial sums (the same image to
+rounding). Seeds and sample ranges enter the kernel as opaque values: a new
 seed or spp does not recompile it.
 """
 
@@ -17,7 +25,7 @@ from dataclasses import dataclass
 import mcrt  # noqa: F401  (sets DRJIT_LIBLLVM_PATH before drjit loads)
 from mcrt.camera import Pinhole
 from mcrt.estimator import EstimatorOptions, PathEstimator
-from mcrt.film import Progress, RenderResult, run_passes, samples_per_pass
+from mcrt.film import Progress, RenderResult, run_tiles
 from mcrt.imageio import encode_output
 from mcrt.geometry import Geometry
 from mcrt.host import McrtHost
@@ -25,7 +33,7 @@ from mcrt.light import needs_mis
 from mcrt.llvm import require_llvm
 from mcrt.mutants import camera_jitter, check_mutants, estimator_overrides, mutate_scene, output_encoding
 from mcrt.precision import check_precision
-from mcrt.rng import WeylRng
+from mcrt.rng import SampleStreams
 from mcrt.scene import RenderSettings, Scene
 from mcrt.tricks.options import trick_options
 
@@ -58,8 +66,8 @@ def _mix64(x: int) -> int:
     return x ^ (x >> 31)
 
 
-def stream_keys(seed: int, pass_index: int) -> tuple[int, int]:
-    """The two 32-bit keys of one pass's random streams (mcrt.rng.WeylRng.seeded)."""
+def stream_keys(seed: int, pass_index: int = 0) -> tuple[int, int]:
+    """The two 32-bit keys of a seed's random streams (mcrt.rng; the tracer's camera samples use pass_index 0)."""
     key = _mix64(seed * 0x9E3779B97F4A7C15 + pass_index)
     return key & 0xFFFFFFFF, key >> 32
 
@@ -101,105 +109,182 @@ class Tracer:
         )
         self.estimator = PathEstimator(McrtHost(self.geometry), self.options)
         self.camera_model = Pinhole(scene.camera(self.camera), self.width, self.height, jitter=camera_jitter(self.mutants))
-        self._frozen_pass = dr.freeze(self._pass_kernel, limit=8, warn_after=64)  # one recording per pass size, a few kept
+        self._frozen_launch = dr.freeze(self._launch_kernel, limit=8, warn_after=64)  # one recording per layout, a few kept
+
+    def layout(self, spp: int, spp_per_pass: int | None = None) -> tuple[int, int, int]:
+        """(lanes per pixel, paths per lane, samples per pixel of one pass) of a render of this tracer at ``spp``."""
+        k, b = lane_layout(self.width * self.height, spp_per_pass or spp)
+        return k, b, min(k * b, spp_per_pass or spp)
+
+    def pixel_sums(self, seed: int, pixels, first_sample: int, n: int, *, spp_per_pass: int | None = None):
+        """Sums of x and of x^2 over samples ``first_sample`` .. ``first_sample + n - 1`` of each of ``pixels``.
+
+        ``pixels``: pixel indices (row * width + column) as a NumPy array, a
+        list or a Dr.Jit UInt32: any set, any order. Returns (s1, s2),
+        float64 NumPy arrays of shape (len(pixels), 3). Sample s of pixel p
+        is the same path here as in every other call and in
+        :func:`render_tracer` with this seed (its random stream is a function
+        of (seed, p, s) alone), so calls over disjoint sample ranges are
+        independent and their sums add up to those of the union: the
+        primitive for adaptive sampling (per-pixel sample counts). One call's
+        sums are a function of (seed, pixels, first_sample, n, spp_per_pass),
+        bit for bit; the lanes are laid out by :func:`lane_layout` for
+        len(pixels) pixels and ``n`` (or ``spp_per_pass``) samples, in
+        launches of at most TILE_LANES lanes.
+        """
+        import numpy as np
+
+        idx = np.asarray(pixels.numpy() if hasattr(pixels, "numpy") else pixels, dtype=np.int64).ravel()
+        if idx.size and (idx.min() < 0 or idx.max() >= self.width * self.height):
+            raise ValueError(f"pixel indices must lie in [0, {self.width * self.height}), got {idx.min()}..{idx.max()}")
+        if n < 1 or first_sample < 0:
+            raise ValueError(f"need n >= 1 and first_sample >= 0, got n={n}, first_sample={first_sample}")
+        k, b = lane_layout(max(idx.size, 1), spp_per_pass or n)
+        per_pass = min(k * b, spp_per_pass or n)
+        tile = max(1, TILE_LANES // k)
+        s1, s2 = np.zeros((idx.size, 3)), np.zeros((idx.size, 3))
+        for p0 in range(0, idx.size, tile):
+            acc, chunk = None, self.m.UInt32(idx[p0:p0 + tile].astype(np.uint32))
+            for first in range(first_sample, first_sample + n, per_pass):
+                acc = self.launch(seed, acc, chunk, first, min(per_pass, first_sample + n - first), k, b)
+            s1[p0:p0 + tile] = np.stack([a.numpy() for a in acc[0]], axis=1)
+            s2[p0:p0 + tile] = np.stack([a.numpy() for a in acc[1]], axis=1)
+        return s1, s2
 
     def pass_sums(self, seed: int, pass_index: int, n: int):
-        """Per-pixel sums of x and x^2 over ``n`` new samples per pixel: one evaluated Float64 array.
+        """Sums of x and x^2 over ``n`` samples of every pixel, pass ``pass_index``'s: one evaluated Float64 array.
 
-        Laid out (moment, pixel, channel): the sums of x, then those of x^2,
-        pixels in row-major order. The work is :meth:`_pass_kernel`, frozen
-        (``dr.freeze``): Dr.Jit traces the path kernel in Python once per
-        pass size and replays the recorded kernels for every later pass,
-        which then skips the Python tracing. The seed's keys
-        enter as opaque arrays, so a new seed replays the same recording.
+        Laid out (moment, pixel, channel), pixels in row-major order, for
+        renderers that loop over passes of the whole image (mcrt.bidir).
+        Pass k takes samples k PASS_SAMPLES .. k PASS_SAMPLES + n - 1, so no two
+        passes share a sample.
         """
         import drjit as dr
 
-        k0, k1 = stream_keys(seed, pass_index)
-        return self._frozen_pass(dr.opaque(self.m.UInt32, k0), dr.opaque(self.m.UInt32, k1), n)
+        if not 1 <= n <= PASS_SAMPLES:
+            raise ValueError(f"a pass holds 1 to {PASS_SAMPLES} samples per pixel, got {n}")
+        m, P = self.m, self.width * self.height
+        k, b = lane_layout(P, n)
+        tile = max(1, TILE_LANES // k)
+        out = dr.zeros(m.Float64, 6 * P)
+        for p0 in range(0, P, tile):
+            count = min(tile, P - p0)
+            pixels = pixel_range(m, p0, count)
+            acc = None
+            for first in range(0, n, k * b):
+                acc = self.launch(seed, acc, pixels, pass_index * PASS_SAMPLES + first, min(k * b, n - first), k, b)
+            for moment in range(2):
+                for c in range(3):
+                    dr.scatter(out, acc[moment][c], (moment * P + pixels) * 3 + c)
+        dr.eval(out)
+        return out
 
-    def _pass_kernel(self, key0, key1, n: int):
-        """:meth:`pass_sums` for the pass keyed by the UInt32 arrays (key0, key1) (mcrt.rng.WeylRng.seeded).
+    def launch(self, seed: int, acc, pixels, first_sample: int, n: int, k: int, b: int):
+        """``acc`` plus the sums of x and x^2 over samples first_sample .. first_sample + n - 1 of ``pixels`` (UInt32).
 
-        Each pixel gets consecutive lanes (:func:`pass_layout`), and each lane
-        traces its share of the pixel's n paths one after another
-        (mcrt.estimator.PathEstimator.path_sums), keeping the sums of its
-        samples x and x^2. The lanes' sums are then added (as float64)
-        into slots of up to GROUP consecutive lanes of one pixel, each packet
-        first reducing its own lanes (ReduceMode.Local), so a slot receives
-        one addition per packet: a pixel's sums do not depend on which thread
-        adds first, and a seed gives the same image bit for bit. The slots
-        of a pixel are added in a second, ordered reduction.
+        ``acc`` (None: zeros) and the result are (sums of x, sums of x^2),
+        three evaluated Float64 arrays each, one entry per pixel. ``k`` lanes
+        per pixel (a power of two), each tracing up to ``b`` samples, with
+        n <= k b. The work is :meth:`_launch_kernel`, frozen (``dr.freeze``):
+        Dr.Jit traces the path kernel in Python once per layout and array
+        size, and replays the recorded kernels for every later launch. The
+        seed's keys and the sample range enter as opaque arrays, so they
+        replay the same recording.
         """
         import drjit as dr
 
         m = self.m
-        W, H = self.width, self.height
-        stride, group = pass_layout(n, W * H)
-        lanes = W * H * stride
-        idx = dr.arange(m.UInt32, lanes)
-        # lane // stride in float64 (exact for lanes < 2^32): an integer division by an
-        # opaque value would be 16 scalar divides per packet.
-        pixel = m.UInt32((m.Float64(idx) + 0.5) * dr.opaque(m.Float64, 1.0 / stride))
-        lane = idx - pixel * dr.opaque(m.UInt32, stride)  # the lane's place among its pixel's lanes
-        # The pixel's n paths dealt out: n // stride to every lane, one more to the first n % stride.
-        paths = dr.opaque(m.UInt32, n // stride) + dr.select(lane < dr.opaque(m.UInt32, n % stride), 1, 0)
+        if not 1 <= n <= k * b:
+            raise ValueError(f"a launch of {k} lanes of {b} paths per pixel holds 1 to {k * b} samples, got {n}")
+        if acc is None:
+            zeros = dr.zeros(m.Float64, dr.width(pixels))
+            acc = ((zeros, zeros, zeros), (zeros, zeros, zeros))
+        key0, key1 = stream_keys(seed)
+        opaque = [dr.opaque(m.UInt32, v) for v in (key0, key1, first_sample, n)]
+        return self._frozen_launch(acc, pixels, *opaque, k, b, dr.width(pixels))  # the width keys the recording too
+
+    def _launch_kernel(self, acc, pixels, key0, key1, first, n, k: int, b: int, count: int):
+        """:meth:`launch` with its keys, first sample and count as opaque UInt32 arrays.
+
+        Lane i k + j (j < k) traces samples first + j b .. of pixel i, at most
+        b and none from first + n on (mcrt.estimator.PathEstimator.path_sums;
+        each sample from the start of its own stream, mcrt.rng.SampleStreams),
+        keeping float32 sums of its samples x and x^2. A pixel's k lanes are
+        then added in float64 in lane order (``dr.block_sum``, no atomics) and
+        the pass's totals added to ``acc``: a pixel's sums do not depend on
+        which thread or tile traced it.
+        """
+        import drjit as dr
+
+        m = self.m
+        W = self.width
+        idx = dr.arange(m.UInt32, count * k)
+        if k > 1:
+            pixel = dr.gather(m.UInt32, pixels, idx >> (k.bit_length() - 1))
+            lane = idx & (k - 1)  # the lane's place among its pixel's lanes
+        else:
+            pixel, lane = m.UInt32(pixels), m.UInt32(0)
+        start = lane * b  # the lane's first sample, counted from ``first``
+        paths = dr.select(n > start, dr.minimum(n - start, b), 0)
         col = m.Float(pixel % W)
         row = m.Float(pixel // W)
-        rng = WeylRng.seeded(m, lanes, key0, key1)
+        rng = SampleStreams.start(pixel, first + start, key0, key1)
         eye = m.Array3f(*self.camera_model.eye)
 
         def camera_ray(u, v):
             return eye, self.camera_model.direction(col, row, u, v)
 
-        used = paths > 0  # lanes past n pad the pass to a power of two per pixel
+        def new_path(restart, streams):
+            streams.restart(restart)
+            return camera_ray(streams.next_1d(), streams.next_1d())
+
         o, d = camera_ray(rng.next_1d(), rng.next_1d())
-        sum_x, sum_x2, _ = self.estimator.path_sums(o, d, rng, paths=dr.maximum(paths, 1), camera_ray=camera_ray)
-
-        slots = stride // group  # per pixel
-        # Layout (moment, pixel, channel, slot): the slots of one sum are one block of ``slots``.
-        base = (pixel * 3) * slots + (lane >> dr.opaque(m.UInt32, group.bit_length() - 1))
-        moment = 3 * W * H * slots
-        acc = dr.zeros(m.Float64, 2 * moment)
-        for c in range(3):
-            dr.scatter_reduce(dr.ReduceOp.Add, acc, m.Float64(sum_x[c]), base + c * slots, used, mode=dr.ReduceMode.Local)
-            dr.scatter_reduce(dr.ReduceOp.Add, acc, m.Float64(sum_x2[c]), base + (c * slots + moment), used, mode=dr.ReduceMode.Local)
-        if slots > 1:
-            dr.eval(acc)
-            acc = dr.block_sum(acc, slots)
-        dr.eval(acc)
-        return acc
+        # Lanes past n (paths 0) pad the launch to whole lanes of b: inactive, their sums stay 0.
+        sum_x, sum_x2, _ = self.estimator.path_sums(o, d, rng, paths=dr.maximum(paths, 1), active=paths > 0,
+                                                    new_path=new_path)
+        sums = [m.Float64(v[c]) for v in (sum_x, sum_x2) for c in range(3)]
+        if k > 1:
+            dr.eval(sums)  # once: a block sum of an unevaluated result would rerun the path kernel per channel
+            sums = [dr.block_sum(v, k) for v in sums]
+        out = (tuple(a + v for a, v in zip(acc[0], sums[:3])), tuple(a + v for a, v in zip(acc[1], sums[3:])))
+        dr.eval(out)
+        return out
 
 
-#: Lanes summed into one slot inside the kernel (a power of two no wider than a packet of 16).
-GROUP = 16
 #: Paths one lane traces in turn, at most: its float32 sums of x and x^2 stay exact to about a
 #: millionth, and a packet's lanes, each with this many paths, end close together.
 PATHS_PER_LANE = 16
-#: Lanes a pass has at least, where it has the samples: Dr.Jit's LLVM backend hands out blocks
-#: of 16384 lanes to its threads, and a pass of one block would keep one core busy.
+#: Lanes a launch has at least, where it has the samples: Dr.Jit's LLVM backend hands out blocks
+#: of 16384 lanes to its threads, and a launch of one block would keep one core busy.
 MIN_LANES = 1 << 16
+#: Lanes a launch has at most (a tile holds TILE_LANES / k pixels): bounds a tile's sums and
+#: leaves enough launches for the progress line, whatever the resolution.
+TILE_LANES = 1 << 18
+#: The samples of pass k of :meth:`Tracer.pass_sums` start at k * PASS_SAMPLES (passes of at most as many).
+PASS_SAMPLES = 1 << 16
 
 
-def pass_layout(n: int, pixels: int) -> tuple[int, int]:
-    """(lanes per pixel, lanes per slot) of a pass of ``n`` samples per pixel over ``pixels`` pixels.
+def lane_layout(pixels: int, n: int) -> tuple[int, int]:
+    """(k lanes per pixel, b paths per lane) of launches of up to ``n`` samples per pixel over ``pixels`` pixels.
 
-    Enough lanes that none traces more than PATHS_PER_LANE paths and, where
-    n allows, that the pass has MIN_LANES; up to GROUP lanes per pixel, the
-    next power of two (lanes past n trace nothing that is counted), beyond,
-    whole groups of GROUP.
+    One lane per pixel where the pixels alone give MIN_LANES lanes; fewer
+    pixels get more lanes each (a power of two, no more than n needs), so a
+    launch keeps every core busy. Each lane then traces b = ceil(n / k)
+    samples, at most PATHS_PER_LANE; a pass holds k b samples per pixel.
     """
-    lanes = min(n, max(-(-n // PATHS_PER_LANE), -(-MIN_LANES // pixels)))
-    if lanes <= GROUP:
-        stride = 1 << (lanes - 1).bit_length()
-        return stride, stride
-    return -(-lanes // GROUP) * GROUP, GROUP
+    if pixels < 1 or n < 1:
+        raise ValueError(f"need pixels >= 1 and n >= 1, got {pixels} and {n}")
+    k = 1
+    if pixels < MIN_LANES:
+        k = min(1 << (-(-MIN_LANES // pixels) - 1).bit_length(), 1 << (n - 1).bit_length())
+    return k, min(PATHS_PER_LANE, -(-n // k))
 
 
-def pass_size(width: int, height: int, spp: int) -> int:
-    """Samples per pixel in one pass: the film's budget, rounded down to whole groups (no padded lanes)."""
-    n = samples_per_pass(width, height, spp)
-    return n if n <= GROUP else n // GROUP * GROUP
+def pixel_range(m, first: int, count: int):
+    """Pixel indices first .. first + count - 1 as a UInt32 of backend ``m`` (the start opaque: one kernel for every tile)."""
+    import drjit as dr
+
+    return dr.opaque(m.UInt32, first) + dr.arange(m.UInt32, count)
 
 
 _TRACERS: dict = {}
@@ -220,7 +305,7 @@ def _tracer(scene: Scene, *args) -> Tracer:
 def render_tracer(scene: Scene, settings: RenderSettings, *, backend: str = "llvm", progress: bool = True,
                   spp_per_pass: int | None = None, mutants=(), intersector: str = "convex", mis: bool | None = None,
                   precision_guard: bool = True, bidirectional: bool = False, mirror_caustics: str = "all",
-                  **tricks) -> RenderResult:
+                  tile_pixels: int | None = None, max_launches: int | None = None, **tricks) -> RenderResult:
     """Render ``scene`` at ``settings`` with the standalone tracer: mean and per-sample variance.
 
     Called through :func:`mcrt.render.render` (renderer ``mcrt``). ``mis``
@@ -232,7 +317,12 @@ def render_tracer(scene: Scene, settings: RenderSettings, *, backend: str = "llv
     ``bidirectional`` adds light tracing for the paths eye D ... D S+ L
     (:func:`mcrt.bidir.render_bidirectional`); ``mirror_caustics``
     (:class:`mcrt.estimator.EstimatorOptions`) 'only' renders those paths
-    alone, to check it.
+    alone, to check it. ``spp_per_pass`` caps the samples per pixel of one
+    launch (default: as :func:`lane_layout` deals them); ``tile_pixels``
+    sets the pixels of a tile (default TILE_LANES / lanes per pixel) and
+    never changes the image. ``max_launches`` stops after that many launches
+    (benchmarks: a prefix of a long render; the image is unfinished,
+    ``extra['paths']`` counts the paths traced).
     """
     import drjit as dr
 
@@ -248,9 +338,15 @@ def render_tracer(scene: Scene, settings: RenderSettings, *, backend: str = "llv
     caustics = (("mirror_caustics", mirror_caustics),) if mirror_caustics != "all" else ()
     tracer = _tracer(scene, s.camera, s.width, s.height, s.max_depth, s.light_samples, s.rr_depth, backend, intersector,
                      frozenset(mutants), precision_guard, mis, tuple(sorted(trick_options(tricks) + caustics)))
-    per_pass = spp_per_pass or pass_size(s.width, s.height, s.spp)
-    totals = run_passes(lambda k, n: tracer.pass_sums(s.seed, k, n), width=s.width, height=s.height, spp=s.spp,
-                        spp_per_pass=per_pass, progress=Progress(s.spp, label="mcrt", enabled=progress))
+    k, b, per_pass = tracer.layout(s.spp, spp_per_pass)
+    tile = tile_pixels or max(1, TILE_LANES // k)
+    total = -(-(s.width * s.height) // tile) * -(-s.spp // per_pass)
+
+    def launch(acc, p0, count, first, n):
+        return tracer.launch(s.seed, acc, pixel_range(tracer.m, p0, count), first, n, k, b)
+
+    totals = run_tiles(launch, width=s.width, height=s.height, spp=s.spp, tile_pixels=tile, spp_per_pass=per_pass,
+                       progress=Progress(total, label="mcrt", unit="passes", enabled=progress), max_launches=max_launches)
     mean, var = encode_output(totals.mean, totals.variance, output_encoding(tracer.mutants))
     return RenderResult(
         mean=mean,
@@ -271,6 +367,7 @@ def render_tracer(scene: Scene, settings: RenderSettings, *, backend: str = "llv
             "rr_depth": str(s.rr_depth),
             "mutants": ",".join(sorted(tracer.mutants)),
             **({"tricks": ",".join(f"{k}={v}" for k, v in tracer.tricks)} if tracer.tricks else {}),
+            "paths": str(totals.paths),
             "drjit_version": dr.__version__,
             "mcrt_version": mcrt.__version__,
         },
