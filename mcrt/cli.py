@@ -269,9 +269,6 @@ def build_parser() -> argparse.ArgumentParser:
     threeway.register(sub)
     reports.register(sub)
     validate_integrator.register(sub)
-    from mcrt.tricks.cli import register as register_tricks
-
-    register_tricks(sub)
     return ap
 
 
