@@ -6,6 +6,13 @@ repetitions after one warm-up render each, which also takes the JIT
 compilation out of the timing (reported apart, from Dr.Jit's kernel history).
 Speed is paths per second (one path per pixel sample, whatever its length).
 
+Renders too long to repeat are timed on a bounded part of themselves
+(``max_paths``): mcrt on the first launches of the render (a tile's first
+passes: every launch of a render has the same shape, so its throughput is
+the render's), Mitsuba on a crop of the film's first rows at the case's spp
+(``mi.render`` of the crop: its kernel per sample is the full film's). Each
+row records the paths a timed render traced and whether it was bounded.
+
 Where a committed Mitsuba reference of the case exists (mcrt.reference), each
 timed render is also scored against it: the excess MSE (the squared error
 minus the reference's own noise, mean(var_ref / spp_ref)), averaged over the
@@ -22,7 +29,9 @@ from __future__ import annotations
 
 import contextlib
 import json
+import os
 import resource
+import subprocess
 import statistics
 import sys
 import time
@@ -51,20 +60,43 @@ class BenchRow:
     paths_per_second: float = 0.0
     mse_excess: float | None = None  # mean over the timed renders; None without a committed reference
     efficiency: float | None = None  # 1 / (mse_excess x median time)
+    paths: int = 0  # paths one timed render traced
+    bounded: bool = False  # timed on a bounded part of the render (module docstring)
+    load: tuple = ()  # os.getloadavg() before the case (1, 5 and 15 minutes)
 
 
-def _renderers(names, scene, backend, intersector):
-    """Callables (case, seed) -> seconds for each renderer; setup and loading are outside the clock."""
+#: Paths a timed render traces at most, per renderer (module docstring), unless run_bench is told otherwise.
+MAX_PATHS = {"mcrt": 1 << 25, "mitsuba": 1 << 22}
+
+
+def _renderers(names, scene, backend, intersector, max_paths):
+    """Callables (case, seed) -> (seconds, compile seconds or None, image or None, paths) for each renderer.
+
+    Setup and loading are outside the clock. A case of more than
+    ``max_paths[name]`` paths is timed on a bounded part (module docstring)
+    and returns no image.
+    """
     import drjit as dr
 
     from mcrt.render import render
+    from mcrt.tracer import TILE_LANES, _tracer, render_tracer
 
     def mcrt_time(c, seed):
         s = scene.settings(camera=c.camera, width=c.width, height=c.height, spp=c.spp, max_depth=c.max_depth,
                            light_samples=c.light_samples)
+        paths = c.width * c.height * c.spp
+        if paths <= max_paths["mcrt"]:
+            t0 = time.perf_counter()
+            r = render(scene, s, seed=seed, backend=backend, intersector=intersector, progress=False)
+            return time.perf_counter() - t0, None, r.mean, paths
+        tracer = _tracer(scene, s.camera, s.width, s.height, s.max_depth, s.light_samples, s.rr_depth, backend,
+                         intersector, frozenset(), True, None, ())
+        k, _, per_pass = tracer.layout(c.spp)
+        per_launch = min(max(1, TILE_LANES // k), c.width * c.height) * per_pass
         t0 = time.perf_counter()
-        r = render(scene, s, seed=seed, backend=backend, intersector=intersector, progress=False)
-        return time.perf_counter() - t0, None, r.mean
+        r = render_tracer(scene, replace(s, seed=seed), backend=backend, intersector=intersector, progress=False,
+                          max_launches=-(-max_paths["mcrt"] // per_launch))
+        return time.perf_counter() - t0, None, None, int(r.extra["paths"])
 
     loaded = {}
 
@@ -73,12 +105,11 @@ def _renderers(names, scene, backend, intersector):
         # than the deterministic passes with variance of mcrt.render's 'mitsuba' renderer.
         import mitsuba as mi
 
-        from mcrt.mitsuba import load_mitsuba_scene
-
-        key = (c.camera, c.width, c.height, c.max_depth)
+        rows = min(c.height, max(1, max_paths["mitsuba"] // (c.width * c.spp)))
+        key = (c.camera, c.width, c.height, c.max_depth, rows)
         if key not in loaded:
             loaded.clear()
-            loaded[key] = load_mitsuba_scene(scene, c.camera, c.width, c.height, c.max_depth, backend=backend)
+            loaded[key] = mi.load_dict(_cropped(scene, c, rows, backend))
         dr.sync_thread()
         dr.kernel_history()
         t0 = time.perf_counter()
@@ -87,7 +118,8 @@ def _renderers(names, scene, backend, intersector):
         dr.sync_thread()
         elapsed = time.perf_counter() - t0
         compile_s = sum(h.get("codegen_time", 0.0) + h.get("backend_time", 0.0) for h in dr.kernel_history()) / 1000
-        return elapsed, compile_s, np.asarray(img)[..., :3]
+        image = np.asarray(img)[..., :3] if rows == c.height else None
+        return elapsed, compile_s, image, c.width * rows * c.spp
 
     table = {"mcrt": mcrt_time, "mitsuba": mitsuba_time}
     unknown = set(names) - set(table)
@@ -96,40 +128,58 @@ def _renderers(names, scene, backend, intersector):
     return {n: table[n] for n in names}
 
 
+def _cropped(scene, c: BenchCase, rows: int, backend: str) -> dict:
+    """Mitsuba's scene dictionary of the case, its film cropped to the first ``rows`` rows (all rows: no crop)."""
+    from mcrt.mitsuba import scene_dict
+
+    s = scene.settings(camera=c.camera, width=c.width, height=c.height, max_depth=c.max_depth)
+    d = scene_dict(scene, s.camera, s.width, s.height, s.max_depth, "path", rr_depth=s.rr_depth, spp=c.spp, backend=backend)
+    if rows < c.height:
+        film = next(v["film"] for v in d.values() if isinstance(v, dict) and "film" in v)
+        film.update(crop_offset_x=0, crop_offset_y=0, crop_width=c.width, crop_height=rows)
+    return d
+
+
 def run_bench(scene, cases: list[BenchCase], *, renderers=("mcrt", "mitsuba"), repeats: int = 5, backend: str = "llvm",
-              intersector: str = "convex", progress: bool = True) -> list[BenchRow]:
-    """Median paths per second of each renderer on each case, renderers alternating."""
+              intersector: str = "convex", progress: bool = True, max_paths: dict | None = None) -> list[BenchRow]:
+    """Median paths per second of each renderer on each case, renderers alternating.
+
+    ``max_paths``: per renderer, the paths above which a case is timed on a
+    bounded part of it (default MAX_PATHS).
+    """
     import drjit as dr
 
-    fns = _renderers(renderers, scene, backend, intersector)
+    fns = _renderers(renderers, scene, backend, intersector, MAX_PATHS | (max_paths or {}))
     dr.set_flag(dr.JitFlag.KernelHistory, True)
     rows = []
     for case in cases:
         ref = _committed_reference(scene, case, progress)
+        load = tuple(round(x, 2) for x in os.getloadavg())
+        paths = {}
         times = {n: [] for n in fns}
         errors = {n: [] for n in fns}
         compile_time = {}
         for n, fn in fns.items():  # warm-up: the first call compiles the kernels
             dr.kernel_history()
-            elapsed, compile_s, _ = fn(case, 1000)
+            elapsed, compile_s, _, _ = fn(case, 1000)
             history = dr.kernel_history()
             compile_time[n] = compile_s if compile_s is not None else sum(
                 h.get("codegen_time", 0.0) + h.get("backend_time", 0.0) for h in history) / 1000
         for k in range(repeats):
             for n, fn in fns.items():
-                elapsed, _, image = fn(case, k)
+                elapsed, _, image, paths[n] = fn(case, k)
                 times[n].append(elapsed)
-                if ref is not None:
+                if ref is not None and image is not None:
                     errors[n].append(float(np.mean((image.astype(np.float64) - ref[0]) ** 2)) - ref[1])
             if progress:
                 print(f"  {case.camera} {case.width}x{case.height} {case.spp} spp depth {case.max_depth}: repetition {k + 1}/{repeats}",
                       file=sys.stderr, flush=True)
-        paths = case.width * case.height * case.spp
+        full = case.width * case.height * case.spp
         for n in fns:
             t = statistics.median(times[n])
             mse = statistics.fmean(errors[n]) if errors[n] else None
             eff = 1.0 / (mse * t) if mse is not None and mse > 0 else None
-            rows.append(BenchRow(case, n, times[n], compile_time[n], paths / t, mse, eff))
+            rows.append(BenchRow(case, n, times[n], compile_time[n], paths[n] / t, mse, eff, paths[n], paths[n] < full, load))
     return rows
 
 
@@ -210,23 +260,70 @@ def kernel_profile(scene, *, camera: str = "near", res: int = 256, spp: int = 16
     return rows
 
 
+#: The renders whose peak memory ``--memory`` measures, each in a fresh process: (resolution, spp, max depth).
+MEMORY_RUNS = ((256, 16, 8), (1024, 16, 8), (4096, 16, 2), (4096, 1024, 2))
+
+_MEMORY_SCRIPT = """
+import json, resource, sys, time
+import mcrt
+from mcrt.scene import load_scene
+from mcrt.tracer import render_tracer
+res, spp, depth = map(int, sys.argv[1:4])
+scene = load_scene()
+t0 = time.perf_counter()
+r = render_tracer(scene, scene.settings(camera="near", width=res, height=res, spp=spp, max_depth=depth), progress=False)
+print(json.dumps({"seconds": time.perf_counter() - t0, "paths": int(r.extra["paths"]), "image_mib": (r.mean.nbytes + r.variance.nbytes) / 2**20,
+                  "peak_rss_mib": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0, "mean": float(r.mean.mean())}))
+"""
+
+
+def memory_runs(runs=MEMORY_RUNS, *, progress: bool = True) -> list[dict]:
+    """Peak resident memory (ru_maxrss) of whole mcrt renders (near camera), each in a fresh Python process.
+
+    The output image itself (mean and variance, float32) is part of the
+    peak; everything else is bounded by the tile, not by resolution or spp.
+    """
+    out = []
+    for res, spp, depth in runs:
+        if progress:
+            print(f"  memory: {res}x{res}, {spp} spp, depth {depth} ...", file=sys.stderr, flush=True)
+        done = subprocess.run([sys.executable, "-c", _MEMORY_SCRIPT, str(res), str(spp), str(depth)], check=True,
+                              capture_output=True, text=True)
+        out.append({"width": res, "height": res, "spp": spp, "max_depth": depth,
+                    **json.loads(done.stdout.strip().splitlines()[-1])})
+    return out
+
+
 def peak_memory_mib() -> float:
     """Peak resident memory of this process (Linux reports KiB)."""
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
 
 
-def bench_cases(cameras, resolutions, spps, depths, light_samples: int = 1, spp_sweep=()) -> list[BenchCase]:
-    """Every (camera, resolution, spp, depth), then each camera's ``spp_sweep`` at the last resolution and depth.
+#: The course's hand-in (reference/assignments/course2023_800.toml): near camera, 800x800, 100 spp, max depth 8.
+COURSE = {"camera": "near", "width": 800, "height": 800, "spp": 100, "max_depth": 8}
 
-    A sweep case that is already among the others is not timed twice.
+
+def bench_cases(cameras, resolutions, spps, depths, light_samples: int = 1, spp_sweep=(), *, sweep_res=None,
+                depth_sweep=(), course_light_samples=()) -> list[BenchCase]:
+    """Every (camera, resolution, spp, depth), then the sweeps, then the course's hand-in.
+
+    Each camera's ``spp_sweep`` runs at every ``sweep_res`` (default: the
+    last resolution) and the last depth; its ``depth_sweep`` at every
+    ``sweep_res`` and the first spp. ``course_light_samples``: the course's
+    800x800, 100-spp render (COURSE) with each of these K. A case already
+    listed is not timed twice.
     """
     cases = [BenchCase(cam, res, res, spp, depth, light_samples)
              for cam in cameras for res in resolutions for spp in spps for depth in depths]
+    extra = []
     for cam in cameras:
-        for spp in spp_sweep:
-            case = BenchCase(cam, resolutions[-1], resolutions[-1], spp, depths[-1], light_samples)
-            if case not in cases:
-                cases.append(case)
+        for res in sweep_res or resolutions[-1:]:
+            extra += [BenchCase(cam, res, res, spp, depths[-1], light_samples) for spp in spp_sweep]
+            extra += [BenchCase(cam, res, res, spps[0], depth, light_samples) for depth in depth_sweep]
+    extra += [BenchCase(light_samples=k, **COURSE) for k in course_light_samples]
+    for case in extra:
+        if case not in cases:
+            cases.append(case)
     return cases
 
 
@@ -243,7 +340,8 @@ def simd_extension() -> str | None:
 
 
 def bench_data(rows: list[BenchRow], *, command: str, backend: str, intersector: str, repeats: int,
-               profile: list[ProfileRow] = (), profile_case: dict | None = None) -> dict:
+               profile: list[ProfileRow] = (), profile_case: dict | None = None, memory: list[dict] = (),
+               limits: dict | None = None, max_paths: dict | None = None, seconds: float | None = None) -> dict:
     """The run as one JSON-ready dictionary: what ``--json`` writes and :mod:`mcrt.bench_report` reads.
 
     Machine and versions come from :func:`mcrt.provenance.provenance`, with
@@ -261,7 +359,20 @@ def bench_data(rows: list[BenchRow], *, command: str, backend: str, intersector:
             "backend": backend, "intersector": intersector, "repeats": repeats, "warmup_renders": 1,
             "rows": [dict(asdict(r), median_time=statistics.median(r.times)) for r in rows],
             "peak_memory_mib": peak_memory_mib(),
-            "kernel_profile": [asdict(r) for r in profile], "kernel_profile_case": profile_case}
+            "kernel_profile": [asdict(r) for r in profile], "kernel_profile_case": profile_case,
+            "max_paths": MAX_PATHS | (max_paths or {}), "memory_runs": list(memory), "limits": limits,
+            "load_end": list(os.getloadavg()), "seconds": seconds, "gpu": gpu_note(backend)}
+
+
+def gpu_note(backend: str) -> str:
+    """Whether this run used a GPU, in words for the report."""
+    import drjit as dr
+
+    if backend == "cuda":
+        return "This run used Dr.Jit's CUDA backend (mcrt) and Mitsuba's cuda_ad_rgb."
+    have = "has" if dr.has_backend(dr.JitBackend.CUDA) else "has no"
+    return (f"No GPU run: this machine {have} a usable CUDA backend, and no GPU machine was lent to the task that "
+            f"wrote this report; every figure here is the LLVM (CPU) backend's.")
 
 
 def command_line(parser, args) -> str:
@@ -293,6 +404,23 @@ def register(sub) -> None:
     p.add_argument("--spp-sweep", type=int, action="append", default=None, metavar="SPP",
                    help="also time these samples per pixel, repeatable, at the last --res and --max-depth of each camera "
                         "(the report's section against samples per render; default: none)")
+    p.add_argument("--sweep-res", type=int, action="append", default=None, metavar="RES",
+                   help="resolution(s) of --spp-sweep and --depth-sweep, repeatable (default: the last --res)")
+    p.add_argument("--depth-sweep", type=int, action="append", default=None, metavar="DEPTH",
+                   help="also time these max depths, repeatable, at each --sweep-res and the first --spp (default: none)")
+    p.add_argument("--course", type=int, action="append", default=None, metavar="K",
+                   help="also time the course's hand-in (near, 800x800, 100 spp, depth 8) with K shadow rays, "
+                        "repeatable (default: none)")
+    p.add_argument("--max-paths-mcrt", type=int, default=MAX_PATHS["mcrt"],
+                   help=f"time mcrt renders of more paths on their first launches (default {MAX_PATHS['mcrt']})")
+    p.add_argument("--max-paths-mitsuba", type=int, default=MAX_PATHS["mitsuba"],
+                   help=f"time Mitsuba renders of more paths on a crop of the first rows (default {MAX_PATHS['mitsuba']})")
+    p.add_argument("--memory", action="store_true",
+                   help="also measure the peak memory of whole mcrt renders up to 4096x4096 at 1024 spp, each in a fresh "
+                        "process (default: off)")
+    p.add_argument("--limits", action="store_true",
+                   help="also compile the path kernel cold and count its instructions, segments and shadow rays per path "
+                        "against the machine (default: off)")
     p.add_argument("--light-samples", type=int, default=1, help="K, shadow rays per diffuse vertex (default 1)")
     p.add_argument("--repeats", type=int, default=5,
                    help="timed repetitions per renderer and case, after one warm-up render (default 5)")
@@ -302,8 +430,10 @@ def register(sub) -> None:
     p.add_argument("--json", default=None, metavar="FILE",
                    help="also write the measurements to this JSON file (default: none; DIR/bench.json with --report)")
     p.add_argument("--profile", action="store_true",
-                   help="also time mcrt's path kernel with one part left out at a time, at the first camera and the last "
-                        "--res, --spp and --max-depth (where the time goes; default: off)")
+                   help="also time mcrt's path kernel with one part left out at a time, at the first camera, --profile-res "
+                        "and the last --spp and --max-depth (where the time goes; default: off)")
+    p.add_argument("--profile-res", type=int, default=256,
+                   help="square resolution of --profile and --limits (default 256)")
     p.add_argument("--report", default=None, metavar="DIR",
                    help="write the report DIR/index.md, every number in it from this run, and the measurements "
                         "(DIR/bench.json unless --json names another file; default: none)")
@@ -335,24 +465,35 @@ def cmd_bench(args) -> int:
     scene = load_scene(args.scene or CANONICAL)
     cameras, resolutions, depths = args.camera or ["near", "far"], args.res or [256], args.max_depth or [8]
     spps = args.spp or [16]
-    cases = bench_cases(cameras, resolutions, spps, depths, args.light_samples, args.spp_sweep or ())
+    cases = bench_cases(cameras, resolutions, spps, depths, args.light_samples, args.spp_sweep or (),
+                        sweep_res=args.sweep_res, depth_sweep=args.depth_sweep or (), course_light_samples=args.course or ())
+    max_paths = {"mcrt": args.max_paths_mcrt, "mitsuba": args.max_paths_mitsuba}
+    t0 = time.perf_counter()
     rows = run_bench(scene, cases, renderers=args.renderers.split(","), repeats=args.repeats, backend=args.backend,
-                     intersector=args.intersector)
+                     intersector=args.intersector, max_paths=max_paths)
     profile, profile_case = [], None
     if args.profile:
-        profile_case = {"camera": cameras[0], "width": resolutions[-1], "height": resolutions[-1], "spp": spps[-1],
+        profile_case = {"camera": cameras[0], "width": args.profile_res, "height": args.profile_res, "spp": spps[-1],
                         "max_depth": depths[-1], "repeats": args.repeats}
-        profile = kernel_profile(scene, camera=cameras[0], res=resolutions[-1], spp=spps[-1], max_depth=depths[-1],
+        profile = kernel_profile(scene, camera=cameras[0], res=args.profile_res, spp=spps[-1], max_depth=depths[-1],
                                  repeats=args.repeats, backend=args.backend)
+    limits = None
+    if args.limits:
+        from mcrt.bench_limits import kernel_limits
+
+        limits = kernel_limits(scene, camera=cameras[0], res=args.profile_res, spp=spps[-1], max_depth=depths[-1],
+                               backend=args.backend)
+    memory = memory_runs() if args.memory else []
     data = bench_data(rows, command=command_line(args.bench_parser, args), backend=args.backend,
-                      intersector=args.intersector, repeats=args.repeats, profile=profile, profile_case=profile_case)
+                      intersector=args.intersector, repeats=args.repeats, profile=profile, profile_case=profile_case,
+                      memory=memory, limits=limits, max_paths=max_paths, seconds=time.perf_counter() - t0)
     prov, v = data["provenance"], data["provenance"]["versions"]
     print(f"mcrt {v['mcrt']}, Mitsuba {v['mitsuba']}, Dr.Jit {v['drjit']}, {prov['drjit_threads']} threads, "
           f"{prov['machine']['cpu']}")
     print(format_table(data["rows"]))
     print(f"peak memory of this process: {data['peak_memory_mib']:.0f} MiB")
     if profile:
-        print(format_profile(data["kernel_profile"], resolutions[-1] ** 2 * spps[-1]))
+        print(format_profile(data["kernel_profile"], args.profile_res ** 2 * spps[-1]))
     json_path = Path(args.json) if args.json else Path(args.report) / "bench.json" if args.report else None
     if json_path is not None:
         json_path.parent.mkdir(parents=True, exist_ok=True)

@@ -76,20 +76,18 @@ def efficiency_ratio(mcrt: dict, mitsuba: dict) -> float | None:
 
 
 def paths_per_lane(case: dict) -> int:
-    """The most paths one of mcrt's SIMD lanes traces in turn in a render of ``case`` (its first, largest pass)."""
-    from mcrt.tracer import pass_layout, pass_size
+    """The most paths one of mcrt's SIMD lanes traces in turn in a render of ``case`` (mcrt.tracer.lane_layout)."""
+    from mcrt.tracer import lane_layout
 
-    n = pass_size(case["width"], case["height"], case["spp"])
-    lanes_per_pixel, _ = pass_layout(n, case["width"] * case["height"])
-    return -(-n // lanes_per_pixel)
+    return lane_layout(case["width"] * case["height"], case["spp"])[1]
 
 
 def format_table(rows) -> str:
     """The run's table: one row per case and renderer, with mcrt's speed-up and efficiency ratio beside Mitsuba's."""
     rows = _rows(rows)
     lines = ["| camera | resolution | spp | depth | K | renderer | median s | M paths/s | JIT s | speed-up | MSE excess | "
-             "efficiency ratio | paths per lane |",
-             "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+             "efficiency ratio | paths per lane | paths timed |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     base = {_key(r["case"]): r for r in rows if r["renderer"] == "mitsuba"}
     for r in rows:
         c = r["case"]
@@ -101,8 +99,14 @@ def format_table(rows) -> str:
         lane = str(paths_per_lane(c)) if r["renderer"] == "mcrt" else "-"
         lines.append(f"| {c['camera']} | {c['width']}x{c['height']} | {c['spp']} | {c['max_depth']} | {c.get('light_samples', 1)} "
                      f"| {r['renderer']} | {_median(r):.4f} | {r['paths_per_second'] / 1e6:.2f} | {jit} | {ratio} | {mse} | "
-                     f"{f'{eff:.1f}x' if eff else '-'} | {lane} |")
+                     f"{f'{eff:.1f}x' if eff else '-'} | {lane} | {_timed(r)} |")
     return "\n".join(lines)
+
+
+def _timed(row: dict) -> str:
+    """Paths of one timed render, marked where that was a bounded part of the case."""
+    paths = row.get("paths") or row["case"]["width"] * row["case"]["height"] * row["case"]["spp"]
+    return f"{paths:,}" + (" (part)" if row.get("bounded") else "")
 
 
 def format_profile(rows, paths: int) -> str:
@@ -162,7 +166,7 @@ def _machine(data: dict) -> list[str]:
             f"| versions | {versions} |",
             f"| git commit | {p.get('git_commit') or '-'} (source hash {p.get('source_hash', '-')}) |",
             f"| backend | {data['backend']} (Mitsuba variant {VARIANTS.get(data['backend'], '-')}); mcrt's intersector "
-            f"{data['intersector']} |"]
+            f"{data['intersector']} |", *_load_rows(data)]
 
 
 def _method(data: dict) -> str:
@@ -176,7 +180,21 @@ def _method(data: dict) -> str:
             f"whatever its length; the speed-up is mcrt's paths per second over Mitsuba's in the same case of this run. "
             f"Paths per lane: the most paths one of mcrt's SIMD lanes traces in turn in that render "
             f"(`mcrt.tracer.pass_layout`); where a lane has more than one, a path that ends is followed in the same loop "
-            f"iteration by the lane's next (path regeneration), so a packet does not idle while its longest path finishes.")
+            f"iteration by the lane's next (path regeneration), so a packet does not idle while its longest path finishes."
+            + _bounded_text(data))
+
+
+def _bounded_text(data: dict) -> str:
+    caps = data.get("max_paths")
+    if not caps:
+        return ""
+    n = sum(1 for r in data["rows"] if r.get("bounded"))
+    return (f" Bounded measurements ('(part)' under paths timed; {n} rows): a render of more than "
+            f"{caps.get('mcrt', 0):,} paths (mcrt) or {caps.get('mitsuba', 0):,} paths (Mitsuba) is too long to repeat, "
+            f"so each timed render covers a bounded part of it: mcrt the render's first launches (whole launches, "
+            f"at least that many paths; every launch of a render has the same shape, so their throughput is the "
+            f"render's), Mitsuba `mi.render` of a crop of the film's first rows at the case's spp. Paths per second "
+            f"are the paths of that part over its time; the MSE needs the whole image, so bounded rows have none.")
 
 
 def _efficiency(data: dict) -> list[str]:
@@ -242,6 +260,185 @@ def _profile_section(data: dict) -> list[str]:
             out.append("- " + text.format(cost=full - ms, share=100 * (full - ms) / full, ms=ms, ratio=ms / full,
                                           ratio_pct=100 * ms / full, extra_pct=100 * (ms - full) / full))
     return out
+
+
+def _load_rows(data: dict) -> list[str]:
+    loads = [r["load"][0] for r in _rows(data["rows"]) if r.get("load")]
+    if not loads:
+        return []
+    end = data.get("load_end") or [float("nan")]
+    took = f"; the run took {data['seconds'] / 60:.1f} min" if data.get("seconds") else ""
+    return [f"| load average | {min(loads):.2f} to {max(loads):.2f} (1 minute, before each case; {end[0]:.2f} at the end; "
+            f"other work shared the machine, which the alternation evens out{took}) |"]
+
+
+def _goal_pairs(data, pred):
+    return [(a, b) for a, b in pairs(data["rows"]) if pred(a["case"])]
+
+
+def goals(data: dict) -> list[tuple[str, bool | None, str]]:
+    """(goal, met or None where unmeasured, the measured figure) for the issue's goals, from this run alone."""
+    out = []
+
+    def worst(ps):
+        a, b = min(ps, key=lambda p: speedup(*p))
+        return speedup(a, b), _case_text(a["case"])
+
+    big = _goal_pairs(data, lambda c: c["max_depth"] == 8 and c.get("light_samples", 1) == 1 and 256 <= c["width"] <= 4096
+                      and c["spp"] >= 16 and c["width"] != 800)
+    if big:
+        v, where = worst(big)
+        out.append(("at least 15x Mitsuba's paths/s at depth 8, 256x256 to 4096x4096, 16 spp and more", v >= 15,
+                    f"lowest {v:.1f}x ({where}) over {len(big)} cases"))
+    small = _goal_pairs(data, lambda c: c["spp"] == 1 or c["width"] == 64)
+    if small:
+        v, where = worst(small)
+        out.append(("at least 10x at 1 spp and at 64x64", v >= 10, f"lowest {v:.1f}x ({where}) over {len(small)} cases"))
+    for cam in sorted({r["case"]["camera"] for r in _rows(data["rows"])}):
+        mine = [r for r in _rows(data["rows"]) if r["renderer"] == "mcrt" and r["case"]["camera"] == cam
+                and r["case"]["max_depth"] == 8 and r["case"].get("light_samples", 1) == 1 and r["case"]["spp"] >= 16]
+        at = [r for r in mine if r["case"]["width"] == 4096]
+        if mine and at:
+            best = max(mine, key=lambda r: r["paths_per_second"])
+            worst4k = min(at, key=lambda r: r["paths_per_second"])
+            ratio = worst4k["paths_per_second"] / best["paths_per_second"]
+            out.append((f"mcrt's throughput at 4096x4096 within 15 % of its best ({cam} camera, depth 8, 16 spp and more)",
+                        ratio >= 0.85, f"{ratio * 100:.0f} % of its best: {worst4k['paths_per_second'] / 1e6:.1f} M paths/s "
+                        f"({_case_text(worst4k['case'])}) against {best['paths_per_second'] / 1e6:.1f} "
+                        f"({_case_text(best['case'])})"))
+    mem = [m for m in data.get("memory_runs") or [] if m["width"] == 4096 and m["spp"] == 1024]
+    if mem:
+        m = mem[0]
+        out.append(("peak memory under 1 GB for a 4096x4096, 1024-spp render", m["peak_rss_mib"] < 1024,
+                    f"{m['peak_rss_mib']:.0f} MiB (max depth {m['max_depth']}, the whole render, {m['seconds']:.0f} s)"))
+    eff = [(efficiency_ratio(a, b), speedup(a, b), a["case"]) for a, b in pairs(data["rows"]) if efficiency_ratio(a, b)]
+    if eff:
+        lo = min(eff, key=lambda e: e[0] / e[1])
+        out.append(("equal-time efficiency keeps pace with the speed-up", lo[0] / lo[1] >= 0.85,
+                    f"efficiency ratio {lo[0]:.1f}x against a speed-up of {lo[1]:.1f}x at the furthest case "
+                    f"({_case_text(lo[2])}; {len(eff)} cases with a committed reference)"))
+    return out
+
+
+def _goals_section(data: dict) -> list[str]:
+    g = goals(data)
+    if not g:
+        return []
+    out = ["", "## Goals", "", "| goal | met | measured in this run |", "|---|---|---|"]
+    out += [f"| {name} | {'yes' if met else 'no'} | {fig} |" for name, met, fig in g]
+    return out
+
+
+def plot_speedups(data: dict, out_dir: Path) -> list[str]:
+    """speedup_resolution.png and speedup_spp.png in ``out_dir`` (speed-up and both renderers' paths/s); their names."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    written = []
+    for name, dim, label in (("speedup_resolution.png", "width", "resolution (pixels per side)"),
+                             ("speedup_spp.png", "spp", "samples per pixel")):
+        groups: dict[tuple, list] = {}
+        for a, b in pairs(data["rows"]):
+            c = a["case"]
+            rest = tuple(v for k, v in sorted(c.items()) if k not in (dim, "height") and not (dim == "width" and k == "width"))
+            groups.setdefault(rest, []).append((a, b))
+        groups = {k: sorted(g, key=lambda p: p[0]["case"][dim]) for k, g in groups.items() if len(g) >= 3}
+        if not groups:
+            continue
+        fig, (ax, ax2) = plt.subplots(1, 2, figsize=(11, 4))
+        for g in groups.values():
+            c = g[0][0]["case"]
+            tag = f"{c['camera']}, depth {c['max_depth']}" + (f", {c['spp']} spp" if dim == "width" else f", {c['width']}x{c['height']}")
+            xs = [p[0]["case"][dim] for p in g]
+            line, = ax.plot(xs, [speedup(*p) for p in g], "o-", label=tag)
+            ax2.plot(xs, [p[0]["paths_per_second"] / 1e6 for p in g], "o-", color=line.get_color(), label=f"mcrt, {tag}")
+            ax2.plot(xs, [p[1]["paths_per_second"] / 1e6 for p in g], "s--", color=line.get_color(), label=f"Mitsuba, {tag}")
+        for a in (ax, ax2):
+            a.set_xscale("log", base=2)
+            a.set_xlabel(label)
+            a.grid(True, alpha=0.3)
+        ax.axhline(15, color="grey", lw=0.8, ls=":")
+        ax.set_ylabel("mcrt paths/s over Mitsuba's")
+        ax.set_ylim(bottom=0)
+        ax2.set_yscale("log")
+        ax2.set_ylabel("M paths/s")
+        ax.legend(fontsize=7)
+        ax2.legend(fontsize=6)
+        fig.tight_layout()
+        fig.savefig(Path(out_dir) / name, dpi=90)
+        plt.close(fig)
+        written.append(name)
+    return written
+
+
+def _plots_section(data: dict, out_dir: Path) -> list[str]:
+    names = plot_speedups(data, out_dir)
+    if not names:
+        return []
+    return ["", "## Speed-up against resolution and samples per pixel", "",
+            "Left: mcrt's paths per second over Mitsuba's (dotted: 15x); right: both renderers' paths per second "
+            "(solid mcrt, dashed Mitsuba). From the table above.", ""] + [f"![{n[:-4]}]({n})" for n in names]
+
+
+def _memory_section(data: dict) -> list[str]:
+    runs = data.get("memory_runs") or []
+    if not runs:
+        return []
+    out = ["", "## Peak memory", "",
+           "Whole mcrt renders (near camera), each in a fresh Python process (`mcrt.bench.memory_runs`); peak resident "
+           "memory is the process's `ru_maxrss`, which includes the interpreter, Dr.Jit, LLVM and the output image "
+           "(mean and variance, float32). Memory does not depend on the depth, so the 1024-spp 4096x4096 render runs at "
+           "depth 2, which makes it short enough for this run (depth 8 traces the same launches, 5 times as long).", "",
+           "| resolution | spp | depth | seconds | M paths/s | output image MiB | peak RSS MiB |", "|---|---|---|---|---|---|---|"]
+    for m in runs:
+        out.append(f"| {m['width']}x{m['height']} | {m['spp']} | {m['max_depth']} | {m['seconds']:.1f} | "
+                   f"{m['paths'] / m['seconds'] / 1e6:.1f} | {m['image_mib']:.0f} | {m['peak_rss_mib']:.0f} |")
+    return out
+
+
+def _limits_section(data: dict) -> list[str]:
+    lim = data.get("limits")
+    if not lim:
+        return []
+    seg_s = lim["segments"] / lim["kernel_seconds"]
+    out = ["", "## How far from the machine's limit", "",
+           f"One launch of the path kernel, {lim['camera']} camera, {lim['width']}x{lim['height']} x {lim['spp']} spp = "
+           f"{lim['paths']:,} paths, max depth {lim['max_depth']} ({lim['lanes_per_pixel']} lane(s) per pixel, "
+           f"{lim['paths_per_lane']} paths per lane), `mcrt.bench_limits`:", "",
+           f"- Work: {lim['segments_per_path']:.2f} segments (closest-hit rays) and {lim['shadow_rays_per_path']:.2f} shadow "
+           f"rays per path, counted by a host that counts the estimator's calls.",
+           f"- Time: {1e3 * lim['kernel_seconds']:.1f} ms (median kernel execution time), {seg_s / 1e6:.0f} M segments/s, "
+           f"{1e9 / seg_s:.2f} ns per segment on {lim['cores']} cores."]
+    loop, whole = lim.get("loop_instructions"), lim.get("kernel_instructions")
+    if loop and lim.get("clock_mhz"):
+        hz = lim["clock_mhz"] * 1e6
+        cyc = lim["cores"] * hz / (seg_s / 16)  # core cycles per 16 segments, one packet iteration if packets are full
+        out += [f"- Machine code (the kernel compiled cold, disassembled by Dr.Jit): {whole['instructions']} instructions, "
+                f"the path loop {loop['instructions']} per iteration of a 16-lane packet, {loop['zmm']} of them on 512-bit zmm "
+                f"registers (16 float32 lanes), {loop['stack']} stack accesses (loop state and constants that do not fit "
+                f"the 32 vector registers), {loop['branches']} branches.",
+                f"- Against the machine: {lim['cores']} cores x 16 lanes x {lim['clock_mhz'] / 1e3:.1f} GHz (the clock "
+                f"/proc/cpuinfo reports) = {lim['cores'] * 16 * hz / 1e9:.0f} G lane-cycles/s. A packet iteration (16 "
+                f"segments where every lane is busy) took {cyc:.0f} core cycles, so the loop's {loop['instructions']} "
+                f"instructions ran at about {loop['instructions'] / cyc:.2f} per cycle if every iteration ran the whole body "
+                f"with full packets; lanes idle in partly finished packets and branches that skip code move that figure "
+                f"in opposite directions, and without hardware counters ({lim['perf']}) neither is measured.",
+                f"- Memory: the launch moves about {lim['kernel_bytes'] / 2**20:.1f} MiB through memory (pixel indices and "
+                f"the tile's float64 sums), {lim['kernel_bytes'] / lim['segments']:.1f} bytes per segment, "
+                f"{lim['kernel_bytes'] / lim['kernel_seconds'] / 1e9:.2f} GB/s against the {lim['copy_bandwidth'] / 1e9:.1f} GB/s "
+                f"a NumPy copy moves here. Everything else (rays, hits, throughput, random state) stays in registers "
+                f"and the stack (L1).",
+                "- What bounds it: the instruction stream. The kernel is not memory bound (the line above), and its "
+                "vector width is the machine's (16 lanes of AVX-512); what is left is the number of instructions per "
+                "segment (intersection with every object, a shadow ray, sampling, the loop state's spills) and how many "
+                "of those a core retires per cycle."]
+    return out
+
+
+def _gpu_section(data: dict) -> list[str]:
+    return ["", "## GPU", "", data.get("gpu") or "No GPU run."]
 
 
 def _trends(data: dict) -> list[str]:
@@ -327,7 +524,9 @@ def markdown(data: dict, out_dir: Path, *, json_path: Path | None = None, tried:
              "## Method", "", _method(data), "",
              "## Paths per second", "", format_table(data["rows"]), "",
              f"Peak memory of the benchmark process: {data['peak_memory_mib']:.0f} MiB.",
-             *_efficiency(data), *_spp_section(data), *_profile_section(data), *_reading(data, out_dir)]
+             *_efficiency(data), *_goals_section(data), *_plots_section(data, out_dir), *_spp_section(data),
+             *_memory_section(data), *_profile_section(data), *_limits_section(data), *_gpu_section(data),
+             *_reading(data, out_dir)]
     if tried:
         lines += _log_section(Path(tried), out_dir)
     return "\n".join(lines) + "\n"

@@ -95,9 +95,18 @@ def _recorded_run() -> dict:
             "machine": {"cpu": "Test CPU", "cores": 3, "platform": "TestOS"},
             "versions": {"mcrt": "9.9", "drjit": "8.8", "mitsuba": "7.7", "numpy": "6.6", "python": "5.5"},
             "drjit_threads": 3, "libllvm": "42.0.0", "simd": "AVX-512"}
+    memory = [{"width": 4096, "height": 4096, "spp": 1024, "max_depth": 2, "seconds": 100.0, "paths": 4096 * 4096 * 1024,
+               "image_mib": 384.0, "peak_rss_mib": 700.0, "mean": 0.1}]
+    limits = {"camera": "near", "width": 64, "height": 64, "spp": 16, "max_depth": 8, "paths": 65536, "segments": 327680,
+              "shadow_rays": 262144, "segments_per_path": 5.0, "shadow_rays_per_path": 4.0, "lanes_per_pixel": 16,
+              "paths_per_lane": 1, "kernel_seconds": 0.01, "kernel_bytes": 1 << 20,
+              "kernel_instructions": {"instructions": 1200, "vector": 1000, "zmm": 990, "stack": 100, "branches": 9},
+              "loop_instructions": {"instructions": 1000, "vector": 900, "zmm": 880, "stack": 90, "branches": 3},
+              "cores": 2, "clock_mhz": 2000.0, "copy_bandwidth": 1e10, "perf": "perf is not installed"}
     return {"command": "mcrt bench --res 64 --spp-sweep 1", "provenance": prov, "backend": "llvm", "intersector": "convex",
             "repeats": 3, "warmup_renders": 1, "rows": rows, "peak_memory_mib": 123.4, "kernel_profile": profile,
-            "kernel_profile_case": {"camera": "near", "width": 64, "height": 64, "spp": 16, "max_depth": 8, "repeats": 3}}
+            "kernel_profile_case": {"camera": "near", "width": 64, "height": 64, "spp": 16, "max_depth": 8, "repeats": 3},
+            "memory_runs": memory, "limits": limits, "gpu": "No GPU run (test)."}
 
 
 def _sections(page: str) -> list[str]:
@@ -115,8 +124,11 @@ def test_report_from_recorded_rows(tmp_path):
     tried = tmp_path / "tried.md"
     tried.write_text("### An old round\n\n- Something 11 % slower.\n")
     page = markdown(data, tmp_path, json_path=tmp_path / "bench.json", tried=tried)
-    assert _sections(page) == ["## Machine", "## Method", "## Paths per second", "## Against samples per render",
-                               "## Where mcrt's time goes", "## Reading it", LOG_HEADING]
+    assert _sections(page) == ["## Machine", "## Method", "## Paths per second", "## Goals",
+                               "## Speed-up against resolution and samples per pixel", "## Against samples per render",
+                               "## Peak memory", "## Where mcrt's time goes", "## How far from the machine's limit", "## GPU",
+                               "## Reading it", LOG_HEADING]
+    assert (tmp_path / "speedup_spp.png").stat().st_size > 1000 and "![speedup_spp](speedup_spp.png)" in page
     assert "    mcrt bench --res 64 --spp-sweep 1\n" in page and "[bench.json](bench.json)" in page
     for fact in ("2000-01-02T03:04:05+00:00", "Test CPU, 3 cores", "16-lane packets", "| Dr.Jit threads | 3 |", "mcrt 9.9",
                  "Mitsuba 7.7", "Dr.Jit 8.8", "libLLVM 42.0.0", "abc", "Peak memory of the benchmark process: 123 MiB",
@@ -141,12 +153,51 @@ def test_report_from_recorded_rows(tmp_path):
     assert log.rstrip().endswith(tried.read_text().rstrip()) and "11 %" not in body
 
 
+def test_report_goals_and_limits_from_recorded_rows(tmp_path):
+    """The goals table and the limits section: each figure derived from the recorded numbers.
+
+    The 64x64 cases' lowest speed-up is at 1 spp (the fixed costs weigh most), a goal not met;
+    the kernel's 327,680 segments in 10 ms on 2 cores at 2 GHz are 2 x 2e9 /
+    (3.2768e7 / 16) = 1953 cycles per packet iteration, 1000 / 1953 = 0.51
+    instructions per cycle; 700 MiB is under 1 GB.
+    """
+    from mcrt.bench_report import goals, pairs, speedup
+
+    data = _recorded_run()
+    lowest = min(speedup(a, b) for a, b in pairs(data["rows"]))
+    by_goal = {name: (met, fig) for name, met, fig in goals(data)}
+    assert lowest < 10  # 1 spp: (3 ms + 272 ns x 4096) / (2 ms + 16 ns x 4096) = 2.0x
+    assert by_goal["at least 10x at 1 spp and at 64x64"] == (False, f"lowest {lowest:.1f}x (near camera, 64x64, 1 spp, max depth 8) over 4 cases")
+    assert by_goal["peak memory under 1 GB for a 4096x4096, 1024-spp render"][0] is True
+    page = markdown(data, tmp_path)
+    assert "took 1953 core cycles" in page and "about 0.51 per cycle" in page and "5.00 segments" in page
+    assert "| 4096x4096 | 1024 | 2 | 100.0 | 171.8 | 384 | 700 |" in page and "No GPU run (test)." in page
+    data["memory_runs"][0]["peak_rss_mib"] = 1500.0
+    assert ("peak memory under 1 GB for a 4096x4096, 1024-spp render", False,
+            "1500 MiB (max depth 2, the whole render, 100 s)") in goals(data)
+
+
+def test_run_bench_bounds_long_renders():
+    """Cases above max_paths are timed on a part: mcrt's first launches, Mitsuba's first rows; no MSE then."""
+    from mcrt.tracer import TILE_LANES
+
+    rows = run_bench(load_scene(), [BenchCase("near", 600, 600, 1, 1)], repeats=1, progress=False,
+                     max_paths={"mcrt": 1000, "mitsuba": 1300})
+    mcrt, mitsuba = rows
+    assert mcrt.bounded and mitsuba.bounded and mcrt.mse_excess is None and mitsuba.mse_excess is None
+    assert mitsuba.paths == 2 * 600  # 2 rows of 600 pixels at 1 spp: at most 1300 paths
+    assert mcrt.paths == TILE_LANES < 600 * 600  # one whole launch, at least 1000 paths
+    assert all(r.paths_per_second == r.paths / statistics.median(r.times) for r in rows)
+    assert "(part)" in format_table(rows)
+
+
 def test_report_without_log_or_sweep(tmp_path):
     data = _recorded_run()
     data["rows"] = data["rows"][:2]
     data["kernel_profile"], data["kernel_profile_case"] = [], None
+    data["memory_runs"], data["limits"] = [], None
     page = (write_report(tmp_path / "r", data)).read_text()
-    assert _sections(page) == ["## Machine", "## Method", "## Paths per second", "## Reading it"]
+    assert _sections(page) == ["## Machine", "## Method", "## Paths per second", "## Goals", "## GPU", "## Reading it"]
     assert "outside the last section" not in page
 
 
