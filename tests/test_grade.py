@@ -562,3 +562,190 @@ def test_code_mode_command_line(code_class, assignment, workdir):
     assert main(["grade", str(d / "good.py"), "--mode", "code", "-a", assignment.path, "-o", str(out),
                  "--cache", str(workdir / "cache"), "-q"]) == 0
     assert json.loads((out / "good" / "results.json").read_text())["score"] == 50
+
+
+# --------------------------------------------------------------------------
+# Mistakes outside the catalogue (issue 22): Mitsuba renders of edited scenes, filtered images,
+# PNGs written by Pillow and ImageMagick, hand-ins too small to test. 64x64 as course2023.toml,
+# without the catalogue (its renders are not needed to score these).
+# --------------------------------------------------------------------------
+
+import dataclasses  # noqa: E402
+import shutil  # noqa: E402
+import subprocess  # noqa: E402
+
+from PIL import Image  # noqa: E402
+from scipy import ndimage  # noqa: E402
+
+from mcrt.grade.submissions import discover  # noqa: E402
+from mcrt.grade.grader import grade_submission  # noqa: E402
+
+
+@pytest.fixture(scope="session")
+def context64(workdir):
+    a = load_assignment(Path(__file__).parents[1] / "reference" / "assignments" / "course2023.toml")
+    return prepare_context(a, workdir / "cache64", mutants=())
+
+
+def _mitsuba(scene, spp, seed, *, sampler="independent", sensor=None, drop=()):
+    """A Mitsuba 3 render (path integrator) of ``scene`` seen by the near camera at 64x64, the sensor dict edited by ``sensor``."""
+    from mcrt.mitsuba import render_with_variance, scene_dict
+
+    d = scene_dict(scene, "near", 64, 64, 8)
+    d["sensor"] = dict(d["sensor"], sampler={"type": sampler, "sample_count": spp}, **(sensor or {}))
+    for k in drop:
+        del d[k]
+    return render_with_variance(d, spp=spp, seed=seed, spp_per_pass=spp).mean.astype(np.float64)
+
+
+def _recoloured(scene, wall: str, albedo):
+    walls = tuple(dataclasses.replace(w, albedo=albedo) if "".join(w.corners) == wall else w for w in scene.room.walls)
+    return dataclasses.replace(scene, room=dataclasses.replace(scene.room, walls=walls))
+
+
+def _grade_files(tmp: Path, files: dict, ctx):
+    """Write {student: (writer, spp)} under ``tmp`` and grade them; {student: StudentResult}."""
+    tmp.mkdir(parents=True, exist_ok=True)
+    for sid, (write, spp) in files.items():
+        write(tmp / sid)
+        if spp:
+            _manifest(tmp / f"{sid}.toml", spp)
+    return {s.student: grade_submission(s, ctx) for s in discover(tmp)}
+
+
+def _lost(r, name):
+    t = next(t for t in r.tests if t.name == name)
+    return t.max_score - t.score, t.output
+
+
+@pytest.fixture(scope="session")
+def structured(scene, context64, workdir):
+    """Correct Mitsuba renders (independent, stratified, low-discrepancy samplers) and edited-scene mistakes (seeds 400 + k)."""
+    fov = scene.camera("near").fov_x_deg
+    correct = _mitsuba(scene, 256, 401)
+    imgs = {
+        "ok_mi_independent": (correct, 256),
+        "ok_mi_stratified": (_mitsuba(scene, 64, 402, sampler="stratified"), 64),
+        "ok_mi_ldsampler": (_mitsuba(scene, 256, 403, sampler="ldsampler"), 256),
+        "mi_fov_3pct": (_mitsuba(scene, 256, 404, sensor={"fov": fov * 1.03}), 256),
+        "mi_half_pixel": (_mitsuba(scene, 256, 405, sensor={"principal_point_offset_x": 0.5 / 64}), 256),
+        "mi_blurred": (ndimage.gaussian_filter(correct, (0.8, 0.8, 0)), 256),
+        "mi_wall_colour": (_mitsuba(_recoloured(scene, "DE", (0.75, 0.2, 0.15)), 256, 406), 256),
+        "mi_no_tetrahedron": (_mitsuba(scene, 256, 407, drop=("tetrahedron",)), 256),
+        "mi_cracks": (np.where(np.isin(np.arange(64), [40, 41])[:, None, None] & np.isin(np.arange(64), [20, 21])[None, :, None],
+                               0.0, correct), 256),
+    }
+    files = {sid: ((lambda p, im=im: write_pfm(p.with_suffix(".pfm"), im)), spp) for sid, (im, spp) in imgs.items()}
+    return _grade_files(workdir / "structured", files, context64)
+
+
+def test_correct_mitsuba_renders_with_other_samplers_get_full_marks(structured):
+    """Mitsuba's path integrator with independent, stratified and low-discrepancy samplers: no false alarm
+    (each test at the assignment's family-wise level of 0.01; seeds 401-403)."""
+    for sid in ("ok_mi_independent", "ok_mi_stratified", "ok_mi_ldsampler"):
+        r = structured[sid]
+        assert r.score == r.max_score, (sid, [(t.name, t.output) for t in r.tests if t.score < t.max_score])
+
+
+def test_camera_mistakes_are_major(structured, context64):
+    """A field of view 3 % wide and a half-pixel offset of the pixel centres (Mitsuba renders of the edited
+    sensor): the camera criterion fails, named as such, and the bias criterion loses at least major_loss."""
+    th = context64.assignment.thresholds
+    for sid in ("mi_fov_3pct", "mi_half_pixel"):
+        r = structured[sid]
+        lost, out = _lost(r, "camera")
+        assert lost > 0 and "camera does not match" in out, (sid, out)
+        lost_u, out_u = _lost(r, "unbiased")
+        assert lost_u >= th.major_loss * 55 - 1e-6, (sid, out_u)
+    assert "field of view" in _lost(structured["mi_fov_3pct"], "camera")[1]
+    assert "shifted" in _lost(structured["mi_half_pixel"], "camera")[1]
+
+
+def test_blurred_image_is_called_filtered(structured, context64):
+    """scipy.ndimage's Gaussian blur (sigma 0.8 px) of a correct render: the noise criterion names the filter
+    and the bias criterion loses at least filter_loss, though no tile mean moves."""
+    r = structured["mi_blurred"]
+    lost, out = _lost(r, "noise")
+    assert lost == 5 and "filtered" in out, out
+    assert _lost(r, "unbiased")[0] >= context64.assignment.thresholds.filter_loss * 55 - 1e-6
+
+
+def test_wrong_wall_and_missing_object_are_major(structured, context64):
+    """A wall of the wrong colour and the tetrahedron left out (Mitsuba renders of the edited scene) lose at least
+    major_loss of the bias points, whatever their share of the image; the surface is named."""
+    th = context64.assignment.thresholds
+    for sid, what in (("mi_wall_colour", "wall DE"), ("mi_no_tetrahedron", "tetrahedron")):
+        lost, out = _lost(structured[sid], "unbiased")
+        assert lost >= th.major_loss * 55 - 1e-6 and what in out, (sid, out)
+
+
+def test_a_few_wrong_pixels_are_minor(structured, context64):
+    """Four black pixels (a crack) in a correct render: found by the pixel test, and only minor_loss is lost."""
+    th = context64.assignment.thresholds
+    lost, out = _lost(structured["mi_cracks"], "unbiased")
+    assert lost == pytest.approx(th.minor_loss * 55) and "darker than any correct render" in out, out
+
+
+def _png_writer(img, curve):
+    """An 8-bit PNG written by Pillow with ``curve`` (the student's encoding of linear radiance)."""
+    enc = {"srgb": srgb_oetf, "gamma22": lambda x: x ** (1 / 2.2), "gamma2": np.sqrt, "linear": lambda x: x}[curve]
+
+    def write(p):
+        codes = np.round(255 * enc(np.clip(img, 0, 1))).astype(np.uint8)
+        Image.fromarray(codes, "RGB").save(p.with_suffix(".png"))
+    return write
+
+
+def test_png_encodings_are_decoded_not_called_bugs(scene, context64, workdir):
+    """Correct 100-spp mcrt renders as 8-bit PNGs (Pillow) with the sRGB curve, gamma 2.2 and a square root get full
+    marks (quantisation and clipping in the noise model); one with linear values loses only the linear points; a PPM
+    made by ImageMagick from the sRGB PNG reads the same (seeds 500 + k)."""
+    files = {}
+    for k, curve in enumerate(("srgb", "gamma22", "gamma2", "linear")):
+        files[f"png_{curve}"] = (_png_writer(_render(scene, 100, 500 + k, res=64).mean, curve), 100)
+    res = _grade_files(workdir / "pngs", files, context64)
+    if shutil.which("convert"):
+        d = workdir / "ppm"
+        d.mkdir()
+        subprocess.run(["convert", str(workdir / "pngs" / "png_srgb.png"), str(d / "magick.ppm")], check=True)
+        _manifest(d / "magick.toml", 100)
+        res.update({s.student: grade_submission(s, context64) for s in discover(d)})
+    for sid, r in res.items():
+        lost = [(t.name, t.output) for t in r.tests if t.score < t.max_score]
+        if sid == "png_linear":
+            assert [n for n, _ in lost] == ["linear"] and "PNG holds linear values" in lost[0][1], lost
+        else:
+            assert r.score == r.max_score, (sid, lost)
+    assert res["png_gamma2"].details["encoding"]["detected"] == "gamma2"
+    assert res["png_gamma22"].details["encoding"]["detected"] in ("gamma2.2", "srgb")
+
+
+def test_images_too_small_to_test_get_no_bias_points(scene, context64, workdir):
+    """1x1 and 4x4 hand-ins (the box-filtered mean of a correct render): nothing can be tested, so the bias
+    criteria (exposure, noise, unbiased) score 0, said so."""
+    img = _render(scene, 256, 510, res=64).mean.astype(np.float64)
+    files = {f"small_{k}": ((lambda p, k=k: write_pfm(p.with_suffix(".pfm"), img.reshape(k, 64 // k, k, 64 // k, 3).mean(axis=(1, 3)))), 256)
+             for k in (1, 4)}
+    for sid, r in _grade_files(workdir / "small", files, context64).items():
+        for name in ("exposure", "noise", "unbiased"):
+            lost, out = _lost(r, name)
+            assert lost == 5 or lost == 55, (sid, name, out)
+            assert "smaller than one 8x8 tile" in out
+
+
+def test_weighted_holm_is_holm_with_equal_weights_and_splits_the_level():
+    """adjust_p_values_weighted against Holm (equal weights) and against the step-down rule written out."""
+    from mcrt.stats import adjust_p_values, adjust_p_values_weighted
+
+    p = np.random.default_rng(7).random(40) ** 4
+    assert np.allclose(adjust_p_values_weighted(p, np.ones(40)), adjust_p_values(p, "holm"))
+    # Two groups: 0.9 of alpha over 3 tests, 0.1 over 1. Step-down by hand: sort by p / w, reject while
+    # p_(i) <= alpha w_(i) / (sum of the weights left).
+    p, w, alpha = np.array([0.004, 0.02, 0.5, 0.006]), np.array([0.3, 0.3, 0.3, 0.1]), 0.05
+    rejected = adjust_p_values_weighted(p, w) <= alpha
+    left, expect = w.sum(), np.zeros(4, bool)
+    for i in np.argsort(p / w):
+        if p[i] > alpha * w[i] / left:
+            break
+        expect[i], left = True, left - w[i]
+    assert rejected.tolist() == expect.tolist() == [True, True, False, True]

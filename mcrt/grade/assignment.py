@@ -59,7 +59,7 @@ CRITERIA: dict[str, tuple[float, dict[str, tuple[str, float, float]]]] = {
     "resolution": (5.0, {}),
     "finite": (5.0, {"max_fraction": ("max_nonfinite_fraction", 0.0, 1.0)}),
     "non_negative": (5.0, {"tolerance": ("negative_tolerance", 0.0, 1.0)}),
-    "linear": (5.0, {}),
+    "linear": (5.0, {"png_gamma_loss": ("png_gamma_loss", 0.0, 1.0)}),
     "orientation": (5.0, {"margin": ("orientation_margin", 0.0, 1.0)}),
     "camera": (5.0, {}),
     "exposure": (5.0, {"max_stops": ("max_exposure_stops", 0.0, 20.0)}),
@@ -69,6 +69,15 @@ CRITERIA: dict[str, tuple[float, dict[str, tuple[str, float, float]]]] = {
         "min_effect": ("min_effect", 0.0, 1.0),
         "min_loss": ("min_loss", 0.0, 1.0),
         "full_effect": ("full_effect", 0.0, 100.0),
+        "major_loss": ("major_loss", 0.0, 1.0),
+        "major_coverage": ("major_coverage", 0.0, 1.0),
+        "minor_loss": ("minor_loss", 0.0, 1.0),
+        "minor_area": ("minor_area", 0.0, 1.0),
+        "filter_loss": ("filter_loss", 0.0, 1.0),
+        "min_shift": ("min_shift", 0.0, 100.0),
+        "min_blur": ("min_blur", 0.0, 100.0),
+        "min_correlation": ("min_correlation", 0.0, 1.0),
+        "min_pixel_effect": ("min_pixel_effect", 0.0, 1.0),
     }),
     "metrics": (0.0, {}),
 }
@@ -102,6 +111,16 @@ class Thresholds:
     min_effect: float = 0.003  # unbiased.min_effect: smaller relative biases are never penalised
     min_loss: float = 0.25  # unbiased.min_loss: share of the points lost for any penalised bias
     full_effect: float = 0.10  # unbiased.full_effect: relative bias at which a pixel counts in full
+    major_loss: float = 0.75  # unbiased.major_loss: share lost at least for a major mistake (camera, a surface wrong)
+    major_coverage: float = 0.5  # unbiased.major_coverage: share of a surface's pixels off by full_effect that makes it wrong
+    minor_loss: float = 0.10  # unbiased.minor_loss: share lost for a mistake confined to a few pixels
+    minor_area: float = 0.01  # unbiased.minor_area: share of the image below which a mistake is minor
+    filter_loss: float = 0.50  # unbiased.filter_loss: share lost at least for a blurred or denoised image
+    min_shift: float = 0.05  # unbiased.min_shift: grade pixels of misregistration below which it is not penalised
+    min_blur: float = 0.1  # unbiased.min_blur: blur variance (grade pixels^2) below which it is not penalised
+    min_correlation: float = 0.05  # unbiased.min_correlation: neighbour correlation of the noise below which it is not
+    min_pixel_effect: float = 0.25  # unbiased.min_pixel_effect: relative darkening below which a pixel is not penalised
+    png_gamma_loss: float = 0.0  # linear.png_gamma_loss: share lost for a PNG with a gamma of 2.2 or 2 instead of sRGB
 
 
 @dataclass(frozen=True)

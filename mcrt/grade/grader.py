@@ -59,6 +59,8 @@ from mcrt.grade.score import (
     quantisation_variance,
     scale_stats,
 )
+from mcrt.grade.structure import detect as detect_structure
+from mcrt.grade.structure import families as structure_families
 from mcrt.grade.submissions import Submission, choose_images, read_manifest
 
 STATUS_GRADED = "graded"
@@ -319,27 +321,67 @@ class _Grader:
 
         # Encoding.
         base_tile = next((t for t in a.tiles if t > 0), 8)
-        enc = ck.detect_encoding(imgs[0], R, mask, loaded.fmt, base_tile)
-        self.details["encoding"] = {"detected": enc.kind, "spreads": {k: round(v, 4) for k, v in enc.spreads.items()}}
-        fmt = loaded.fmt
-        self.encoding = enc.kind
-        if enc.kind != "linear":
-            rub.failed("linear", enc.message)
-            dec = ck.ENCODINGS[enc.kind][0]
-            imgs = [dec(i) for i in imgs]
-            if enc.kind == "png-linear":
-                fmt = fmt.replace("png8", "png8-linear").replace("png16", "png16-linear")
-            qvar = [quantisation_variance(i, fmt) / plan.down**2 for i in imgs]
-            corrected.append("linear")
+        self.png_safe = None
+        if loaded.fmt.startswith("png"):
+            self.png_safe = _png_unclipped(R, self.ctx.model_var[cam].astype(np.float64), spp or a.min_spp)
+            imgs, qvar = self._png_curve(loaded, plan, ori, R, mask & self.png_safe, base_tile, corrected)
         else:
-            rub.passed("linear", "linear radiance" if not fmt.startswith("png") else "sRGB-encoded PNG, decoded to linear")
+            imgs, qvar = self._hdr_encoding(loaded, plan, imgs, qvar, R, mask, base_tile, corrected)
 
         if corrected and not a.grade_corrected:
             rub.block(f"the image had to be corrected ({', '.join(corrected)}) and this assignment grades only images "
                       "that need no correction")
             return
         self.corrected = corrected
-        self._grade_statistics(imgs, qvar, mask, R, ref, cam, spp, n_r, fmt, diag_imgs)
+        self._grade_statistics(imgs, qvar, mask, R, ref, cam, spp, n_r, loaded.fmt, diag_imgs)
+
+    def _png_curve(self, loaded, plan, ori, R, mask, tile, corrected):
+        """A display image's transfer curve (:func:`mcrt.grade.checks.detect_png_curve`), decoded per hand-in pixel."""
+        rub, fmt = self.rubric, loaded.fmt
+        declared = "linear" if fmt.endswith("linear") else "srgb"
+        inv = ck.TRANSFORMS[ori.transform][1]
+        codes = [inv(ck.png_codes(i, fmt)) for i in loaded.images]
+        cands = {c: [ck.box_down(dec(x), plan.down) for x in codes] for c, (dec, _) in ck.PNG_CURVES.items()}
+        enc = ck.detect_png_curve({c: v[0] for c, v in cands.items()}, R, mask, tile, declared)
+        curve = enc.curve
+        self.details["encoding"] = {"detected": curve, "declared": declared, "curve_chi2": {k: round(v, 2) for k, v in enc.chi2.items()}}
+        qvar = [ck.box_down(ck.curve_quantisation_variance(x, curve, fmt), plan.down) / plan.down**2 for x in codes]
+        what = ck.PNG_CURVES[curve][1]
+        if curve == declared:
+            rub.passed("linear", "sRGB-encoded image, decoded to linear" if curve == "srgb" else "linear image, as declared")
+        elif curve == "linear":
+            rub.failed("linear", "the PNG holds linear values but PNGs are read as sRGB-encoded: declare `linear = true` in "
+                       "your manifest, or encode with the sRGB curve before writing 8-bit files")
+            corrected.append("linear")
+        elif declared == "linear":
+            rub.failed("linear", f"the manifest declares the image linear, but its values follow {what}; it was decoded "
+                       "with that curve: leave `linear` out of the manifest for a gamma-encoded image")
+            corrected.append("linear")
+        else:
+            text = (f"written with {what} rather than the sRGB curve; decoded with it (the sRGB curve is the standard "
+                    "one for 8-bit files)")
+            if self.th.png_gamma_loss > 0:
+                rub.failed("linear", text, loss=self.th.png_gamma_loss)
+                corrected.append("linear")
+            else:
+                rub.passed("linear", text)
+        return cands[curve], qvar
+
+    def _hdr_encoding(self, loaded, plan, imgs, qvar, R, mask, base_tile, corrected):
+        """A gamma or sRGB curve on data that should be linear radiance (:func:`mcrt.grade.checks.detect_encoding`)."""
+        rub = self.rubric
+        enc = ck.detect_encoding(imgs[0], R, mask, loaded.fmt, base_tile)
+        self.details["encoding"] = {"detected": enc.kind, "spreads": {k: round(v, 4) for k, v in enc.spreads.items()}}
+        self.encoding = enc.kind
+        if enc.kind != "linear":
+            rub.failed("linear", enc.message)
+            dec = ck.ENCODINGS[enc.kind][0]
+            imgs = [dec(i) for i in imgs]
+            qvar = [quantisation_variance(i, loaded.fmt) / plan.down**2 for i in imgs]
+            corrected.append("linear")
+        else:
+            rub.passed("linear", "linear radiance")
+        return imgs, qvar
 
     # -- statistics ------------------------------------------------------------
     def _grade_statistics(self, imgs, qvar, mask, R, ref, cam, spp, n_r, fmt, diag_imgs) -> None:
@@ -353,10 +395,20 @@ class _Grader:
         if pair is not None:
             pair = np.where(np.isfinite(pair), pair, 0.0)
         base_tile = next((t for t in a.tiles if t > 0), 8)
+        gh, gw = R.shape[:2]
+        if gh < base_tile or gw < base_tile:
+            self._too_small(gh, gw, base_tile)
+            return
+        # Display images: pixels the 8-bit range may have clipped are left out of every statistic.
+        clip_mask = mask if self.png_safe is None else mask & self.png_safe
+        n_clip = int(np.count_nonzero(mask & ~clip_mask))
+        if n_clip:
+            self.notes.append(f"{n_clip} pixels whose expected value is near or above 1 (or next to such a pixel) were "
+                              "left out: an 8-bit image clips them (hand in EXR, PFM or HDR to have them graded)")
 
         # Noise level: 1 / (samples per grade pixel) of an mcrt-like estimator.
         resid = np.where(mask[..., None], img - R, 0.0)
-        ratio = noise_ratio(resid, R, mask, model_ps, ref_noise + q, base_tile, pair)
+        ratio = noise_ratio(resid, R, clip_mask, model_ps, ref_noise + q, base_tile, pair)
         per = n_r * k2  # hand-in renders x pixels per grade pixel
         spp_eff = (1.0 / ratio) / per if np.isfinite(ratio) and ratio > 0 else float("inf")
         self.details["noise"] = {"spp_declared": spp, "renders": n_r, "spp_effective": None if not np.isfinite(spp_eff) else spp_eff}
@@ -401,28 +453,29 @@ class _Grader:
 
         noise = Noise(model=model_ps / (spp_model * per) + q, reference=ref_noise, pair=pair)
         kw = {"alpha": th.alpha, "min_effect": th.min_effect, "full_effect": th.full_effect}
+        samples = spp_model * per
 
-        # PNG: leave out pixels that the 8-bit range may have clipped.
-        clip_mask = mask
-        if fmt.startswith("png"):
-            sd = np.sqrt(model_ps / (spp_model * per))
-            clip_mask = mask & np.all(R + 3 * sd < 1.0, axis=2)
-            n_clip = int(np.count_nonzero(mask & ~clip_mask))
-            if n_clip:
-                self.notes.append(f"{n_clip} pixels whose expected value is near or above 1 were left out: an 8-bit PNG "
-                                  "clips them (hand in EXR, PFM or HDR to have them graded)")
-        bt = bias_test(resid, R, clip_mask, noise, a.tiles, **kw)
+        def structure(res, nz, scale=1.0):
+            st = detect_structure(res, R, clip_mask, nz.model + nz.reference,
+                                  nz.model + nz.reference + (R * scale) ** 2 / samples,
+                                  base=ctx.baseline.mean if cam == a.camera else None, labels=ctx.labels[cam])
+            return st, structure_families(st, th)
+
+        st, fam = structure(resid, noise)
+        bt = bias_test(resid, R, clip_mask, noise, a.tiles, **kw, extra=fam)
         k = ck.estimate_scale(img, R, clip_mask, base_tile)
         stops = float(np.log2(k)) if k > 0 else float("inf")
         scaled = None
-        if bt.penalised_any and abs(k - 1) > th.min_effect:
+        if _flagged(bt) and abs(k - 1) > th.min_effect:
             ks = ck.nice_scale(k)
             img_s = img / ks
             pair_s = pair / ks**2 if pair is not None else None
             noise_s = Noise(model=model_ps / (spp_model * per) + q / ks**2, reference=ref_noise, pair=pair_s)
-            bts = bias_test(np.where(clip_mask[..., None], img_s - R, 0.0), R, clip_mask, noise_s, a.tiles, **kw)
-            if not bts.penalised_any:
-                scaled = (ks, bts, img_s)
+            resid_s = np.where(clip_mask[..., None], img_s - R, 0.0)
+            st_s, fam_s = structure(resid_s, noise_s)
+            bts = bias_test(resid_s, R, clip_mask, noise_s, a.tiles, **kw, extra=fam_s)
+            if not _flagged(bts):
+                scaled = (ks, bts, img_s, st_s)
         self.details["exposure"] = {"ratio": k, "stops": stops}
         if scaled is not None:
             ks = scaled[0]
@@ -433,7 +486,7 @@ class _Grader:
                        "wrong: an exposure or display scale applied before saving, or a constant missing in the "
                        "estimator (1/pi, the light's radiance or area)")
             if a.grade_corrected:
-                bt, img = scaled[1], scaled[2]
+                bt, img, st = scaled[1], scaled[2], scaled[3]
                 self.corrected.append("exposure")
         elif abs(stops) > th.max_exposure_stops:
             rub.failed("exposure", f"the image is {k:.3g} times as bright as the reference overall ({stops:+.2f} stops, "
@@ -452,35 +505,46 @@ class _Grader:
                   f"relative effects of {_fmt_pct(th.min_effect)} or more")
         self.details["bias_test"] = _bias_details(bt)
         self._figures(img, R, bt, mask)
-        m = metrics(img, R, mask, noise.model + noise.reference)
+        m = metrics(img, R, clip_mask, noise.model + noise.reference)
         fmap = m.pop("_flip_map", None)
         if fmap is not None:
             self.figures["flip"] = np.asarray(fmap)
         m["excess_rms"] = bt.excess_rms
         self.details["metrics"] = m
-        if not bt.penalised_any:
+        self.details["structure"] = _structure_details(st, bt)
+        found = self._structure_findings(st, bt, spp_eff, spp)
+        if not _flagged(bt):
             rub.passed("unbiased", f"no significant bias: none of {bt.n_tests} tile tests is significant ({family}); noise from {pooled}. "
                        f"At your noise a tile would need a bias of about {_fmt_pct(bt.min_detectable)} to show; "
-                       f"bias beyond noise: {_fmt_pct(bt.excess_rms)} RMS")
+                       f"bias beyond noise: {_fmt_pct(bt.excess_rms)} RMS. No misregistration, blur or wrong pixels "
+                       "either (tested with the tiles at the same error rate)")
             self.headline = "No significant bias."
         else:
-            loss = bt.loss(th.min_loss)
-            n_pen = sum(int(np.count_nonzero(s.penalised)) for s in bt.scales)
-            where = self._where(bt, cam)
-            lines = [f"biased: {n_pen} of {bt.n_tests} tile tests are significant ({family})."
-                     + (f" {where[0].upper() + where[1:]}." if where else "")]
-            diag = self._diagnose(diag_imgs, mask, R, ref, cam, noise, base_tile)
-            if diag:
-                lines.append(f"Most consistent with {short_text(diag[0].text)} ({diag[0].name})"
-                             + (f", or {short_text(diag[1].text)} ({diag[1].name})" if len(diag) > 1 else "") + ".")
-            lines.append(f"Bias beyond noise: {_fmt_pct(bt.excess_rms)} RMS; {_fmt_pct(loss)} of these points lost "
-                         f"({_fmt_pct(th.min_loss)} for any significant bias plus the share of the image it covers).")
+            loss, why = self._loss(bt, cam)
+            lines, where, diag = [], "", []
+            if bt.penalised_any:
+                n_pen = sum(int(np.count_nonzero(s.penalised)) for s in bt.scales)
+                where = self._where(bt, cam)
+                lines.append(f"biased: {n_pen} of {bt.n_tests} tile tests are significant ({family})."
+                             + (f" {where[0].upper() + where[1:]}." if where else ""))
+                diag = self._diagnose(diag_imgs, mask, R, ref, cam, noise, base_tile)
+                if diag:
+                    lines.append(f"Most consistent with {short_text(diag[0].text)} ({diag[0].name})"
+                                 + (f", or {short_text(diag[1].text)} ({diag[1].name})" if len(diag) > 1 else "") + ".")
+            lines += [found[k] + "." for k in found]
+            lines.append(f"Bias beyond noise: {_fmt_pct(bt.excess_rms)} RMS; {_fmt_pct(loss)} of these points lost ({why}).")
             rub.failed("unbiased", " ".join(lines), loss=loss)
             self.headline = where[0].upper() + where[1:] + "." if where else "Biased."
             if diag:
                 self.headline = f"{where[0].upper() + where[1:] if where else 'Biased'}: consistent with {short_text(diag[0].text)}."
+            elif found:
+                self.headline = next(iter(found.values())).split(":")[0] + "."
+        if "registration" in found:
+            rub.failed("camera", found["registration"])
         status, text, firm = noise_verdict
-        if status == "failed" and not firm and bt.penalised_any:
+        if "filter" in found:
+            status, text, firm = "failed", found["filter"], True
+        if status == "failed" and not firm and _flagged(bt):
             status, text = "passed", (f"not judged: the image is biased, so its noise cannot be compared with a correct "
                                       f"renderer's (it is like mcrt with about {_spp_text(spp_eff)} spp)")
         elif status == "failed" and not firm:
@@ -524,6 +588,82 @@ class _Grader:
             mtxt += f", FLIP {m['flip']:.3f}"
         mtxt += f", bias beyond noise {_fmt_pct(bt.excess_rms)} RMS. These grow with noise and are not graded."
         rub.set("metrics", "info", mtxt)
+
+    # -- structured errors and points ---------------------------------------------
+    def _too_small(self, gh: int, gw: int, tile: int) -> None:
+        """A graded image smaller than one tile of the bias test: the bias criteria get no points."""
+        msg = (f"not tested: the graded image is {gw}x{gh} pixels, smaller than one {tile}x{tile} tile of the bias test, "
+               f"so nothing about it can be tested; hand in {self.a.width}x{self.a.height} pixels")
+        for name in ("exposure", "noise", "unbiased"):
+            self.rubric.failed(name, msg)
+        self.rubric.set("metrics", "info", "not computed: the image is too small to compare")
+        self.headline = "Too small to test."
+
+    def _wrong_surfaces(self, bt, cam) -> list[str]:
+        """Surfaces most of whose pixels (``major_coverage``) are off by at least ``full_effect``."""
+        th, lab = self.th, self.ctx.labels[cam]
+        off = bt.pixel_effect >= th.full_effect
+        out = []
+        for k in np.unique(lab):
+            sel = lab == k
+            if sel.sum() >= 8 and float(np.mean(off[sel])) >= th.major_coverage:
+                out.append(self.ctx.label_names[int(k)])
+        return out
+
+    def _loss(self, bt, cam) -> tuple[float, str]:
+        """Share of the unbiased points lost, as a TA would: by the kind of mistake, then by its extent."""
+        th, ex = self.th, bt.extra
+        tile_loss = bt.loss(th.min_loss) if bt.penalised_any else 0.0
+        pix = ex["pixels"].reshape(bt.shape + (3,)).any(axis=2) if "pixels" in ex else np.zeros(bt.shape, bool)
+        area = float(np.mean((bt.pixel_effect > 0) | pix))
+        surfaces = self._wrong_surfaces(bt, cam) if bt.penalised_any else []
+        if ex.get("registration", np.zeros(1, bool)).any() or surfaces:
+            what = "the camera" if not surfaces else "; ".join(surfaces[:3]) + (" look wrong" if len(surfaces) > 1 else " looks wrong")
+            return max(th.major_loss, tile_loss), f"a major mistake ({what}): at least {_fmt_pct(th.major_loss)}"
+        if ex.get("blur", np.zeros(1, bool)).any() or ex.get("correlation", np.zeros(1, bool)).any():
+            return max(th.filter_loss, tile_loss), f"a filtered image: at least {_fmt_pct(th.filter_loss)}"
+        if area <= th.minor_area:
+            return th.minor_loss, f"a minor mistake, {_fmt_pct(area)} of the image: {_fmt_pct(th.minor_loss)}"
+        if not bt.penalised_any:
+            return min(1.0, th.min_loss + (1.0 - th.min_loss) * area), "wrong pixels over part of the image"
+        return tile_loss, f"{_fmt_pct(th.min_loss)} for any significant bias plus the share of the image it covers"
+
+    def _structure_findings(self, st, bt, spp_eff: float, spp: int | None) -> dict[str, str]:
+        """Feedback for each structured error found (rejected and relevant): registration, filter, pixels."""
+        out, ex = {}, bt.extra
+        reg = st.registration
+        if reg is not None and ex.get("registration", np.zeros(1, bool)).any():
+            h, w = bt.shape
+            radius = 0.5 * float(np.hypot(h - 1, w - 1))
+            parts = []
+            if np.hypot(*reg.shift) >= self.th.min_shift:
+                parts.append(f"shifted by ({reg.shift[0]:+.2f}, {reg.shift[1]:+.2f}) pixels (right, down)")
+            if abs(reg.zoom) * radius >= self.th.min_shift:
+                parts.append(f"a field of view about {_fmt_pct(abs(reg.zoom))} {'wider' if reg.zoom > 0 else 'narrower'} "
+                             "(in tan(fov/2))")
+            if abs(reg.roll) * radius >= self.th.min_shift:
+                parts.append(f"rotated by about {np.degrees(abs(reg.roll)):.2g} degrees")
+            out["registration"] = ("the camera does not match the reference: the image is " + ", ".join(parts or ["misregistered"])
+                                   + f" (up to {reg.edge_displacement:.2f} pixels at the border; a first-order fit, "
+                                   f"p = {reg.p:.2g}); check the pixel centre ((i + 0.5) / width), the field of view "
+                                   "(horizontal, in degrees) and the camera's eye, look-at and up vectors")
+        blur = ex.get("blur", np.zeros(1, bool)).any()
+        if blur or ex.get("correlation", np.zeros(1, bool)).any():
+            how = [f"neighbouring pixels' noise is correlated ({st.correlation:.2f})"] if st.correlation > 0 else []
+            if blur:
+                how.append(f"edges are {'softened' if st.blur > 0 else 'sharpened'} as by a filter of about "
+                           f"{np.sqrt(abs(st.blur)):.2g} pixels")
+            low = (f"; its noise is like {_spp_text(spp_eff)} spp where {spp} were declared" if spp and np.isfinite(spp_eff)
+                   and spp_eff > 4 * spp else "")
+            out["filter"] = ("the image was filtered (blurred, denoised or resampled): " + " and ".join(how) + low
+                             + "; a Monte-Carlo render's pixels are independent: hand in the unfiltered render")
+        if "pixels" in ex and ex["pixels"].any():
+            pix = ex["pixels"].reshape(bt.shape + (3,)).any(axis=2)
+            first = np.argwhere(pix)[0]
+            out["pixels"] = (f"{int(pix.sum())} pixels are darker than any correct render's noise allows (the first at row "
+                             f"{int(first[0])}, column {int(first[1])}): rays that miss geometry (cracks between triangles, "
+                             "a hit test's epsilon) or shadow rays that hit the surface they start from")
+        return out
 
     # -- where and why -----------------------------------------------------------
     def _where(self, bt, cam) -> str:
@@ -695,6 +835,31 @@ def _conclusive_chi2(cands, chi0: float, terms: int) -> bool:
 def _conclusive(cands) -> bool:
     """The best candidate explains at least 30 % and twice as much as the next one."""
     return bool(cands) and cands[0].explained >= 0.3 and (len(cands) < 2 or cands[0].explained >= 2 * max(cands[1].explained, 0.0))
+
+
+def _flagged(bt) -> bool:
+    """Any tile test or structured-error test rejected and relevant."""
+    return bool(bt.penalised_any or any(np.any(v) for v in bt.extra.values()))
+
+
+def _structure_details(st, bt) -> dict:
+    reg = st.registration
+    out = {"correlation": st.correlation, "p_correlation": st.p_correlation, "blur_variance": st.blur,
+           "p_blur": st.p_blur, "penalised": {k: int(np.count_nonzero(v)) for k, v in bt.extra.items()}}
+    if reg is not None:
+        out["registration"] = {"shift": list(reg.shift), "zoom": reg.zoom, "roll": reg.roll,
+                               "edge_displacement": reg.edge_displacement, "p": reg.p}
+    return out
+
+
+def _png_unclipped(R, model_ps, spp: int) -> np.ndarray:
+    """Grade pixels an 8-bit image cannot have clipped: expected value plus 3 sd of a hand-in pixel below 1,
+    and not next to a pixel that is not (a grade pixel's hand-in pixels may see a brighter neighbour)."""
+    from scipy import ndimage
+
+    sd = np.sqrt(model_ps / max(spp, 1))  # a hand-in pixel's noise: its per-sample variance is at most a grade pixel's
+    bright = np.any(R + 3 * sd >= 1.0, axis=2)
+    return ~ndimage.binary_dilation(bright, structure=np.ones((3, 3), bool))
 
 
 def _tile_means(x, mask, tile):

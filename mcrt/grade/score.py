@@ -49,7 +49,7 @@ from scipy import stats as _sps
 
 from mcrt import metrics as image_metrics
 from mcrt.imageio import srgb_eotf_slope, srgb_oetf
-from mcrt.stats import LUMINANCE_WEIGHTS, adjust_p_values
+from mcrt.stats import LUMINANCE_WEIGHTS, adjust_p_values_weighted
 from mcrt.stats.tiles import tile_box, tile_expand, tile_sums
 
 LUMINANCE = np.asarray(LUMINANCE_WEIGHTS)  # as an array, for ``rgb @ LUMINANCE``
@@ -99,6 +99,7 @@ class BiasTest:
     excess_rms: float = 0.0  # bias RMS beyond noise at the first scale, relative to the mean reference
     min_detectable: float = 0.0  # median relative effect a base tile must have to reach significance
     worst: dict = field(default_factory=dict)
+    extra: dict = field(default_factory=dict)  # other detector -> its rejected and relevant tests (bool array)
 
     @property
     def base(self) -> ScaleResult:
@@ -154,12 +155,30 @@ def bias_scales(tiles, h: int, w: int) -> list[int]:
 
 
 def bias_test(resid: np.ndarray, ref: np.ndarray, mask: np.ndarray, noise: Noise, tiles, *, alpha: float,
-              min_effect: float, full_effect: float) -> BiasTest:
-    """Multi-scale tile test, Holm-corrected over every tile, scale and channel (module docstring)."""
+              min_effect: float, full_effect: float, extra=()) -> BiasTest:
+    """Multi-scale tile test, Holm-corrected over every tile, scale and channel (module docstring).
+
+    ``extra`` holds other detectors' tests that share the family-wise error
+    rate: (name, raw p-values, relevant, share) with ``share`` the part of
+    ``alpha`` the detector gets (the tile tests keep the rest). All tests
+    are then adjusted together by weighted Holm, each test weighted by its
+    group's share over the group's size; ``BiasTest.extra`` maps each name
+    to the tests that are rejected and relevant.
+    """
     h, w = resid.shape[:2]
     scales = [scale_stats(resid, ref, mask, noise, tile) for tile in bias_scales(tiles, h, w)]
     ps = np.concatenate([s.p[s.valid].ravel() for s in scales]) if scales else np.zeros(0)
-    adj = adjust_p_values(ps, "holm") if ps.size else ps
+    extra = [(name, np.asarray(p, np.float64).ravel(), np.asarray(rel, bool).ravel(), share)
+             for name, p, rel, share in extra if np.size(p)]
+    tile_share = 1.0 - sum(e[3] for e in extra)
+    weights = [np.full(ps.size, tile_share / max(ps.size, 1))] + [np.full(e[1].size, e[3] / e[1].size) for e in extra]
+    all_p = np.concatenate([ps] + [e[1] for e in extra])
+    all_adj = adjust_p_values_weighted(all_p, np.concatenate(weights)) if all_p.size else all_p
+    adj = all_adj[:ps.size]
+    extra_pen, k_e = {}, ps.size
+    for name, p, rel, _ in extra:
+        extra_pen[name] = (all_adj[k_e:k_e + p.size] <= alpha) & rel
+        k_e += p.size
     k = 0
     pix = np.zeros((h, w))
     any_pen = False
@@ -181,7 +200,7 @@ def bias_test(resid: np.ndarray, ref: np.ndarray, mask: np.ndarray, noise: Noise
             if not worst or abs(s.t[ty, tx, c]) > abs(worst["t"]):
                 worst = {"tile": s.tile, "ty": int(ty), "tx": int(tx), "box": [y0, y1, x0, x1], "channel": CHANNELS[c],
                          "t": float(s.t[ty, tx, c]), "p_adjusted": float(pa[ty, tx, c]), "rel": float(s.rel[ty, tx, c])}
-    bt = BiasTest(scales, alpha, min_effect, int(ps.size), (h, w), any_pen)
+    bt = BiasTest(scales, alpha, min_effect, int(ps.size), (h, w), any_pen, extra=extra_pen)
     bt.pixel_effect = pix
     bt.severity = float(np.mean(np.minimum(1.0, pix / full_effect))) if any_pen else 0.0
     bt.worst = worst

@@ -10,7 +10,7 @@ One job per module:
   ``policy='independent'`` or ``'reference-floor'`` (the variance floor,
   :func:`floor_variance`, against a high-spp reference);
 * :mod:`mcrt.stats.multiple`: Holm, Bonferroni and Benjamini-Hochberg
-  (:func:`adjust_p_values`, :func:`reject`);
+  (:func:`adjust_p_values`, :func:`reject`), weighted Holm (:func:`adjust_p_values_weighted`);
 * :mod:`mcrt.stats.goodness`: chi-square goodness of fit with pooling
   (:func:`chi2_gof`, for sampling routines);
 * :mod:`mcrt.stats.interval`: the Clopper-Pearson interval
@@ -25,7 +25,7 @@ reports is :mod:`mcrt.compare`'s job; the pytest assertion is
 from mcrt.stats.errors import StatsError, ZeroPdfError
 from mcrt.stats.goodness import chi2_gof
 from mcrt.stats.interval import binomial_interval
-from mcrt.stats.multiple import CORRECTIONS, adjust_p_values, reject
+from mcrt.stats.multiple import CORRECTIONS, adjust_p_values, adjust_p_values_weighted, reject
 from mcrt.stats.policy import POLICIES, compare, floor_variance
 from mcrt.stats.tiles import tile_box, tile_counts, tile_means, tile_sums
 from mcrt.stats.twosample import LUMINANCE_WEIGHTS, Comparison, TileResult, compare_images
@@ -42,6 +42,7 @@ __all__ = [
     "floor_variance",
     "CORRECTIONS",
     "adjust_p_values",
+    "adjust_p_values_weighted",
     "reject",
     "chi2_gof",
     "binomial_interval",

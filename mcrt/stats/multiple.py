@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["CORRECTIONS", "adjust_p_values", "reject"]
+__all__ = ["CORRECTIONS", "adjust_p_values", "adjust_p_values_weighted", "reject"]
 
 #: Procedure name -> (error rate it bounds, display name).
 CORRECTIONS = {
@@ -73,3 +73,29 @@ def reject(p_values, alpha: float, method: str = "holm") -> np.ndarray:
     """Boolean mask of the tests rejected at level ``alpha`` by ``method``:
     ``adjust_p_values(p_values, method) <= alpha`` (see :func:`adjust_p_values`)."""
     return adjust_p_values(p_values, method) <= alpha
+
+
+def adjust_p_values_weighted(p_values, weights) -> np.ndarray:
+    r"""Weighted Holm adjusted p-values (Holm 1979): one family-wise error rate over tests of unequal weight.
+
+    With the tests sorted by :math:`p_i / w_i` ascending, test (j) is
+    rejected at level alpha when :math:`p_{(i)} \le \alpha\, w_{(i)} / \sum_{k \ge i} w_{(k)}`
+    for every i <= j; the adjusted p-value is
+    :math:`\tilde p_{(j)} = \max_{i \le j} \min(1, p_{(i)} \sum_{k \ge i} w_{(k)} / w_{(i)})`.
+    Equal weights give :func:`adjust_p_values` with ``'holm'``. The weights
+    split the error rate between groups of tests (a group's weights summing
+    to its share) without a Bonferroni split's loss within each group.
+    """
+    p = np.asarray(p_values, dtype=np.float64).ravel()
+    w = np.broadcast_to(np.asarray(weights, dtype=np.float64), p.shape).ravel()
+    if p.size == 0:
+        return p.copy()
+    if np.any(w <= 0):
+        raise ValueError("weights must be positive")
+    order = np.argsort(p / w, kind="stable")
+    ws = w[order]
+    tail = np.cumsum(ws[::-1])[::-1]  # sum of the weights from rank i on
+    adj = np.maximum.accumulate(np.minimum(1.0, p[order] * tail / ws))
+    out = np.empty(p.size)
+    out[order] = adj
+    return out.reshape(np.shape(p_values))

@@ -1,0 +1,278 @@
+r"""Structured errors the tile test cannot see: misregistration, blur or denoising, wrong pixels.
+
+A tile mean is blind to an error whose mean over the tile is zero: a camera
+shifted by a fraction of a pixel, a field of view a few per cent off or a
+blur move energy *within* a tile. Three detectors look at the residual
+:math:`r_i = S_i - R_i` pixel by pixel (luminance for the first two, each
+channel for the third); each gives p-values that join the tile tests in one
+weighted Holm family (:func:`mcrt.stats.adjust_p_values_weighted`), so that
+the whole verdict keeps the family-wise error rate ``alpha``.
+
+**Registration and blur** (a regression of the residual on what each mistake
+would do to the image). With B the diagnosis baseline (an mcrt render of the
+assigned camera whose noise is independent of both S and R) and its central
+differences :math:`B_x, B_y` about the image centre (c_x, c_y), a sub-pixel
+shift :math:`(\delta_x, \delta_y)`, a zoom s (field of view), a roll
+:math:`\theta` and a blur of variance :math:`\sigma^2` give to first order
+
+.. math::
+
+    r \approx \delta_x B_x + \delta_y B_y + s\,[(x - c_x) B_x + (y - c_y) B_y]
+        + \theta\,[(x - c_x) B_y - (y - c_y) B_x] + \tfrac{\sigma^2}{2}\,\Delta B
+        + \sum_k a_k\,B\,[\mathrm{label} = k],
+
+the last sum a brightness factor per visible surface (a nuisance, so that a
+wall of the wrong brightness is not taken for a shifted camera). The
+coefficients are fitted by weighted least squares (weights
+:math:`1/v_i`, mcrt's noise model); their covariance is the
+heteroscedasticity-consistent sandwich (HC3: each squared residual divided by
+:math:`(1 - h_{ii})^2`), which needs no noise model to be right, only pixels
+whose noise is independent: any estimator, sampler or sample count. The
+registration test is the Wald statistic of :math:`(\delta_x, \delta_y, s,
+\theta)` against :math:`\chi^2_4`, the blur test that of :math:`\sigma^2`
+against :math:`\chi^2_1`. Pan and tilt of the camera are shifts to first order.
+
+**Correlated noise** (denoising). A Monte-Carlo render's pixels are
+independent; a filter makes neighbours alike. With :math:`e_i` the residual
+less the fit above, in units of the model noise, the self-normalised
+lag-one statistic
+
+.. math::
+
+    T = \frac{\sum_{(i,j)} e_i e_j}{\sqrt{\sum_{(i,j)} e_i^2 e_j^2}}
+
+over horizontally and vertically adjacent pairs is N(0, 1) when the pixels are
+independent with mean 0, whatever their variances (its denominator estimates
+the variance of its numerator); a filter makes it large and positive
+(one-sided test). Its effect size is the lag-one correlation.
+
+**Pixels too dark to be noise.** A pixel of n non-negative samples X can
+fall short of its mean only so far: :math:`P(\bar X \le \mu - t) \le
+\exp(-n t^2 / (2\,E[X^2]))` (the lower-tail bound for non-negative variables,
+which holds however heavy the upper tail), with :math:`E[X^2]/n = \sigma^2/n
++ \mu^2/n`. Each pixel and channel darker than the reference gets that bound
+as its p-value (reference and quantisation noise added to the variance).
+Too-bright pixels are not tested: a correct render's fireflies make any
+brightness possible.
+
+Each detector also has a relevance threshold (as the tile test's
+``min_effect``): a significant but negligible structure is not penalised.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy import ndimage
+from scipy import stats as _sps
+
+from mcrt.stats import LUMINANCE_WEIGHTS
+
+LUMINANCE = np.asarray(LUMINANCE_WEIGHTS)
+
+#: Relevance thresholds (defaults of the rubric's ``unbiased`` table).
+MIN_SHIFT = 0.05  # grade pixels of shift (or of displacement at the image's edge for zoom and roll)
+MIN_BLUR = 0.1  # sigma^2 of the fitted blur (a Gaussian of that variance), in grade pixels^2
+MIN_CORRELATION = 0.05  # lag-one correlation of the residual noise
+MIN_PIXEL_EFFECT = 0.25  # relative darkening of a pixel
+TARGET_SHIFT = 0.5  # grade pixels: the displacement beyond which the first-order model is not trusted (weights)
+MIN_LABEL_PIXELS = 32  # a surface seen by fewer pixels gets no brightness factor of its own
+
+
+@dataclass
+class Registration:
+    """Fitted first-order camera error, in grade pixels (shift), relative (zoom) and radians (roll)."""
+
+    shift: tuple[float, float]  # (x, y): the image shows the scene moved by this much
+    zoom: float  # s: the image is magnified by 1 + s about its centre (a narrower field of view)
+    roll: float  # theta: rotated counter-clockwise on screen by this angle
+    edge_displacement: float  # largest displacement of a pixel the fit implies (grade pixels)
+    p: float
+    wald: float
+
+
+@dataclass
+class Structure:
+    """The detectors' results; p-values raw (the grader adjusts them with the tile tests)."""
+
+    registration: Registration | None = None
+    blur: float = 0.0  # sigma^2 (grade pixels^2) of a Gaussian blur; negative: sharpened
+    p_blur: float = 1.0
+    correlation: float = 0.0  # lag-one correlation of the residual noise
+    p_correlation: float = 1.0
+    t_correlation: float = 0.0
+    pixel_p: np.ndarray | None = None  # (H, W, 3) lower-tail bounds (1 where not tested)
+    pixel_effect: np.ndarray | None = None  # (H, W, 3) relative darkening
+    notes: list[str] = field(default_factory=list)
+
+    def families(self) -> list[tuple[str, np.ndarray]]:
+        """(name, raw p-values) of each detector, for the joint multiple-testing correction."""
+        out = []
+        if self.registration is not None:
+            out += [("registration", np.array([self.registration.p])), ("blur", np.array([self.p_blur]))]
+        out.append(("correlation", np.array([self.p_correlation])))
+        if self.pixel_p is not None:
+            out.append(("pixels", self.pixel_p.ravel()))
+        return out
+
+    def relevant(self, name: str, *, min_shift: float = MIN_SHIFT, min_blur: float = MIN_BLUR,
+                 min_correlation: float = MIN_CORRELATION, min_pixel: float = MIN_PIXEL_EFFECT) -> np.ndarray:
+        """Which tests of detector ``name`` are large enough to matter (same shape as its p-values)."""
+        if name == "registration":
+            return np.array([self.registration.edge_displacement >= min_shift])
+        if name == "blur":
+            return np.array([abs(self.blur) >= min_blur])
+        if name == "correlation":
+            return np.array([self.correlation >= min_correlation])
+        return (self.pixel_effect >= min_pixel).ravel()
+
+
+def _gradients(b: np.ndarray):
+    """Central differences of an (H, W) image (one-sided at the border), and the 4-neighbour Laplacian."""
+    p = np.pad(b, 1, mode="edge")
+    gx = 0.5 * (p[1:-1, 2:] - p[1:-1, :-2])
+    gy = 0.5 * (p[2:, 1:-1] - p[:-2, 1:-1])
+    lap = p[1:-1, 2:] + p[1:-1, :-2] + p[2:, 1:-1] + p[:-2, 1:-1] - 4.0 * b
+    return gx, gy, lap
+
+
+def _design(base: np.ndarray, labels: np.ndarray | None):
+    """Columns of the regression (module docstring): structure first (dx, dy, zoom, roll, blur), then nuisances."""
+    h, w = base.shape
+    gx, gy, lap = _gradients(base)
+    yy, xx = np.mgrid[0:h, 0:w].astype(np.float64)
+    cx, cy = 0.5 * (w - 1), 0.5 * (h - 1)
+    x, y = xx - cx, yy - cy
+    cols = [gx, gy, x * gx + y * gy, x * gy - y * gx, 0.5 * lap]
+    lab = labels if labels is not None else np.zeros((h, w), np.int16)
+    ks, counts = np.unique(lab, return_counts=True)
+    small = np.isin(lab, ks[counts < MIN_LABEL_PIXELS])
+    # Surfaces seen by a handful of pixels share one factor: a column of a few pixels has leverage
+    # near 1 there, which makes the sandwich's (1 - h)^-2 explode.
+    for k in ks[counts >= MIN_LABEL_PIXELS]:
+        cols.append(np.where(lab == k, base, 0.0))
+    if small.sum() >= MIN_LABEL_PIXELS:
+        cols.append(np.where(small, base, 0.0))
+    return np.stack([c.ravel() for c in cols], axis=1), float(np.hypot(cx, cy))
+
+
+def _fit(X: np.ndarray, y: np.ndarray, wt: np.ndarray):
+    """Weighted least squares with the HC3 sandwich covariance: (beta, cov, residual)."""
+    sw = np.sqrt(wt)
+    Xw = X * sw[:, None]
+    keep = np.abs(Xw).sum(axis=0) > 0
+    Xw, Xk = Xw[:, keep], X[:, keep]
+    q, rr = np.linalg.qr(Xw)
+    ok = np.abs(np.diag(rr)) > 1e-10 * max(float(np.abs(np.diag(rr)).max()), 1e-300)
+    q, Xw, Xk = q[:, ok], Xw[:, ok], Xk[:, ok]
+    idx = np.flatnonzero(keep)[ok]
+    yw = y * sw
+    beta_k, *_ = np.linalg.lstsq(Xw, yw, rcond=None)
+    e = y - Xk @ beta_k
+    lev = np.minimum(np.sum(q * q, axis=1), 0.99)
+    bread = np.linalg.pinv(Xw.T @ Xw)
+    u = Xw * (sw * e / (1.0 - lev))[:, None]
+    cov_k = bread @ (u.T @ u) @ bread
+    beta = np.zeros(X.shape[1])
+    cov = np.zeros((X.shape[1], X.shape[1]))
+    beta[idx] = beta_k
+    cov[np.ix_(idx, idx)] = cov_k
+    return beta, cov, e, idx
+
+
+def _wald(beta: np.ndarray, cov: np.ndarray, sel: list[int]) -> tuple[float, float]:
+    b, c = beta[sel], cov[np.ix_(sel, sel)]
+    if not np.any(np.diag(c) > 0):
+        return 0.0, 1.0
+    wald = float(b @ np.linalg.pinv(c) @ b)
+    return wald, float(_sps.chi2.sf(wald, len(sel)))
+
+
+def _lag_one(e: np.ndarray, mask: np.ndarray) -> tuple[float, float, float]:
+    """(T, p one-sided, correlation) of the self-normalised lag-one statistic over adjacent valid pairs."""
+    num = den = ss = 0.0
+    n = 0
+    for a, b, ma, mb in ((e[:, :-1], e[:, 1:], mask[:, :-1], mask[:, 1:]), (e[:-1], e[1:], mask[:-1], mask[1:])):
+        m = ma & mb
+        pa, pb = a[m], b[m]
+        num += float(np.sum(pa * pb))
+        den += float(np.sum(pa * pa * pb * pb))
+        ss += float(np.sum(0.5 * (pa * pa + pb * pb)))
+        n += int(m.sum())
+    if n < 16 or den <= 0:
+        return 0.0, 1.0, 0.0
+    t = num / np.sqrt(den)
+    return t, float(_sps.norm.sf(t)), num / max(ss, 1e-300)
+
+
+def detect(resid: np.ndarray, ref: np.ndarray, mask: np.ndarray, var: np.ndarray, second_moment: np.ndarray,
+           *, base: np.ndarray | None, labels: np.ndarray | None) -> Structure:
+    """Run the three detectors (module docstring) on one graded image.
+
+    ``resid`` and ``ref`` are (H, W, 3); ``var`` (H, W, 3) is the variance of
+    each pixel mean under the noise model (student, reference, quantisation);
+    ``second_moment`` (H, W, 3) the bound's :math:`E[X^2]/n` plus the
+    reference's and quantisation's variance; ``base`` (H, W, 3) the
+    independent render the regression's columns are made from (None: no
+    registration or blur test, e.g. for a camera without one); ``labels``
+    the surface each pixel sees.
+    """
+    out = Structure()
+    h, w = resid.shape[:2]
+    v = np.maximum(var @ (LUMINANCE**2), 0.0)
+    pos = v[mask & (v > 0)]
+    floor = float(np.median(pos)) * 1e-3 if pos.size else 1e-12
+    # Pixels that see only an emitter have no noise and a step at their edge that no first-order
+    # term follows: they and their neighbours are left to the tile test (which compares them exactly).
+    pixel_mask = mask
+    mask = mask & ~ndimage.binary_dilation(v <= floor, structure=np.ones((3, 3), bool))
+    r = np.where(mask, resid @ LUMINANCE, 0.0)
+    wt = np.where(mask, 1.0 / np.maximum(v, floor), 0.0)
+    e = r
+    if base is not None and mask.sum() > 64:
+        bl = np.asarray(base, np.float64) @ LUMINANCE
+        X, radius = _design(bl, labels)
+        # Weights from B alone (so the estimate stays unbiased): where a shift of TARGET_SHIFT would change
+        # the pixel by far more than its noise (a sharp, bright edge: a reflection of the light), the
+        # first-order model is off and that pixel would swamp the fit; it counts as if that were noise.
+        gx, gy, lap = _gradients(bl)
+        wt = np.where(mask, 1.0 / (np.maximum(v, floor) + TARGET_SHIFT**2 * (gx * gx + gy * gy)
+                                   + (0.5 * TARGET_SHIFT**2 * lap) ** 2), 0.0)
+        m = mask.ravel()
+        beta, cov, e_m, _ = _fit(X[m], r.ravel()[m], wt.ravel()[m])
+        wald, p = _wald(beta, cov, [0, 1, 2, 3])
+        edge = float(np.hypot(beta[0], beta[1]) + (abs(beta[2]) + abs(beta[3])) * radius)
+        # The fit of r = S - R on B_x: S(x) = R(x) + dx R'(x) ~ R(x + dx): the image shows the scene moved by -dx.
+        out.registration = Registration((-float(beta[0]), -float(beta[1])), float(beta[2]), -float(beta[3]), edge, p, wald)
+        _, out.p_blur = _wald(beta, cov, [4])
+        out.blur = float(beta[4])
+        e = np.zeros(h * w)
+        e[m] = e_m
+        e = e.reshape(h, w)
+    z = np.where(mask, e * np.sqrt(wt), 0.0)
+    out.t_correlation, out.p_correlation, out.correlation = _lag_one(z, mask)
+
+    # Pixels darker than the non-negative lower-tail bound allows.
+    with np.errstate(divide="ignore", invalid="ignore"):
+        deficit = np.maximum(-resid, 0.0)
+        m3 = pixel_mask[..., None] & (second_moment > 0)
+        p = np.where(m3, np.exp(-0.5 * deficit**2 / np.where(m3, second_moment, 1.0)), 1.0)
+        eff = np.where(m3 & (np.abs(ref) > 0), deficit / np.maximum(np.abs(ref), 1e-300), 0.0)
+    out.pixel_p = np.minimum(p, 1.0)
+    out.pixel_effect = eff
+    return out
+
+
+#: Share of the family-wise error rate each detector gets; the tile tests keep the rest.
+SHARES = {"registration": 0.05, "blur": 0.025, "correlation": 0.025, "pixels": 0.10}
+
+
+def families(st: Structure, th) -> list[tuple[str, np.ndarray, np.ndarray, float]]:
+    """(name, raw p-values, relevant, share of alpha) of every detector, for :func:`mcrt.grade.score.bias_test`.
+
+    ``th`` holds the relevance thresholds (:class:`mcrt.grade.assignment.Thresholds`).
+    """
+    kw = {"min_shift": th.min_shift, "min_blur": th.min_blur, "min_correlation": th.min_correlation,
+          "min_pixel": th.min_pixel_effect}
+    return [(name, p, st.relevant(name, **kw), SHARES[name]) for name, p in st.families()]
