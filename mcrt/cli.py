@@ -134,6 +134,12 @@ def _add_trick_flags(p: argparse.ArgumentParser) -> None:
     g.add_argument("--light-sampling", choices=("area", "solid_angle"), default=None,
                    help="points on the light uniform in area, or uniform in its solid angle (spherical rectangle) "
                         "(default: area)")
+    g.add_argument("--adaptive", choices=("naive", "two-stage"), default=None,
+                   help="per-pixel sample counts, spp on average: naive stops a pixel by its own samples (biased), "
+                        "two-stage budgets from a pilot and estimates from fresh samples (default: off)")
+    g.add_argument("--denoise", choices=("albedo+normal", "color"), default=None,
+                   help="Intel Open Image Denoise on the render, guided by first-hit buffers or the colour alone "
+                        "(biased; needs pyoidn, the denoise extra) (default: off)")
     g.add_argument("--bidirectional", action="store_true",
                    help="light tracing for the paths eye-diffuse-...-mirror-light (the caustics next-event estimation "
                         "cannot sample), the path tracer for the rest (mcrt.bidir; default: off)")
@@ -269,6 +275,9 @@ def build_parser() -> argparse.ArgumentParser:
     threeway.register(sub)
     reports.register(sub)
     validate_integrator.register(sub)
+    from mcrt.tricks.cli import register as register_tricks
+
+    register_tricks(sub)
     return ap
 
 

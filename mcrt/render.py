@@ -30,7 +30,7 @@ from typing import Callable
 
 from mcrt.film import RenderResult
 from mcrt.scene import RenderSettings, Scene
-from mcrt.tricks.options import TRICK_OPTIONS
+from mcrt.tricks.options import RENDER_TRICKS, TRICK_OPTIONS
 
 #: Options that every renderer takes, with their defaults.
 COMMON_OPTIONS = {"backend": "llvm", "progress": True, "spp_per_pass": None}
@@ -56,9 +56,9 @@ class Renderer:
 
 
 def _tracer():
-    from mcrt.tracer import render_tracer
+    from mcrt.tricks.render import render_mcrt  # render_tracer, with adaptive sampling and denoising as options
 
-    return render_tracer
+    return render_mcrt
 
 
 def _mitsuba():
@@ -78,7 +78,7 @@ RENDERERS: dict[str, Renderer] = {
     for r in (
         Renderer("mcrt", "the standalone Dr.Jit tracer", "mcrt", "mcrt",
                  {"mutants": (), "intersector": "convex", "mis": None, "precision_guard": True, **TRICK_OPTIONS,
-                  "bidirectional": False, "mirror_caustics": "all"}, _tracer),
+                  "bidirectional": False, "mirror_caustics": "all", **RENDER_TRICKS}, _tracer),
         Renderer("plugin", "mcrt's estimator as the Mitsuba integrator 'mcrt'", "mitsuba", "mcrt",
                  {"mutants": (), "mis": None}, _plugin),
         Renderer("mitsuba", "Mitsuba 3's path integrator", "mitsuba", "mitsuba", {"integrator": "path"}, _mitsuba),

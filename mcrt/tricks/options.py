@@ -12,9 +12,10 @@ roulette_start      None          the first depth roulette runs at instead of th
 light_sampling      'area'        'solid_angle': the light sampled as a spherical rectangle
 ==================  ============  =============================================================
 
-Adaptive sampling (:mod:`mcrt.tricks.adaptive`) and denoising
-(:mod:`mcrt.tricks.denoise`) work on whole renders and are functions of
-their own.
+Adaptive sampling (``adaptive='naive'`` or ``'two-stage'``,
+:mod:`mcrt.tricks.adaptive`) and denoising (``denoise='albedo+normal'`` or
+``'color'``, :mod:`mcrt.tricks.denoise`) work on whole renders: options of
+the renderer too, handled by :func:`mcrt.tricks.render.render_mcrt`.
 """
 
 from __future__ import annotations
@@ -29,3 +30,10 @@ def trick_options(tricks: dict) -> tuple:
     if unknown:
         raise ValueError(f"no trick option {unknown[0]!r} (have: {', '.join(TRICK_OPTIONS)})")
     return tuple(sorted((k, v) for k, v in tricks.items() if v != TRICK_OPTIONS[k]))
+
+
+#: Tricks that work on whole renders, options of the ``mcrt`` renderer too (:func:`mcrt.tricks.render.render_mcrt`):
+#: ``adaptive`` one of mcrt.tricks.adaptive.SCHEMES, ``denoise`` one of :data:`DENOISE_GUIDES`.
+RENDER_TRICKS = {"adaptive": None, "denoise": None}
+#: What guides the denoiser: the first-hit albedo and normal buffers, or the colour alone.
+DENOISE_GUIDES = ("albedo+normal", "color")

@@ -1,0 +1,48 @@
+"""The ``mcrt`` renderer with the whole-render tricks: adaptive sampling and denoising as render options.
+
+:func:`render_mcrt` is what :func:`mcrt.render.render` calls for renderer
+``mcrt``: at ``adaptive=None, denoise=None`` (the defaults) it is
+:func:`mcrt.tracer.render_tracer` itself, so the default image is unchanged.
+"""
+
+from __future__ import annotations
+
+from mcrt.film import RenderResult
+from mcrt.scene import RenderSettings, Scene
+from mcrt.tricks.options import DENOISE_GUIDES, TRICK_OPTIONS
+
+
+def render_mcrt(scene: Scene, settings: RenderSettings, *, adaptive: str | None = None, denoise: str | None = None,
+                **options) -> RenderResult:
+    """render_tracer, or an adaptive render (``adaptive``), then denoised (``denoise``) where asked."""
+    from mcrt.tracer import render_tracer
+
+    if denoise is not None and denoise not in DENOISE_GUIDES:
+        raise ValueError(f"denoise must be one of {', '.join(DENOISE_GUIDES)}, got {denoise!r}")
+    if adaptive is None:
+        result = render_tracer(scene, settings, **options)
+    else:
+        result = _adaptive(scene, settings, adaptive, options)
+    if denoise is None:
+        return result
+    from mcrt.tricks.aov import first_hit_buffers
+    from mcrt.tricks.denoise import denoise_result
+
+    s = settings
+    buffers = first_hit_buffers(scene, s.camera, s.width, s.height, backend=options.get("backend", "llvm")) \
+        if denoise == "albedo+normal" else None
+    return denoise_result(result, buffers)
+
+
+#: The estimator's options an adaptive render keeps at their defaults (it renders with the default estimator).
+ADAPTIVE_FIXED = {**TRICK_OPTIONS, "mutants": (), "intersector": "convex", "mis": None, "bidirectional": False,
+                  "mirror_caustics": "all"}
+
+
+def _adaptive(scene: Scene, settings: RenderSettings, scheme: str, options: dict) -> RenderResult:
+    from mcrt.tricks.adaptive import render_adaptive
+
+    other = sorted(k for k, d in ADAPTIVE_FIXED.items() if k in options and options[k] != d and (d != () or options[k]))
+    if other:
+        raise ValueError(f"adaptive sampling renders with the default estimator: it takes no option {other[0]!r}")
+    return render_adaptive(scene, settings, scheme=scheme, backend=options.get("backend", "llvm")).result

@@ -1,0 +1,177 @@
+"""reports/tricks/: index.md (verdicts, tables, figures) and data.json (every number, the command, provenance)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict
+from pathlib import Path
+
+from mcrt.report.content import fmt
+from mcrt.report.data import clean, write_json
+from mcrt.report.markdown import write as write_markdown
+from mcrt.tricks import plots
+from mcrt.tricks.study import StudyData, measurement_dicts, rung_dicts
+from mcrt.tricks.variants import PLAIN, TRICKS
+from mcrt.tricks.verdicts import TRICK_NAMES, WORTH, denoiser_numbers, rungs_of, variant_row, verdicts
+
+#: Schema tag of data.json.
+SCHEMA = "mcrt.tricks/1"
+#: Where ``mcrt tricks`` writes by default.
+REPORT_DIR = Path("reports") / "tricks"
+
+CONVENTIONS = {
+    "time": "wall time less Dr.Jit's JIT compile time, after a warm-up render of each variant; denoised renders add "
+            "OIDN's time and the first-hit buffers' tracing time; adaptive renders count every launch",
+    "efficiency": "1 / (MSE_excess x time), MSE_excess = MSE - the reference's noise floor mean(var_ref / spp_ref); "
+                  "the ratio is a variant's over plain mcrt's at the same spp",
+    "bias2": "MSE - variance - floor, means over the seeds; variance = mean over pixels and channels of the image's "
+             "variance across seeds (can come out negative by chance: no measurable bias)",
+    "flagged": "seeds for which mcrt.stats.policy.compare against the reference, policy 'reference-floor', rejects "
+               "'same image' at one of the tile sizes (Welch tile test, Holm, each tile size at alpha / their number); "
+               "a denoised image keeps its noisy render's variance; an adaptive one its per-pixel variance of the mean, "
+               "floored at the reference's at each pixel's own count; 'biased (measured)': flagged on at least half "
+               "the seeds at the top rung",
+    "worth": f"worth it: efficiency ratio >= {WORTH}; a wash: within a factor {WORTH}; not worth it: below 1/{WORTH}",
+}
+
+
+def _trick_list(data: StudyData) -> list[str]:
+    return [t for t in TRICKS if any(v.trick == t for v in data.variants)]
+
+
+def _row_cells(row: dict) -> list[str]:
+    return [row["label"], row["claim"], fmt(row["time"], 3), fmt(row["relmse"], 3), fmt(math.sqrt(row["mse"]), 3),
+            fmt(row["efficiency_ratio"], 3), f"{row['flagged']}/{row['seeds']}", fmt(row["detected_from"]),
+            fmt(row["bias_share"], 2) if row["biased"] and row["bias_share"] > 0 else "-"]
+
+
+ROW_HEADER = ["variant", "theory", "time [s]", "relMSE", "RMSE", "efficiency / plain", "flagged", "detected from spp",
+              "bias^2 / MSE"]
+
+
+def _rung_table(data: StudyData, labels: list[str]) -> tuple[list[str], list[list[str]]]:
+    header = ["variant", "spp", "time [s]", "relMSE", "RMSE", "variance", "bias^2", "efficiency", "flagged"]
+    rows = []
+    for label in labels:
+        for r in rungs_of(data, label):
+            rows.append([label, str(r.spp), fmt(r.time, 3), fmt(r.relmse, 3), fmt(r.rmse, 3), fmt(r.variance, 3),
+                         fmt(r.bias2, 3), fmt(r.efficiency, 3), f"{r.flagged}/{r.seeds}"])
+    return header, rows
+
+
+def _light_table(rows: list[dict]) -> tuple[list[str], list[list[str]]]:
+    header = ["receiver", "distance", "closed form E", "area: mean", "solid angle: mean (z)", "variance area / solid angle",
+              "time per sample area / solid angle", "efficiency ratio"]
+    out = []
+    for r in rows:
+        a, s = r["area"], r["solid_angle"]
+        z = (s["mean"] - r["closed_form"]) / s["std_error"] if s["std_error"] > 0 else float("nan")
+        out.append([r["receiver"], fmt(r["distance"], 3), fmt(r["closed_form"], 5), fmt(a["mean"], 5),
+                    f"{fmt(s['mean'], 5)} ({z:+.1f})", fmt(r["variance_ratio"], 3),
+                    fmt(a["seconds_per_sample"] / s["seconds_per_sample"], 3), fmt(r["efficiency_ratio"], 3)])
+    return header, out
+
+
+def _section(data: StudyData, trick: str, files: dict, line: str) -> list:
+    labels = [v.label for v in data.variants if v.trick == trick]
+    doc = [("h", 2, TRICK_NAMES[trick]), ("p", line)]
+    doc.append(("table", ROW_HEADER, [_row_cells(variant_row(data, lab)) for lab in [PLAIN, *labels]]))
+    if trick == "adaptive" and "spp_maps" in files:
+        doc.append(("img", files["spp_maps"], "samples per pixel of each adaptive scheme"))
+    if trick == "denoise":
+        d = {lab: denoiser_numbers(data, lab) for lab in labels}
+        doc.append(("table", ["variant", "relMSE plain / denoised per spp", "MSE plain / denoised per spp",
+                              "bias^2 > variance from spp", "plain better (relMSE) from spp", "flagged from spp"],
+                    [[lab, ", ".join(f"{k}: {fmt(v, 3)}" for k, v in n["relmse_ratio"].items()),
+                      ", ".join(f"{k}: {fmt(v, 3)}" for k, v in n["mse_ratio"].items()),
+                      fmt(n["bias_dominates_from"]), fmt(n["plain_better_from"]), fmt(n["detected_from"])]
+                     for lab, n in d.items()]))
+        doc.append(("img", files["bias"], "bias squared and variance against spp"))
+    if trick == "light" and data.extra.get("light_receivers"):
+        doc.append(("p", "Single receivers facing the light, direct-light estimate of one light sample (the estimator's "
+                         "own light_sample, mcrt's host), both strategies with the same number of samples; z: the "
+                         "solid-angle mean's distance from Lambert's closed form in standard errors."))
+        doc.append(("table", *_light_table(data.extra["light_receivers"])))
+        doc.append(("img", files["light_sampling"], "light sampling near and far"))
+    if trick == "bidirectional" and "variance_distribution" in files:
+        doc.append(("img", files["variance_distribution"], "distribution of per-pixel variance"))
+    return doc
+
+
+def _bidir_note(data: StudyData) -> list:
+    if any(v.trick == "bidirectional" for v in data.variants):
+        return []
+    return [("h", 2, TRICK_NAMES["bidirectional"]),
+            ("p", "Pending: the mcrt renderer has no option bidirectional=True in this checkout, so this run did not "
+                  "render it; the same command includes it once the option exists.")]
+
+
+def document(data: StudyData, command: str, prov: dict, lines: list[str], files: dict) -> list:
+    cfg = data.config
+    doc = [("h", 1, "The lecture's efficiency tricks, measured for speed against error"),
+           ("p", "Generated by `mcrt tricks`; do not edit by hand."),
+           ("ul", [f"Command: `{command}`", f"Date: {prov['date']}",
+                   f"Versions: " + ", ".join(f"{k} {v}" for k, v in prov["versions"].items() if v),
+                   f"Machine: {prov['machine']['cpu']} ({prov['machine']['cores']} cores), {prov['machine']['platform']}",
+                   f"Commit: {prov['git_commit']}",
+                   f"Scene: `{data.scene.path}` (hash {data.scene.content_hash()}), camera {cfg.camera}, "
+                   f"{cfg.res}x{cfg.res}, max depth {cfg.max_depth}",
+                   f"Reference: the committed Mitsuba reference {data.reference_key} ({data.reference_spp} spp); its "
+                   f"noise floor {fmt(data.floor['mse'], 3)} is subtracted from every MSE in efficiencies",
+                   f"Ladder: {', '.join(map(str, cfg.ladder))} spp, {cfg.seeds} seeds per rung, every render its own seed",
+                   f"Comparison: mcrt.stats.policy.compare, policy reference-floor (adaptive renders: floored at each pixel's "
+                   f"count), tiles {', '.join(map(str, cfg.tiles))}, each at alpha = {cfg.alpha} / {len(cfg.tiles)}",
+                   f"Run time: {data.runtime:.0f} s"])]
+    doc += [("h", 2, "Verdicts"), ("ul", lines)]
+    doc += [("h", 2, "Conventions"), ("ul", [f"**{k}**: {v}" for k, v in CONVENTIONS.items()])]
+    doc += [("h", 2, "Error against time and against samples"),
+            ("img", files["error_vs_time"], "relMSE against render time"),
+            ("img", files["error_vs_spp"], "RMSE against samples per pixel")]
+    by_trick = dict(zip(_trick_list(data), lines))
+    for trick in TRICKS:
+        if trick in by_trick:
+            doc += _section(data, trick, files, by_trick[trick])
+        elif trick == "bidirectional":
+            doc += _bidir_note(data)
+    doc += [("h", 2, "Renders at the top rung (seed 0)"), ("img", files["images"], "renders")]
+    doc.append(("details", "Every rung of every variant",
+                [("table", *_rung_table(data, [v.label for v in data.variants]))]))
+    return doc
+
+
+def write_report(data: StudyData, out: Path, *, command: str, svg: bool = False) -> dict:
+    """Write the figures, index.md and data.json into ``out``; returns {name: path}."""
+    from mcrt.provenance import provenance
+
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    tricks = _trick_list(data)
+    lines = verdicts(data, tricks)
+    figs = {
+        "error_vs_time": plots.error_panels(data, tricks, out, axis="time", svg=svg),
+        "error_vs_spp": plots.error_panels(data, tricks, out, axis="spp", svg=svg),
+        "bias": plots.bias_plot(data, [v.label for v in data.variants if v.claim == "biased"], out, svg=svg),
+        "spp_maps": plots.spp_maps(data, out, svg=svg),
+        "light_sampling": plots.light_plot(data.extra.get("light_receivers") or [], out, svg=svg),
+        "variance_distribution": plots.variance_histogram(
+            data, [PLAIN] + [v.label for v in data.variants if v.trick in ("bidirectional", "light")], out, svg=svg),
+        "images": plots.image_strip(data, [v.label for v in data.variants], out),
+    }
+    files = {k: v["png"].name for k, v in figs.items() if v}
+    prov = provenance(command=command, packages=("pyoidn",))
+    write_markdown(out / "index.md", document(data, command, prov, lines, files))
+    names = sorted([*files.values(), "index.md", "data.json"])
+    write_json(out / "data.json", clean({
+        "schema": SCHEMA, "command": command, "provenance": prov, "config": asdict(data.config),
+        "scene": {"name": data.scene.name, "path": str(data.scene.path), "hash": data.scene.content_hash()},
+        "reference": {"key": data.reference_key, "spp": data.reference_spp, "floor": data.floor},
+        "conventions": CONVENTIONS,
+        "variants": [{"label": v.label, "trick": v.trick, "claim": v.claim, "options": v.options,
+                      "light_samples": v.light_samples, "adaptive": v.adaptive, "denoise": v.denoise} for v in data.variants],
+        "verdicts": lines, "rows": [variant_row(data, v.label) for v in data.variants],
+        "denoiser": {v.label: denoiser_numbers(data, v.label) for v in data.variants if v.trick == "denoise"},
+        "light_receivers": data.extra.get("light_receivers"), "aov_time_s": data.extra.get("aov_time"),
+        "bidirectional_present": "bidirectional" in tricks,
+        "rungs": rung_dicts(data), "measurements": measurement_dicts(data), "runtime_s": data.runtime, "files": names,
+    }))
+    return {n: out / n for n in names}

@@ -1,0 +1,156 @@
+"""The numbers each verdict rests on, and the one-line verdicts computed from them.
+
+For a variant at a rung (spp):
+
+- *efficiency ratio*: its 1 / (MSE_excess x time) over plain mcrt's at the
+  same spp (> 1: it reaches a given error sooner);
+- *flagged*: the seeds whose comparison with the reference
+  (:func:`mcrt.stats.policy.compare`) rejected "same image";
+- *detected from*: the smallest spp from which the comparison flags it on
+  at least half the seeds at every rung;
+- *bias share*: bias^2 / MSE.
+
+A variant is *biased (measured)* when it is flagged on at least half the
+seeds at the top rung. A trick is *worth it* when an unbiased variant not
+flagged at the top rung has an efficiency ratio of at least
+:data:`WORTH` there; *a wash* within a factor WORTH either way; *not worth it*
+below. These thresholds are the report's conventions, written into it.
+"""
+
+from __future__ import annotations
+
+import math
+
+from mcrt.tricks.study import Rung, StudyData
+from mcrt.tricks.variants import PLAIN
+
+#: Efficiency ratio above which a trick is worth it (and below whose inverse it is not).
+WORTH = 1.2
+
+TRICK_NAMES = {"roulette": "Russian roulette", "adaptive": "Early stopping (adaptive sampling)",
+               "bidirectional": "Bidirectional", "denoise": "AI denoising (OIDN)", "light": "Explicit light sampling"}
+
+
+def rungs_of(data: StudyData, label: str) -> list[Rung]:
+    return sorted((r for r in data.rungs if r.label == label), key=lambda r: r.spp)
+
+
+def ratio(data: StudyData, r: Rung) -> float:
+    """Efficiency of ``r`` over plain mcrt's at the same spp."""
+    base = next(b for b in data.rungs if b.label == PLAIN and b.spp == r.spp)
+    return r.efficiency / base.efficiency if math.isfinite(r.efficiency) and math.isfinite(base.efficiency) else float("nan")
+
+
+def detected_from(rungs: list[Rung]) -> int | None:
+    """The smallest spp from which at least half the seeds are flagged at every higher rung (None: not at the top)."""
+    spp = None
+    for r in reversed(rungs):
+        if 2 * r.flagged < r.seeds:
+            break
+        spp = r.spp
+    return spp
+
+
+def variant_row(data: StudyData, label: str) -> dict:
+    """Every number the variant's verdict uses, at the top rung unless said otherwise."""
+    rs = rungs_of(data, label)
+    top = rs[-1]
+    v = next(x for x in data.variants if x.label == label)
+    return {
+        "label": label, "trick": v.trick, "claim": v.claim, "spp": top.spp, "time": top.time, "mse": top.mse,
+        "relmse": top.relmse, "efficiency_ratio": ratio(data, top), "flagged": top.flagged, "seeds": top.seeds,
+        "biased": 2 * top.flagged >= top.seeds, "detected_from": detected_from(rs),
+        "bias2": top.bias2, "bias_share": top.bias2 / top.mse if top.mse > 0 else float("nan"),
+        "ratios": {r.spp: ratio(data, r) for r in rs},
+    }
+
+
+def _worth(r: float) -> str:
+    if not math.isfinite(r):
+        return "not measurable"
+    return "worth it" if r >= WORTH else ("a wash" if r > 1 / WORTH else "not worth it")
+
+
+def _bias_text(row: dict) -> str:
+    if not row["biased"]:
+        return f"no bias found ({row['flagged']}/{row['seeds']} seeds flagged at {row['spp']} spp)"
+    share = row["bias_share"]
+    share_text = f", bias^2 {100 * share:.0f} % of its MSE" if math.isfinite(share) and share > 0 else ""
+    return f"biased: flagged from {row['detected_from']} spp ({row['flagged']}/{row['seeds']} at {row['spp']}){share_text}"
+
+
+def trick_verdict(data: StudyData, trick: str) -> str | None:
+    """One line for one trick: its best unbiased variant's efficiency, what bias the comparison finds."""
+    rows = [variant_row(data, v.label) for v in data.variants if v.trick == trick]
+    if not rows:
+        return None
+    clean = [r for r in rows if not r["biased"] and r["claim"] == "unbiased"]
+    biased = [r for r in rows if r["biased"]]
+    parts = []
+    if clean:
+        best = max(clean, key=lambda r: r["efficiency_ratio"] if math.isfinite(r["efficiency_ratio"]) else -1)
+        parts.append(f"best unbiased variant '{best['label']}': {best['efficiency_ratio']:.2f}x plain mcrt's efficiency "
+                     f"at {best['spp']} spp, {_worth(best['efficiency_ratio'])}")
+    else:
+        parts.append("no variant passes the comparison at the top rung")
+    for r in biased:
+        parts.append(f"'{r['label']}' {_bias_text(r)}")
+    wrong = [r["label"] for r in rows if r["claim"] == "unbiased" and r["biased"]]
+    if wrong:
+        parts.append(f"flagged although unbiased in theory: {', '.join(wrong)}")
+    missed = [r["label"] for r in rows if r["claim"] == "biased" and not r["biased"]]
+    if missed:
+        parts.append(f"biased in theory but not flagged at {rows[0]['spp']} spp: {', '.join(missed)}")
+    return f"{TRICK_NAMES[trick]}: " + "; ".join(parts) + "."
+
+
+def denoiser_numbers(data: StudyData, label: str) -> dict:
+    """Where the denoiser's bias dominates (bias^2 > variance), and from which spp plain mcrt has the lower relMSE."""
+    rs = rungs_of(data, label)
+    plain = {r.spp: r for r in rungs_of(data, PLAIN)}
+    dominates = next((r.spp for r in rs if r.bias2 > r.variance), None)
+    overtaken = next((r.spp for r in rs if plain[r.spp].relmse < r.relmse), None)
+    return {"bias_dominates_from": dominates, "plain_better_from": overtaken,
+            "mse_ratio": {r.spp: plain[r.spp].mse / r.mse for r in rs},
+            "relmse_ratio": {r.spp: plain[r.spp].relmse / r.relmse for r in rs}, "detected_from": detected_from(rs)}
+
+
+def _denoise_tail(data: StudyData) -> str:
+    labels = [v.label for v in data.variants if v.trick == "denoise"]
+    if not labels:
+        return ""
+    d = denoiser_numbers(data, labels[0])
+    low = min(d["mse_ratio"])
+    none = "no rung up to the top"
+    return (f" '{labels[0]}': relMSE of plain mcrt over the denoised {d['relmse_ratio'][low]:.3g} at {low} spp (MSE "
+            f"{d['mse_ratio'][low]:.3g}); its bias^2 exceeds its variance from {d['bias_dominates_from'] or none} spp on; "
+            f"plain mcrt has the lower relMSE from {d['plain_better_from'] or none} spp on; the comparison tells from "
+            f"{d['detected_from'] or none} spp.")
+
+
+def _light_tail(data: StudyData) -> str:
+    rows = data.extra.get("light_receivers") or []
+    if not rows:
+        return ""
+    near, far = rows[0], rows[-1]
+    return (f" At single receivers, solid-angle sampling is {near['efficiency_ratio']:.3g}x as efficient {near['receiver']} "
+            f"and {far['efficiency_ratio']:.3g}x at the {far['receiver']}.")
+
+
+def _bidir_tail(data: StudyData, goal: float = 3.0) -> str:
+    labels = [v.label for v in data.variants if v.trick == "bidirectional"]
+    if not labels:
+        return ""
+    r = variant_row(data, labels[0])["efficiency_ratio"]
+    return f" Goal {goal:g}x: {'met' if r >= goal else 'not met'} ({r:.2f}x)."
+
+
+def verdicts(data: StudyData, tricks) -> list[str]:
+    """One line per trick present in the study."""
+    tails = {"denoise": _denoise_tail, "light": _light_tail, "bidirectional": _bidir_tail}
+    out = []
+    for t in tricks:
+        line = trick_verdict(data, t)
+        if line:
+            out.append(line + (tails[t](data) if t in tails else ""))
+    return out
