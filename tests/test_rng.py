@@ -16,7 +16,7 @@ import mcrt  # noqa: F401
 import drjit as dr
 import drjit.llvm as m
 
-from mcrt.rng import FLOAT_ONE_BITS, WeylRng, mix32
+from mcrt.rng import FLOAT_ONE_BITS, SAMPLE_MULT, SampleStreams, WeylRng, mix32
 from mcrt.tracer import stream_keys
 
 ALPHA = 1e-4
@@ -139,3 +139,84 @@ def test_statistics_have_power():
     assert chi2_uniform_p(second_differences(bare)[:, 0], 256) < ALPHA
     shared = numpy_draws(LANES, 2, *KEYS, mixer=lambda x: x, shared_step=0x9E3779B9)
     assert chi2_pairs_p(shared[:, 0], shared[:, 1], 32) < ALPHA
+
+
+# The streams the tracer draws from: one per pixel sample (mcrt.rng.SampleStreams).
+PIXELS = 1 << 12
+SAMPLES = 16
+
+
+def numpy_sample_draws(pixel, sample, key0, key1, draws, sample_mult=SAMPLE_MULT):
+    """SampleStreams written again over NumPy uint32: (lanes, draws) floats of the streams (pixel[i], sample[i])."""
+    with np.errstate(over="ignore"):
+        h0, h1 = mix32(pixel ^ np.uint32(key0)), mix32(pixel ^ np.uint32(key1))
+        g = np.uint32(sample_mult)
+        state, step = mix32(h0 + sample * g), mix32(h1 + sample * g) | np.uint32(1)
+        out = np.empty((len(pixel), draws), np.float32)
+        for k in range(draws):
+            state = state + step
+            out[:, k] = ((mix32(state) >> np.uint32(9)) | np.uint32(FLOAT_ONE_BITS)).view(np.float32) - np.float32(1.0)
+    return out
+
+
+def pixel_sample_grid():
+    """(pixel, sample) of every lane, samples of one pixel consecutive: pixel-major, as a pixel's samples are summed."""
+    pixel = np.repeat(np.arange(PIXELS, dtype=np.uint32), SAMPLES)
+    sample = np.tile(np.arange(SAMPLES, dtype=np.uint32), PIXELS)
+    return pixel, sample
+
+
+def drjit_sample_draws(pixel, sample, key0, key1, draws):
+    rng = SampleStreams.start(m.UInt32(pixel), m.UInt32(sample), dr.opaque(m.UInt32, key0), dr.opaque(m.UInt32, key1))
+    return np.stack([rng.next_1d().numpy() for _ in range(draws)], axis=1)
+
+
+@pytest.fixture(scope="module")
+def sample_draws():
+    return drjit_sample_draws(*pixel_sample_grid(), *KEYS, DRAWS)
+
+
+def test_sample_streams_agree_with_numpy_bit_for_bit(sample_draws):
+    assert np.array_equal(sample_draws, numpy_sample_draws(*pixel_sample_grid(), *KEYS, DRAWS))
+
+
+def test_restart_is_the_next_samples_stream():
+    """A lane that moves on (restart) draws what a fresh stream of (pixel, sample + 1) draws: tiling cannot matter."""
+    pixel, sample = pixel_sample_grid()
+    rng = SampleStreams.start(m.UInt32(pixel), m.UInt32(sample), dr.opaque(m.UInt32, KEYS[0]), dr.opaque(m.UInt32, KEYS[1]))
+    rng.next_1d()
+    moved = m.Bool(sample % 2 == 0)
+    rng.restart(moved)
+    after = np.stack([rng.next_1d().numpy() for _ in range(2)], axis=1)
+    fresh = numpy_sample_draws(pixel, sample + 1, *KEYS, 2)
+    stayed = numpy_sample_draws(pixel, sample, *KEYS, 3)[:, 1:]
+    even = sample % 2 == 0
+    assert np.array_equal(after[even], fresh[even]) and np.array_equal(after[~even], stayed[~even])
+
+
+def test_sample_streams_uniform_and_successive_draws_independent(sample_draws):
+    for k in range(DRAWS):
+        assert chi2_uniform_p(sample_draws[:, k], 256) > ALPHA, f"draw {k}"
+    for k in range(DRAWS - 1):
+        assert chi2_pairs_p(sample_draws[:, k], sample_draws[:, k + 1], 32) > ALPHA, f"draws {k}, {k + 1}"
+
+
+def test_samples_of_one_pixel_are_independent_streams(sample_draws):
+    """Samples s and s + 1 of one pixel, and the sums of a pixel's samples, behave as independent uniforms."""
+    for k in (0, DRAWS - 1):
+        assert chi2_pairs_p(sample_draws[:-1:2, k], sample_draws[1::2, k], 32) > ALPHA, f"draw {k}"
+        assert block_variance_p(sample_draws[:, k], SAMPLES) > ALPHA, f"draw {k}"
+
+
+def test_neighbouring_pixels_are_independent_streams(sample_draws):
+    """Sample s of pixel p and of pixel p + 1: neighbouring pixels must not share structure."""
+    by_pixel = sample_draws.reshape(PIXELS, SAMPLES, DRAWS)
+    for k in (0, DRAWS - 1):
+        a, b = by_pixel[:-1:2, :, k].ravel(), by_pixel[1::2, :, k].ravel()
+        assert chi2_pairs_p(a, b, 32) > ALPHA, f"draw {k}"
+
+
+def test_sample_stream_statistics_have_power():
+    """Without the sample's share in the increment (multiplier 0), a pixel's samples are one stream repeated: rejected."""
+    same = numpy_sample_draws(*pixel_sample_grid(), *KEYS, 1, sample_mult=0)
+    assert block_variance_p(same[:, 0], SAMPLES) < ALPHA
