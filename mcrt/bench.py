@@ -66,7 +66,7 @@ class BenchRow:
 
 
 #: Paths a timed render traces at most, per renderer (module docstring), unless run_bench is told otherwise.
-MAX_PATHS = {"mcrt": 1 << 25, "mitsuba": 1 << 22}
+MAX_PATHS = {"mcrt": 1 << 24, "mitsuba": 1 << 21}
 
 
 def _renderers(names, scene, backend, intersector, max_paths):

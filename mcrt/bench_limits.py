@@ -91,8 +91,8 @@ def ray_counts(scene, *, camera: str, res: int, spp: int, max_depth: int, backen
     k, b = lane_layout(res * res, spp)
     n = min(spp, k * b)
     zeros = dr.zeros(m.Float64, res * res)
-    keys = [dr.opaque(m.UInt32, v) for v in (*stream_keys(1), 0, n)]
-    dr.eval(tracer._launch_kernel(((zeros,) * 3, (zeros,) * 3), pixel_range(m, 0, res * res), *keys, k, b, res * res))
+    params = m.UInt32([*stream_keys(1), 0, n])
+    dr.eval(tracer._launch_kernel(((zeros,) * 3, (zeros,) * 3), pixel_range(m, 0, res * res), params, k, b, res * res))
     segments, shadow = (int(v) for v in counter.numpy())
     paths = res * res * n
     return {"paths": paths, "segments": segments, "shadow_rays": shadow, "segments_per_path": segments / paths,

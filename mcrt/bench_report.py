@@ -179,8 +179,10 @@ def _method(data: dict) -> str:
             f"(0: the on-disk kernel cache already held the kernels). Paths per second count one path per pixel sample, "
             f"whatever its length; the speed-up is mcrt's paths per second over Mitsuba's in the same case of this run. "
             f"Paths per lane: the most paths one of mcrt's SIMD lanes traces in turn in that render "
-            f"(`mcrt.tracer.pass_layout`); where a lane has more than one, a path that ends is followed in the same loop "
-            f"iteration by the lane's next (path regeneration), so a packet does not idle while its longest path finishes."
+            f"(`mcrt.tracer.lane_layout`); where a lane has more than one, a path that ends is followed in the same loop "
+            f"iteration by the lane's next (path regeneration), so a packet does not idle while its longest path finishes. "
+            f"K is mcrt's shadow rays per diffuse vertex; Mitsuba's path integrator samples one emitter point per vertex "
+            f"whatever K, so its rows with K > 1 time the same integrator as K = 1."
             + _bounded_text(data))
 
 
@@ -193,7 +195,7 @@ def _bounded_text(data: dict) -> str:
             f"{caps.get('mcrt', 0):,} paths (mcrt) or {caps.get('mitsuba', 0):,} paths (Mitsuba) is too long to repeat, "
             f"so each timed render covers a bounded part of it: mcrt the render's first launches (whole launches, "
             f"at least that many paths; every launch of a render has the same shape, so their throughput is the "
-            f"render's), Mitsuba `mi.render` of a crop of the film's first rows at the case's spp. Paths per second "
+            f"render's), Mitsuba `mi.render` of a crop of the film's first rows at the case's spp (at least one row). Paths per second "
             f"are the paths of that part over its time; the MSE needs the whole image, so bounded rows have none.")
 
 

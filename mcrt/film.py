@@ -17,6 +17,7 @@ independent given their seeds, so results merge exactly in any order
 
 from __future__ import annotations
 
+import contextlib
 import sys
 import time
 from dataclasses import dataclass, field
@@ -203,12 +204,7 @@ def run_passes(pass_sums: PassFn, *, width: int, height: int, spp: int, spp_per_
 
     if spp_per_pass < 1:
         raise ValueError(f"spp_per_pass must be >= 1, got {spp_per_pass}")
-    was_recording = dr.flag(dr.JitFlag.KernelHistory)
-    dr.set_flag(dr.JitFlag.KernelHistory, True)
-    try:
-        dr.kernel_history_clear()
-        dr.sync_thread()
-        t0 = time.perf_counter()
+    with _clock() as clock:
         sums, done, k = None, 0, 0
         while done < spp:
             n = min(spp_per_pass, spp - done)
@@ -220,11 +216,7 @@ def run_passes(pass_sums: PassFn, *, width: int, height: int, spp: int, spp_per_
                 dr.sync_thread()  # the kernels run asynchronously: wait, so the time left is right
                 progress.update(done)
         mean, var = mean_variance(sums, done, width, height)
-        wall = time.perf_counter() - t0
-        history = dr.kernel_history()
-    finally:
-        dr.set_flag(dr.JitFlag.KernelHistory, was_recording)
-    return PassTotals(mean, var, done, wall, compile_seconds(history))
+    return PassTotals(mean, var, done, clock['wall'], clock['compile'])
 
 
 def tile_mean_variance(s1, s2, n: int) -> tuple[np.ndarray, np.ndarray]:
@@ -270,14 +262,7 @@ def run_tiles(launch: LaunchFn, *, width: int, height: int, spp: int, tile_pixel
         raise ValueError(f"spp_per_pass and tile_pixels must be >= 1, got {spp_per_pass} and {tile_pixels}")
     pixels = width * height
     mean, var = np.zeros((pixels, 3), np.float32), np.zeros((pixels, 3), np.float32)
-    passes = -(-spp // spp_per_pass)
-    total = -(-pixels // tile_pixels) * passes
-    was_recording = dr.flag(dr.JitFlag.KernelHistory)
-    dr.set_flag(dr.JitFlag.KernelHistory, True)
-    try:
-        dr.kernel_history_clear()
-        dr.sync_thread()
-        t0 = time.perf_counter()
+    with _clock() as clock:
         launches, paths = 0, 0
         for p0 in range(0, pixels, tile_pixels):
             count, acc = min(tile_pixels, pixels - p0), None
@@ -294,12 +279,27 @@ def run_tiles(launch: LaunchFn, *, width: int, height: int, spp: int, tile_pixel
                 dr.sync_thread()
                 break
             mean[p0:p0 + count], var[p0:p0 + count] = tile_mean_variance(*acc, spp)
-        wall = time.perf_counter() - t0
-        history = dr.kernel_history()
+    shape = (height, width, 3)
+    return PassTotals(mean.reshape(shape), var.reshape(shape), spp, clock["wall"], clock["compile"], paths or pixels * spp)
+
+
+@contextlib.contextmanager
+def _clock():
+    """Times the block from an idle device with Dr.Jit's kernel history on: fills 'wall' and 'compile' (seconds)."""
+    import drjit as dr
+
+    out: dict[str, float] = {}
+    was_recording = dr.flag(dr.JitFlag.KernelHistory)
+    dr.set_flag(dr.JitFlag.KernelHistory, True)
+    try:
+        dr.kernel_history_clear()
+        dr.sync_thread()
+        t0 = time.perf_counter()
+        yield out
+        out["wall"] = time.perf_counter() - t0
+        out["compile"] = compile_seconds(dr.kernel_history())
     finally:
         dr.set_flag(dr.JitFlag.KernelHistory, was_recording)
-    shape = (height, width, 3)
-    return PassTotals(mean.reshape(shape), var.reshape(shape), spp, wall, compile_seconds(history), paths or pixels * spp)
 
 
 def samples_per_pass(width: int, height: int, spp: int, budget: int = 1 << 22) -> int:

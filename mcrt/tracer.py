@@ -199,12 +199,12 @@ class Tracer:
         if acc is None:
             zeros = dr.zeros(m.Float64, dr.width(pixels))
             acc = ((zeros, zeros, zeros), (zeros, zeros, zeros))
-        key0, key1 = stream_keys(seed)
-        opaque = [dr.opaque(m.UInt32, v) for v in (key0, key1, first_sample, n)]
-        return self._frozen_launch(acc, pixels, *opaque, k, b, dr.width(pixels))  # the width keys the recording too
+        # One small array for the four per-launch values: one copy to the device instead of four.
+        params = m.UInt32([*stream_keys(seed), first_sample, n])
+        return self._frozen_launch(acc, pixels, params, k, b, dr.width(pixels))  # the width keys the recording too
 
-    def _launch_kernel(self, acc, pixels, key0, key1, first, n, k: int, b: int, count: int):
-        """:meth:`launch` with its keys, first sample and count as opaque UInt32 arrays.
+    def _launch_kernel(self, acc, pixels, params, k: int, b: int, count: int):
+        """:meth:`launch` with its keys, first sample and count in ``params`` (UInt32 [key0, key1, first, n]).
 
         Lane i k + j (j < k) traces samples first + j b .. of pixel i, at most
         b and none from first + n on (mcrt.estimator.PathEstimator.path_sums;
@@ -218,6 +218,7 @@ class Tracer:
 
         m = self.m
         W = self.width
+        key0, key1, first, n = (dr.gather(m.UInt32, params, i) for i in range(4))
         idx = dr.arange(m.UInt32, count * k)
         if k > 1:
             pixel = dr.gather(m.UInt32, pixels, idx >> (k.bit_length() - 1))
