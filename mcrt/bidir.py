@@ -57,17 +57,20 @@ Determinism and variance
 ------------------------
 Splats land on any pixel in any order; they are added as 64-bit fixed-point
 integers (2^-SPLAT_BITS, far below any noise), so the sum does not depend on
-which thread adds first and a seed gives the same image bit for bit. The
-splats are no per-pixel samples, so the variance is that of batch means:
-pass k gives one estimate X_k of every pixel (the path tracer's n samples'
-mean plus the light tracer's splats over N), and with P passes
+which thread adds first and a seed gives the same image bit for bit.
 
-    mean = (1/P) sum_k X_k,    Var(mean) = s_X^2 / P,    s_X^2 = sum_k (X_k - mean)^2 / (P - 1).
+The path tracer's image has its per-sample variance, as plain mcrt's. The
+splats are no per-pixel samples (a light subpath adds to any pixels), so the
+light tracer's variance is that of batch means: its N subpaths run in P
+equal passes (:func:`batch_count`), pass k gives one estimate X_k of every pixel, and
 
-The result reports spp = P n camera samples and the per-sample variance
-n s_X^2, so that variance / spp is Var(mean) as for every renderer; its
-degrees of freedom are P - 1 per pixel (BATCHES), which the project's tile
-tests pool over a tile's pixels.
+    mean = (1/P) sum_k X_k,    Var(mean) = s_X^2 / P,    s_X^2 = sum_k (X_k - mean)^2 / (P - 1),
+
+with P - 1 degrees of freedom per pixel, which the project's tile tests pool
+over a tile's pixels. The two estimates are independent (their own random
+streams), so the variance of their sum is the sum of their variances; the
+result reports it times spp, so that variance / spp is Var(mean) as for
+every renderer.
 """
 
 from __future__ import annotations
@@ -82,13 +85,15 @@ from mcrt.film import Progress, RenderResult, run_passes
 from mcrt.sampling import coordinate_frame, cosine_about_normal, to_world
 from mcrt.scene import Mirror, RenderSettings, Scene, Sphere
 
-#: Passes (batches) a bidirectional render is split into, at most: the variance's degrees of freedom + 1.
-BATCHES = 32
+#: Passes (batches) of the light tracer, at most and at least: its variance's degrees of freedom + 1.
+BATCHES, MIN_BATCHES = 32, 8
+#: Light subpaths a batch has at least where the total allows: smaller launches leave cores idle.
+BATCH_PATHS = 1 << 16
 #: Fixed-point splats: a contribution is rounded to a multiple of 2^-SPLAT_BITS.
 SPLAT_BITS = 28
 #: Light subpaths per camera sample of the path tracer, by default.
-LIGHT_PATHS = 1.0
-#: The pass's light tracer draws its streams from pass indices past every camera pass's.
+LIGHT_PATHS = 0.05
+#: The light tracer's pass k keys its streams as pass _LIGHT_STREAMS + k (mcrt.tracer.stream_keys), never a camera pass's.
 _LIGHT_STREAMS = 1 << 40
 
 
@@ -143,8 +148,13 @@ class LightTracer:
         return [(tuple(float(x) for x in s.center), float(s.radius)) for s in mirrors]
 
     # ------------------------------------------------------------------
-    def pass_splats(self, seed: int, pass_index: int, paths: int):
-        """Per-pixel sums (Int64, units of 2^-SPLAT_BITS, laid out (pixel, channel)) of ``paths`` light subpaths' splats."""
+    def pass_moments(self, seed: int, pass_index: int, paths: int):
+        """[X, X^2] of one pass of ``paths`` light subpaths, X = sum of splats / paths: Float64, laid out (moment, pixel, channel).
+
+        X is the pass's estimate of every pixel (one batch of the module
+        docstring's batch means). The work is :meth:`_light_pass`, frozen:
+        recorded once per ``paths`` and replayed, the seed's keys opaque.
+        """
         from mcrt.tracer import stream_keys
 
         k0, k1 = stream_keys(seed, _LIGHT_STREAMS + pass_index)
@@ -155,11 +165,16 @@ class LightTracer:
 
         m = self.m
         rng = WeylRng.seeded(m, paths, key0, key1)
-        acc = dr.zeros(m.Int64, 3 * self.width * self.height)
+        size = 3 * self.width * self.height
+        acc = dr.zeros(m.Int64, size)
         o, d, power, valid = self.emit(rng)
         self.trace(o, d, power, rng, acc, valid)
         dr.eval(acc)
-        return acc
+        idx = dr.arange(m.UInt32, 2 * size)
+        x = m.Float64(dr.gather(m.Int64, acc, idx % size)) * (2.0**-SPLAT_BITS / paths)
+        out = dr.select(idx < size, x, x * x)
+        dr.eval(out)
+        return out
 
     def emit(self, rng):
         """(origin, direction, Le cos / (p_A p_w), cos > 0) of light subpaths: a uniform light point, a direction towards the mirrors."""
@@ -258,46 +273,39 @@ class LightTracer:
 
 
 # ----------------------------------------------------------------------
-def batch_layout(spp: int, spp_per_pass: int | None = None) -> tuple[int, int]:
-    """(passes P, camera samples per pass n), P n >= spp: n = ``spp_per_pass``, by default the least giving P <= BATCHES.
-
-    The variance needs P >= 2.
-    """
-    n = spp_per_pass or -(-spp // BATCHES)
-    passes = -(-spp // n)
-    if passes < 2:
-        raise ValueError(f"a bidirectional render needs at least 2 passes (its variance comes from batches), "
-                         f"got spp {spp} in passes of {n}")
-    return passes, n
-
-
-class Bidirectional:
-    """Path tracer (class C dropped) plus light tracer: one pass gives one batch estimate X_k of every pixel."""
-
-    def __init__(self, tracer, light: LightTracer, *, light_paths: float, part: str):
-        self.tracer, self.light, self.part = tracer, light, part
-        self.light_paths = light_paths
-        self.size = 3 * tracer.width * tracer.height
-
-    def batch(self, seed: int, k: int, n: int):
-        """[X_k, X_k^2] (Float64, laid out (moment, pixel, channel)) of pass k with n camera samples per pixel."""
-        m = self.tracer.m
-        idx = dr.arange(m.UInt32, self.size)
-        x = dr.zeros(m.Float64, self.size)
-        if self.part in ("both", "path"):
-            x = dr.gather(m.Float64, self.tracer.pass_sums(seed, k, n), idx) * (1.0 / n)
-        if self.part in ("both", "light"):
-            paths = max(1, round(self.light_paths * n * self.tracer.width * self.tracer.height))
-            splats = self.light.pass_splats(seed, k, paths)
-            x = dr.fma(m.Float64(splats), 2.0**-SPLAT_BITS / paths, x)
-        out = dr.zeros(m.Float64, 2 * self.size)
-        dr.scatter(out, x, idx)
-        dr.scatter(out, x * x, idx + self.size)
-        dr.eval(out)
-        return out
-
-
 PARTS = ("both", "path", "light")
+
+_LIGHT_TRACERS: dict = {}
+
+
+def _light_tracer(tracer, cos_power: int) -> LightTracer:
+    """The LightTracer of a cached Tracer (mcrt.tracer._tracer), kept with it so its frozen pass is recorded once."""
+    key = (id(tracer), cos_power)
+    entry = _LIGHT_TRACERS.get(key)
+    if entry is None or entry[0] is not tracer:
+        if len(_LIGHT_TRACERS) >= 8:
+            _LIGHT_TRACERS.pop(next(iter(_LIGHT_TRACERS)))
+        entry = _LIGHT_TRACERS[key] = (tracer, LightTracer(tracer, importance_cos_power=cos_power))
+    return entry[1]
+
+
+def batch_count(paths: int) -> int:
+    """Batches of ``paths`` light subpaths: BATCH_PATHS each, MIN_BATCHES to BATCHES of them."""
+    return min(BATCHES, max(MIN_BATCHES, paths // BATCH_PATHS))
+
+
+def light_batches(light: LightTracer, *, seed: int, paths: int, progress: bool = True):
+    """The light tracer's image from about ``paths`` light subpaths: (PassTotals, paths traced, batches).
+
+    :func:`batch_count` equal passes; each pass k gives one estimate X_k of
+    every pixel, the totals' mean is their mean and their variance the
+    variance of one X_k.
+    """
+    batches = batch_count(paths)
+    per_batch = max(1, -(-paths // batches))
+    totals = run_passes(lambda k, _: light.pass_moments(seed, k, per_batch), width=light.width, height=light.height, spp=batches, spp_per_pass=1,
+                        progress=Progress(batches, label="mcrt light tracing", unit="batches", enabled=progress))
+    return totals, per_batch * batches, batches
 
 
 def render_bidirectional(scene: Scene, settings: RenderSettings, *, backend: str = "llvm", progress: bool = True,
@@ -307,52 +315,57 @@ def render_bidirectional(scene: Scene, settings: RenderSettings, *, backend: str
     """Render ``scene`` with the path tracer for every path outside class C and light tracing for class C.
 
     Called by :func:`mcrt.tracer.render_tracer` with ``bidirectional=True``
-    (renderer ``mcrt``). ``light_paths`` light subpaths per camera sample;
-    ``part`` 'light' renders the light tracer's share alone (class C, to
-    compare with the path tracer's ``mirror_caustics='only'``), 'path' the
-    path tracer's; ``importance_cos_power`` as in :func:`pinhole_importance`.
-    ``tricks`` are the path tracer's (mcrt.tricks.options.trick_options).
-    The variance is that of batch means over passes of ``spp_per_pass``
-    camera samples (default: BATCHES passes, fewer where spp is smaller;
-    module docstring).
+    (renderer ``mcrt``). The path tracer renders ``settings`` as plain mcrt
+    does, with ``mirror_caustics='skip'`` (``spp_per_pass`` and ``tricks``,
+    mcrt.tricks.options, are its); the light tracer traces ``light_paths``
+    subpaths per camera sample (light_paths spp W H in all). The two are
+    independent, so the variance of the sum is the sum of the path tracer's
+    per-sample variance over spp and the light tracer's variance of batch
+    means over its passes (module docstring); the result reports it as
+    spp times that. ``part`` 'light' renders the light tracer's share alone
+    (class C, to compare with plain mcrt's ``mirror_caustics='only'``),
+    'path' the path tracer's; ``importance_cos_power`` as in
+    :func:`pinhole_importance`.
     """
-    from mcrt.tracer import _tracer
+    from mcrt.tracer import _tracer, render_tracer
 
     if part not in PARTS:
         raise ValueError(f"part must be one of {', '.join(PARTS)}, got {part!r}")
     if light_paths <= 0:
         raise ValueError(f"light_paths must be > 0, got {light_paths}")
     s = settings
-    tricks = tuple(sorted((*tricks, ("mirror_caustics", "skip"))))
-    tracer = _tracer(scene, s.camera, s.width, s.height, s.max_depth, s.light_samples, s.rr_depth, backend, intersector,
-                     frozenset(), precision_guard, mis, tricks)
-    est = Bidirectional(tracer, LightTracer(tracer, importance_cos_power=importance_cos_power),
-                        light_paths=light_paths, part=part)
-    passes, n = batch_layout(s.spp, spp_per_pass)
-    totals = run_passes(lambda k, _: est.batch(s.seed, k, n), width=s.width, height=s.height, spp=passes,
-                        spp_per_pass=1, progress=Progress(passes, label="mcrt bidirectional", unit="batches",
-                                                          enabled=progress))
+    common = dict(backend=backend, intersector=intersector, mis=mis, precision_guard=precision_guard)
+    shape = (s.height, s.width, 3)
+    mean, var_of_mean = np.zeros(shape, np.float64), np.zeros(shape, np.float64)
+    wall = compile_time = 0.0
+    extra = {}
+    if part in ("both", "path"):
+        pt = render_tracer(scene, s, progress=progress, spp_per_pass=spp_per_pass, mirror_caustics="skip", **common,
+                           **dict(tricks))
+        mean += pt.mean
+        var_of_mean += pt.variance.astype(np.float64) / pt.spp
+        wall, compile_time, extra = pt.wall_time, pt.compile_time or 0.0, dict(pt.extra)
+    if part in ("both", "light"):
+        tracer = _tracer(scene, s.camera, s.width, s.height, s.max_depth, s.light_samples, s.rr_depth, backend,
+                         intersector, frozenset(), precision_guard, mis, tuple(sorted((*tricks, ("mirror_caustics", "skip")))))
+        light = _light_tracer(tracer, importance_cos_power)
+        totals, paths, batches = light_batches(light, seed=s.seed, paths=round(light_paths * s.spp * s.width * s.height),
+                                      progress=progress)
+        mean += totals.mean
+        var_of_mean += totals.variance.astype(np.float64) / batches
+        wall, compile_time = wall + totals.wall_time, compile_time + totals.compile_time
+        extra.update(mis=str(tracer.options.mis).lower(), light_paths=str(paths), light_batches=str(batches))
     return RenderResult(
-        mean=totals.mean,
-        variance=totals.variance * n,
-        spp=passes * n,
+        mean=mean.astype(np.float32),
+        variance=(var_of_mean * s.spp).astype(np.float32),
+        spp=s.spp,
         seed=s.seed,
         max_depth=s.max_depth,
         renderer="mcrt",
         scene_hash=scene.content_hash(),
         camera=s.camera,
-        wall_time=totals.wall_time,
-        compile_time=totals.compile_time,
-        extra={
-            "backend": backend,
-            "intersector": intersector,
-            "light_samples": str(s.light_samples),
-            "mis": str(tracer.options.mis).lower(),
-            "rr_depth": str(s.rr_depth),
-            "bidirectional": part,
-            "light_paths": str(light_paths),
-            "batches": str(passes),
-            "variance": "batch means",
-            "drjit_version": dr.__version__,
-        },
+        wall_time=wall,
+        compile_time=compile_time,
+        extra={**extra, "bidirectional": part, "variance": "path samples + light batch means",
+               "drjit_version": dr.__version__},
     )

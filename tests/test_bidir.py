@@ -24,7 +24,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from mcrt.bidir import batch_layout, render_bidirectional
+from mcrt.bidir import render_bidirectional
 from mcrt.reference import load_reference
 from mcrt.render import render
 from mcrt.scene import load_scene
@@ -33,8 +33,9 @@ from mcrt.stats import compare, compare_images
 ALPHA = 0.01
 RES = 64
 LIGHT_SPP = 1024  # light tracer: 4M light subpaths at 64x64 (light_paths 1)
-CLASS_SPP = 16384  # the path tracer restricted to the class, which it finds only by chance: many samples
+CLASS_SPP = 8192  # the path tracer restricted to the class, which it finds only by chance: many samples
 CLASS_TILE = 16  # its per-pixel estimates are heavy-tailed: larger tiles give the central limit theorem room
+DEPTH_TILE = 32  # at max depth 3 the path tracer's hits of the class are rarer still
 
 
 @pytest.fixture(scope="module")
@@ -76,13 +77,14 @@ def test_depth_rule_matches_path_tracer(scene):
     """At max depth 3 only eye D S L is in the class: light tracer (seed 33) vs path tracer (seed 34) at ALPHA.
 
     One segment too many would add eye D D S L, one too few would give black.
+    DEPTH_TILE-pixel tiles: the path tracer's rare hits need them.
     """
     lt = _light(scene, 33, max_depth=3)
     pt = render(scene, _settings(scene, CLASS_SPP, 34, max_depth=3), mirror_caustics="only", progress=False)
     assert lt.mean.max() > 0.01
-    assert compare_images(lt, pt, alpha=ALPHA, tile=CLASS_TILE).passed
+    assert compare_images(lt, pt, alpha=ALPHA, tile=DEPTH_TILE).passed
     wrong = _light(scene, 33, max_depth=4)  # the class up to 4 segments holds more light
-    assert not compare_images(wrong, pt, alpha=ALPHA, tile=CLASS_TILE).passed
+    assert not compare_images(wrong, pt, alpha=ALPHA, tile=DEPTH_TILE).passed
 
 
 def test_no_class_paths_at_depth_2(scene):
@@ -105,13 +107,13 @@ def test_bidirectional_matches_mitsuba_reference(scene, bidirectional):
 
 
 def test_bidirectional_matches_plain_mcrt(scene, bidirectional):
-    """Against plain mcrt at 16384 spp (seed 41), ALPHA, 8x8 tiles.
+    """Against plain mcrt at 8192 spp (seed 41), ALPHA, 8x8 tiles.
 
     Not at equal spp: plain mcrt at 1024 spp often misses the rare paths
     that light tracing takes over, and then underestimates both their mean
     and its variance (the fireflies this renderer is for).
     """
-    plain = render(scene, _settings(scene, 16384, 41), progress=False)
+    plain = render(scene, _settings(scene, 8192, 41), progress=False)
     assert compare_images(bidirectional, plain, alpha=ALPHA).passed
 
 
@@ -123,12 +125,12 @@ def test_same_seed_same_image(scene):
     assert not np.array_equal(a.mean, c.mean)
 
 
-def test_batches_and_refusals(scene):
-    """Passes are equal batches of at least two; mutants and a one-batch render are refused."""
-    assert batch_layout(1024) == (32, 32)
-    assert batch_layout(100) == (25, 4)
-    assert batch_layout(10, 5) == (2, 5)
-    with pytest.raises(ValueError, match="at least 2 passes"):
-        batch_layout(1)
+def test_refusals(scene):
+    """Mutants, an unknown part and no light paths are refused with a one-line error."""
+    s = _settings(scene, 64, 1)
     with pytest.raises(ValueError, match="no mutants"):
-        render(scene, _settings(scene, 64, 1), bidirectional=True, mutants=("brdf_no_inv_pi",), progress=False)
+        render(scene, s, bidirectional=True, mutants=("brdf_no_inv_pi",), progress=False)
+    with pytest.raises(ValueError, match="part must be one of"):
+        render_bidirectional(scene, s, part="eye", progress=False)
+    with pytest.raises(ValueError, match="light_paths must be > 0"):
+        render_bidirectional(scene, s, light_paths=0, progress=False)
