@@ -93,19 +93,27 @@ def relative_variance(s: Sums) -> np.ndarray:
 
 
 def allocate(a: np.ndarray, budget: int, *, minimum: int = MIN_SAMPLES) -> np.ndarray:
-    """n_i = max(minimum, round(budget sqrt(a_i) / sum sqrt(a))), rounded to a geometric ladder of levels.
+    """n_i proportional to sqrt(a_i), at least ``minimum``, on a geometric ladder of levels, summing to about ``budget``.
 
-    The sum of the n_i is close to ``budget`` (the minimum and the rounding
-    move it a little; the report records the samples traced).
+    Rounding to the ladder moves the sum; the proportionality constant is
+    then bisected so that the rounded counts add up to ``budget`` or just
+    below (the report records the samples traced).
     """
     w = np.sqrt(np.maximum(a, 0.0))
-    total = w.sum()
-    n = np.full(a.shape, budget / a.size) if total <= 0 else budget * w / total
-    levels = _levels(minimum, max(int(n.max()) + 1, minimum))
-    pick = np.searchsorted(levels, np.maximum(n, minimum))
-    lo = levels[np.maximum(pick - 1, 0)]
-    hi = levels[np.minimum(pick, len(levels) - 1)]
-    return np.where(np.abs(n - lo) <= np.abs(hi - n), lo, hi).astype(np.int64)
+    share = np.full(a.shape, 1.0 / a.size) if w.sum() <= 0 else w / w.sum()
+    levels = _levels(minimum, max(int(budget * share.max()) + 1, minimum))
+
+    def rounded(scale):
+        n = np.maximum(budget * scale * share, minimum)
+        pick = np.clip(np.searchsorted(levels, n), 1, len(levels) - 1)
+        lo, hi = levels[pick - 1], levels[pick]
+        return np.where(n - lo <= hi - n, lo, hi).astype(np.int64)
+
+    lo, hi = 0.0, 2.0
+    for _ in range(40):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if rounded(mid).sum() <= budget else (lo, mid)
+    return rounded(lo)
 
 
 def _levels(lo: int, hi: int) -> np.ndarray:

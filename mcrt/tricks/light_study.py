@@ -50,8 +50,9 @@ def _sample(scene: Scene, strategy: str, x, n, samples: int, seed: int):
     host = McrtHost(Geometry(scene, m, "convex"))
     est = PathEstimator(host, EstimatorOptions(light_sampling=strategy))
     rng = WeylRng.seeded(m, samples, m.UInt32(seed), m.UInt32(seed + 1))
-    origin = m.Array3f(*(dr.full(m.Float, c, samples) for c in x))
-    value = est.light_sample(origin, m.Array3f(*n), rng, m.Bool(True))
+    # Opaque receivers: one kernel per strategy, not one per receiver.
+    origin = m.Array3f(*(dr.opaque(m.Float, c, samples) for c in x))
+    value = est.light_sample(origin, m.Array3f(*(dr.opaque(m.Float, c) for c in n)), rng, m.Bool(True))
     g = value[1]
     dr.eval(g)
     return g

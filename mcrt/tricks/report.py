@@ -23,7 +23,8 @@ CONVENTIONS = {
     "time": "wall time less Dr.Jit's JIT compile time, after a warm-up render of each variant; denoised renders add "
             "OIDN's time and the first-hit buffers' tracing time; adaptive renders count every launch",
     "efficiency": "1 / (MSE_excess x time), MSE_excess = MSE - the reference's noise floor mean(var_ref / spp_ref); "
-                  "the ratio is a variant's over plain mcrt's at the same spp",
+                  "the ratio is a variant's over plain mcrt's at the same spp, plain mcrt timed between the variant's "
+                  "renders (paired: the machine is shared); also with relMSE and its floor",
     "bias2": "MSE - variance - floor, means over the seeds; variance = mean over pixels and channels of the image's "
              "variance across seeds (can come out negative by chance: no measurable bias)",
     "flagged": "seeds for which mcrt.stats.policy.compare against the reference, policy 'reference-floor', rejects "
@@ -40,21 +41,22 @@ def _trick_list(data: StudyData) -> list[str]:
 
 
 def _row_cells(row: dict) -> list[str]:
-    return [row["label"], row["claim"], fmt(row["time"], 3), fmt(row["relmse"], 3), fmt(math.sqrt(row["mse"]), 3),
-            fmt(row["efficiency_ratio"], 3), f"{row['flagged']}/{row['seeds']}", fmt(row["detected_from"]),
+    return [row["label"], row["claim"], fmt(row["time"], 3), fmt(row["time_ratio"], 3), fmt(row["relmse"], 3),
+            fmt(math.sqrt(row["mse"]), 3), fmt(row["efficiency_ratio"], 3), fmt(row["efficiency_ratio_relmse"], 3),
+            f"{row['flagged']}/{row['seeds']}", fmt(row["detected_from"]),
             fmt(row["bias_share"], 2) if row["biased"] and row["bias_share"] > 0 else "-"]
 
 
-ROW_HEADER = ["variant", "theory", "time [s]", "relMSE", "RMSE", "efficiency / plain", "flagged", "detected from spp",
-              "bias^2 / MSE"]
+ROW_HEADER = ["variant", "theory", "time [s]", "time / plain", "relMSE", "RMSE", "efficiency / plain",
+              "efficiency / plain (relMSE)", "flagged", "detected from spp", "bias^2 / MSE"]
 
 
 def _rung_table(data: StudyData, labels: list[str]) -> tuple[list[str], list[list[str]]]:
-    header = ["variant", "spp", "time [s]", "relMSE", "RMSE", "variance", "bias^2", "efficiency", "flagged"]
+    header = ["variant", "spp", "time [s]", "plain time [s]", "relMSE", "RMSE", "variance", "bias^2", "efficiency", "flagged"]
     rows = []
     for label in labels:
         for r in rungs_of(data, label):
-            rows.append([label, str(r.spp), fmt(r.time, 3), fmt(r.relmse, 3), fmt(r.rmse, 3), fmt(r.variance, 3),
+            rows.append([label, str(r.spp), fmt(r.time, 3), fmt(r.time_plain, 3), fmt(r.relmse, 3), fmt(r.rmse, 3), fmt(r.variance, 3),
                          fmt(r.bias2, 3), fmt(r.efficiency, 3), f"{r.flagged}/{r.seeds}"])
     return header, rows
 

@@ -68,6 +68,8 @@ class Measurement:
     relmse: float
     passed: bool  # the comparisons with the reference found no difference
     rejected: tuple  # tiles each comparison rejected (one per tile size)
+    rejected_darker: int  # of those, the tiles darker than the reference (t < 0)
+    whole_image: float  # the whole image's (A - B) / mean(|A|, |B|), mean over channels
 
 
 @dataclass
@@ -78,6 +80,7 @@ class Rung:
     trick: str
     spp: int
     time: float  # median over seeds
+    time_plain: float  # median of plain mcrt's renders at this spp timed between this variant's (the paired time)
     mse: float
     relmse: float
     rmse: float
@@ -132,18 +135,20 @@ def _measure(v: Variant, r: RenderResult, adaptive, ref: RenderResult, floor: di
         time=float(r.wall_time) - float(r.compile_time or 0.0) + extra_time,
         samples=float(r.extra.get("samples_per_pixel", r.spp)), mse=mse, mse_excess=mse - floor["mse"],
         rmse=float(np.sqrt(mse)), relmse=M.relmse(ref.mean, r.mean), passed=all(c.passed for c in cs),
-        rejected=tuple(int(c.n_rejected) for c in cs),
+        rejected=tuple(int(c.n_rejected) for c in cs), rejected_darker=sum(int(((c.t < 0) & c.rejected).sum()) for c in cs),
+        whole_image=float(np.mean(cs[0].global_rel_diff)),
     )
 
 
-def _rung(v: Variant, spp: int, ms: list[Measurement], images: list[np.ndarray], floor: dict) -> Rung:
+def _rung(v: Variant, spp: int, ms: list[Measurement], images: list[np.ndarray], floor: dict, plain_times) -> Rung:
     stack = np.stack([im.astype(np.float64) for im in images])
     variance = float(stack.var(axis=0, ddof=1).mean()) if len(images) > 1 else float("nan")
     mse = float(np.mean([m.mse for m in ms]))
     t = float(np.median([m.time for m in ms]))  # the median: a rung's first render also records its kernels
     excess = mse - floor["mse"]
     return Rung(
-        label=v.label, trick=v.trick, spp=spp, time=t, mse=mse, relmse=float(np.mean([m.relmse for m in ms])),
+        label=v.label, trick=v.trick, spp=spp, time=t, time_plain=float(np.median(plain_times)) if plain_times else t,
+        mse=mse, relmse=float(np.mean([m.relmse for m in ms])),
         rmse=float(np.mean([m.rmse for m in ms])), variance=variance, bias2=mse - variance - floor["mse"],
         flagged=sum(not m.passed for m in ms), seeds=len(ms),
         efficiency=1.0 / (excess * t) if excess > 0 and t > 0 else float("nan"),
@@ -166,12 +171,18 @@ def run_study(scene: Scene, variants: list[Variant], cfg: StudyConfig, *, progre
     total = len(variants) * cfg.seeds * sum(cfg.ladder)
     bar = Progress(total, label="mcrt tricks", enabled=progress)
     done = 0
-    # Variant by variant, so that each variant's tracer stays compiled and cached while it renders.
+    # Variant by variant, so that each variant's tracer stays compiled and cached while it renders; plain
+    # mcrt is timed between a variant's renders, so that the time ratio sees the same load of the machine.
+    plain = variants[0]
+    plain.render(scene, _at(settings, 2), WARMUP_SEED, backend=cfg.backend)
     for v in variants:
         v.render(scene, _at(settings, 2), WARMUP_SEED, buffers=buffers, backend=cfg.backend)  # compile first
         for spp in cfg.ladder:
-            ms, images = [], []
+            ms, images, plain_times = [], [], []
             for seed in range(cfg.seeds):
+                if v is not plain and seed % 2 == 1:
+                    pr, _ = plain.render(scene, _at(settings, spp), render_seed("timing", seed, spp), backend=cfg.backend)
+                    plain_times.append(float(pr.wall_time) - float(pr.compile_time or 0.0))
                 rseed = render_seed(v.label, seed, spp)
                 r, adaptive = v.render(scene, _at(settings, spp), rseed, buffers=buffers, backend=cfg.backend)
                 ms.append(_measure(v, r, adaptive, ref, floor, cfg, spp, seed, rseed,
@@ -186,10 +197,35 @@ def run_study(scene: Scene, variants: list[Variant], cfg: StudyConfig, *, progre
                 done += spp
                 bar.update(done)
             data.measurements += ms
-            data.rungs.append(_rung(v, spp, ms, images, floor))
+            data.rungs.append(_rung(v, spp, ms, images, floor, plain_times))
     data.images["reference"] = ref.mean
     data.runtime = time.perf_counter() - t_start
     return data
+
+
+def confirm_unbiased(data: StudyData, labels: list[str], spp: int, *, backend: str = "llvm", log=print) -> dict:
+    """One render of each of ``labels`` at ``spp``, compared as in the study: does a flag at the top rung persist?
+
+    An unbiased estimator with heavy tails (a fixed small survival
+    probability multiplies rare paths' weights by 1/q per vertex) has a
+    skewed mean: at moderate spp it is more often low, with a low variance
+    estimate, and the comparison rejects it on the dark side; the flag goes
+    away with more samples, a bias's does not.
+    """
+    from mcrt.reference import load_reference
+
+    cfg = data.config
+    ref = load_reference(data.scene, cfg.camera, (cfg.res, cfg.res), cfg.max_depth)
+    settings = data.scene.settings(camera=cfg.camera, width=cfg.res, height=cfg.res, spp=spp, max_depth=cfg.max_depth)
+    out = {}
+    for label in labels:
+        v = next(x for x in data.variants if x.label == label)
+        log(f"mcrt tricks: {label}: flagged although unbiased in theory; one render at {spp} spp")
+        r, adaptive = v.render(data.scene, settings, render_seed(label, -1, spp), backend=backend)
+        m = _measure(v, r, adaptive, ref, data.floor, cfg, spp, -1, render_seed(label, -1, spp), 0.0)
+        out[label] = {"spp": spp, "passed": m.passed, "rejected": list(m.rejected), "rejected_darker": m.rejected_darker,
+                      "whole_image": m.whole_image}
+    return out
 
 
 def _at(settings, spp: int):
