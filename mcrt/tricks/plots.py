@@ -33,12 +33,8 @@ def error_panels(data: StudyData, tricks, out: Path, *, axis: str, svg: bool) ->
             style = dict(color="k", lw=2.0) if label == PLAIN else dict(color=COLORS[(i - 1) % len(COLORS)], lw=1.1)
             ls = "--" if i > len(COLORS) else "-"
             ax.plot(x, y, "o" + ls, ms=3, label=label, **style)
-        ax.set_xscale("log")
-        ax.set_yscale("log")
-        ax.set_title(TRICK_NAMES[trick], fontsize=9)
-        ax.set_xlabel("render time [s] (wall - JIT compile)" if axis == "time" else "samples per pixel (budget)")
-        ax.set_ylabel("relMSE" if axis == "time" else "RMSE")
-        ax.legend(fontsize=6.5, loc="best")
+        _log_axes(ax, "render time [s] (wall - JIT compile)" if axis == "time" else "samples per pixel (budget)",
+                  "relMSE" if axis == "time" else "RMSE", TRICK_NAMES[trick])
     for ax in axes.ravel()[n:]:
         ax.set_visible(False)
     cfg = data.config
@@ -62,14 +58,21 @@ def bias_plot(data: StudyData, labels: list[str], out: Path, *, svg: bool) -> di
             ok = b > 0
             ax.plot(x[ok], b[ok], "-", color=c, marker="s", ms=3.5, label=f"{label}: bias$^2$ (MSE - variance - floor)")
     ax.axhline(data.floor["mse"], color="0.6", ls="-.", lw=1, label="reference noise floor")
-    ax.set_xscale("log")
-    ax.set_yscale("log")
-    ax.set_xlabel("samples per pixel")
-    ax.set_ylabel("squared error (mean over pixels and channels)")
-    ax.set_title("Bias against spp: where bias$^2$ crosses the variance, more samples stop helping", fontsize=9)
-    ax.legend(fontsize=6.5)
+    _log_axes(ax, "samples per pixel", "squared error (mean over pixels and channels)",
+              "Bias against spp: where bias$^2$ crosses the variance, more samples stop helping")
     fig.tight_layout()
     return _save(fig, out, "bias", svg)
+
+
+def _log_axes(ax, xlabel: str, ylabel: str, title: str | None = None) -> None:
+    """Log-log axes with their labels, title and legend."""
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    if title:
+        ax.set_title(title, fontsize=9)
+    ax.legend(fontsize=6.5)
 
 
 def spp_maps(data: StudyData, out: Path, *, svg: bool) -> dict | None:
@@ -112,15 +115,10 @@ def light_plot(rows: list[dict], out: Path, *, svg: bool) -> dict | None:
     for strategy, c in (("area", COLORS[0]), ("solid_angle", COLORS[1])):
         a1.plot(d, [r[strategy]["variance"] / r["closed_form"] ** 2 for r in below], "o-", color=c, ms=3,
                 label=strategy.replace("_", " "))
-    a1.set_ylabel("relative per-sample variance  var / E$^2$")
     a2.plot(d, [r["efficiency_ratio"] for r in below], "o-", color="k", ms=3, label="variance x time, area / solid angle")
     a2.axhline(1.0, color="0.5", lw=0.8)
-    a2.set_ylabel("efficiency ratio (solid angle over area)")
-    for ax in (a1, a2):
-        ax.set_xscale("log")
-        ax.set_yscale("log")
-        ax.set_xlabel("distance below the light's centre (receiver facing it)")
-        ax.legend(fontsize=7)
+    for ax, ylabel in ((a1, "relative per-sample variance  var / E$^2$"), (a2, "efficiency ratio (solid angle over area)")):
+        _log_axes(ax, "distance below the light's centre (receiver facing it)", ylabel)
     fig.tight_layout()
     return _save(fig, out, "light_sampling", svg)
 
@@ -138,12 +136,8 @@ def variance_histogram(data: StudyData, labels: list[str], out: Path, *, svg: bo
     for i, (label, m) in enumerate(maps.items()):
         c = "k" if label == PLAIN else COLORS[i % len(COLORS)]
         ax.hist(m.ravel()[m.ravel() > 0], bins=bins, histtype="step", color=c, lw=1.3, label=label)
-    ax.set_xscale("log")
-    ax.set_yscale("log")
-    ax.set_xlabel("per-sample variance of a pixel (mean over channels)")
-    ax.set_ylabel("pixels")
-    ax.set_title("Per-pixel variance: the right tail is the fireflies", fontsize=9)
-    ax.legend(fontsize=7)
+    _log_axes(ax, "per-sample variance of a pixel (mean over channels)", "pixels",
+              "Per-pixel variance: the right tail is the fireflies")
     fig.tight_layout()
     return _save(fig, out, "variance_distribution", svg)
 

@@ -38,16 +38,18 @@ def rungs_of(data: StudyData, label: str) -> list[Rung]:
     return sorted((r for r in data.rungs if r.label == label), key=lambda r: r.spp)
 
 
-def ratio(data: StudyData, r: Rung, key: str = "mse") -> float:
+def ratio(data: StudyData, r: Rung, key: str = "mse", *, per_sample: bool = False) -> float:
     """Efficiency of ``r`` over plain mcrt's at the same spp: (excess_plain t_plain) / (excess t), paired times.
 
-    ``key`` 'mse' or 'relmse'; the excess subtracts the reference's noise floor.
+    ``key`` 'mse' or 'relmse'; the excess subtracts the reference's noise
+    floor. ``per_sample``: at equal samples instead of equal time (the
+    error ratio alone; what a trick gains before what it costs to run).
     """
     base = next(b for b in data.rungs if b.label == PLAIN and b.spp == r.spp)
     e_base, e = getattr(base, key) - data.floor[key], getattr(r, key) - data.floor[key]
     if e_base <= 0 or e <= 0:
         return float("nan")
-    return (e_base * r.time_plain) / (e * r.time)
+    return e_base / e if per_sample else (e_base * r.time_plain) / (e * r.time)
 
 
 def detected_from(rungs: list[Rung]) -> int | None:
@@ -69,7 +71,8 @@ def variant_row(data: StudyData, label: str) -> dict:
     return {
         "label": label, "trick": v.trick, "claim": v.claim, "spp": top.spp, "time": top.time, "mse": top.mse,
         "relmse": top.relmse, "efficiency_ratio": ratio(data, top), "efficiency_ratio_relmse": ratio(data, top, "relmse"),
-        "time_ratio": top.time / top.time_plain, "flagged": top.flagged, "seeds": top.seeds,
+        "time_ratio": top.time / top.time_plain, "per_sample_ratio": ratio(data, top, per_sample=True),
+        "per_sample_ratio_relmse": ratio(data, top, "relmse", per_sample=True), "flagged": top.flagged, "seeds": top.seeds,
         "biased": 2 * top.flagged >= top.seeds, "detected_from": detected_from(rs),
         "rejected": sum(sum(m.rejected) for m in at_top), "rejected_darker": sum(m.rejected_darker for m in at_top),
         "whole_image": float(sum(m.whole_image for m in at_top) / len(at_top)),
@@ -162,6 +165,13 @@ def _light_tail(data: StudyData) -> str:
             f"and {far['efficiency_ratio']:.3g}x at the {far['receiver']}.")
 
 
+def _adaptive_tail(data: StudyData) -> str:
+    rows = [variant_row(data, v.label) for v in data.variants if v.trick == "adaptive"]
+    return " At equal samples (launch overhead aside): " + "; ".join(
+        f"'{r['label']}' {r['per_sample_ratio']:.2f}x plain mcrt's efficiency by MSE, {r['per_sample_ratio_relmse']:.2f}x "
+        f"by relMSE" for r in rows) + "." if rows else ""
+
+
 def _bidir_tail(data: StudyData, goal: float = 3.0) -> str:
     labels = [v.label for v in data.variants if v.trick == "bidirectional"]
     if not labels:
@@ -172,7 +182,7 @@ def _bidir_tail(data: StudyData, goal: float = 3.0) -> str:
 
 def verdicts(data: StudyData, tricks) -> list[str]:
     """One line per trick present in the study."""
-    tails = {"denoise": _denoise_tail, "light": _light_tail, "bidirectional": _bidir_tail}
+    tails = {"denoise": _denoise_tail, "light": _light_tail, "bidirectional": _bidir_tail, "adaptive": _adaptive_tail}
     out = []
     for t in tricks:
         line = trick_verdict(data, t)
