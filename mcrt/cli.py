@@ -278,6 +278,9 @@ def build_parser() -> argparse.ArgumentParser:
     from mcrt.tricks.cli import register as register_tricks
 
     register_tricks(sub)
+    from mcrt.grade.accuracy.cli import register as register_accuracy
+
+    register_accuracy(sub)
     return ap
 
 

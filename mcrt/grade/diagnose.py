@@ -171,6 +171,30 @@ def signature_region(rel: np.ndarray, shape, tile, labels, names, direct, min_ef
     return describe_tiles(rel, chosen, shape, tile, labels, names, direct)
 
 
+def change_region(delta: np.ndarray, ref: np.ndarray, mask: np.ndarray, tile: int, labels, names, direct,
+                  min_effect: float) -> str:
+    """Where an image change ``delta`` (H, W, 3) lies, in the words of :func:`describe_tiles`.
+
+    Tiles are chosen by the mean *absolute* relative change in luminance
+    (a shift or a blur moves light within a tile, so its signed mean can
+    vanish where the change is strong) and worded with the sign of the
+    signed mean; a change whose tile means all stay below ``min_effect``
+    is 'no visible change at this resolution'.
+    """
+    d = np.asarray(delta, np.float64)
+    r_t = tile_means(np.asarray(ref, np.float64), mask, tile)
+    signed = rel_lum(tile_means(d, mask, tile), r_t)
+    lum = np.abs(d @ LUMINANCE)[..., None] * np.ones(3)
+    mag = rel_lum(tile_means(lum, mask, tile), r_t)
+    mx = float(np.max(np.abs(mag))) if mag.size else 0.0
+    if mx < min_effect:
+        return "no visible change at this resolution"
+    chosen = np.abs(mag) >= max(0.3 * mx, min_effect)
+    rel = np.where(signed < 0, -np.abs(mag), np.abs(mag))
+    h, w = np.asarray(ref).shape[:2]
+    return describe_tiles(rel, chosen, (h, w), tile, labels, names, direct)
+
+
 def rank_noise(spread: np.ndarray, n: np.ndarray, valid: np.ndarray, image_t: np.ndarray, mutants: dict, baseline,
                mask: np.ndarray, tile: int, samples: float, texts: dict) -> tuple[list[Candidate], float]:
     r"""Candidates ranked by how well their *noise* matches the image's (for bugs that mostly add variance).

@@ -17,6 +17,9 @@ that tells too few samples from a noisy bug, in
   rendered by mcrt at the grade resolution with the same seed as the
   baseline (common random numbers: ``mutant - baseline`` is much less noisy
   than either image).
+* The scene's variations (each surface's albedo, the light, the objects,
+  the eye, the path depth, a finer image for camera warps) that
+  :mod:`mcrt.grade.explain` fits to a failing image.
 * Per camera, the surface each pixel sees (:func:`surface_labels`) and the
   share of direct light (a max-depth-2 image over the full image), for
   describing *where* an image is wrong.
@@ -82,6 +85,7 @@ class Context:
     label_names: tuple[str, ...]
     prepare_time: float = 0.0
     notes: list[str] = field(default_factory=list)
+    explain: object = None  # mcrt.grade.explain.Basis: the scene's variations, for explaining a failing image
 
 
 # --------------------------------------------------------------------------
@@ -189,11 +193,14 @@ def reference_for(a: Assignment, scene: Scene, camera: str, max_depth: int, spp:
     return _expected(r, f"mcrt render ({spp} spp, cached)")
 
 
-def prepare_context(a: Assignment, cache_dir: str | os.PathLike | None = None, *, mutants=None, log=None) -> Context:
+def prepare_context(a: Assignment, cache_dir: str | os.PathLike | None = None, *, mutants=None, log=None,
+                    explain: bool = True) -> Context:
     """Render or load everything grading needs (see the module docstring).
 
     ``mutants`` restricts the catalogue (default: all of it); ``log`` is a
-    callable taking one line of progress text.
+    callable taking one line of progress text; ``explain`` (default true)
+    renders the scene's variations that explain a failing image
+    (:func:`mcrt.grade.explain.prepare_basis`).
     """
     from mcrt.mutants import MUTANTS
 
@@ -226,11 +233,14 @@ def prepare_context(a: Assignment, cache_dir: str | os.PathLike | None = None, *
             notes.append(f"mutant {m} left out of the diagnosis: {e}")
             continue
         muts[m] = _expected(r, f"mcrt with mutant {m} ({a.diagnosis_spp} spp)")
+    from mcrt.grade.explain import prepare_basis
+
+    basis = prepare_basis(a, scene, cache, log=log) if explain else None
     return Context(
         assignment=a, scene_hash=scene.content_hash(), cameras=cams, references=refs, model_var=model,
         baseline=_expected(baseline, f"mcrt ({a.diagnosis_spp} spp)"), mutants=muts,
         mutant_texts={m: MUTANTS[m] for m in names}, direct_fraction=direct, labels=labels,
-        label_names=label_names(scene), prepare_time=time.perf_counter() - t0, notes=notes,
+        label_names=label_names(scene), prepare_time=time.perf_counter() - t0, notes=notes, explain=basis,
     )
 
 
@@ -377,4 +387,5 @@ def coarsen(ctx: Context, k: int) -> Context:
         mutants={m: _coarse_expected(e, k) for m, e in ctx.mutants.items()},
         direct_fraction={c: block_means(d.astype(np.float64), k).astype(np.float32) for c, d in ctx.direct_fraction.items()},
         labels={c: _mode_blocks(lab, k, len(ctx.label_names)) for c, lab in ctx.labels.items()},
+        explain=None,  # the variations exist at the grade resolution only
     )

@@ -1,0 +1,74 @@
+"""``mcrt grade-accuracy``: grade the realistic class and write the grading-accuracy report."""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import sys
+import time
+
+from mcrt.exitcodes import EXIT_OK
+
+DEFAULT_OUT = "reports/grading_accuracy"
+DEFAULT_ASSIGNMENT = "course2023"
+
+
+def register(sub) -> None:
+    p = sub.add_parser("grade-accuracy", help="grade a class of realistic hand-ins (Mitsuba scene edits, correct renders "
+                       "of several estimators) and report scores, detection, naming and false-alarm rates",
+                       description=__doc__)
+    p.add_argument("--out", default=DEFAULT_OUT, help=f"report folder (default: {DEFAULT_OUT})")
+    p.add_argument("--assignment", default=DEFAULT_ASSIGNMENT,
+                   help=f"assignment name in reference/assignments/ or a file (default: {DEFAULT_ASSIGNMENT})")
+    p.add_argument("--cache", default=None, help="grading cache folder (default: $MCRT_CACHE/grade or ~/.cache/mcrt/grade)")
+    p.add_argument("--only", action="append", default=[], metavar="CASE",
+                   help="grade only this case (repeatable; default: the whole class)")
+    p.add_argument("--gradescope", type=int, default=2, metavar="N",
+                   help="time N students in a fresh process as Gradescope grades them (default: 2)")
+    p.add_argument("--quiet", "-q", action="store_true", help="no progress lines (default: off)")
+    p.set_defaults(func=cmd_grade_accuracy)
+
+
+def _command(args) -> str:
+    words = ["mcrt", "grade-accuracy", "--out", args.out]
+    if args.assignment != DEFAULT_ASSIGNMENT:
+        words += ["--assignment", args.assignment]
+    for c in args.only:
+        words += ["--only", c]
+    if args.gradescope != 2:
+        words += ["--gradescope", str(args.gradescope)]
+    return " ".join(words)
+
+
+def cmd_grade_accuracy(args) -> int:
+    from mcrt.grade.accuracy.cases import build_class
+    from mcrt.grade.accuracy.markdown import write_report
+    from mcrt.grade.accuracy.run import grade_cases, gradescope_figures
+    from mcrt.grade.assignment import load_assignment
+    from mcrt.grade.cli import resolve_assignment
+    from mcrt.grade.expected import default_cache_dir, prepare_context
+
+    def log(line: str) -> None:
+        if not args.quiet:
+            print(f"mcrt grade-accuracy: {line}", file=sys.stderr, flush=True)
+
+    t0 = time.perf_counter()
+    a = load_assignment(resolve_assignment(args.assignment))
+    cache = args.cache or default_cache_dir()
+    log(f"preparing {a.name} (cache {cache})")
+    ctx = prepare_context(a, cache, log=log)
+    prep = time.perf_counter() - t0
+    cases = build_class(width=a.grade_width, height=a.grade_height, max_depth=a.max_depth,
+                        names=tuple(args.only) or None, log=log)
+    outcomes = grade_cases(cases, ctx, log=log)
+    gs = []
+    picks = [c for c in cases if c.cause is not None][: max(args.gradescope - 1, 0)] + [c for c in cases if c.cause is None][:1]
+    for c in picks[: args.gradescope]:
+        log(f"timing {c.name} as Gradescope grades it")
+        gs.append(gradescope_figures(c, str(a.path), cache))
+    meta = {"date": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"),
+            "seconds": time.perf_counter() - t0, "prepare_seconds": prep, "assignment": a.name,
+            "reference": ctx.references[a.camera].source}
+    path = write_report(args.out, outcomes, command=_command(args), meta=meta, gradescope=gs)
+    log(f"wrote {path} ({time.perf_counter() - t0:.0f} s)")
+    return EXIT_OK

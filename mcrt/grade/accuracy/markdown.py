@@ -1,0 +1,75 @@
+"""The grading-accuracy report: reports/grading_accuracy/index.md and data.json."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from mcrt.grade.accuracy.run import Outcome, rates
+
+
+def _pct(r: dict) -> str:
+    return "n/a" if r["rate"] is None else f"{r['k']}/{r['n']} ({100 * r['rate']:.0f} %)"
+
+
+def _cell(text: str, limit: int = 260) -> str:
+    t = " ".join(str(text).split()).replace("|", "/")
+    return t if len(t) <= limit else t[: limit - 3] + "..."
+
+
+def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta: dict, gradescope: list[dict]) -> Path:
+    """Write index.md and data.json under ``out``; returns the Markdown's path."""
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    tuned = [o for o in outcomes if not o.held_out]
+    held = [o for o in outcomes if o.held_out]
+    groups = {"all": rates(outcomes), "tuned on": rates(tuned), "held out": rates(held)}
+    data = {"command": command, "meta": meta, "rates": groups, "gradescope": gradescope,
+            "cases": [o.to_dict() for o in outcomes]}
+    (out / "data.json").write_text(json.dumps(data, indent=1, default=str) + "\n", encoding="utf-8")
+    L = ["# Grading accuracy on a class of realistic hand-ins", "",
+         f"Written by `{command}` ({meta.get('date', '')}, {meta.get('seconds', 0):.0f} s). "
+         f"Assignment: `{meta.get('assignment')}`; reference: {meta.get('reference')}.", "",
+         "The wrong renders are **Mitsuba** renders of the scene edited the way a student's tracer goes wrong "
+         "(mcrt.grade.accuracy.cases), not mcrt's catalogued mutants; the correct ones come from mcrt and from "
+         "Mitsuba's `path` and `volpath` with several samplers, 16 to 1024 spp, as EXR or 8-bit PNG. Each is "
+         "written as a student's folder and graded with the course assignment. *Named right*: the feedback names "
+         "the mistake's cause (the explanation's family, or a criterion that names it: `linear` for an encoding, "
+         "`exposure` for a constant factor, `camera` for misregistration). *Named wrong*: it names a cause, and "
+         "not the right one. **Held-out** cases (marked H) were not looked at while the diagnosis was tuned.", "",
+         "## Rates", "",
+         "| | mistakes | detected (lost points) | named right | named wrong | major mistakes losing >= 25 % | "
+         "correct renders | false alarms | correct named a bug |",
+         "|---|---|---|---|---|---|---|---|---|"]
+    for g, r in groups.items():
+        L.append(f"| {g} | {r['mistakes']} | {_pct(r['detected'])} | {_pct(r['named_right'])} | {_pct(r['named_wrong'])} | "
+                 f"{_pct(r['major_lost_a_quarter'])} | {r['correct']} | {_pct(r['false_alarms'])} | "
+                 f"{_pct(r['correct_named_a_bug'])} |")
+    L += ["", "## Wrong renders", "",
+          "| case | H | mistake | cause | major | spp | file | score | named | the feedback says | s |",
+          "|---|---|---|---|---|---|---|---|---|---|---|"]
+    for o in outcomes:
+        if o.cause is None:
+            continue
+        named = "right" if o.right else ("wrong" if o.wrong else "none")
+        L.append(f"| {o.name} | {'H' if o.held_out else ''} | {_cell(o.truth, 90)} | {o.cause} | {'yes' if o.major else 'no'} | "
+                 f"{o.spp} | {o.file} | {o.score:g}/{o.max_score:g} | {named} | {_cell(o.said)} | {o.seconds:.1f} |")
+    L += ["", "## Correct renders", "",
+          "| case | H | render | spp | file | score | named a bug | the feedback says | s |", "|---|---|---|---|---|---|---|---|---|"]
+    for o in outcomes:
+        if o.cause is not None:
+            continue
+        L.append(f"| {o.name} | {'H' if o.held_out else ''} | {_cell(o.truth, 90)} | {o.spp} | {o.file} | "
+                 f"{o.score:g}/{o.max_score:g} | {'yes' if o.wrong else 'no'} | {_cell(o.said) or '-'} | {o.seconds:.1f} |")
+    if gradescope:
+        L += ["", "## One student as Gradescope grades it", "",
+              "`mcrt grade --single` in a fresh process with the cache built (Gradescope's defaults: half a vCPU, "
+              "768 MB, a 10-minute timeout; under half a vCPU the wall time is about twice the CPU time).", "",
+              "| case | exit | CPU s | wall s here | peak memory MB |", "|---|---|---|---|---|"]
+        for g in gradescope:
+            L.append(f"| {g['case']} | {g['exit']} | {g['cpu_s']:.1f} | {g['wall_s']:.1f} | {g['peak_rss_mb']:.0f} |")
+        L += ["", f"Building the cache (`mcrt grade --prepare`, references, catalogue and the explanation's "
+              f"variations): {meta.get('prepare_seconds', 0):.0f} s here."]
+    path = out / "index.md"
+    path.write_text("\n".join(L) + "\n", encoding="utf-8")
+    return path

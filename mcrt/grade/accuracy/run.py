@@ -1,0 +1,173 @@
+"""Grade the class of :mod:`mcrt.grade.accuracy.cases` and judge the grades.
+
+Each case is written as a student's folder (the file as the student would
+write it and a manifest with the spp) and graded by
+:func:`mcrt.grade.grader.grade_submission`, in this process, with one
+prepared context. For each case the outcome says:
+
+* the score and whether points were lost;
+* which causes the feedback names (:func:`named_causes`): the explanation's
+  family (:mod:`mcrt.grade.explain`), a catalogued bug named in its place,
+  or a criterion whose failure names the cause itself (``linear``: an
+  encoding; ``exposure``: a constant factor, which a light of the wrong
+  radiance is; a camera criterion failed for misregistration);
+* whether the named cause is the right one (:data:`CAUSE_OF`), or a wrong
+  one (a confident wrong cause), or none.
+
+Rates are given over all cases and apart for the held-out ones.
+"""
+
+from __future__ import annotations
+
+import resource
+import subprocess
+import sys
+import tempfile
+import time
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+from mcrt.grade.accuracy.cases import Case, write_submission
+
+#: What each explanation family (and catalogued bug) names, as a cause of :data:`mcrt.grade.accuracy.cases.CAUSES`.
+CAUSE_OF: dict[str, tuple[str, ...]] = {
+    "scale": ("light_radiance",), "light_radiance": ("light_radiance",), "channels": ("albedo",),
+    "albedo": ("albedo",), "reflectance": ("albedo",), "light_position": ("light_position",),
+    "light_size": ("light_size",), "object_missing": ("object_missing",), "object_moved": ("object_moved",),
+    # Moving the eye along the view is nearly a zoom: either word is right for either mistake.
+    "eye": ("camera_eye", "camera_fov"), "fov": ("camera_fov", "camera_eye"), "rotation": ("camera_rotation",),
+    # A shift of the image by a fraction of a pixel is what a small rotation does too.
+    "pixel_offset": ("pixel_offset", "camera_rotation"), "depth": ("depth",), "emitter_hidden": ("light_hidden",),
+    "encoding": ("encoding",), "blur": ("blur",),
+    "gamma_output": ("encoding",), "depth_off_by_one": ("depth",), "albedo_1pct": ("albedo",),
+    "mirror_wrong_sign": ("albedo",), "no_jitter": ("blur",),
+}
+
+
+@dataclass
+class Outcome:
+    """One graded case."""
+
+    name: str
+    truth: str
+    cause: str | None
+    major: bool
+    held_out: bool
+    spp: int
+    file: str
+    score: float
+    max_score: float
+    named: list[str]  # causes the feedback names
+    right: bool | None  # named the right cause (None: a correct render)
+    wrong: bool  # named a cause, and not the right one
+    said: str  # what the feedback says of the cause
+    seconds: float
+
+    @property
+    def lost(self) -> bool:
+        return self.score < self.max_score - 1e-9
+
+    def to_dict(self) -> dict:
+        return dict(asdict(self), lost=self.lost)
+
+
+def named_causes(res) -> tuple[list[str], str]:
+    """The causes a graded result's feedback names, and the words that name them (see the module docstring)."""
+    causes: list[str] = []
+    said: list[str] = []
+    expl = res.details.get("explanation")
+    if expl and expl.get("named"):
+        fam = expl["family"] if expl["family"] != "catalogue" else expl["named"]
+        causes += CAUSE_OF.get(fam, (f"catalogue:{fam}",))
+        said.append(expl["sentence"])
+    elif expl:
+        said.append(expl["sentence"])
+    elif res.diagnosis:  # the catalogue alone (no explanation basis): its best entry
+        m = res.diagnosis[0]["mutant"]
+        causes += CAUSE_OF.get(m, (f"catalogue:{m}",))
+        said.append(f"consistent with {m}")
+    tests = {t.name: t for t in res.tests}
+    for crit, cause in (("linear", "encoding"), ("exposure", "light_radiance")):
+        t = tests.get(crit)
+        if t is not None and t.status == "failed":
+            causes.append(cause)
+            said.append(t.output.split(";")[0])
+    cam = tests.get("camera")
+    if cam is not None and cam.status == "failed":
+        causes += ["camera_fov", "camera_rotation", "camera_eye", "pixel_offset"]
+        said.append(cam.output.split(";")[0])
+    noise = tests.get("noise")
+    if noise is not None and noise.status == "failed" and any(w in noise.output for w in ("blur", "denois", "filter")):
+        causes.append("blur")
+        said.append(noise.output.split(";")[0])
+    return list(dict.fromkeys(causes)), " | ".join(said)
+
+
+def grade_cases(cases: list[Case], ctx, *, workdir: str | Path | None = None, log=None) -> list[Outcome]:
+    """Write and grade every case with the prepared context ``ctx``; ``log`` takes one progress line per case."""
+    from mcrt.grade.grader import grade_submission
+    from mcrt.grade.submissions import discover
+
+    out = []
+    t0 = time.perf_counter()
+    with tempfile.TemporaryDirectory(dir=workdir) as tmp:
+        for k, c in enumerate(cases):
+            folder = Path(tmp) / c.name
+            write_submission(c, folder)
+            sub = discover(folder, single=True, student=c.name)[0]
+            t1 = time.perf_counter()
+            res = grade_submission(sub, ctx)
+            dt = time.perf_counter() - t1
+            named, said = named_causes(res)
+            right = None if c.cause is None else c.cause in named
+            wrong = bool(named) and (c.cause is None or c.cause not in named)
+            out.append(Outcome(c.name, c.spec.truth, c.cause, c.major, c.held_out, c.spp, c.spec.file, float(res.score),
+                               float(res.max_score), named, right, wrong, said or res.summary, dt))
+            if log:
+                el = time.perf_counter() - t0
+                log(f"graded {k + 1}/{len(cases)}: {c.name} {res.score:g}/{res.max_score:g} ({dt:.1f} s); "
+                    f"{el:.0f} s, ~{el / (k + 1) * (len(cases) - k - 1):.0f} s left")
+    return out
+
+
+def rates(outcomes: list[Outcome]) -> dict:
+    """Detection, naming, wrong-naming and false-alarm rates, over the outcomes given."""
+    wrong = [o for o in outcomes if o.cause is not None]
+    ok = [o for o in outcomes if o.cause is None]
+    major = [o for o in wrong if o.major]
+
+    def frac(xs, pred):
+        return {"n": len(xs), "k": sum(1 for x in xs if pred(x)), "rate": (sum(1 for x in xs if pred(x)) / len(xs)) if xs else None}
+
+    return {
+        "mistakes": len(wrong), "correct": len(ok),
+        "detected": frac(wrong, lambda o: o.lost),
+        "named_right": frac(wrong, lambda o: o.right),
+        "named_wrong": frac(wrong, lambda o: o.wrong),
+        "major_lost_a_quarter": frac(major, lambda o: o.max_score - o.score >= 0.25 * o.max_score),
+        "false_alarms": frac(ok, lambda o: o.lost),
+        "correct_named_a_bug": frac(ok, lambda o: o.wrong),
+    }
+
+
+def gradescope_figures(case: Case, assignment_path: str, cache_dir: str | Path, *, workdir=None) -> dict:
+    """CPU seconds, wall seconds and peak memory of grading one student in a fresh process, with the cache built.
+
+    ``mcrt grade --single`` runs as Gradescope runs it (one student, the
+    cache prepared ahead), in a child process whose resource usage is read
+    after it exits: user + system CPU time (under Gradescope's half vCPU the
+    wall time is about twice that) and its peak resident set.
+    """
+    with tempfile.TemporaryDirectory(dir=workdir) as tmp:
+        folder = Path(tmp) / "submission"
+        write_submission(case, folder)
+        before = resource.getrusage(resource.RUSAGE_CHILDREN)
+        t0 = time.perf_counter()
+        p = subprocess.run([sys.executable, "-m", "mcrt.cli", "grade", str(folder), "--single", "--student", case.name,
+                            "--assignment", assignment_path, "--out", str(Path(tmp) / "out"), "--cache", str(cache_dir),
+                            "--jobs", "0", "--quiet"], capture_output=True, text=True)
+        wall = time.perf_counter() - t0
+        after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return {"case": case.name, "exit": p.returncode, "wall_s": wall,
+            "cpu_s": (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime),
+            "peak_rss_mb": after.ru_maxrss / 1024.0, "stderr_tail": p.stderr[-300:]}
