@@ -1,4 +1,4 @@
-r"""Bidirectional rendering: light tracing takes over the paths the path tracer finds only by chance.
+r"""Bidirectional rendering: light tracing shares the paths the path tracer finds only by chance.
 
 The paths it is for
 -------------------
@@ -13,11 +13,33 @@ reflect off the mirror into the light, which is where its fireflies come from.
 
 The partition
 -------------
-The path tracer keeps every path outside C as before
-(:class:`mcrt.estimator.EstimatorOptions` ``mirror_caustics='skip'`` drops the
-emission of class C), and a light tracer counts exactly the class C: each
-path is counted by one strategy that can sample it, a valid multiple
-importance sampling with binary weights, so the sum is unbiased.
+Both the path tracer and a light tracer can sample every class C path, once
+each: the path tracer by its camera ray and cosine bounces up to the mirror,
+the light tracer by a subpath from the light joined to the eye at x1. Each
+counts a path with a weight, and the weights of a path add up to one, so the
+sum is unbiased (multiple importance sampling). Paths outside C stay with
+the path tracer as before.
+
+``weights='binary'`` gives class C to the light tracer alone (the path
+tracer's ``mirror_caustics='skip'``). ``weights='balance'`` (the default)
+uses Veach's balance heuristic with n camera samples per pixel and N light
+subpaths: the light tracer's weight is q / (1 + q), the path tracer's
+1 / (1 + q), with q = N p_L / (n p_E), where p_L and p_E are the light and
+the path tracer's densities of the path in the area measure of its vertices. Every diffuse vertex between x1
+and the mirror chain is sampled by a cosine bounce in both (in opposite
+directions: both give the factor G / pi), and the mirror chain's Jacobians
+cancel because reflection conserves etendue (cos dA dw is the same at both
+ends of a specular chain), so the ratio reduces to the ends of the path:
+
+    q = (N / n) pi p_A(y0) p_w(w0) / (p_cam(x1) cos(theta_0)),    p_cam(x1) = W(w) cos(theta_x1) / d^2,
+
+with p_A and p_w the light tracer's densities of its first point and
+direction, theta_0 the angle of w0 to the light's normal, and p_cam the
+density of x1 for one camera sample of its pixel. The path tracer evaluates
+it where it hits the light (:meth:`LightTracer.path_weight`), the light
+tracer where it splats. N / n is a nominal constant (light_paths W H): the
+weights add up to one whatever it is. Near the eye, where a pixel's patch is
+small and the light tracer rarely hits it, the path tracer takes over.
 
 The light tracer
 ----------------
@@ -51,7 +73,7 @@ uniform point of the pixel's square on that plane, whose density in solid
 angle is 1 / (A_pix cos^3 theta) (dA = dw / cos^3 theta); in area measure,
 with the camera's cosine in the geometry term, it is the familiar
 1 / (A_pix cos^4 theta). With N light subpaths per pass, the pass estimates
-pixel p by sum c_p / N.
+pixel p by sum c_p / N (each c_p times its balance weight).
 
 Determinism and variance
 ------------------------
@@ -127,6 +149,8 @@ class LightTracer:
         self.tx, self.ty = tx, ty
         self.pixel_area = (2.0 * tx / self.width) * (2.0 * ty / self.height)
         self.cones = self._mirror_cones(tracer.geometry.scene)
+        # With balance weights (mirror_caustics 'mis'): N / n, light subpaths per camera sample of a pixel.
+        self.caustic_paths = tracer.options.caustic_light_paths
         self._frozen = dr.freeze(self._light_pass, limit=4, warn_after=64)
 
     @staticmethod
@@ -167,8 +191,8 @@ class LightTracer:
         rng = WeylRng.seeded(m, paths, key0, key1)
         size = 3 * self.width * self.height
         acc = dr.zeros(m.Int64, size)
-        o, d, power, valid = self.emit(rng)
-        self.trace(o, d, power, rng, acc, valid)
+        o, d, power, ratio, valid = self.emit(rng)
+        self.trace(o, d, power, ratio, rng, acc, valid)
         dr.eval(acc)
         idx = dr.arange(m.UInt32, 2 * size)
         x = m.Float64(dr.gather(m.Int64, acc, idx % size)) * (2.0**-SPLAT_BITS / paths)
@@ -176,8 +200,33 @@ class LightTracer:
         dr.eval(out)
         return out
 
+    # ---- Densities both strategies evaluate (balance weights) -----------
+    def camera_density(self, d, hit):
+        """Area density at the first vertex of one camera sample of its pixel: W cos(theta_x) / t^2 (d from the eye)."""
+        cos_cam = dr.dot(self.m.Array3f(*self.forward), d)
+        return pinhole_importance(cos_cam, self.pixel_area) * (-dr.dot(hit.n, d) * dr.rcp(dr.square(hit.t)))
+
+    def light_ratio(self, y0, w0, cos0):
+        """pi p_A(y0) p_w(w0) / cos(theta_0): the light side of the densities' ratio (p_w without the sampled sphere's index)."""
+        light = self.host.light
+        if self.cones is None:
+            return light.pdf_area  # p_w = cos / pi
+        pdf = self.m.Float(0.0)
+        for axis, s2, cos_max in self._cone_frames(y0):
+            pdf += dr.select(dr.dot(w0, axis) >= cos_max, 1.0 / (2.0 * math.pi * (s2 / (1.0 + cos_max))), 0.0)
+        return pdf * (math.pi * light.pdf_area / len(self.cones)) / cos0
+
+    def path_weight(self, hit, d, cam_density):
+        """The path tracer's balance weight 1 / (1 + q) of a light hit along d that ends a path eye D ... D S+ L."""
+        q = self.caustic_paths * self.light_ratio(hit.p, -d, hit.light_cos) * dr.rcp(cam_density)
+        return dr.rcp(1.0 + q)
+
+    # ---- Light subpaths --------------------------------------------------
     def emit(self, rng):
-        """(origin, direction, Le cos / (p_A p_w), cos > 0) of light subpaths: a uniform light point, a direction towards the mirrors."""
+        """(origin, direction, Le cos / (p_A p_w), light_ratio, cos > 0) of light subpaths.
+
+        A point uniform on the light, a direction towards the mirrors (or the cosine direction).
+        """
         m, light = self.m, self.host.light
         u1, u2 = rng.next_1d(), rng.next_1d()
         (cx, cy, cz), (hx, hy) = light.center, light.half
@@ -191,39 +240,46 @@ class LightTracer:
         cos0 = d.z * light.normal_z
         valid = cos0 > 0  # the light emits on its normal's side only
         power = dr.select(valid, light.emitted() * (cos0 * light.area / pdf), 0.0)
+        ratio = self.light_ratio(y0, d, cos0) if self.caustic_paths else None
         origin = dr.fma(m.Array3f(*n), self.host.geo.offset(y0), y0)
-        return origin, d, power, valid
+        return origin, d, power, ratio, valid
+
+    def _cone_frames(self, y0):
+        """(axis, sin^2 theta_s, cos theta_s) of each mirror sphere's cone seen from y0."""
+        m = self.m
+        frames = []
+        for c, r in self.cones:
+            to_c = m.Array3f(*c) - y0
+            inv = dr.rsqrt(dr.squared_norm(to_c))
+            s2 = dr.square(r * inv)
+            frames.append((to_c * inv, s2, dr.safe_sqrt(1.0 - s2)))
+        return frames
 
     def _sample_cones(self, y0, rng):
         """A direction uniform in the cone of one mirror sphere chosen uniformly, and the mixture's density."""
         m = self.m
         count = len(self.cones)
         pick = m.UInt32(dr.minimum(rng.next_1d() * count, count - 1)) if count > 1 else m.UInt32(0)
-        axes, cos_maxes = [], []
-        for c, r in self.cones:
-            to_c = m.Array3f(*c) - y0
-            inv = dr.rsqrt(dr.squared_norm(to_c))
-            s2 = dr.square(r * inv)  # sin^2 theta_s
-            cos_maxes.append(dr.safe_sqrt(1.0 - s2))
-            axes.append((to_c * inv, s2))
-        axis = axes[0][0]
-        one_minus = axes[0][1] / (1.0 + cos_maxes[0])  # 1 - cos theta_s without cancellation
+        frames = self._cone_frames(y0)
+        axis, s2, cos_max = frames[0]
         for k in range(1, count):
-            axis = dr.select(pick == k, axes[k][0], axis)
-            one_minus = dr.select(pick == k, axes[k][1] / (1.0 + cos_maxes[k]), one_minus)
+            axis = dr.select(pick == k, frames[k][0], axis)
+            s2 = dr.select(pick == k, frames[k][1], s2)
+            cos_max = dr.select(pick == k, frames[k][2], cos_max)
+        one_minus = s2 / (1.0 + cos_max)  # 1 - cos theta_s without cancellation
         cos_t = 1.0 - rng.next_1d() * one_minus
         sin_t = dr.safe_sqrt((1.0 - cos_t) * (1.0 + cos_t))
         sp, cp = dr.sincos(2.0 * math.pi * rng.next_1d())
         s, t = coordinate_frame(axis.x, axis.y, axis.z)
         d = m.Array3f(*to_world((sin_t * cp, sin_t * sp, cos_t), s, t, (axis.x, axis.y, axis.z)))
         pdf = m.Float(0.0)
-        for k, ((a, s2), cm) in enumerate(zip(axes, cos_maxes)):
-            inside = (pick == k) | (dr.dot(d, a) >= cm)
-            pdf += dr.select(inside, 1.0 / (2.0 * math.pi * (s2 / (1.0 + cm))), 0.0)
+        for k, (a, s2_k, cm) in enumerate(frames):
+            inside = (pick == k) | (dr.dot(d, a) >= cm)  # the chosen cone holds d, whatever rounding says
+            pdf += dr.select(inside, 1.0 / (2.0 * math.pi * (s2_k / (1.0 + cm))), 0.0)
         return d, pdf * (1.0 / count)
 
     @dr.syntax
-    def trace(self, o, d, power, rng, acc, active):
+    def trace(self, o, d, power, ratio, rng, acc, active):
         """Follow light subpaths from (o, d) with weight ``power``, splatting at diffuse vertices after a mirror."""
         host, estimator, max_depth = self.host, self.estimator, self.max_depth
         beta = host.Spectrum(1.0)  # product of the bounce weights since the light
@@ -235,7 +291,7 @@ class LightTracer:
             depth += 1
             diffuse = active & hit.reflects & ~hit.mirror
             # ---- Join to the eye: a path of depth + 1 segments.
-            self.splat(acc, hit, power * beta, diffuse & mirrored & (depth + 1 <= max_depth))
+            self.splat(acc, hit, power * beta, ratio, diffuse & mirrored & (depth + 1 <= max_depth))
             # ---- Continue: a class C path from the light begins with a mirror vertex.
             alive = active & hit.reflects & (depth + 1 < max_depth) & (mirrored | hit.mirror)
             d, weight, _ = estimator.scatter(d, hit, alive, rng.next_1d(), rng.next_1d(), rng)
@@ -245,8 +301,8 @@ class LightTracer:
             beta, alive = estimator.roulette(beta, depth, diffuse, alive, rng)
             active = alive
 
-    def splat(self, acc, hit, value, active):
-        """Add value f cos(theta_y) / d^2 W to the pixel that sees the hit, where the eye sees its lit side."""
+    def splat(self, acc, hit, value, ratio, active):
+        """Add value f cos(theta_y) / d^2 W (times the balance weight q / (1 + q)) to the pixel that sees the hit."""
         m, host = self.m, self.host
         to_eye = m.Array3f(*self.eye) - hit.p
         inv_d = dr.rsqrt(dr.squared_norm(to_eye))
@@ -265,7 +321,11 @@ class LightTracer:
         to_eye_o = m.Array3f(*self.eye) - origin
         ok &= host.intersect(origin, w, ok).t > dr.norm(to_eye_o)
         f = lambertian_f(hit.color, inv_pi=self.estimator.opt.brdf_inv_pi)
-        c = value * f * (cos_y * dr.square(inv_d) * pinhole_importance(cos_cam, self.pixel_area, cos_power=self.cos_power))
+        g = cos_y * dr.square(inv_d)
+        c = value * f * (g * pinhole_importance(cos_cam, self.pixel_area, cos_power=self.cos_power))
+        if ratio is not None:  # the light tracer's balance weight, q / (1 + q)
+            q = self.caustic_paths * ratio * dr.rcp(pinhole_importance(cos_cam, self.pixel_area) * g)
+            c = c * (q * dr.rcp(1.0 + q))
         pixel = m.UInt32(dr.minimum(row, self.height - 1)) * self.width + m.UInt32(dr.minimum(col, self.width - 1))
         for k in range(3):
             fixed = m.Int64(dr.round(m.Float64(c[k]) * float(2**SPLAT_BITS)))
@@ -273,7 +333,8 @@ class LightTracer:
 
 
 # ----------------------------------------------------------------------
-PARTS = ("both", "path", "light")
+PARTS = ("both", "path", "light", "caustics")
+WEIGHTS = ("balance", "binary")
 
 _LIGHT_TRACERS: dict = {}
 
@@ -311,46 +372,57 @@ def light_batches(light: LightTracer, *, seed: int, paths: int, progress: bool =
 def render_bidirectional(scene: Scene, settings: RenderSettings, *, backend: str = "llvm", progress: bool = True,
                          spp_per_pass: int | None = None, intersector: str = "convex", mis: bool | None = None,
                          precision_guard: bool = True, tricks: tuple = (), light_paths: float = LIGHT_PATHS,
-                         part: str = "both", importance_cos_power: int = 3) -> RenderResult:
-    """Render ``scene`` with the path tracer for every path outside class C and light tracing for class C.
+                         weights: str = "balance", part: str = "both", importance_cos_power: int = 3) -> RenderResult:
+    """Render ``scene`` with the path tracer and, for the paths eye D ... D S+ L (class C), light tracing.
 
     Called by :func:`mcrt.tracer.render_tracer` with ``bidirectional=True``
     (renderer ``mcrt``). The path tracer renders ``settings`` as plain mcrt
-    does, with ``mirror_caustics='skip'`` (``spp_per_pass`` and ``tricks``,
-    mcrt.tricks.options, are its); the light tracer traces ``light_paths``
-    subpaths per camera sample (light_paths spp W H in all). The two are
-    independent, so the variance of the sum is the sum of the path tracer's
-    per-sample variance over spp and the light tracer's variance of batch
-    means over its passes (module docstring); the result reports it as
-    spp times that. ``part`` 'light' renders the light tracer's share alone
-    (class C, to compare with plain mcrt's ``mirror_caustics='only'``),
-    'path' the path tracer's; ``importance_cos_power`` as in
-    :func:`pinhole_importance`.
+    does (``spp_per_pass`` and ``tricks``, mcrt.tricks.options, are its),
+    the light tracer ``light_paths`` subpaths per camera sample (light_paths
+    spp W H in all). ``weights`` 'balance' shares class C between them by
+    the balance heuristic, 'binary' leaves it to the light tracer alone
+    (module docstring). The two are independent, so the variance of the sum
+    is the sum of the path tracer's per-sample variance over spp and the
+    light tracer's variance of batch means over its passes; the result
+    reports it as spp times that.
+
+    ``part`` renders a share, for checks: 'path' the path tracer's, 'light'
+    the light tracer's, 'caustics' both strategies' shares of class C alone
+    (to compare with plain mcrt's ``mirror_caustics='only'``);
+    ``importance_cos_power`` as in :func:`pinhole_importance`.
     """
     from mcrt.tracer import _tracer, render_tracer
 
     if part not in PARTS:
         raise ValueError(f"part must be one of {', '.join(PARTS)}, got {part!r}")
+    if weights not in WEIGHTS:
+        raise ValueError(f"weights must be one of {', '.join(WEIGHTS)}, got {weights!r}")
     if light_paths <= 0:
         raise ValueError(f"light_paths must be > 0, got {light_paths}")
     s = settings
+    # N / n of the balance heuristic: light subpaths per camera sample of a pixel (nominal; any constant is unbiased).
+    ratio = light_paths * s.width * s.height if weights == "balance" else 0.0
+    caustics = "only" if part == "caustics" else ("mis" if ratio else "skip")
+    options = (("mirror_caustics", caustics),) + ((("caustic_light_paths", ratio),) if ratio else ())
     common = dict(backend=backend, intersector=intersector, mis=mis, precision_guard=precision_guard)
+    tracer = _tracer(scene, s.camera, s.width, s.height, s.max_depth, s.light_samples, s.rr_depth, backend,
+                     intersector, frozenset(), precision_guard, mis, tuple(sorted((*tricks, *options))))
+    if ratio:
+        tracer.estimator.caustic_pdfs = _light_tracer(tracer, 3)  # before the path kernel is first recorded
     shape = (s.height, s.width, 3)
     mean, var_of_mean = np.zeros(shape, np.float64), np.zeros(shape, np.float64)
     wall = compile_time = 0.0
     extra = {}
-    if part in ("both", "path"):
-        pt = render_tracer(scene, s, progress=progress, spp_per_pass=spp_per_pass, mirror_caustics="skip", **common,
-                           **dict(tricks))
+    if part == "path" or part == "both" or (part == "caustics" and ratio):  # binary: the light tracer's class alone
+        pt = render_tracer(scene, s, progress=progress, spp_per_pass=spp_per_pass, mirror_caustics=caustics,
+                           caustic_light_paths=ratio, **common, **dict(tricks))
         mean += pt.mean
         var_of_mean += pt.variance.astype(np.float64) / pt.spp
         wall, compile_time, extra = pt.wall_time, pt.compile_time or 0.0, dict(pt.extra)
-    if part in ("both", "light"):
-        tracer = _tracer(scene, s.camera, s.width, s.height, s.max_depth, s.light_samples, s.rr_depth, backend,
-                         intersector, frozenset(), precision_guard, mis, tuple(sorted((*tricks, ("mirror_caustics", "skip")))))
+    if part != "path":
         light = _light_tracer(tracer, importance_cos_power)
         totals, paths, batches = light_batches(light, seed=s.seed, paths=round(light_paths * s.spp * s.width * s.height),
-                                      progress=progress)
+                                               progress=progress)
         mean += totals.mean
         var_of_mean += totals.variance.astype(np.float64) / batches
         wall, compile_time = wall + totals.wall_time, compile_time + totals.compile_time
@@ -366,6 +438,6 @@ def render_bidirectional(scene: Scene, settings: RenderSettings, *, backend: str
         camera=s.camera,
         wall_time=wall,
         compile_time=compile_time,
-        extra={**extra, "bidirectional": part, "variance": "path samples + light batch means",
-               "drjit_version": dr.__version__},
+        extra={**extra, "bidirectional": part, "weights": weights,
+               "variance": "path samples + light batch means", "drjit_version": dr.__version__},
     )

@@ -72,7 +72,7 @@ from mcrt.sampling import balance_heuristic, cosine_hemisphere_pdf
 UNBOUNDED = 2**32 - 1
 
 #: What the path tracer does with the paths eye D ... D S+ L (EstimatorOptions.mirror_caustics).
-MIRROR_CAUSTICS = ("all", "skip", "only")
+MIRROR_CAUSTICS = ("all", "skip", "only", "mis")
 
 #: Light sampling strategies: uniform in area on the light, or uniform in the solid angle it subtends
 #: (the spherical rectangle of :func:`mcrt.sampling.square_to_spherical_rectangle`).
@@ -144,8 +144,10 @@ class EstimatorOptions:
     roulette_start: int | None = None  # first depth roulette runs at; None: the scheme's (rr_depth; 1)
     light_sampling: str = "area"  # 'area': uniform on the light; 'solid_angle': uniform in its solid angle
     # Paths eye D ... D S+ L (first vertex diffuse, last a mirror): 'all' counts them; 'skip' leaves
-    # them to mcrt.bidir's light tracer; 'only' counts them alone (to check that light tracer).
+    # them to mcrt.bidir's light tracer; 'only' counts them alone (to check that light tracer); 'mis'
+    # counts them with the balance weight against the light tracer (PathEstimator.caustic_pdfs).
     mirror_caustics: str = "all"
+    caustic_light_paths: float = 0.0  # > 0: balance weights ('mis', 'only'); the light subpaths per camera sample of a pixel
 
     def __post_init__(self):
         if self.max_depth < -1:
@@ -168,6 +170,9 @@ class EstimatorOptions:
             raise ValueError(f"light_sampling must be one of {', '.join(LIGHT_SAMPLING)}, got {self.light_sampling!r}")
         if self.mirror_caustics not in MIRROR_CAUSTICS:
             raise ValueError(f"mirror_caustics must be one of {', '.join(MIRROR_CAUSTICS)}, got {self.mirror_caustics!r}")
+        if (self.mirror_caustics == "mis" and self.caustic_light_paths <= 0) or (
+                self.caustic_light_paths and self.mirror_caustics not in ("mis", "only")):
+            raise ValueError("mirror_caustics 'mis' needs caustic_light_paths > 0, and only 'mis' and 'only' take them")
         if self.light_sampling == "solid_angle" and self.mis:
             # Its weight Le cos_x Omega is bounded, which is what MIS is there for; the MIS weight of a
             # light hit would need the solid angle seen from the ray's origin, which no host provides.
@@ -189,6 +194,9 @@ def _max_component(v):
 
 class PathEstimator:
     """The path loop of the module docstring on one host."""
+
+    #: With mirror_caustics 'mis': the densities both strategies evaluate (mcrt.bidir.LightTracer), set by mcrt.bidir.
+    caustic_pdfs = None
 
     def __init__(self, host, options: EstimatorOptions):
         self.host, self.opt = host, options
@@ -234,6 +242,10 @@ class PathEstimator:
         left = host.UInt32(paths - 1)  # paths the lane has still to start
         hit_first = host.Bool(False)  # the first ray hit something
         eye_diffuse = host.Bool(False)  # the current path's first vertex is diffuse (mirror_caustics)
+        cam_density = host.Float(0.0)  # area density of the first vertex per camera sample (mirror_caustics 'mis')
+        balance = self.opt.caustic_light_paths > 0
+        if balance and self.caustic_pdfs is None:
+            raise ValueError("mirror_caustics 'mis' needs the light tracer's densities (mcrt.bidir sets caustic_pdfs)")
         active = host.Bool(active) & (self.max_depth > 0)  # the lane has a path in flight
 
         while dr.hint(active, label="mcrt_path"):
@@ -245,7 +257,12 @@ class PathEstimator:
             # ---- Emission.
             if caustics != "all":
                 eye_diffuse = dr.select(depth == 1, hit.reflects & ~hit.mirror, eye_diffuse)
-            L = dr.fma(beta, self.emitted(hit, specular, pdf_bsdf, depth, active, eye_diffuse=eye_diffuse), L)
+            if balance:
+                cam_density = dr.select(depth == 1, self.caustic_pdfs.camera_density(d, hit), cam_density)
+            # The balance weight of this hit where it ends a path eye D ... D S+ L.
+            w_caustic = self.caustic_pdfs.path_weight(hit, d, cam_density) if balance else 1.0
+            L = dr.fma(beta, self.emitted(hit, specular, pdf_bsdf, depth, active, eye_diffuse=eye_diffuse,
+                                          caustic_weight=w_caustic), L)
             if hit.emission is not None and caustics != "only":
                 L = dr.fma(beta, hit.emission, L)
 
@@ -297,15 +314,16 @@ class PathEstimator:
         return sum_x, sum_x2, hit_first
 
     # ------------------------------------------------------------------
-    def emitted(self, hit, specular, pdf_bsdf, depth, active, eye_diffuse=False):
+    def emitted(self, hit, specular, pdf_bsdf, depth, active, eye_diffuse=False, caustic_weight=1.0):
         """Le towards the ray where it meets a light's emitting side, weighted against light sampling.
 
         Without MIS it counts only where no light sample could have found it
         (from the eye, after a mirror). With MIS a hit after a diffuse bounce
         counts too, with the balance weight of the cosine direction against
         K light samples, both densities in solid angle. ``mirror_caustics``
-        drops (or keeps alone) the hits after a mirror on paths whose first
-        vertex was diffuse (``eye_diffuse``): the paths eye D ... D S+ L.
+        drops (or keeps alone, or weighs by ``caustic_weight``) the hits
+        after a mirror on paths whose first vertex was diffuse
+        (``eye_diffuse``): the paths eye D ... D S+ L.
         """
         opt = self.opt
         cos_y = hit.light_cos if opt.light_one_sided else dr.abs(hit.light_cos)
@@ -323,7 +341,10 @@ class PathEstimator:
             counted = counted & (depth > 1)
         if opt.mirror_caustics != "all":
             caustic = specular & eye_diffuse  # after a mirror (specular at depth > 1: eye_diffuse is false at depth 1)
-            counted = counted & (caustic if opt.mirror_caustics == "only" else ~caustic)
+            if opt.mirror_caustics in ("skip", "only"):
+                counted = counted & (caustic if opt.mirror_caustics == "only" else ~caustic)
+            if opt.caustic_light_paths:
+                weight = dr.select(caustic, caustic_weight, weight)
         return dr.select(counted, hit.light_radiance * weight, 0.0)
 
     def scatter(self, d, hit, alive, u1, u2, sampler):

@@ -306,6 +306,7 @@ def _tracer(scene: Scene, *args) -> Tracer:
 def render_tracer(scene: Scene, settings: RenderSettings, *, backend: str = "llvm", progress: bool = True,
                   spp_per_pass: int | None = None, mutants=(), intersector: str = "convex", mis: bool | None = None,
                   precision_guard: bool = True, bidirectional: bool = False, mirror_caustics: str = "all",
+                  caustic_light_paths: float = 0.0,
                   tile_pixels: int | None = None, max_launches: int | None = None, **tricks) -> RenderResult:
     """Render ``scene`` at ``settings`` with the standalone tracer: mean and per-sample variance.
 
@@ -337,6 +338,8 @@ def render_tracer(scene: Scene, settings: RenderSettings, *, backend: str = "llv
                                     intersector=intersector, mis=mis, precision_guard=precision_guard,
                                     tricks=trick_options(tricks))
     caustics = (("mirror_caustics", mirror_caustics),) if mirror_caustics != "all" else ()
+    if caustic_light_paths:  # mirror_caustics 'mis' (mcrt.bidir)
+        caustics += (("caustic_light_paths", caustic_light_paths),)
     tracer = _tracer(scene, s.camera, s.width, s.height, s.max_depth, s.light_samples, s.rr_depth, backend, intersector,
                      frozenset(mutants), precision_guard, mis, tuple(sorted(trick_options(tricks) + caustics)))
     k, b, per_pass = tracer.layout(s.spp, spp_per_pass)

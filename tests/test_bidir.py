@@ -10,6 +10,8 @@ seeds, so each test always passes or always fails on a given machine.
   max depth and at max depth 3 (only eye D S L: the depth rule's edge), where
   a light tracer that counted one segment more or less would differ. At max
   depth 2 the class is empty: the light tracer adds exactly nothing.
+* Balance weights: both strategies' shares of the class add up to it, on the
+  canonical scene and where the class lies a step from the eye.
 * A wrong camera importance (no cos^3, an extra cos) is rejected by the same
   comparison.
 * The whole render against the committed Mitsuba reference and against plain
@@ -54,8 +56,9 @@ def class_c(scene):
 
 
 def _light(scene, seed, max_depth=8, **kw):
-    return render_bidirectional(scene, _settings(scene, LIGHT_SPP, seed, max_depth), part="light", light_paths=1.0,
-                                progress=False, **kw)
+    """The light tracer alone, binary weights: all of class C."""
+    return render_bidirectional(scene, _settings(scene, LIGHT_SPP, seed, max_depth), part="light", weights="binary",
+                                light_paths=1.0, progress=False, **kw)
 
 
 def test_light_tracer_matches_path_tracer_on_its_paths(scene, class_c):
@@ -64,6 +67,30 @@ def test_light_tracer_matches_path_tracer_on_its_paths(scene, class_c):
     assert lt.mean.max() > 0.01  # the caustics are there (a light tracer that splats nothing could "agree" with noise)
     c = compare_images(lt, class_c, alpha=ALPHA, tile=CLASS_TILE)
     assert c.passed, c.summary()
+
+
+def test_balance_weights_share_the_class(scene, class_c):
+    """Balance weights: both strategies' shares of class C (seed 37) add up to the path tracer's class C (seed 31)."""
+    both = render_bidirectional(scene, _settings(scene, LIGHT_SPP, 37), part="caustics", light_paths=1.0,
+                                progress=False)
+    c = compare_images(both, class_c, alpha=ALPHA, tile=CLASS_TILE)
+    assert c.passed, c.summary()
+
+
+def test_balance_weights_near_the_eye():
+    """Class C a step from the eye (hard case grazing_wall, 32x32): the path tracer's share is large there.
+
+    Both shares (seed 38, 4096 spp) agree with the path tracer's class C
+    (seed 39, 16384 spp) at ALPHA, 8x8 tiles; the light tracer's share alone
+    does not, so weights that left out the path tracer would fail.
+    """
+    near = load_scene("reference/scenes/hard/grazing_wall.toml")
+    s = replace(near.settings(), width=32, height=32, spp=4096, seed=38)
+    plain = render(near, replace(s, spp=16384, seed=39), mirror_caustics="only", progress=False)
+    both = render_bidirectional(near, s, part="caustics", light_paths=1.0, progress=False)
+    assert compare_images(both, plain, alpha=ALPHA, tile=8).passed
+    light = render_bidirectional(near, s, part="light", light_paths=1.0, progress=False)
+    assert not compare_images(light, plain, alpha=ALPHA, tile=8).passed
 
 
 @pytest.mark.parametrize("cos_power", [0, 4], ids=["no_cos3", "cos4"])
