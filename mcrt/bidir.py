@@ -370,14 +370,17 @@ def light_batches(light: LightTracer, *, seed: int, paths: int, progress: bool =
 
 
 def render_bidirectional(scene: Scene, settings: RenderSettings, *, backend: str = "llvm", progress: bool = True,
-                         spp_per_pass: int | None = None, intersector: str = "convex", mis: bool | None = None,
-                         precision_guard: bool = True, tricks: tuple = (), light_paths: float = LIGHT_PATHS,
-                         weights: str = "balance", part: str = "both", importance_cos_power: int = 3) -> RenderResult:
+                         spp_per_pass: int | None = None, mutants=(), intersector: str = "convex",
+                         mis: bool | None = None, precision_guard: bool = True, mirror_caustics: str = "all",
+                         light_paths: float = LIGHT_PATHS, weights: str = "balance", part: str = "both",
+                         importance_cos_power: int = 3, **tricks) -> RenderResult:
     """Render ``scene`` with the path tracer and, for the paths eye D ... D S+ L (class C), light tracing.
 
-    Called by :func:`mcrt.tracer.render_tracer` with ``bidirectional=True``
-    (renderer ``mcrt``). The path tracer renders ``settings`` as plain mcrt
-    does (``spp_per_pass`` and ``tricks``, mcrt.tricks.options, are its),
+    Renderer ``mcrt`` with ``bidirectional=True`` (:mod:`mcrt.tricks.render`)
+    calls it with that renderer's options; it refuses ``mutants`` and
+    ``mirror_caustics`` (it sets those itself). The path tracer renders
+    ``settings`` as plain mcrt does (``spp_per_pass`` and ``tricks``,
+    mcrt.tricks.options, are its),
     the light tracer ``light_paths`` subpaths per camera sample (light_paths
     spp W H in all). ``weights`` 'balance' shares class C between them by
     the balance heuristic, 'binary' leaves it to the light tracer alone
@@ -392,7 +395,11 @@ def render_bidirectional(scene: Scene, settings: RenderSettings, *, backend: str
     ``importance_cos_power`` as in :func:`pinhole_importance`.
     """
     from mcrt.tracer import _tracer, render_tracer
+    from mcrt.tricks.options import trick_options
 
+    if mutants or mirror_caustics != "all":
+        raise ValueError("bidirectional rendering takes no mutants and no mirror_caustics (it sets them itself)")
+    tricks = trick_options(tricks)
     if part not in PARTS:
         raise ValueError(f"part must be one of {', '.join(PARTS)}, got {part!r}")
     if weights not in WEIGHTS:

@@ -305,8 +305,7 @@ def _tracer(scene: Scene, *args) -> Tracer:
 
 def render_tracer(scene: Scene, settings: RenderSettings, *, backend: str = "llvm", progress: bool = True,
                   spp_per_pass: int | None = None, mutants=(), intersector: str = "convex", mis: bool | None = None,
-                  precision_guard: bool = True, bidirectional: bool = False, mirror_caustics: str = "all",
-                  caustic_light_paths: float = 0.0,
+                  precision_guard: bool = True, mirror_caustics: str = "all", caustic_light_paths: float = 0.0,
                   tile_pixels: int | None = None, max_launches: int | None = None, **tricks) -> RenderResult:
     """Render ``scene`` at ``settings`` with the standalone tracer: mean and per-sample variance.
 
@@ -316,10 +315,10 @@ def render_tracer(scene: Scene, settings: RenderSettings, *, backend: str = "llv
     :func:`mcrt.precision.check_precision` would refuse (only to measure
     where float32 breaks). ``tricks`` are the estimator's efficiency tricks
     (:data:`mcrt.tricks.options.TRICK_OPTIONS`, off at their defaults).
-    ``bidirectional`` adds light tracing for the paths eye D ... D S+ L
-    (:func:`mcrt.bidir.render_bidirectional`); ``mirror_caustics``
-    (:class:`mcrt.estimator.EstimatorOptions`) 'only' renders those paths
-    alone, to check it. ``spp_per_pass`` caps the samples per pixel of one
+    ``mirror_caustics`` and ``caustic_light_paths``
+    (:class:`mcrt.estimator.EstimatorOptions`) are for
+    :func:`mcrt.bidir.render_bidirectional`; 'only' renders the paths eye
+    D ... D S+ L alone, to check it. ``spp_per_pass`` caps the samples per pixel of one
     launch (default: as :func:`lane_layout` deals them); ``tile_pixels``
     sets the pixels of a tile (default TILE_LANES / lanes per pixel) and
     never changes the image. ``max_launches`` stops after that many launches
@@ -329,14 +328,6 @@ def render_tracer(scene: Scene, settings: RenderSettings, *, backend: str = "llv
     import drjit as dr
 
     s = settings
-    if bidirectional:
-        from mcrt.bidir import render_bidirectional
-
-        if mutants or mirror_caustics != "all":
-            raise ValueError("bidirectional rendering takes no mutants and no mirror_caustics (it sets them itself)")
-        return render_bidirectional(scene, s, backend=backend, progress=progress, spp_per_pass=spp_per_pass,
-                                    intersector=intersector, mis=mis, precision_guard=precision_guard,
-                                    tricks=trick_options(tricks))
     caustics = (("mirror_caustics", mirror_caustics),) if mirror_caustics != "all" else ()
     if caustic_light_paths:  # mirror_caustics 'mis' (mcrt.bidir)
         caustics += (("caustic_light_paths", caustic_light_paths),)

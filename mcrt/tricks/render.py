@@ -14,15 +14,20 @@ from mcrt.tricks.options import DENOISE_GUIDES, TRICK_OPTIONS
 
 def render_mcrt(scene: Scene, settings: RenderSettings, *, adaptive: str | None = None, denoise: str | None = None,
                 **options) -> RenderResult:
-    """render_tracer, or an adaptive render (``adaptive``), then denoised (``denoise``) where asked."""
+    """render_tracer, or a bidirectional (``bidirectional``) or adaptive render (``adaptive``), then denoised (``denoise``) where asked."""
     from mcrt.tracer import render_tracer
 
     if denoise is not None and denoise not in DENOISE_GUIDES:
         raise ValueError(f"denoise must be one of {', '.join(DENOISE_GUIDES)}, got {denoise!r}")
-    if adaptive is None:
+    bidirectional = options.pop("bidirectional", False)
+    if adaptive is None and bidirectional:
+        from mcrt.bidir import render_bidirectional
+
+        result = render_bidirectional(scene, settings, **options)
+    elif adaptive is None:
         result = render_tracer(scene, settings, **options)
     else:
-        result = _adaptive(scene, settings, adaptive, options)
+        result = _adaptive(scene, settings, adaptive, {**options, "bidirectional": bidirectional})
     if denoise is None:
         return result
     from mcrt.tricks.aov import first_hit_buffers
