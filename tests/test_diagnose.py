@@ -1,0 +1,96 @@
+"""Explaining a failing image beyond the bug catalogue (mcrt.grade.explain), on images it did not make.
+
+The wrong images are **Mitsuba** renders of edited scenes (a wall
+recoloured, the light moved, an object the scene does not have), never
+mcrt's own variations; the catalogued bug comes from mcrt's mutant. The
+context is a 32x32 course assignment prepared once per session in a
+temporary cache. Seeds are fixed (every render below names its seed), so each
+test is deterministic; the thresholds checked are the production ones
+(:data:`mcrt.grade.explain.NAMED` and its chi-square gain).
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from mcrt.grade.accuracy.cases import Spec, _render_spec, light, wall_albedo
+from mcrt.grade.assignment import assignment_from_dict
+from mcrt.grade.explain import explain
+from mcrt.grade.expected import prepare_context
+from mcrt.grade.grader import grade_image
+from mcrt.render import render
+from mcrt.scene import Lambertian, Sphere, load_scene
+
+RES = 32
+ASSIGNMENT = {
+    "format": 1, "name": "explain32",
+    "scene": {"camera": "near", "width": RES, "height": RES, "spp": 256, "min_spp": 16},
+    "grading": {"tiles": [8, 16, 0], "diagnosis_spp": 1024, "reference_spp": 4096},
+}
+
+
+@pytest.fixture(scope="module")
+def ctx(tmp_path_factory):
+    a = assignment_from_dict(ASSIGNMENT, str(tmp_path_factory.mktemp("explain") / "explain32.toml"))
+    return prepare_context(a, tmp_path_factory.mktemp("cache"))
+
+
+def _mitsuba(scene, seed: int, spp: int = 1024):
+    return _render_spec(Spec("t", None, spp=spp), scene, width=RES, height=RES, max_depth=8, seed=seed)
+
+
+def _explain(ctx, image, spp):
+    ref = ctx.references["near"]
+    V = ctx.model_var["near"] / spp + ref.var / ref.spp
+    return explain(image, ref.mean, V, np.ones((RES, RES), bool), ctx.explain, mutants=ctx.mutants,
+                   baseline=ctx.baseline, texts=ctx.mutant_texts)
+
+
+def test_a_recoloured_wall_is_that_walls_albedo(ctx):
+    """Wall EF rendered blue (0.15, 0.20, 0.75) instead of green by Mitsuba (seed 11, 1024 spp): named as wall
+    EF's albedo, each channel within 0.06 of the edit, explaining most of the difference."""
+    edit = (0.15, 0.20, 0.75)
+    r = _mitsuba(wall_albedo("EF", edit)(load_scene()), seed=11)
+    e = _explain(ctx, r.mean, r.spp)
+    assert e.named is not None and e.named.key == "albedo of wall EF", e.sentence
+    assert np.allclose(e.named.value, edit, atol=0.06), e.named.value
+    assert e.named.explained >= 0.8
+    assert "wall EF with albedo (" in e.sentence and "the scene says (0.15, 0.70, 0.15)" in e.sentence
+
+
+def test_a_moved_light_is_named_through_the_grader(ctx):
+    """The light moved by +1 along y (Mitsuba, seed 12, 256 spp) loses points, and the feedback says the light
+    moved along y, by about 1."""
+    r = _mitsuba(light(move=(0.0, 1.0, 0.0))(load_scene()), seed=12, spp=256)
+    res = grade_image("moved_light", ctx, [r.mean], spp=256)
+    assert res.score < res.max_score
+    ex = res.details["explanation"]
+    assert ex["family"] == "light_position", ex["sentence"]
+    assert abs(ex["candidates"][0]["value"][1] - 1.0) < 0.3
+    assert "light moved by +1 along y" in res.summary
+
+
+def test_an_edit_outside_every_family_is_not_given_a_cause(ctx):
+    """A grey ball the scene does not have (Mitsuba, seed 13, 1024 spp): no candidate explains most of it, the
+    feedback says so and names no bug."""
+    s = load_scene()
+    ball = Sphere("ball", (6.0, -2.0, 1.0), 1.0, Lambertian((0.5, 0.5, 0.5)))
+    r = _mitsuba(replace(s, objects=s.objects + (ball,)), seed=13)
+    e = _explain(ctx, r.mean, r.spp)
+    assert e.named is None, e.sentence
+    assert e.sentence.startswith("No single mistake we tried")
+    res = grade_image("ball", ctx, [r.mean], spp=1024)
+    assert res.score < res.max_score and not res.diagnosis
+    assert "No single mistake we tried" in res.summary
+
+
+def test_a_catalogued_bug_keeps_its_name(ctx):
+    """mcrt's nee_no_area mutant (seed 14, 256 spp): the explanation names the catalogued bug itself."""
+    s = ctx.assignment.load_scene()
+    img = render(s, s.settings(camera="near", width=RES, height=RES, spp=256, max_depth=8), seed=14, progress=False,
+                 mutants=("nee_no_area",)).mean
+    e = _explain(ctx, img, 256)
+    assert e.named is not None and e.named.catalogue and e.named.key == "nee_no_area", e.sentence
