@@ -32,7 +32,9 @@ CONVENTIONS = {
                "a denoised image keeps its noisy render's variance; an adaptive one its per-pixel variance of the mean, "
                "floored at the reference's at each pixel's own count; 'biased (measured)': flagged on at least half "
                "the seeds at the top rung",
-    "worth": f"worth it: efficiency ratio >= {WORTH}; a wash: within a factor {WORTH}; not worth it: below 1/{WORTH}",
+    "worth": f"a trick's best variant: unbiased, not flagged, largest smaller-of-two efficiency ratios; worth it: both "
+             f"ratios (MSE, relMSE) >= {WORTH}; not worth it: both <= 1/{WORTH}; a wash: both between; mixed otherwise. "
+             "MSE weighs bright pixels most, relMSE weighs each pixel's error by its brightness",
 }
 
 
