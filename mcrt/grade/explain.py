@@ -74,7 +74,7 @@ from mcrt.scene import Lambertian, Mirror, Scene
 #: Share of the excess chi-square the best candidate must explain to be named.
 NAMED = 0.5
 #: The best candidate must also lower chi^2 by this many standard deviations of noise's chi^2 (sqrt(2 n)).
-GAIN_SIGMAS = 5.0
+GAIN_SIGMAS = 3.0
 #: A catalogued bug within this share of the best candidate is named first.
 TIE = 0.02
 #: Floor of the relative error no two renderers share (as in mcrt.grade.diagnose).
@@ -297,16 +297,21 @@ def _num(x: float) -> str:
 class _Fit:
     r"""chi^2 of model images against the student's image, each term capped at CAP (see the module docstring).
 
-    Every chi^2 here, that of the reference included, has the same weights
+    The chi^2 sums two levels: single pixels (what a shift, a blur or an
+    edge changes) and the means of ``tile`` x ``tile`` tiles (what a smooth
+    bias of a per cent changes: a single pixel's noise hides it, a tile's
+    mean does not). Every chi^2 here, that of the reference included, has
+    the same pixel weights
     :math:`1 / (\tilde V + W + (f R)^2 + (\epsilon |\nabla R|)^2)`:
     :math:`\tilde V` is the noise variance raised to its 3x3 mean where that
     is larger (a pixel's variance estimated from a few thousand heavy-tailed
     samples is usually too small; its neighbours' share the rare bright
     paths), and :math:`\epsilon` = EDGE pixel of uncertainty in where an edge
-    lies (no model image puts a light's edge exactly).
+    lies (no model image puts a light's edge exactly). A tile mean's variance
+    is the sum of its pixels' over the count squared, plus the floor.
     """
 
-    def __init__(self, S, R, V, ok, W):
+    def __init__(self, S, R, V, ok, W, tile: int = 8):
         from scipy.ndimage import uniform_filter
 
         self.S, self.R, self.ok = S, R, ok
@@ -314,20 +319,41 @@ class _Fit:
         V = np.maximum(V, uniform_filter(V, (3, 3, 1), mode="nearest"))
         gy, gx = np.gradient(R, axis=(0, 1))
         edge = EDGE**2 * (gx**2 + gy**2)
-        self.w = np.where(ok, 1.0 / np.maximum(V + W + (FLOOR * R) ** 2 + edge, 1e-30), 0.0)
+        var = V + W + (FLOOR * R) ** 2 + edge
+        self.w = np.where(ok, 1.0 / np.maximum(var, 1e-30), 0.0)
         self.D = np.where(ok, S - R, 0.0)
+        self.t = max(1, min(int(tile), *R.shape[:2]))
+        self.hc, self.wc = (R.shape[0] // self.t) * self.t, (R.shape[1] // self.t) * self.t
+        cnt = self.blocks(ok.astype(np.float64))
+        self.cnt = np.maximum(cnt, 1.0)
+        r_t = self.blocks(np.where(ok, R, 0.0)) / self.cnt
+        v_t = self.blocks(np.where(ok, var, 0.0)) / self.cnt**2 + (FLOOR * r_t) ** 2
+        self.wt = np.where(cnt >= 2, 1.0 / np.maximum(v_t, 1e-30), 0.0)
+        self.Dt = self.blocks(self.D) / self.cnt
+        self.n = int(np.count_nonzero(ok)) + int(np.count_nonzero(cnt >= 2))
         self.chi0 = self.delta(0.0)
-        self.n = int(np.count_nonzero(ok))
+
+    def blocks(self, x: np.ndarray) -> np.ndarray:
+        """Sums over the tiles of x (..., H, W, C), cropped to whole tiles: (..., H/t, W/t, C)."""
+        x = x[..., : self.hc, : self.wc, :]
+        t = self.t
+        sh = x.shape[:-3] + (self.hc // t, t, self.wc // t, t, x.shape[-1])
+        return x.reshape(sh).sum(axis=(-4, -2))
+
+    def tile_means(self, dm: np.ndarray) -> np.ndarray:
+        return self.blocks(np.where(self.ok, dm, 0.0)) / self.cnt
 
     def delta(self, dm) -> float:
-        """chi^2 of M = R + dm."""
-        return float(np.sum(np.minimum((self.D - dm) ** 2 * self.w, CAP)))
+        """chi^2 of M = R + dm (pixels and tiles)."""
+        dt = self.tile_means(np.broadcast_to(dm, self.D.shape)) if not np.isscalar(dm) else dm
+        return float(np.sum(np.minimum((self.D - dm) ** 2 * self.w, CAP)) +
+                     np.sum(np.minimum((self.Dt - dt) ** 2 * self.wt, CAP)))
 
     def model(self, m: np.ndarray) -> float:
         return self.delta(m - self.R)
 
     def irls(self, dm) -> np.ndarray:
-        """Weights of a least-squares step that caps like chi^2: w where z^2 < CAP, w CAP / z^2 beyond."""
+        """Weights of a least-squares step that caps like chi^2: w where z^2 < CAP, w CAP / z^2 beyond (pixels)."""
         z2 = (self.D - dm) ** 2 * self.w
         return self.w * np.minimum(1.0, CAP / np.maximum(z2, 1e-300))
 
@@ -385,6 +411,8 @@ def _albedo_candidates(fit: _Fit, b: Basis) -> list[Candidate]:
             L = _lagrange(grid, xs)
             curves = np.tensordot(L, ys, axes=(1, 0)) - b.base[None, :, :, c]  # (101, H, W): M - R
             err = np.sum(np.minimum((fit.D[None, :, :, c] - curves) ** 2 * fit.w[None, :, :, c], CAP), axis=(1, 2))
+            ct = fit.blocks(np.where(fit.ok[None, :, :, c:c + 1], curves[..., None], 0.0))[..., 0] / fit.cnt[None, :, :, c]
+            err = err + np.sum(np.minimum((fit.Dt[None, :, :, c] - ct) ** 2 * fit.wt[None, :, :, c], CAP), axis=(1, 2))
             i = int(np.argmin(err))
             fitted.append(float(_refine(grid, err, i)))
             dm[..., c] = np.tensordot(_lagrange(np.array([fitted[-1]]), xs), ys, axes=(1, 0))[0] - b.base[..., c]
@@ -674,7 +702,7 @@ class Explanation:
 
 
 def explain(S: np.ndarray, R: np.ndarray, V: np.ndarray, mask: np.ndarray, basis: Basis, *, mutants: dict | None = None,
-            baseline=None, texts: dict | None = None, where_fn=None) -> Explanation:
+            baseline=None, texts: dict | None = None, where_fn=None, tile: int = 8) -> Explanation:
     """Fit every family of mistakes to the image S (see the module docstring).
 
     ``V`` is the per-pixel noise variance of S - R (the student's and the
@@ -682,14 +710,15 @@ def explain(S: np.ndarray, R: np.ndarray, V: np.ndarray, mask: np.ndarray, basis
     (the catalogue's expected images, :class:`mcrt.grade.expected.Expected`)
     make the catalogued bugs candidates too. ``where_fn(delta)`` describes
     where an image change lies (the grader passes the region words of
-    :mod:`mcrt.grade.diagnose`).
+    :mod:`mcrt.grade.diagnose`); ``tile`` is the edge of the tiles of the
+    tile level of chi^2 (:class:`_Fit`).
     """
     t0 = time.perf_counter()
     S, R, V = (np.asarray(x, np.float64) for x in (S, R, V))
     ok = mask[..., None] & np.isfinite(S) & np.isfinite(V) & np.isfinite(R)
     ok = np.broadcast_to(ok, S.shape)
-    W = 2.0 * basis.var.astype(np.float64) / basis.spp
-    fit = _Fit(S, R, V, ok, W)
+    W = basis.var.astype(np.float64) / basis.spp  # a variation minus the base, common random numbers
+    fit = _Fit(S, R, V, ok, W, tile)
     cands = _scale_candidates(fit, basis.values) + _curve_candidates(fit) + _albedo_candidates(fit, basis) + \
         _node_candidates(fit, basis) + _camera_candidates(fit, basis)
     if mutants:

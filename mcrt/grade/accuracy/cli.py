@@ -65,7 +65,7 @@ def cmd_grade_accuracy(args) -> int:
     picks = [c for c in cases if c.cause is not None][: max(args.gradescope - 1, 0)] + [c for c in cases if c.cause is None][:1]
     for c in picks[: args.gradescope]:
         log(f"timing {c.name} as Gradescope grades it")
-        gs.append(gradescope_figures(c, str(a.path), cache))
+        gs.append(gradescope_figures(c, ctx))
     meta = {"date": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"),
             "seconds": time.perf_counter() - t0, "prepare_seconds": prep, "assignment": a.name,
             "reference": ctx.references[a.camera].source}

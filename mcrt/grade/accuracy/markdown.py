@@ -63,11 +63,15 @@ def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta
                  f"{o.score:g}/{o.max_score:g} | {'yes' if o.wrong else 'no'} | {_cell(o.said) or '-'} | {o.seconds:.1f} |")
     if gradescope:
         L += ["", "## One student as Gradescope grades it", "",
-              "`mcrt grade --single` in a fresh process with the cache built (Gradescope's defaults: half a vCPU, "
-              "768 MB, a 10-minute timeout; under half a vCPU the wall time is about twice the CPU time).", "",
-              "| case | exit | CPU s | wall s here | peak memory MB |", "|---|---|---|---|---|"]
+              "A fresh process imports mcrt, loads the prepared context (the grading cache, as workers receive it) "
+              "and grades one student (mcrt.grade.accuracy.run.gradescope_figures). Gradescope's defaults: half a "
+              "vCPU, 768 MB, a 10-minute timeout; under half a vCPU the wall time is about twice the CPU time.", "",
+              "| case | exit | score | CPU s (process) | CPU s (grading) | wall s here | peak memory MB | context MB |",
+              "|---|---|---|---|---|---|---|---|"]
         for g in gradescope:
-            L.append(f"| {g['case']} | {g['exit']} | {g['cpu_s']:.1f} | {g['wall_s']:.1f} | {g['peak_rss_mb']:.0f} |")
+            gc = "-" if g.get("grading_cpu_s") is None else f"{g['grading_cpu_s']:.1f}"
+            L.append(f"| {g['case']} | {g['exit']} | {g.get('score')} | {g['cpu_s']:.1f} | {gc} | {g['wall_s']:.1f} | "
+                     f"{g['peak_rss_mb']:.0f} | {g['context_mb']:.1f} |")
         L += ["", f"Building the cache (`mcrt grade --prepare`, references, catalogue and the explanation's "
               f"variations): {meta.get('prepare_seconds', 0):.0f} s here."]
     path = out / "index.md"

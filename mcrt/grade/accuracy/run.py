@@ -150,24 +150,45 @@ def rates(outcomes: list[Outcome]) -> dict:
     }
 
 
-def gradescope_figures(case: Case, assignment_path: str, cache_dir: str | Path, *, workdir=None) -> dict:
-    """CPU seconds, wall seconds and peak memory of grading one student in a fresh process, with the cache built.
+_CHILD = """
+import pickle, sys, time
+import mcrt
+from mcrt.grade.grader import grade_submission
+from mcrt.grade.submissions import discover
+ctx = pickle.load(open(sys.argv[1], "rb"))
+t0 = time.process_time()
+res = grade_submission(discover(sys.argv[2], single=True, student="s")[0], ctx)
+print(time.process_time() - t0, res.score)
+"""
 
-    ``mcrt grade --single`` runs as Gradescope runs it (one student, the
-    cache prepared ahead), in a child process whose resource usage is read
-    after it exits: user + system CPU time (under Gradescope's half vCPU the
-    wall time is about twice that) and its peak resident set.
+
+def gradescope_figures(case: Case, ctx, *, workdir=None) -> dict:
+    """CPU seconds and peak memory of grading one student in a fresh process, with the context prepared.
+
+    The child process does what a Gradescope run does once the cache is
+    built: import mcrt, load the prepared context (here from a pickle, as
+    grading workers receive it) and grade one student. Its resource usage is
+    read after it exits: user + system CPU time of the whole process
+    (imports included; under Gradescope's half vCPU the wall time is about
+    twice that), the CPU time of the grading alone, and its peak resident
+    set.
     """
+    import pickle
+
     with tempfile.TemporaryDirectory(dir=workdir) as tmp:
         folder = Path(tmp) / "submission"
         write_submission(case, folder)
+        pk = Path(tmp) / "context.pickle"
+        pk.write_bytes(pickle.dumps(ctx))
         before = resource.getrusage(resource.RUSAGE_CHILDREN)
         t0 = time.perf_counter()
-        p = subprocess.run([sys.executable, "-m", "mcrt.cli", "grade", str(folder), "--single", "--student", case.name,
-                            "--assignment", assignment_path, "--out", str(Path(tmp) / "out"), "--cache", str(cache_dir),
-                            "--jobs", "0", "--quiet"], capture_output=True, text=True)
+        p = subprocess.run([sys.executable, "-c", _CHILD, str(pk), str(folder)], capture_output=True, text=True)
         wall = time.perf_counter() - t0
         after = resource.getrusage(resource.RUSAGE_CHILDREN)
+        ctx_mb = pk.stat().st_size / 2**20
+    words = p.stdout.split()
     return {"case": case.name, "exit": p.returncode, "wall_s": wall,
             "cpu_s": (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime),
-            "peak_rss_mb": after.ru_maxrss / 1024.0, "stderr_tail": p.stderr[-300:]}
+            "grading_cpu_s": float(words[0]) if p.returncode == 0 and words else None,
+            "score": float(words[1]) if p.returncode == 0 and len(words) > 1 else None,
+            "peak_rss_mb": after.ru_maxrss / 1024.0, "context_mb": ctx_mb, "stderr_tail": p.stderr[-300:]}
