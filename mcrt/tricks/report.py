@@ -38,6 +38,37 @@ CONVENTIONS = {
 }
 
 
+#: What each trick's variants are (the method; the numbers are the tables').
+METHODS = {
+    "roulette": "mcrt's roulette survives with q = min(max throughput, 0.95) from depth 5 and divides by q. The "
+                "variants move its start depth, fix q (still dividing: unbiased, but a survivor's weight grows by 1/q "
+                "per vertex), switch it off, or use the 2023 course's scheme: absorb with 0.75 at every diffuse hit, "
+                "survivors times 0.8, no division (biased), from depth 1, 3 or 5.",
+    "adaptive": "Both spend spp samples per pixel on average. Naive: 8 samples per pixel, then rounds that double the "
+                "samples of each pixel whose own samples still estimate a relative error above the target; the "
+                "estimate averages all of them (Kirk and Arvo's bias). Two-stage: a pilot of spp / 8 decides each "
+                "pixel's count (proportional to the square root of its relative variance); the estimate uses only "
+                "the fresh samples that follow (unbiased). Times include every launch of the per-pixel sample sets.",
+    "bidirectional": "mcrt's bidirectional estimator (mcrt.bidir): light tracing for the paths eye - diffuse ... - "
+                     "mirror - light that next-event estimation cannot sample, the path tracer for the rest.",
+    "denoise": "Intel Open Image Denoise 2.5 (pyoidn, CPU, RT filter, HDR, quality high) on plain mcrt's render, "
+               "guided by first-hit albedo and normal buffers (16 jittered rays per pixel, through mirrors; their "
+               "tracing time is added) or by the colour alone.",
+    "light": "Next-event estimation samples the square light uniformly in area (weight proportional to 1 / d^2); "
+             "the variants sample it uniformly in the solid angle it subtends (a spherical rectangle, Urena et al. "
+             "2013; weight Le cos_x Omega) or take K = 4 area samples per diffuse vertex.",
+}
+
+
+def _scene_path(data: StudyData) -> str:
+    """The scene file relative to the working folder where it lies below it (as the command was given)."""
+    p = Path(data.scene.path)
+    try:
+        return p.resolve().relative_to(Path.cwd().resolve()).as_posix()
+    except ValueError:
+        return str(p)
+
+
 def _trick_list(data: StudyData) -> list[str]:
     return [t for t in TRICKS if any(v.trick == t for v in data.variants)]
 
@@ -78,7 +109,7 @@ def _light_table(rows: list[dict]) -> tuple[list[str], list[list[str]]]:
 
 def _section(data: StudyData, trick: str, files: dict, line: str) -> list:
     labels = [v.label for v in data.variants if v.trick == trick]
-    doc = [("h", 2, TRICK_NAMES[trick]), ("p", line)]
+    doc = [("h", 2, TRICK_NAMES[trick]), ("p", METHODS[trick]), ("p", f"**Verdict.** {line}")]
     doc.append(("table", ROW_HEADER, [_row_cells(variant_row(data, lab)) for lab in [PLAIN, *labels]]))
     if trick == "adaptive" and "spp_maps" in files:
         doc.append(("img", files["spp_maps"], "samples per pixel of each adaptive scheme"))
@@ -118,7 +149,7 @@ def document(data: StudyData, command: str, prov: dict, lines: list[str], files:
                    f"Versions: " + ", ".join(f"{k} {v}" for k, v in prov["versions"].items() if v),
                    f"Machine: {prov['machine']['cpu']} ({prov['machine']['cores']} cores), {prov['machine']['platform']}",
                    f"Commit: {prov['git_commit']}",
-                   f"Scene: `{data.scene.path}` (hash {data.scene.content_hash()}), camera {cfg.camera}, "
+                   f"Scene: `{_scene_path(data)}` (hash {data.scene.content_hash()}), camera {cfg.camera}, "
                    f"{cfg.res}x{cfg.res}, max depth {cfg.max_depth}",
                    f"Reference: the committed Mitsuba reference {data.reference_key} ({data.reference_spp} spp); its "
                    f"noise floor {fmt(data.floor['mse'], 3)} is subtracted from every MSE in efficiencies",
@@ -167,7 +198,7 @@ def write_report(data: StudyData, out: Path, *, command: str, svg: bool = False)
     names = sorted([*files.values(), "index.md", "data.json"])
     write_json(out / "data.json", clean({
         "schema": SCHEMA, "command": command, "provenance": prov, "config": asdict(data.config),
-        "scene": {"name": data.scene.name, "path": str(data.scene.path), "hash": data.scene.content_hash()},
+        "scene": {"name": data.scene.name, "path": _scene_path(data), "hash": data.scene.content_hash()},
         "reference": {"key": data.reference_key, "spp": data.reference_spp, "floor": data.floor},
         "conventions": CONVENTIONS,
         "variants": [{"label": v.label, "trick": v.trick, "claim": v.claim, "options": v.options,

@@ -128,7 +128,7 @@ def trick_verdict(data: StudyData, trick: str) -> str | None:
     if not rows:
         return None
     clean = [r for r in rows if not r["biased"] and r["claim"] == "unbiased"]
-    biased = [r for r in rows if r["biased"]]
+    biased = [r for r in rows if r["biased"] and r["claim"] == "biased"]
     parts = []
     if clean:
         best = max(clean, key=_worst_case)
