@@ -91,7 +91,7 @@ def ray_counts(scene, *, camera: str, res: int, spp: int, max_depth: int, backen
     k, b = lane_layout(res * res, spp)
     n = min(spp, k * b)
     zeros = dr.zeros(m.Float64, res * res)
-    params = m.UInt32([*stream_keys(1), 0, n])
+    params = m.UInt32([*stream_keys(1), 0, n, 0])
     dr.eval(tracer._launch_kernel(((zeros,) * 3, (zeros,) * 3), pixel_range(m, 0, res * res), params, k, b, res * res))
     segments, shadow = (int(v) for v in counter.numpy())
     paths = res * res * n

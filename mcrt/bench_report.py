@@ -391,8 +391,9 @@ def _memory_section(data: dict) -> list[str]:
     out = ["", "## Peak memory", "",
            "Whole mcrt renders (near camera), each in a fresh Python process (`mcrt.bench.memory_runs`); peak resident "
            "memory is the process's `ru_maxrss`, which includes the interpreter, Dr.Jit, LLVM and the output image "
-           "(mean and variance, float32). Memory does not depend on the depth, so the 1024-spp 4096x4096 render runs at "
-           "depth 2, which makes it short enough for this run (depth 8 traces the same launches, 5 times as long).", "",
+           "(mean and variance, float32). A tile's memory does not depend on the depth, so the 1024-spp 4096x4096 render "
+           "(every pixel, every sample: the whole image) runs at max depth 1, camera rays only, which makes it short "
+           "enough for this run; the 16-spp one at depth 8 shows the same memory with whole paths.", "",
            "| resolution | spp | depth | seconds | M paths/s | output image MiB | peak RSS MiB |", "|---|---|---|---|---|---|---|"]
     for m in runs:
         out.append(f"| {m['width']}x{m['height']} | {m['spp']} | {m['max_depth']} | {m['seconds']:.1f} | "

@@ -223,20 +223,26 @@ def tile_mean_variance(s1, s2, n: int) -> tuple[np.ndarray, np.ndarray]:
     """Mean and unbiased per-sample variance (float32, pixels x 3) of a tile from its device sums (three Float64 arrays each).
 
     The formulas of :class:`Moments`, in one small Dr.Jit kernel, with the
-    count opaque as in :func:`mean_variance`.
+    count opaque as in :func:`mean_variance`; the six channels come back
+    interleaved in one array (one copy from the device).
     """
     import drjit as dr
 
     Float64 = type(s1[0])
-    Float = dr.float32_array_t(Float64)
+    Float, UInt32 = dr.float32_array_t(Float64), dr.uint32_array_t(Float64)
+    size = dr.width(s1[0])
     count = dr.opaque(Float64, n)
     mean = [Float(a / count) for a in s1]
     if n < 2:
-        var = [dr.zeros(Float, dr.width(a)) for a in s1]
+        var = [dr.zeros(Float, size) for _ in s1]
     else:
         var = [Float(dr.maximum((b - a * a / count) / dr.opaque(Float64, n - 1), 0.0)) for a, b in zip(s1, s2)]
-    dr.eval(mean, var)
-    return np.stack([a.numpy() for a in mean], axis=1), np.stack([a.numpy() for a in var], axis=1)
+    out = dr.zeros(Float, 6 * size)
+    idx = dr.arange(UInt32, size) * 6
+    for c, v in enumerate(mean + var):
+        dr.scatter(out, v, idx + c)
+    both = out.numpy().reshape(size, 6)
+    return both[:, :3], both[:, 3:]
 
 
 #: launch(acc, first_pixel, pixels, first_sample, n) -> acc: the tile's running sums after n more samples per pixel.
@@ -269,6 +275,7 @@ def run_tiles(launch: LaunchFn, *, width: int, height: int, spp: int, tile_pixel
             for first in range(0, spp, spp_per_pass):
                 n = min(spp_per_pass, spp - first)
                 acc = launch(acc, p0, count, first, n)
+                clock["drain"]()  # the history keeps every launch's kernel source: empty it as the render goes
                 launches, paths = launches + 1, paths + count * n
                 if progress.enabled:
                     dr.sync_thread()  # the kernels run asynchronously: wait, so the time left is right
@@ -285,10 +292,20 @@ def run_tiles(launch: LaunchFn, *, width: int, height: int, spp: int, tile_pixel
 
 @contextlib.contextmanager
 def _clock():
-    """Times the block from an idle device with Dr.Jit's kernel history on: fills 'wall' and 'compile' (seconds)."""
+    """Times the block from an idle device with Dr.Jit's kernel history on: fills 'wall' and 'compile' (seconds).
+
+    ``drain()`` adds the compile time recorded so far and empties the
+    history, whose entries hold each launch's kernel source (a long render
+    would otherwise grow by that much per launch).
+    """
     import drjit as dr
 
-    out: dict[str, float] = {}
+    compiled = [0.0]
+
+    def drain() -> None:
+        compiled[0] += compile_seconds(dr.kernel_history())
+
+    out: dict = {"drain": drain}
     was_recording = dr.flag(dr.JitFlag.KernelHistory)
     dr.set_flag(dr.JitFlag.KernelHistory, True)
     try:
@@ -297,7 +314,8 @@ def _clock():
         t0 = time.perf_counter()
         yield out
         out["wall"] = time.perf_counter() - t0
-        out["compile"] = compile_seconds(dr.kernel_history())
+        drain()
+        out["compile"] = compiled[0]
     finally:
         dr.set_flag(dr.JitFlag.KernelHistory, was_recording)
 

@@ -169,10 +169,11 @@ class Tracer:
         out = dr.zeros(m.Float64, 6 * P)
         for p0 in range(0, P, tile):
             count = min(tile, P - p0)
-            pixels = pixel_range(m, p0, count)
             acc = None
             for first in range(0, n, k * b):
-                acc = self.launch(seed, acc, pixels, pass_index * PASS_SAMPLES + first, min(k * b, n - first), k, b)
+                acc = self.launch(seed, acc, range(p0, p0 + count), pass_index * PASS_SAMPLES + first,
+                                  min(k * b, n - first), k, b)
+            pixels = pixel_range(m, p0, count)
             for moment in range(2):
                 for c in range(3):
                     dr.scatter(out, acc[moment][c], (moment * P + pixels) * 3 + c)
@@ -180,9 +181,11 @@ class Tracer:
         return out
 
     def launch(self, seed: int, acc, pixels, first_sample: int, n: int, k: int, b: int):
-        """``acc`` plus the sums of x and x^2 over samples first_sample .. first_sample + n - 1 of ``pixels`` (UInt32).
+        """``acc`` plus the sums of x and x^2 over samples first_sample .. first_sample + n - 1 of ``pixels``.
 
-        ``acc`` (None: zeros) and the result are (sums of x, sums of x^2),
+        ``pixels``: a UInt32 array of pixel indices, or a ``range`` of them
+        (a tile: its start travels with the other per-launch values, and no
+        index array is built). ``acc`` (None: zeros) and the result are (sums of x, sums of x^2),
         three evaluated Float64 arrays each, one entry per pixel. ``k`` lanes
         per pixel (a power of two), each tracing up to ``b`` samples, with
         n <= k b. The work is :meth:`_launch_kernel`, frozen (``dr.freeze``):
@@ -196,15 +199,17 @@ class Tracer:
         m = self.m
         if not 1 <= n <= k * b:
             raise ValueError(f"a launch of {k} lanes of {b} paths per pixel holds 1 to {k * b} samples, got {n}")
-        if acc is None:
-            zeros = dr.zeros(m.Float64, dr.width(pixels))
-            acc = ((zeros, zeros, zeros), (zeros, zeros, zeros))
-        # One small array for the four per-launch values: one copy to the device instead of four.
-        params = m.UInt32([*stream_keys(seed), first_sample, n])
-        return self._frozen_launch(acc, pixels, params, k, b, dr.width(pixels))  # the width keys the recording too
+        tile = isinstance(pixels, range)
+        count = len(pixels) if tile else dr.width(pixels)
+        # One small array for the per-launch values: one copy to the device instead of several.
+        params = m.UInt32([*stream_keys(seed), first_sample, n, pixels.start if tile else 0])
+        # acc None and a range are recorded apart from arrays; the width keys the recording too.
+        return self._frozen_launch(acc, None if tile else pixels, params, k, b, count)
 
     def _launch_kernel(self, acc, pixels, params, k: int, b: int, count: int):
-        """:meth:`launch` with its keys, first sample and count in ``params`` (UInt32 [key0, key1, first, n]).
+        """:meth:`launch` with its per-launch values in ``params`` (UInt32 [key0, key1, first, n, first pixel]).
+
+        ``pixels`` None: the ``count`` pixels from params' first pixel on.
 
         Lane i k + j (j < k) traces samples first + j b .. of pixel i, at most
         b and none from first + n on (mcrt.estimator.PathEstimator.path_sums;
@@ -218,13 +223,11 @@ class Tracer:
 
         m = self.m
         W = self.width
-        key0, key1, first, n = (dr.gather(m.UInt32, params, i) for i in range(4))
+        key0, key1, first, n, p0 = (dr.gather(m.UInt32, params, i) for i in range(5))
         idx = dr.arange(m.UInt32, count * k)
-        if k > 1:
-            pixel = dr.gather(m.UInt32, pixels, idx >> (k.bit_length() - 1))
-            lane = idx & (k - 1)  # the lane's place among its pixel's lanes
-        else:
-            pixel, lane = m.UInt32(pixels), m.UInt32(0)
+        i = idx >> (k.bit_length() - 1) if k > 1 else idx  # the lane's pixel among the launch's
+        lane = idx & (k - 1) if k > 1 else m.UInt32(0)  # the lane's place among its pixel's lanes
+        pixel = p0 + i if pixels is None else (dr.gather(m.UInt32, pixels, i) if k > 1 else m.UInt32(pixels))
         start = lane * b  # the lane's first sample, counted from ``first``
         paths = dr.select(n > start, dr.minimum(n - start, b), 0)
         col = m.Float(pixel % W)
@@ -247,7 +250,9 @@ class Tracer:
         if k > 1:
             dr.eval(sums)  # once: a block sum of an unevaluated result would rerun the path kernel per channel
             sums = [dr.block_sum(v, k) for v in sums]
-        out = (tuple(a + v for a, v in zip(acc[0], sums[:3])), tuple(a + v for a, v in zip(acc[1], sums[3:])))
+        if acc is not None:
+            sums = [a + v for a, v in zip((*acc[0], *acc[1]), sums)]
+        out = (tuple(sums[:3]), tuple(sums[3:]))
         dr.eval(out)
         return out
 
@@ -338,7 +343,7 @@ def render_tracer(scene: Scene, settings: RenderSettings, *, backend: str = "llv
     total = -(-(s.width * s.height) // tile) * -(-s.spp // per_pass)
 
     def launch(acc, p0, count, first, n):
-        return tracer.launch(s.seed, acc, pixel_range(tracer.m, p0, count), first, n, k, b)
+        return tracer.launch(s.seed, acc, range(p0, p0 + count), first, n, k, b)
 
     totals = run_tiles(launch, width=s.width, height=s.height, spp=s.spp, tile_pixels=tile, spp_per_pass=per_pass,
                        progress=Progress(total, label="mcrt", unit="passes", enabled=progress), max_launches=max_launches)

@@ -65,7 +65,7 @@ def test_frozen_launch_replays_the_traced_kernel(scene, n, k, b):
     replay = [a.numpy().copy() for v in tracer.launch(2, None, pixels, 0, n, k, b) for a in v]
     assert tracer._frozen_launch.n_recordings == 1  # the second call replayed
     zeros = dr.zeros(tracer.m.Float64, 120)
-    params = tracer.m.UInt32([*stream_keys(2), 0, n])
+    params = tracer.m.UInt32([*stream_keys(2), 0, n, 0])
     traced = tracer._launch_kernel(((zeros,) * 3, (zeros,) * 3), pixels, params, k, b, 120)
     assert all(np.array_equal(r, t.numpy()) for r, t in zip(replay, (a for v in traced for a in v)))
     assert not np.array_equal(first[0], replay[0])
