@@ -57,6 +57,9 @@ REPORTS: tuple[Report, ...] = (
     Report("integrators", "validate-integrator cornell-box --integrator path --against volpath --against prb "
            "--against ptracer --wrong path:max_depth=7 --res 32 --budget 0.25 --seeds 100 --report reports/integrators",
            "mcrt validate-integrator on Mitsuba's Cornell box: false-alarm rate of path against volpath, prb, ptracer"),
+    Report("tricks", "tricks --camera near --res 64 --max-depth 8 --ladder 16,64,256,1024,4096 --seeds 4 --alpha 0.01 "
+           "--tiles 8,32 --light-receiver-samples 1048576 --confirm-spp 65536 --out reports/tricks",
+           "the lecture's efficiency tricks beside plain mcrt: error against time and spp, bias, a verdict per trick"),
 )
 
 
