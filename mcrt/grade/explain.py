@@ -47,7 +47,10 @@ the share of the *excess* chi-square it removes,
 
     e = \frac{\chi^2_0 - \chi^2(\hat\theta)}{\chi^2_0 - n},
 
-where :math:`\chi^2_0` is that of the reference itself (M = R) and n the
+where :math:`\chi^2(\hat\theta)` includes :math:`p \ln n` for the p
+fitted parameters (the Bayesian information criterion: three albedos do not
+beat a fixed bug by fitting noise), :math:`\chi^2_0` is that of the
+reference itself (M = R) and n the
 number of terms (what noise alone gives; the best candidate's chi^2 where
 that is lower, since capped terms of heavy-tailed noise average less than
 1). The best candidate is named when it explains at least :data:`NAMED` of
@@ -74,7 +77,7 @@ from mcrt.scene import Lambertian, Mirror, Scene
 #: Share of the excess chi-square the best candidate must explain to be named.
 NAMED = 0.5
 #: The best candidate must also lower chi^2 by this many standard deviations of noise's chi^2 (sqrt(2 n)).
-GAIN_SIGMAS = 3.0
+GAIN_SIGMAS = 2.0
 #: A catalogued bug within this share of the best candidate is named first.
 TIE = 0.02
 #: Floor of the relative error no two renderers share (as in mcrt.grade.diagnose).
@@ -725,6 +728,11 @@ def explain(S: np.ndarray, R: np.ndarray, V: np.ndarray, mask: np.ndarray, basis
         cands += _catalogue_candidates(fit, mutants, baseline, texts or {})
     # What noise alone leaves: n terms of about 1 (less where the cap bites on heavy tails), or what the best
     # candidate leaves if that is less.
+    # Each fitted parameter costs ln(n) (the Bayesian information criterion): a surface's three albedos do not
+    # win over a fixed bug by fitting the noise.
+    pen = math.log(max(fit.n, 2))
+    for c in cands:
+        c.chi2 = c.chi2 + c.params * pen
     floor = min([float(fit.n)] + [c.chi2 for c in cands])
     excess = fit.chi0 - floor
     for c in cands:
@@ -746,11 +754,17 @@ def explain(S: np.ndarray, R: np.ndarray, V: np.ndarray, mask: np.ndarray, basis
                     + (f"; it changes the image {named.where}" if named.where else "") + ".")
         headline = f"It looks like {named.text}."
     else:
-        sentence = ("No single mistake we tried (the catalogued bugs, the scene's colours, light, objects and camera, "
-                    "the path depth, encodings and blur) explains most of the difference"
-                    + (f": the closest, {best.text}, explains {100 * max(best.explained, 0):.0f} %" if best else "")
-                    + (f". The image differs {where}" if where else "") + ".")
-        headline = "No single mistake we tried explains most of the difference" + (f"; it differs {where}" if where else "") + "."
+        tried = ("No single mistake we tried (the catalogued bugs, the scene's colours, light, objects and camera, "
+                 "the path depth, encodings and blur)")
+        if best is not None and best.explained >= NAMED:  # it fits, but no better than noise would let anything fit
+            sentence = (f"{tried} stands out: the difference is too close to the noise to tell them apart (the closest, "
+                        f"{best.text}, lowers chi-square by {gain:.0f} where noise alone varies it by about "
+                        f"{math.sqrt(2 * fit.n):.0f})")
+        else:
+            sentence = (f"{tried} explains most of the difference"
+                        + (f": the closest, {best.text}, explains {100 * max(best.explained, 0):.0f} %" if best else ""))
+        sentence += (f". The image differs {where}" if where else "") + "."
+        headline = "No single mistake we tried explains the difference" + (f"; it differs {where}" if where else "") + "."
     return Explanation(cands, fit.chi0, fit.n, named, sentence, headline, where, time.perf_counter() - t0)
 
 

@@ -36,13 +36,14 @@ def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta
          "written as a student's folder and graded with the course assignment. *Named right*: the feedback names "
          "the mistake's cause (the explanation's family, or a criterion that names it: `linear` for an encoding, "
          "`exposure` for a constant factor, `camera` for misregistration). *Named wrong*: it names a cause, and "
-         "not the right one. **Held-out** cases (marked H) were not looked at while the diagnosis was tuned.", "",
+         "not the right one; *also wrong*: it names the right cause and a wrong one beside it. **Held-out** cases (marked H) were not looked at while the diagnosis was tuned.", "",
          "## Rates", "",
-         "| | mistakes | detected (lost points) | named right | named wrong | major mistakes losing >= 25 % | "
+         "| | mistakes | detected (lost points) | named right | named wrong | also wrong | major mistakes losing >= 25 % | "
          "correct renders | false alarms | correct named a bug |",
-         "|---|---|---|---|---|---|---|---|---|"]
+         "|---|---|---|---|---|---|---|---|---|---|"]
     for g, r in groups.items():
         L.append(f"| {g} | {r['mistakes']} | {_pct(r['detected'])} | {_pct(r['named_right'])} | {_pct(r['named_wrong'])} | "
+                 f"{_pct(r['also_named_wrong'])} | "
                  f"{_pct(r['major_lost_a_quarter'])} | {r['correct']} | {_pct(r['false_alarms'])} | "
                  f"{_pct(r['correct_named_a_bug'])} |")
     L += ["", "## Wrong renders", "",
@@ -51,7 +52,7 @@ def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta
     for o in outcomes:
         if o.cause is None:
             continue
-        named = "right" if o.right else ("wrong" if o.wrong else "none")
+        named = ("right, and a wrong one" if o.also_wrong else "right") if o.right else ("wrong" if o.wrong else "none")
         L.append(f"| {o.name} | {'H' if o.held_out else ''} | {_cell(o.truth, 90)} | {o.cause} | {'yes' if o.major else 'no'} | "
                  f"{o.spp} | {o.file} | {o.score:g}/{o.max_score:g} | {named} | {_cell(o.said)} | {o.seconds:.1f} |")
     L += ["", "## Correct renders", "",

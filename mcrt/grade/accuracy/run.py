@@ -44,6 +44,14 @@ CAUSE_OF: dict[str, tuple[str, ...]] = {
 }
 
 
+#: Causes named beside the right one that are not wrong for it (the same mistake in other words): a failed camera
+#: criterion names every camera cause at once (moving the eye along the view is nearly a zoom).
+_CAMERA_CAUSES = ("camera_fov", "camera_rotation", "camera_eye", "pixel_offset")
+_ACCEPTED = {**{c: _CAMERA_CAUSES for c in _CAMERA_CAUSES},
+             # A light of another size at the same radiance emits another power: the exposure criterion says so.
+             "light_size": ("light_size", "light_radiance")}
+
+
 @dataclass
 class Outcome:
     """One graded case."""
@@ -60,6 +68,7 @@ class Outcome:
     named: list[str]  # causes the feedback names
     right: bool | None  # named the right cause (None: a correct render)
     wrong: bool  # named a cause, and not the right one
+    also_wrong: bool  # named a wrong cause beside the right one
     said: str  # what the feedback says of the cause
     seconds: float
 
@@ -121,8 +130,9 @@ def grade_cases(cases: list[Case], ctx, *, workdir: str | Path | None = None, lo
             named, said = named_causes(res)
             right = None if c.cause is None else c.cause in named
             wrong = bool(named) and (c.cause is None or c.cause not in named)
+            also = bool(right) and any(n not in _ACCEPTED.get(c.cause, (c.cause,)) for n in named)
             out.append(Outcome(c.name, c.spec.truth, c.cause, c.major, c.held_out, c.spp, c.spec.file, float(res.score),
-                               float(res.max_score), named, right, wrong, said or res.summary, dt))
+                               float(res.max_score), named, right, wrong, also, said or res.summary, dt))
             if log:
                 el = time.perf_counter() - t0
                 log(f"graded {k + 1}/{len(cases)}: {c.name} {res.score:g}/{res.max_score:g} ({dt:.1f} s); "
@@ -144,6 +154,7 @@ def rates(outcomes: list[Outcome]) -> dict:
         "detected": frac(wrong, lambda o: o.lost),
         "named_right": frac(wrong, lambda o: o.right),
         "named_wrong": frac(wrong, lambda o: o.wrong),
+        "also_named_wrong": frac(wrong, lambda o: o.also_wrong),
         "major_lost_a_quarter": frac(major, lambda o: o.max_score - o.score >= 0.25 * o.max_score),
         "false_alarms": frac(ok, lambda o: o.lost),
         "correct_named_a_bug": frac(ok, lambda o: o.wrong),
