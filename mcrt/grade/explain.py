@@ -421,8 +421,7 @@ def _albedo_candidates(fit: _Fit, b: Basis) -> list[Candidate]:
             dm[..., c] = np.tensordot(_lagrange(np.array([fitted[-1]]), xs), ys, axes=(1, 0))[0] - b.base[..., c]
         kind = b.values[label][0]
         word = "albedo" if kind == "albedo" else "reflectance"
-        name = label if not label.startswith("wall") else label
-        out.append(Candidate(word, f"{word} of {name}", f"{name} with {word} {_fmt(fitted)} where the scene says "
+        out.append(Candidate(word, f"{word} of {label}", f"{label} with {word} {_fmt(fitted)} where the scene says "
                              f"{_fmt(scene_v)}", fit.delta(dm), 3, value=tuple(fitted), delta=dm))
     return out
 

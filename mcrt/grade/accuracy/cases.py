@@ -33,22 +33,22 @@ import numpy as np
 from mcrt.imageio import srgb_oetf
 from mcrt.scene import Scene
 
-#: What a wrong render's feedback must name, by cause key: words any one of which counts as naming it.
-CAUSES: dict[str, tuple[str, ...]] = {
-    "camera_fov": ("field of view",),
-    "camera_rotation": ("camera rotat", "camera's rotation", "camera pose", "pose"),
-    "camera_eye": ("camera's eye", "eye position", "camera position", "field of view"),
-    "pixel_offset": ("pixel-centre", "pixel centre", "half a pixel", "shifted"),
-    "object_missing": ("missing",),
-    "object_moved": ("moved",),
-    "albedo": ("albedo",),
-    "light_radiance": ("light's radiance", "radiance", "exposure", "times brighter", "times darker"),
-    "light_position": ("light moved", "light's position", "light position"),
-    "light_size": ("light's size", "light size"),
-    "light_hidden": ("light itself", "seen directly", "emitter"),
-    "depth": ("depth",),
-    "blur": ("blur", "denois"),
-    "encoding": ("gamma", "srgb", "sRGB", "encod", "linear"),
+#: The causes a wrong render can have, as the report words them.
+CAUSES: dict[str, str] = {
+    "camera_fov": "the camera's field of view",
+    "camera_rotation": "the camera's rotation (forward or up vector)",
+    "camera_eye": "the camera's eye position",
+    "pixel_offset": "the pixel centres (the image shifted by a fraction of a pixel)",
+    "object_missing": "an object missing",
+    "object_moved": "an object moved",
+    "albedo": "a surface's colour",
+    "light_radiance": "the light's radiance (or a constant factor)",
+    "light_position": "the light's position",
+    "light_size": "the light's size",
+    "light_hidden": "the light not seen directly",
+    "depth": "the path depth",
+    "blur": "a blur or denoiser after rendering",
+    "encoding": "the values' encoding (a display curve, or a PNG's curve undeclared)",
 }
 
 
@@ -336,6 +336,9 @@ def build_class(scene: Scene | None = None, *, width: int = 64, height: int = 64
 
     scene = scene or load_scene()
     specs = [s for s in SPECS if (names is None or s.name in names) and (held_out is None or s.held_out == held_out)]
+    unknown = sorted(set(names or ()) - {s.name for s in SPECS})
+    if unknown:
+        raise ValueError(f"no case named {unknown[0]!r} in the class (have {', '.join(s.name for s in SPECS)})")
     out = []
     t0 = time.perf_counter()
     for k, spec in enumerate(specs):

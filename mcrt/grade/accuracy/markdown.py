@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+from mcrt.grade.accuracy.cases import CAUSES
 from mcrt.grade.accuracy.run import Outcome, rates
 
 
@@ -62,6 +63,7 @@ def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta
             continue
         L.append(f"| {o.name} | {'H' if o.held_out else ''} | {_cell(o.truth, 90)} | {o.spp} | {o.file} | "
                  f"{o.score:g}/{o.max_score:g} | {'yes' if o.wrong else 'no'} | {_cell(o.said) or '-'} | {o.seconds:.1f} |")
+    L += ["", "Causes: " + "; ".join(f"`{k}` {v}" for k, v in CAUSES.items()) + "."]
     if gradescope:
         L += ["", "## One student as Gradescope grades it", "",
               "A fresh process imports mcrt, loads the prepared context (the grading cache, as workers receive it) "
