@@ -235,7 +235,10 @@ def prepare_context(a: Assignment, cache_dir: str | os.PathLike | None = None, *
         muts[m] = _expected(r, f"mcrt with mutant {m} ({a.diagnosis_spp} spp)")
     from mcrt.grade.explain import prepare_basis
 
-    basis = prepare_basis(a, scene, cache, log=log) if explain else None
+    def render_cached(sc, cam, width, height, depth, spp, seed):
+        return cached_render(sc, cam, width, height, depth, spp, seed, "none", cache, log)
+
+    basis = prepare_basis(a, scene, render_cached) if explain else None
     return Context(
         assignment=a, scene_hash=scene.content_hash(), cameras=cams, references=refs, model_var=model,
         baseline=_expected(baseline, f"mcrt ({a.diagnosis_spp} spp)"), mutants=muts,

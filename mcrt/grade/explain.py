@@ -68,8 +68,6 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, field, replace
-from pathlib import Path
-
 import numpy as np
 
 from mcrt.scene import Lambertian, Mirror, Scene
@@ -213,19 +211,23 @@ def _eye_variants(scene: Scene, camera: str) -> dict[str, list[tuple[float, Scen
     return out
 
 
-def prepare_basis(a, scene: Scene, cache_dir: Path, *, log=None) -> Basis:
-    """Render (or load from the grading cache) every image :func:`explain` needs, for the assignment ``a``."""
-    from mcrt.grade.expected import cached_render
+def prepare_basis(a, scene: Scene, render) -> Basis:
+    """Render every image :func:`explain` needs, for the assignment ``a``.
 
+    ``render(scene, camera, width, height, max_depth, spp, seed)`` returns a
+    :class:`mcrt.film.RenderResult`; the grading context passes its cached
+    mcrt render (:func:`mcrt.grade.expected.cached_render`), so each image is
+    rendered once per machine.
+    """
     t0 = time.perf_counter()
     w, h, d, cam = a.grade_width, a.grade_height, a.max_depth, a.camera
     spp = max(64, a.diagnosis_spp // 4)
     seed = a.seed + 7
 
     def img(s: Scene, depth: int = d, width: int = w, height: int = h, n: int = spp) -> np.ndarray:
-        return cached_render(s, cam, width, height, depth, n, seed, "none", cache_dir, log).mean.astype(np.float32)
+        return render(s, cam, width, height, depth, n, seed).mean.astype(np.float32)
 
-    base_r = cached_render(scene, cam, w, h, d, spp, seed, "none", cache_dir, log)
+    base_r = render(scene, cam, w, h, d, spp, seed)
     c0 = scene.cameras[cam]
     t_fine = WIDE * math.tan(math.radians(c0.fov_x_deg) / 2)
     wide = replace(scene, cameras={**scene.cameras, cam: replace(c0, fov_x_deg=math.degrees(2 * math.atan(t_fine)))})
