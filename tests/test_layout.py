@@ -118,7 +118,7 @@ def test_the_install_ships_every_package_of_the_source():
     """pyproject.toml lists each folder of mcrt/ with an __init__.py, plugins/ as mcrt.plugins, and reference/ with
     every sub-folder as mcrt.data (package data: the scenes, references and assignments)."""
     tool = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]
-    code = {"mcrt"} | {f"mcrt.{p.parent.name}" for p in PACKAGE.glob("*/__init__.py")} | {"mcrt.plugins"}
+    code = {"mcrt"} | {"mcrt." + ".".join(p.parent.relative_to(PACKAGE).parts) for p in PACKAGE.glob("*/**/__init__.py")} | {"mcrt.plugins"}
     data = {"mcrt.data"} | {"mcrt.data." + ".".join(p.relative_to(ROOT / "reference").parts) for p in (ROOT / "reference").rglob("*")
                             if p.is_dir() and p.name not in ("__pycache__", "chunks")}
     assert set(tool["packages"]) == code | data
