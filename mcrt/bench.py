@@ -264,7 +264,7 @@ def kernel_profile(scene, *, camera: str = "near", res: int = 256, spp: int = 16
 MEMORY_RUNS = ((256, 16, 8), (4096, 16, 8), (4096, 1024, 1))
 
 _MEMORY_SCRIPT = """
-import json, resource, sys, time
+import json, sys, time
 import mcrt
 from mcrt.scene import load_scene
 from mcrt.tracer import render_tracer
@@ -272,13 +272,16 @@ res, spp, depth = map(int, sys.argv[1:4])
 scene = load_scene()
 t0 = time.perf_counter()
 r = render_tracer(scene, scene.settings(camera="near", width=res, height=res, spp=spp, max_depth=depth), progress=False)
-print(json.dumps({"seconds": time.perf_counter() - t0, "paths": int(r.extra["paths"]), "image_mib": (r.mean.nbytes + r.variance.nbytes) / 2**20,
-                  "peak_rss_mib": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0, "mean": float(r.mean.mean())}))
+seconds = time.perf_counter() - t0
+# VmHWM: this process's own peak (ru_maxrss would carry the parent's peak across fork and exec).
+hwm_kib = next(int(l.split()[1]) for l in open("/proc/self/status") if l.startswith("VmHWM:"))
+print(json.dumps({"seconds": seconds, "paths": int(r.extra["paths"]), "image_mib": (r.mean.nbytes + r.variance.nbytes) / 2**20,
+                  "peak_rss_mib": hwm_kib / 1024.0, "mean": float(r.mean.mean())}))
 """
 
 
 def memory_runs(runs=MEMORY_RUNS, *, progress: bool = True) -> list[dict]:
-    """Peak resident memory (ru_maxrss) of whole mcrt renders (near camera), each in a fresh Python process.
+    """Peak resident memory (VmHWM) of whole mcrt renders (near camera), each in a fresh Python process.
 
     The output image itself (mean and variance, float32) is part of the
     peak; everything else is bounded by the tile, not by resolution or spp.
@@ -370,8 +373,8 @@ def gpu_note(backend: str) -> str:
 
     if backend == "cuda":
         return "This run used Dr.Jit's CUDA backend (mcrt) and Mitsuba's cuda_ad_rgb."
-    have = "has" if dr.has_backend(dr.JitBackend.CUDA) else "has no"
-    return (f"No GPU run: this machine {have} a usable CUDA backend, and no GPU machine was lent to the task that "
+    have = "has a" if dr.has_backend(dr.JitBackend.CUDA) else "has no"
+    return (f"No GPU run: this machine {have} usable CUDA backend, and no GPU machine was lent to the task that "
             f"wrote this report; every figure here is the LLVM (CPU) backend's.")
 
 

@@ -6,7 +6,7 @@ Measured, not modelled:
   that counts the closest-hit and shadow rays it is asked for (a scatter-add
   per call, so that run is not timed);
 - the kernel's time: Dr.Jit's kernel history over repeated launches of the
-  ordinary (frozen) kernel;
+  ordinary (frozen) kernel, and the process's CPU time over them;
 - its machine code: the kernel compiled cold (an empty Dr.Jit cache, in a
   child process) with Dr.Jit's trace log on, which disassembles every kernel
   it compiles; the path loop is the widest backward branch inside the
@@ -100,8 +100,13 @@ def ray_counts(scene, *, camera: str, res: int, spp: int, max_depth: int, backen
 
 
 def kernel_seconds(scene, *, camera: str, res: int, spp: int, max_depth: int, backend: str = "llvm",
-                   repeats: int = 5) -> float:
-    """Median execution time of the path kernel (the longest kernel of a launch), after one warm-up launch."""
+                   repeats: int = 5) -> tuple[float, float]:
+    """(median execution time of the path kernel, median process CPU time of a launch), after one warm-up launch.
+
+    The kernel time is the longest kernel of a launch (Dr.Jit's kernel
+    history); the CPU time that of every thread of this process over the
+    launch, which a machine shared with other work inflates less.
+    """
     import drjit as dr
 
     from mcrt.tracer import Tracer, lane_layout, pixel_range
@@ -110,13 +115,15 @@ def kernel_seconds(scene, *, camera: str, res: int, spp: int, max_depth: int, ba
     k, b = lane_layout(res * res, spp)
     pixels = pixel_range(tracer.m, 0, res * res)
     dr.set_flag(dr.JitFlag.KernelHistory, True)
-    times = []
+    times, cpu = [], []
     for seed in range(repeats + 1):
         dr.kernel_history()
+        c0 = time.process_time()
         tracer.launch(seed, None, pixels, 0, min(spp, k * b), k, b)
         dr.sync_thread()
+        cpu.append(time.process_time() - c0)
         times.append(max(h["execution_time"] for h in dr.kernel_history() if "execution_time" in h) / 1000.0)
-    return statistics.median(times[1:])
+    return statistics.median(times[1:]), statistics.median(cpu[1:])
 
 
 def disassemble(*, camera: str, res: int, spp: int, max_depth: int) -> list[tuple[int, str, str]]:
@@ -190,14 +197,14 @@ def kernel_limits(scene, *, camera: str = "near", res: int = 256, spp: int = 16,
     from mcrt.tracer import lane_layout
 
     counts = ray_counts(scene, camera=camera, res=res, spp=spp, max_depth=max_depth, backend=backend)
-    seconds = kernel_seconds(scene, camera=camera, res=res, spp=spp, max_depth=max_depth, backend=backend)
+    seconds, cpu_seconds = kernel_seconds(scene, camera=camera, res=res, spp=spp, max_depth=max_depth, backend=backend)
     code = disassemble(camera=camera, res=res, spp=spp, max_depth=max_depth) if backend == "llvm" else []
     k, _ = lane_layout(res * res, spp)
     # The launch's arrays in memory: the pixel indices (4 B) and the running sums read and written (2 x 6 x 8 B) per
     # pixel, and with k > 1 lanes per pixel the lanes' float64 sums written and read again (2 x 6 x 8 B per lane).
     traffic = res * res * (4 + 96) + (res * res * k * 96 if k > 1 else 0)
     return {"camera": camera, "width": res, "height": res, "spp": spp, "max_depth": max_depth, **counts,
-            "kernel_seconds": seconds, "kernel_bytes": traffic,
+            "kernel_seconds": seconds, "kernel_cpu_seconds": cpu_seconds, "kernel_bytes": traffic,
             "kernel_instructions": instruction_mix(code) if code else None,
             "loop_instructions": instruction_mix(loop_body(code)) if code else None,
             "cores": os.cpu_count(), "clock_mhz": clock_mhz(), "copy_bandwidth": copy_bandwidth(),

@@ -390,7 +390,7 @@ def _memory_section(data: dict) -> list[str]:
         return []
     out = ["", "## Peak memory", "",
            "Whole mcrt renders (near camera), each in a fresh Python process (`mcrt.bench.memory_runs`); peak resident "
-           "memory is the process's `ru_maxrss`, which includes the interpreter, Dr.Jit, LLVM and the output image "
+           "memory is the process's own high-water mark (VmHWM in /proc/self/status), which includes the interpreter, Dr.Jit, LLVM and the output image "
            "(mean and variance, float32). A tile's memory does not depend on the depth, so the 1024-spp 4096x4096 render "
            "(every pixel, every sample: the whole image) runs at max depth 1, camera rays only, which makes it short "
            "enough for this run; the 16-spp one at depth 8 shows the same memory with whole paths.", "",
@@ -415,9 +415,15 @@ def _limits_section(data: dict) -> list[str]:
            f"- Time: {1e3 * lim['kernel_seconds']:.1f} ms (median kernel execution time), {seg_s / 1e6:.0f} M segments/s, "
            f"{1e9 / seg_s:.2f} ns per segment on {lim['cores']} cores."]
     loop, whole = lim.get("loop_instructions"), lim.get("kernel_instructions")
+    if lim.get("kernel_cpu_seconds"):
+        out.append(f"- CPU time: {lim['kernel_cpu_seconds'] * 1e3:.1f} ms of both threads per launch (process time, which "
+                   f"a loaded machine inflates less than the clock), {1e9 * lim['kernel_cpu_seconds'] / lim['segments']:.2f} "
+                   f"core-ns per segment.")
     if loop and lim.get("clock_mhz"):
         hz = lim["clock_mhz"] * 1e6
-        cyc = lim["cores"] * hz / (seg_s / 16)  # core cycles per 16 segments, one packet iteration if packets are full
+        # Core cycles per 16 segments (one packet iteration if packets are full), from CPU time where measured.
+        cyc = (lim["kernel_cpu_seconds"] * hz if lim.get("kernel_cpu_seconds") else lim["cores"] * hz * lim["kernel_seconds"]) \
+            / (lim["segments"] / 16)
         out += [f"- Machine code (the kernel compiled cold, disassembled by Dr.Jit): {whole['instructions']} instructions, "
                 f"the path loop {loop['instructions']} per iteration of a 16-lane packet, {loop['zmm']} of them on 512-bit zmm "
                 f"registers (16 float32 lanes), {loop['stack']} stack accesses (loop state and constants that do not fit "
