@@ -73,8 +73,9 @@ def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta
               "|---|---|---|---|---|---|---|---|"]
         for g in gradescope:
             gc = "-" if g.get("grading_cpu_s") is None else f"{g['grading_cpu_s']:.1f}"
+            mem = "-" if g.get("peak_rss_mb") is None else f"{g['peak_rss_mb']:.0f}"
             L.append(f"| {g['case']} | {g['exit']} | {g.get('score')} | {g['cpu_s']:.1f} | {gc} | {g['wall_s']:.1f} | "
-                     f"{g['peak_rss_mb']:.0f} | {g['context_mb']:.1f} |")
+                     f"{mem} | {g['context_mb']:.1f} |")
         L += ["", f"Building the cache (`mcrt grade --prepare`, references, catalogue and the explanation's "
               f"variations): {meta.get('prepare_seconds', 0):.0f} s here."]
     path = out / "index.md"

@@ -169,7 +169,8 @@ from mcrt.grade.submissions import discover
 ctx = pickle.load(open(sys.argv[1], "rb"))
 t0 = time.process_time()
 res = grade_submission(discover(sys.argv[2], single=True, student="s")[0], ctx)
-print(time.process_time() - t0, res.score)
+hwm = next((line.split()[1] for line in open("/proc/self/status") if line.startswith("VmHWM:")), "nan")
+print(time.process_time() - t0, res.score, float(hwm) / 1024)
 """
 
 
@@ -182,7 +183,8 @@ def gradescope_figures(case: Case, ctx, *, workdir=None) -> dict:
     read after it exits: user + system CPU time of the whole process
     (imports included; under Gradescope's half vCPU the wall time is about
     twice that), the CPU time of the grading alone, and its peak resident
-    set.
+    set (the child's own VmHWM: ``ru_maxrss`` of children can carry the
+    parent's peak across fork and exec).
     """
     import pickle
 
@@ -202,4 +204,5 @@ def gradescope_figures(case: Case, ctx, *, workdir=None) -> dict:
             "cpu_s": (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime),
             "grading_cpu_s": float(words[0]) if p.returncode == 0 and words else None,
             "score": float(words[1]) if p.returncode == 0 and len(words) > 1 else None,
-            "peak_rss_mb": after.ru_maxrss / 1024.0, "context_mb": ctx_mb, "stderr_tail": p.stderr[-300:]}
+            "peak_rss_mb": float(words[2]) if p.returncode == 0 and len(words) > 2 else None,
+            "context_mb": ctx_mb, "stderr_tail": p.stderr[-300:]}
