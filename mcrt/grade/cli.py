@@ -52,6 +52,9 @@ def register(subparsers) -> argparse.ArgumentParser:
                               description=CHECK_DOC, formatter_class=argparse.RawDescriptionHelpFormatter)
     add_check_arguments(c)
     c.set_defaults(func=run_check)
+    from mcrt.grade.false_alarms import register as register_false_alarms
+
+    register_false_alarms(subparsers)
     return p
 
 

@@ -18,17 +18,28 @@ Order of work, and what each step does to the image:
    ``finite.max_fraction`` grading stops); negative values are kept.
 4. orientation, camera: the best of {cameras} x {flips, rotations} by rank
    correlation; a detected mistake is undone.
-5. linear: a gamma or sRGB curve on HDR data (or linear data in a PNG read as
-   sRGB) is detected and decoded.
-6. noise: the noise level against mcrt's at the declared spp (or the spp
-   the noise suggests) and the minimum spp.
-7. unbiased: the multi-scale tile test of :mod:`mcrt.grade.score`; when it
-   fails, a constant brightness factor is tried (exposure).
-8. exposure: a factor beyond ``exposure.max_stops``, or any constant factor
+5. linear: a gamma or sRGB curve on HDR data is detected and decoded; an
+   8-bit image is decoded per hand-in pixel with the curve it was written
+   with (:func:`mcrt.grade.checks.detect_png_curve`: sRGB, gamma 2.2, square
+   root, linear), its clipped pixels left out of every statistic.
+6. A graded image smaller than one tile gets no points for exposure, noise
+   and unbiased: nothing can be tested.
+7. noise: the noise level against mcrt's at the declared spp (or the spp
+   the noise suggests) and the minimum spp; noise correlated between
+   neighbours (a filter) fails it.
+8. unbiased: the multi-scale tile test of :mod:`mcrt.grade.score` and the
+   structured-error detectors of :mod:`mcrt.grade.structure`
+   (misregistration, blur, correlated noise, too-dark pixels) under one
+   family-wise error rate; when it fails, a constant brightness factor is
+   tried (exposure). Points by kind (:meth:`_Grader._loss`): the camera
+   (a misregistration also fails ``camera``) or a surface wrong over most of
+   its pixels is major, a filtered image loses ``filter_loss``, a mistake in
+   at most ``minor_area`` of the image only ``minor_loss``.
+9. exposure: a factor beyond ``exposure.max_stops``, or any constant factor
    that alone explains the failure, loses these points.
-9. metrics: RMSE, SSIM, FLIP, informational.
+10. metrics: RMSE, SSIM, FLIP (clipped pixels left out), informational.
 
-Steps 4, 5 and 8 correct the image for the later steps only when
+Steps 4, 5 and 9 correct the image for the later steps only when
 ``grading.grade_corrected`` is true; otherwise the later criteria score 0.
 """
 
@@ -212,6 +223,7 @@ class _Grader:
         self._chi0 = 0.0
         self.encoding = "linear"
         self.corrected: list[str] = []
+        self.explanation = None  # mcrt.grade.explain.Explanation, when the image was explained
 
     # -- files ---------------------------------------------------------------
     def run_files(self, sub: Submission) -> None:
@@ -455,9 +467,13 @@ class _Grader:
         kw = {"alpha": th.alpha, "min_effect": th.min_effect, "full_effect": th.full_effect}
         samples = spp_model * per
 
-        def structure(res, nz, scale=1.0):
-            st = detect_structure(res, R, clip_mask, nz.model + nz.reference,
-                                  nz.model + nz.reference + (R * scale) ** 2 / samples,
+        # The detectors' weights must not depend on either image's noise: the model's variance stands in for the
+        # reference's own (a heavy-tailed pixel's variance estimate is low exactly where its mean is).
+        weight_var = model_ps / samples + model_ps / ref.spp
+
+        def structure(res, nz):
+            # Second moment of the lower-tail bound: E[X^2] / n = sigma^2 / n + mu^2 / n (structure.py).
+            st = detect_structure(res, R, clip_mask, weight_var, nz.model + nz.reference + R**2 / samples,
                                   base=ctx.baseline.mean if cam == a.camera else None, labels=ctx.labels[cam])
             return st, structure_families(st, th)
 
@@ -485,6 +501,9 @@ class _Grader:
                        f"({stops:+.2f} stops); {'divided' if ks > 1 else 'multiplied'} by {how} it passes the bias test, so only a constant factor is "
                        "wrong: an exposure or display scale applied before saving, or a constant missing in the "
                        "estimator (1/pi, the light's radiance or area)")
+            e = self._explain(img, R, clip_mask, noise, cam, base_tile)
+            if e is not None and e.named is not None and e.named.family not in ("scale", "light_radiance"):
+                rub.results["exposure"].output += f". Not quite a constant, though: {e.sentence[0].lower()}{e.sentence[1:]}"
             if a.grade_corrected:
                 bt, img, st = scaled[1], scaled[2], scaled[3]
                 self.corrected.append("exposure")
@@ -528,14 +547,20 @@ class _Grader:
                 lines.append(f"biased: {n_pen} of {bt.n_tests} tile tests are significant ({family})."
                              + (f" {where[0].upper() + where[1:]}." if where else ""))
                 diag = self._diagnose(diag_imgs, mask, R, ref, cam, noise, base_tile)
-                if diag:
+                if self.explanation is not None:
+                    lines.append(self.explanation.sentence)
+                elif diag:
                     lines.append(f"Most consistent with {short_text(diag[0].text)} ({diag[0].name})"
                                  + (f", or {short_text(diag[1].text)} ({diag[1].name})" if len(diag) > 1 else "") + ".")
+            if not bt.penalised_any and cam == a.camera and self._explain(img, R, clip_mask, noise, cam, base_tile):
+                lines.append(self.explanation.sentence)
             lines += [found[k] + "." for k in found]
             lines.append(f"Bias beyond noise: {_fmt_pct(bt.excess_rms)} RMS; {_fmt_pct(loss)} of these points lost ({why}).")
             rub.failed("unbiased", " ".join(lines), loss=loss)
             self.headline = where[0].upper() + where[1:] + "." if where else "Biased."
-            if diag:
+            if self.explanation is not None and (self.explanation.named is not None or not found):
+                self.headline = self.explanation.headline
+            elif diag and self.explanation is None:
                 self.headline = f"{where[0].upper() + where[1:] if where else 'Biased'}: consistent with {short_text(diag[0].text)}."
             elif found:
                 self.headline = next(iter(found.values())).split(":")[0] + "."
@@ -713,7 +738,41 @@ class _Grader:
         best = cands[0]
         self.figures["mutant_rel_tiles"] = signature(best.name)
         self.figures["mutant_name"] = best.name
+        if not pixel_level:
+            self._explain(img, R, mask, noise, cam, tile)
         return cands[:2]
+
+    def _explain(self, img, R, mask, noise, cam, tile):
+        """Fit the parametric mistakes of :mod:`mcrt.grade.explain` (the catalogue among them) to the image.
+
+        When none explains most of the difference the diagnosis is left
+        empty: no bug is named.
+        """
+        from mcrt.grade.diagnose import change_region, rel_lum
+        from mcrt.grade.explain import explain
+
+        ctx = self.ctx
+        basis = getattr(ctx, "explain", None)
+        if basis is None or cam != basis.camera or basis.base.shape != R.shape:
+            return None
+        labels, names, direct = ctx.labels[cam], ctx.label_names, ctx.direct_fraction[cam]
+
+        def where_fn(dm):
+            return change_region(dm, R, mask, tile, labels, names, direct, self.th.min_effect)
+
+        e = explain(img, R, noise.model + noise.reference, mask, basis, mutants=ctx.mutants, baseline=ctx.baseline,
+                    texts=ctx.mutant_texts, where_fn=where_fn, tile=tile)
+        self.explanation = e
+        self.details["explanation"] = e.to_dict()
+        if e.named is not None:
+            self.diagnosis = [c.to_dict() for c in e.candidates[:5]]
+            self.figures["mutant_rel_tiles"] = rel_lum(_tile_means(e.named.delta, mask, tile), _tile_means(R, mask, tile))
+            self.figures["mutant_name"] = e.named.key
+        else:
+            self.diagnosis = []
+            self.figures.pop("mutant_rel_tiles", None)
+            self.figures.pop("mutant_name", None)
+        return e
 
     def _diagnose_noise(self, resid, R, mask, noise, cam, tile, samples):
         """Rank the catalogue by its noise pattern (:func:`mcrt.grade.diagnose.rank_noise`)."""

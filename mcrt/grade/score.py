@@ -34,10 +34,17 @@ one family, corrected by Holm (:func:`mcrt.stats.adjust_p_values`) at level
 effect :math:`|D_t| / |\bar R_t|` is at least ``min_effect``: significant
 and relevant.
 
+The structured-error detectors of :mod:`mcrt.grade.structure` join the same
+family (``bias_test(..., extra=...)``): weighted Holm
+(:func:`mcrt.stats.adjust_p_values_weighted`) gives each detector its share
+of ``alpha`` and the tiles the rest.
+
 Scoring of the ``unbiased`` criterion: no penalised test gives full points;
-otherwise the loss is ``min_loss`` plus the share of the image covered by
-penalised tests, each pixel weighted by min(1, |relative effect| /
-``full_effect``), capped at all the points.
+otherwise :meth:`BiasTest.loss` is ``min_loss`` plus the share of the image
+covered by penalised tests, each pixel weighted by min(1, |relative effect| /
+``full_effect``), capped at all the points; the grader then weighs the kind
+of mistake (``mcrt.grade.grader``: a major mistake loses at least
+``major_loss``, one in a few pixels only ``minor_loss``).
 """
 
 from __future__ import annotations

@@ -211,7 +211,10 @@ def detect(resid: np.ndarray, ref: np.ndarray, mask: np.ndarray, var: np.ndarray
     """Run the three detectors (module docstring) on one graded image.
 
     ``resid`` and ``ref`` are (H, W, 3); ``var`` (H, W, 3) is the variance of
-    each pixel mean under the noise model (student, reference, quantisation);
+    each pixel mean under the noise model (student and reference), which sets
+    the weights: it must not depend on the noise of either image (the
+    reference's own variance estimate does: with heavy tails it is low where
+    the reference's mean is low, which biases a weighted fit);
     ``second_moment`` (H, W, 3) the bound's :math:`E[X^2]/n` plus the
     reference's and quantisation's variance; ``base`` (H, W, 3) the
     independent render the regression's columns are made from (None: no
