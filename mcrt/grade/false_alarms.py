@@ -216,8 +216,9 @@ def markdown(data: dict) -> str:
     lines.append("")
     fa = [r for r in data["cases"] if r["lost"]]
     if fa:
-        lines += ["False alarms:", ""] + [f"- {r['name'] if 'name' in r else r['renderer']} {r['spp']} spp {r['res']} px "
-                                          f"{r['file']} seed {r['seed']}: lost {', '.join(r['lost'])}" for r in fa]
+        lines += ["False alarms (the test that fired: the tile test, or a structured-error detector):", ""]
+        lines += [f"- {r['renderer']} {r['spp']} spp {r['res']} px {r['file']} seed {r['seed']}: lost {', '.join(r['lost'])} "
+                  f"({', '.join(k for k, v in (r['penalised'] or {}).items() if v) or 'tile test'})" for r in fa]
     return "\n".join(lines) + "\n"
 
 
