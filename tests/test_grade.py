@@ -661,6 +661,7 @@ def test_camera_mistakes_are_major(structured, context64):
         assert lost > 0 and "camera does not match" in out, (sid, out)
         lost_u, out_u = _lost(r, "unbiased")
         assert lost_u >= th.major_loss * 55 - 1e-6, (sid, out_u)
+        assert "filtered" not in _lost(r, "noise")[1], sid  # the camera's structure is not also called a filter
     assert "field of view" in _lost(structured["mi_fov_3pct"], "camera")[1]
     assert "shifted" in _lost(structured["mi_half_pixel"], "camera")[1]
 
@@ -681,6 +682,7 @@ def test_wrong_wall_and_missing_object_are_major(structured, context64):
     for sid, what in (("mi_wall_colour", "wall DE"), ("mi_no_tetrahedron", "tetrahedron")):
         lost, out = _lost(structured[sid], "unbiased")
         assert lost >= th.major_loss * 55 - 1e-6 and what in out, (sid, out)
+        assert "filtered" not in _lost(structured[sid], "noise")[1], sid
 
 
 def test_a_few_wrong_pixels_are_minor(structured, context64):

@@ -531,7 +531,7 @@ class _Grader:
         m["excess_rms"] = bt.excess_rms
         self.details["metrics"] = m
         self.details["structure"] = _structure_details(st, bt)
-        found = self._structure_findings(st, bt, spp_eff, spp)
+        found = self._structure_findings(st, bt, cam, spp_eff, spp)
         if not _flagged(bt):
             rub.passed("unbiased", f"no significant bias: none of {bt.n_tests} tile tests is significant ({family}); noise from {pooled}. "
                        f"At your noise a tile would need a bias of about {_fmt_pct(bt.min_detectable)} to show; "
@@ -653,7 +653,7 @@ class _Grader:
             return min(1.0, th.min_loss + (1.0 - th.min_loss) * area), "wrong pixels over part of the image"
         return tile_loss, f"{_fmt_pct(th.min_loss)} for any significant bias plus the share of the image it covers"
 
-    def _structure_findings(self, st, bt, spp_eff: float, spp: int | None) -> dict[str, str]:
+    def _structure_findings(self, st, bt, cam, spp_eff: float, spp: int | None) -> dict[str, str]:
         """Feedback for each structured error found (rejected and relevant): registration, filter, pixels."""
         out, ex = {}, bt.extra
         reg = st.registration
@@ -673,7 +673,10 @@ class _Grader:
                                    f"p = {reg.p:.2g}); check the pixel centre ((i + 0.5) / width), the field of view "
                                    "(horizontal, in degrees) and the camera's eye, look-at and up vectors")
         blur = ex.get("blur", np.zeros(1, bool)).any()
-        if blur or ex.get("correlation", np.zeros(1, bool)).any():
+        # A wrong camera or surface leaves structure beyond any first-order fit (correlated, edge-like): named
+        # as what it is, not also as a filter.
+        secondary = "registration" in out or bool(bt.penalised_any and self._wrong_surfaces(bt, cam))
+        if not secondary and (blur or ex.get("correlation", np.zeros(1, bool)).any()):
             how = [f"neighbouring pixels' noise is correlated ({st.correlation:.2f})"] if st.correlation > 0 else []
             if blur:
                 how.append(f"edges are {'softened' if st.blur > 0 else 'sharpened'} as by a filter of about "
