@@ -685,6 +685,10 @@ def _catalogue_candidates(fit: _Fit, mutants: dict, baseline, texts: dict) -> li
 # --------------------------------------------------------------------------
 
 
+#: The families that are mistakes of the camera (what the misregistration test of mcrt.grade.structure also sees).
+CAMERA_FAMILIES = frozenset({"fov", "pixel_offset", "rotation", "eye"})
+
+
 @dataclass
 class Explanation:
     """The ranked candidates and what the feedback says."""

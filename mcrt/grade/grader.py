@@ -539,7 +539,6 @@ class _Grader:
                        "either (tested with the tiles at the same error rate)")
             self.headline = "No significant bias."
         else:
-            loss, why = self._loss(bt, cam)
             lines, where, diag = [], "", []
             if bt.penalised_any:
                 n_pen = sum(int(np.count_nonzero(s.penalised)) for s in bt.scales)
@@ -554,6 +553,13 @@ class _Grader:
                                  + (f", or {short_text(diag[1].text)} ({diag[1].name})" if len(diag) > 1 else "") + ".")
             if not bt.penalised_any and cam == a.camera and self._explain(img, R, clip_mask, noise, cam, base_tile):
                 lines.append(self.explanation.sentence)
+            named = self.explanation.named if self.explanation is not None else None
+            if named is not None and named.family not in _camera_families():
+                # The misregistration test fits first-order image motion, which also absorbs part of a
+                # change that is not motion (a missing object, a cut path depth): where a cause outside
+                # the camera explains the difference, the camera is not blamed beside it.
+                found.pop("registration", None)
+            loss, why = self._loss(bt, cam, registration="registration" in found)
             lines += [found[k] + "." for k in found]
             lines.append(f"Bias beyond noise: {_fmt_pct(bt.excess_rms)} RMS; {_fmt_pct(loss)} of these points lost ({why}).")
             rub.failed("unbiased", " ".join(lines), loss=loss)
@@ -635,14 +641,18 @@ class _Grader:
                 out.append(self.ctx.label_names[int(k)])
         return out
 
-    def _loss(self, bt, cam) -> tuple[float, str]:
-        """Share of the unbiased points lost, as a TA would: by the kind of mistake, then by its extent."""
+    def _loss(self, bt, cam, *, registration: bool) -> tuple[float, str]:
+        """Share of the unbiased points lost, as a TA would: by the kind of mistake, then by its extent.
+
+        ``registration``: the misregistration finding stands (it is dropped where the explanation names
+        a cause outside the camera).
+        """
         th, ex = self.th, bt.extra
         tile_loss = bt.loss(th.min_loss) if bt.penalised_any else 0.0
         pix = ex["pixels"].reshape(bt.shape + (3,)).any(axis=2) if "pixels" in ex else np.zeros(bt.shape, bool)
         area = float(np.mean((bt.pixel_effect > 0) | pix))
         surfaces = self._wrong_surfaces(bt, cam) if bt.penalised_any else []
-        if ex.get("registration", np.zeros(1, bool)).any() or surfaces:
+        if registration or surfaces:
             what = "the camera" if not surfaces else "; ".join(surfaces[:3]) + (" look wrong" if len(surfaces) > 1 else " looks wrong")
             return max(th.major_loss, tile_loss), f"a major mistake ({what}): at least {_fmt_pct(th.major_loss)}"
         if ex.get("blur", np.zeros(1, bool)).any() or ex.get("correlation", np.zeros(1, bool)).any():
@@ -897,6 +907,12 @@ def _conclusive_chi2(cands, chi0: float, terms: int) -> bool:
 def _conclusive(cands) -> bool:
     """The best candidate explains at least 30 % and twice as much as the next one."""
     return bool(cands) and cands[0].explained >= 0.3 and (len(cands) < 2 or cands[0].explained >= 2 * max(cands[1].explained, 0.0))
+
+
+def _camera_families() -> frozenset:
+    from mcrt.grade.explain import CAMERA_FAMILIES  # explain loads on first use, as in _Grader._explain
+
+    return CAMERA_FAMILIES
 
 
 def _flagged(bt) -> bool:
