@@ -16,7 +16,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from mcrt.grade.accuracy.cases import Spec, _render_spec, light, wall_albedo
+from mcrt.grade.accuracy.cases import Spec, _render_spec, light, wall_albedo, without
 from mcrt.grade.assignment import assignment_from_dict
 from mcrt.grade.explain import explain
 from mcrt.grade.expected import prepare_context
@@ -108,3 +108,15 @@ def test_a_cut_path_depth_is_not_also_blamed_on_the_camera(ctx):
     camera = next(t for t in res.tests if t.name.startswith("camera"))
     assert camera.status == "passed", camera.output
     assert "the camera does not match" not in res.summary
+
+
+def test_a_missing_object_is_a_major_mistake(ctx):
+    """The mirror sphere left out (Mitsuba, seed 15, 1024 spp): explained as the sphere missing, and the bias
+    criterion loses at least its major share (the assignment's major_loss), whatever the sphere's share of the
+    image."""
+    r = _mitsuba(without("sphere")(load_scene()), seed=15)
+    res = grade_image("no_sphere", ctx, [r.mean], spp=1024)
+    assert res.details["explanation"]["family"] == "object_missing", res.details["explanation"]["sentence"]
+    unbiased = next(t for t in res.tests if t.name.startswith("unbiased"))
+    major = ctx.assignment.thresholds.major_loss
+    assert unbiased.score <= unbiased.max_score * (1.0 - major) + 1e-9, unbiased.output

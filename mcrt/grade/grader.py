@@ -559,7 +559,12 @@ class _Grader:
                 # change that is not motion (a missing object, a cut path depth): where a cause outside
                 # the camera explains the difference, the camera is not blamed beside it.
                 found.pop("registration", None)
-            loss, why = self._loss(bt, cam, registration="registration" in found)
+            if named is not None and named.family != "blur":
+                # Likewise the residual of any structured mistake is correlated between neighbours:
+                # where another cause explains it, the image is not also called filtered.
+                found.pop("filter", None)
+            loss, why = self._loss(bt, cam, registration="registration" in found, filtered="filter" in found,
+                                   major=named.key if named is not None and named.family in _major_families() else None)
             lines += [found[k] + "." for k in found]
             lines.append(f"Bias beyond noise: {_fmt_pct(bt.excess_rms)} RMS; {_fmt_pct(loss)} of these points lost ({why}).")
             rub.failed("unbiased", " ".join(lines), loss=loss)
@@ -641,21 +646,23 @@ class _Grader:
                 out.append(self.ctx.label_names[int(k)])
         return out
 
-    def _loss(self, bt, cam, *, registration: bool) -> tuple[float, str]:
+    def _loss(self, bt, cam, *, registration: bool, filtered: bool, major: str | None = None) -> tuple[float, str]:
         """Share of the unbiased points lost, as a TA would: by the kind of mistake, then by its extent.
 
-        ``registration``: the misregistration finding stands (it is dropped where the explanation names
-        a cause outside the camera).
+        ``registration``, ``filtered``: the misregistration and filter findings stand (they are dropped
+        where the explanation names another cause); ``major``: what the explanation names where it is a
+        major kind of mistake whatever its share of the image (an object missing, a colour, the camera).
         """
         th, ex = self.th, bt.extra
         tile_loss = bt.loss(th.min_loss) if bt.penalised_any else 0.0
         pix = ex["pixels"].reshape(bt.shape + (3,)).any(axis=2) if "pixels" in ex else np.zeros(bt.shape, bool)
         area = float(np.mean((bt.pixel_effect > 0) | pix))
         surfaces = self._wrong_surfaces(bt, cam) if bt.penalised_any else []
-        if registration or surfaces:
-            what = "the camera" if not surfaces else "; ".join(surfaces[:3]) + (" look wrong" if len(surfaces) > 1 else " looks wrong")
+        if registration or surfaces or major:
+            what = ("; ".join(surfaces[:3]) + (" look wrong" if len(surfaces) > 1 else " looks wrong") if surfaces
+                    else major if major else "the camera")
             return max(th.major_loss, tile_loss), f"a major mistake ({what}): at least {_fmt_pct(th.major_loss)}"
-        if ex.get("blur", np.zeros(1, bool)).any() or ex.get("correlation", np.zeros(1, bool)).any():
+        if filtered:
             return max(th.filter_loss, tile_loss), f"a filtered image: at least {_fmt_pct(th.filter_loss)}"
         if area <= th.minor_area:
             return th.minor_loss, f"a minor mistake, {_fmt_pct(area)} of the image: {_fmt_pct(th.minor_loss)}"
@@ -913,6 +920,12 @@ def _camera_families() -> frozenset:
     from mcrt.grade.explain import CAMERA_FAMILIES  # explain loads on first use, as in _Grader._explain
 
     return CAMERA_FAMILIES
+
+
+def _major_families() -> frozenset:
+    from mcrt.grade.explain import MAJOR_FAMILIES
+
+    return MAJOR_FAMILIES
 
 
 def _flagged(bt) -> bool:
