@@ -687,8 +687,9 @@ def _catalogue_candidates(fit: _Fit, mutants: dict, baseline, texts: dict) -> li
 
 #: The families that are mistakes of the camera (what the misregistration test of mcrt.grade.structure also sees).
 CAMERA_FAMILIES = frozenset({"fov", "pixel_offset", "rotation", "eye"})
-#: The families a TA counts as major mistakes whatever their share of the image (mcrt.grade.grader._Grader._loss).
-MAJOR_FAMILIES = CAMERA_FAMILIES | {"object_missing", "albedo", "channels"}
+#: The families a TA counts as major mistakes whatever their share of the image: the camera, the scene's geometry
+#: (an object or the light missing, moved or resized) and its colours (mcrt.grade.grader._Grader._loss).
+MAJOR_FAMILIES = CAMERA_FAMILIES | {"object_missing", "object_moved", "light_position", "light_size", "albedo", "channels"}
 
 
 @dataclass

@@ -37,7 +37,7 @@ def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta
          "written as a student's folder and graded with the course assignment. *Named right*: the feedback names "
          "the mistake's cause (the explanation's family, or a criterion that names it: `linear` for an encoding, "
          "`exposure` for a constant factor, `camera` for misregistration). *Named wrong*: it names a cause, and "
-         "not the right one; *also wrong*: it names the right cause and a wrong one beside it. **Held-out** cases (marked H) were not looked at while the diagnosis was tuned, with one exception: the last two rules of the grader (the camera not blamed beside a cause outside it; an explained missing object, colour or camera scored as a major mistake) were added after the held-out results had been seen.", "",
+         "not the right one; *also wrong*: it names the right cause and a wrong one beside it. **Held-out** cases (marked H) were not looked at while the diagnosis was tuned, with one exception: the last two rules of the grader (the camera not blamed beside a cause outside it; an explained wrong geometry, light placement, colour or camera scored as a major mistake) were added after the held-out results had been seen.", "",
          "## Rates", "",
          "| | mistakes | detected (lost points) | named right | named wrong | also wrong | major mistakes losing >= 25 % | "
          "correct renders | false alarms | correct named a bug |",
