@@ -7,11 +7,11 @@ compilation out of the timing (reported apart, from Dr.Jit's kernel history).
 Speed is paths per second (one path per pixel sample, whatever its length).
 
 Renders too long to repeat are timed on a bounded part of themselves
-(``max_paths``): mcrt on the first launches of the render (a tile's first
-passes: every launch of a render has the same shape, so its throughput is
-the render's), Mitsuba on a crop of the film's first rows at the case's spp
-(``mi.render`` of the crop: its kernel per sample is the full film's). Each
-row records the paths a timed render traced and whether it was bounded.
+(``max_paths``): the same bands of whole rows for every renderer, spread
+evenly down the image (:func:`bounded_rows`), at the case's spp: mcrt's
+render of those rows alone (``render_tracer(rows=...)``, the render's own
+launches), Mitsuba's ``mi.render`` of films cropped to them. Each row
+records the paths a timed render traced and whether it was bounded.
 
 Where a committed Mitsuba reference of the case exists (mcrt.reference), each
 timed render is also scored against it: the excess MSE (the squared error
@@ -58,68 +58,66 @@ class BenchRow:
     times: list[float]
     compile_time: float | None
     paths_per_second: float = 0.0
-    mse_excess: float | None = None  # mean over the timed renders; None without a committed reference
+    mse_excess: float | None = None  # mean over the MSE renders; None without a committed reference
     efficiency: float | None = None  # 1 / (mse_excess x median time)
     paths: int = 0  # paths one timed render traced
     bounded: bool = False  # timed on a bounded part of the render (module docstring)
     load: tuple = ()  # os.getloadavg() before the case (1, 5 and 15 minutes)
 
 
-#: Paths a timed render traces at most, per renderer (module docstring), unless run_bench is told otherwise.
-MAX_PATHS = {"mcrt": 1 << 24, "mitsuba": 1 << 21}
+#: Paths a timed render traces at most (module docstring), unless run_bench is told otherwise.
+MAX_PATHS = 1 << 21
+#: Renders (distinct seeds) whose MSE against the committed reference is averaged, timed ones included.
+MSE_RENDERS = 16
 
 
-def _renderers(names, scene, backend, intersector, max_paths):
+def _renderers(names, scene, backend, intersector, max_paths: int):
     """Callables (case, seed) -> (seconds, compile seconds or None, image or None, paths) for each renderer.
 
     Setup and loading are outside the clock. A case of more than
-    ``max_paths[name]`` paths is timed on a bounded part (module docstring)
-    and returns no image.
+    ``max_paths`` paths is timed on the same bands of rows by every
+    renderer (:func:`bounded_rows`) and returns no image.
     """
     import drjit as dr
 
     from mcrt.render import render
-    from mcrt.tracer import TILE_LANES, _tracer, render_tracer
+    from mcrt.tracer import render_tracer
 
     def mcrt_time(c, seed):
         s = scene.settings(camera=c.camera, width=c.width, height=c.height, spp=c.spp, max_depth=c.max_depth,
                            light_samples=c.light_samples)
-        paths = c.width * c.height * c.spp
-        if paths <= max_paths["mcrt"]:
+        rows = bounded_rows(c, max_paths)
+        if rows is None:
             t0 = time.perf_counter()
             r = render(scene, s, seed=seed, backend=backend, intersector=intersector, progress=False)
-            return time.perf_counter() - t0, None, r.mean, paths
-        tracer = _tracer(scene, s.camera, s.width, s.height, s.max_depth, s.light_samples, s.rr_depth, backend,
-                         intersector, frozenset(), True, None, ())
-        k, _, per_pass = tracer.layout(c.spp)
-        per_launch = min(max(1, TILE_LANES // k), c.width * c.height) * per_pass
+            return time.perf_counter() - t0, None, r.mean, c.width * c.height * c.spp
         t0 = time.perf_counter()
-        r = render_tracer(scene, replace(s, seed=seed), backend=backend, intersector=intersector, progress=False,
-                          max_launches=-(-max_paths["mcrt"] // per_launch))
+        r = render_tracer(scene, replace(s, seed=seed), backend=backend, intersector=intersector, progress=False, rows=rows)
         return time.perf_counter() - t0, None, None, int(r.extra["paths"])
 
     loaded = {}
 
     def mitsuba_time(c, seed):
-        # Mitsuba's own entry point, mi.render, on a scene loaded once per case: its best case, faster
+        # Mitsuba's own entry point, mi.render, on scenes loaded once per case: its best case, faster
         # than the deterministic passes with variance of mcrt.render's 'mitsuba' renderer.
         import mitsuba as mi
 
-        rows = min(c.height, max(1, max_paths["mitsuba"] // (c.width * c.spp)))
-        key = (c.camera, c.width, c.height, c.max_depth, rows)
+        rows = bounded_rows(c, max_paths) or [(0, c.height)]
+        key = (c.camera, c.width, c.height, c.max_depth, tuple(rows))
         if key not in loaded:
             loaded.clear()
-            loaded[key] = mi.load_dict(_cropped(scene, c, rows, backend))
+            loaded[key] = [mi.load_dict(_cropped(scene, c, band, backend)) for band in rows]
         dr.sync_thread()
         dr.kernel_history()
         t0 = time.perf_counter()
-        img = mi.render(loaded[key], spp=c.spp, seed=seed)
-        dr.eval(img)
+        for band in loaded[key]:
+            img = mi.render(band, spp=c.spp, seed=seed)
+            dr.eval(img)
         dr.sync_thread()
         elapsed = time.perf_counter() - t0
         compile_s = sum(h.get("codegen_time", 0.0) + h.get("backend_time", 0.0) for h in dr.kernel_history()) / 1000
-        image = np.asarray(img)[..., :3] if rows == c.height else None
-        return elapsed, compile_s, image, c.width * rows * c.spp
+        image = np.asarray(img)[..., :3] if rows == [(0, c.height)] else None
+        return elapsed, compile_s, image, c.width * sum(n for _, n in rows) * c.spp
 
     table = {"mcrt": mcrt_time, "mitsuba": mitsuba_time}
     unknown = set(names) - set(table)
@@ -128,28 +126,52 @@ def _renderers(names, scene, backend, intersector, max_paths):
     return {n: table[n] for n in names}
 
 
-def _cropped(scene, c: BenchCase, rows: int, backend: str) -> dict:
-    """Mitsuba's scene dictionary of the case, its film cropped to the first ``rows`` rows (all rows: no crop)."""
+#: Bands of rows a bounded measurement spreads over, evenly down the image (module docstring).
+BANDS = 4
+
+
+def bounded_rows(c: BenchCase, max_paths: int) -> list[tuple[int, int]] | None:
+    """The (first row, count) bands every renderer times of a case of more than ``max_paths`` paths; None: the whole image.
+
+    As many whole rows as ``max_paths`` allows at the case's spp (at least
+    one), in up to BANDS equal bands centred in equal parts of the image:
+    the top of an image (the ceiling and the light) costs less per path than
+    its middle, so a band at the top alone would misstate both renderers.
+    """
+    if c.width * c.height * c.spp <= max_paths:
+        return None
+    rows = max(1, min(c.height, max_paths // (c.width * c.spp)))
+    parts = min(BANDS, rows)
+    per = rows // parts
+    return [(min(c.height - per, max(0, round((i + 0.5) * c.height / parts - per / 2))), per) for i in range(parts)]
+
+
+def _cropped(scene, c: BenchCase, band: tuple[int, int], backend: str) -> dict:
+    """Mitsuba's scene dictionary of the case, its film cropped to the rows of ``band`` (first row, count)."""
     from mcrt.mitsuba import scene_dict
 
     s = scene.settings(camera=c.camera, width=c.width, height=c.height, max_depth=c.max_depth)
     d = scene_dict(scene, s.camera, s.width, s.height, s.max_depth, "path", rr_depth=s.rr_depth, spp=c.spp, backend=backend)
-    if rows < c.height:
+    first, count = band
+    if count < c.height:
         film = next(v["film"] for v in d.values() if isinstance(v, dict) and "film" in v)
-        film.update(crop_offset_x=0, crop_offset_y=0, crop_width=c.width, crop_height=rows)
+        film.update(crop_offset_x=0, crop_offset_y=first, crop_width=c.width, crop_height=count)
     return d
 
 
 def run_bench(scene, cases: list[BenchCase], *, renderers=("mcrt", "mitsuba"), repeats: int = 5, backend: str = "llvm",
-              intersector: str = "convex", progress: bool = True, max_paths: dict | None = None) -> list[BenchRow]:
+              intersector: str = "convex", progress: bool = True, max_paths: int = MAX_PATHS,
+              mse_renders: int = MSE_RENDERS) -> list[BenchRow]:
     """Median paths per second of each renderer on each case, renderers alternating.
 
-    ``max_paths``: per renderer, the paths above which a case is timed on a
-    bounded part of it (default MAX_PATHS).
+    ``max_paths``: the paths above which a case is timed on bands of its
+    rows, the same for every renderer (:func:`bounded_rows`). Where the case
+    has a committed reference, the MSE is averaged over ``mse_renders``
+    renders of distinct seeds (the timed ones and untimed others).
     """
     import drjit as dr
 
-    fns = _renderers(renderers, scene, backend, intersector, MAX_PATHS | (max_paths or {}))
+    fns = _renderers(renderers, scene, backend, intersector, max_paths)
     dr.set_flag(dr.JitFlag.KernelHistory, True)
     rows = []
     for case in cases:
@@ -174,6 +196,10 @@ def run_bench(scene, cases: list[BenchCase], *, renderers=("mcrt", "mitsuba"), r
             if progress:
                 print(f"  {case.camera} {case.width}x{case.height} {case.spp} spp depth {case.max_depth}: repetition {k + 1}/{repeats}",
                       file=sys.stderr, flush=True)
+        for n, fn in fns.items():  # more seeds for a steadier MSE: a few renders' MSE swings with rare bright paths
+            for seed in range(repeats, mse_renders if errors[n] else 0):
+                image = fn(case, seed)[2]
+                errors[n].append(float(np.mean((image.astype(np.float64) - ref[0]) ** 2)) - ref[1])
         full = case.width * case.height * case.spp
         for n in fns:
             t = statistics.median(times[n])
@@ -344,7 +370,8 @@ def simd_extension() -> str | None:
 
 def bench_data(rows: list[BenchRow], *, command: str, backend: str, intersector: str, repeats: int,
                profile: list[ProfileRow] = (), profile_case: dict | None = None, memory: list[dict] = (),
-               limits: dict | None = None, max_paths: dict | None = None, seconds: float | None = None) -> dict:
+               limits: dict | None = None, max_paths: int = MAX_PATHS, mse_renders: int = MSE_RENDERS,
+               seconds: float | None = None) -> dict:
     """The run as one JSON-ready dictionary: what ``--json`` writes and :mod:`mcrt.bench_report` reads.
 
     Machine and versions come from :func:`mcrt.provenance.provenance`, with
@@ -363,7 +390,7 @@ def bench_data(rows: list[BenchRow], *, command: str, backend: str, intersector:
             "rows": [dict(asdict(r), median_time=statistics.median(r.times)) for r in rows],
             "peak_memory_mib": peak_memory_mib(),
             "kernel_profile": [asdict(r) for r in profile], "kernel_profile_case": profile_case,
-            "max_paths": MAX_PATHS | (max_paths or {}), "memory_runs": list(memory), "limits": limits,
+            "max_paths": max_paths, "bands": BANDS, "mse_renders": mse_renders, "memory_runs": list(memory), "limits": limits,
             "load_end": list(os.getloadavg()), "seconds": seconds, "gpu": gpu_note(backend)}
 
 
@@ -414,10 +441,9 @@ def register(sub) -> None:
     p.add_argument("--course", type=int, action="append", default=None, metavar="K",
                    help="also time the course's hand-in (near, 800x800, 100 spp, depth 8) with K shadow rays, "
                         "repeatable (default: none)")
-    p.add_argument("--max-paths-mcrt", type=int, default=MAX_PATHS["mcrt"],
-                   help=f"time mcrt renders of more paths on their first launches (default {MAX_PATHS['mcrt']})")
-    p.add_argument("--max-paths-mitsuba", type=int, default=MAX_PATHS["mitsuba"],
-                   help=f"time Mitsuba renders of more paths on a crop of the first rows (default {MAX_PATHS['mitsuba']})")
+    p.add_argument("--max-paths", type=int, default=MAX_PATHS,
+                   help=f"time renders of more paths on up to {BANDS} bands of their rows, the same for every renderer "
+                        f"(default {MAX_PATHS})")
     p.add_argument("--memory", action="store_true",
                    help="also measure the peak memory of whole mcrt renders up to 4096x4096 at 1024 spp, each in a fresh "
                         "process (default: off)")
@@ -427,6 +453,9 @@ def register(sub) -> None:
     p.add_argument("--light-samples", type=int, default=1, help="K, shadow rays per diffuse vertex (default 1)")
     p.add_argument("--repeats", type=int, default=5,
                    help="timed repetitions per renderer and case, after one warm-up render (default 5)")
+    p.add_argument("--mse-renders", type=int, default=MSE_RENDERS,
+                   help="renders of distinct seeds whose MSE against a committed reference is averaged, the timed ones "
+                        f"included (default {MSE_RENDERS})")
     p.add_argument("--renderers", default="mcrt,mitsuba", help="comma-separated renderers (default: mcrt,mitsuba)")
     p.add_argument("--intersector", choices=("convex", "triangles"), default="convex", help="mcrt's intersector (default: convex)")
     p.add_argument("--backend", choices=("llvm", "cuda"), default="llvm", help="Dr.Jit backend (default: llvm)")
@@ -470,10 +499,10 @@ def cmd_bench(args) -> int:
     spps = args.spp or [16]
     cases = bench_cases(cameras, resolutions, spps, depths, args.light_samples, args.spp_sweep or (),
                         sweep_res=args.sweep_res, depth_sweep=args.depth_sweep or (), course_light_samples=args.course or ())
-    max_paths = {"mcrt": args.max_paths_mcrt, "mitsuba": args.max_paths_mitsuba}
+    max_paths = args.max_paths
     t0 = time.perf_counter()
     rows = run_bench(scene, cases, renderers=args.renderers.split(","), repeats=args.repeats, backend=args.backend,
-                     intersector=args.intersector, max_paths=max_paths)
+                     intersector=args.intersector, max_paths=max_paths, mse_renders=args.mse_renders)
     profile, profile_case = [], None
     if args.profile:
         profile_case = {"camera": cameras[0], "width": args.profile_res, "height": args.profile_res, "spp": spps[-1],
@@ -489,7 +518,8 @@ def cmd_bench(args) -> int:
     memory = memory_runs() if args.memory else []
     data = bench_data(rows, command=command_line(args.bench_parser, args), backend=args.backend,
                       intersector=args.intersector, repeats=args.repeats, profile=profile, profile_case=profile_case,
-                      memory=memory, limits=limits, max_paths=max_paths, seconds=time.perf_counter() - t0)
+                      memory=memory, limits=limits, max_paths=max_paths, mse_renders=args.mse_renders,
+                      seconds=time.perf_counter() - t0)
     prov, v = data["provenance"], data["provenance"]["versions"]
     print(f"mcrt {v['mcrt']}, Mitsuba {v['mitsuba']}, Dr.Jit {v['drjit']}, {prov['drjit_threads']} threads, "
           f"{prov['machine']['cpu']}")

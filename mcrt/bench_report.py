@@ -187,16 +187,17 @@ def _method(data: dict) -> str:
 
 
 def _bounded_text(data: dict) -> str:
-    caps = data.get("max_paths")
-    if not caps:
+    cap = data.get("max_paths")
+    if not cap:
         return ""
     n = sum(1 for r in data["rows"] if r.get("bounded"))
-    return (f" Bounded measurements ('(part)' under paths timed; {n} rows): a render of more than "
-            f"{caps.get('mcrt', 0):,} paths (mcrt) or {caps.get('mitsuba', 0):,} paths (Mitsuba) is too long to repeat, "
-            f"so each timed render covers a bounded part of it: mcrt the render's first launches (whole launches, "
-            f"at least that many paths; every launch of a render has the same shape, so their throughput is the "
-            f"render's), Mitsuba `mi.render` of a crop of the film's first rows at the case's spp (at least one row). Paths per second "
-            f"are the paths of that part over its time; the MSE needs the whole image, so bounded rows have none.")
+    return (f" Bounded measurements ('(part)' under paths timed; {n} rows): a render of more than {cap:,} paths is "
+            f"too long to repeat, so each timed render covers the same bands of it for both renderers: as many whole "
+            f"rows as {cap:,} paths allow at the case's spp (at least one), in up to {data.get('bands', 4)} equal bands "
+            f"centred in equal parts of the image (the top rows, ceiling and light, cost less per path than the "
+            f"middle ones), mcrt rendering those rows alone with its own launches and Mitsuba `mi.render` of films "
+            f"cropped to them. Paths per second are the paths of those rows over their time; the MSE needs the "
+            f"whole image, so bounded rows have none.")
 
 
 def _efficiency(data: dict) -> list[str]:
@@ -205,8 +206,10 @@ def _efficiency(data: dict) -> list[str]:
     if not ratios:
         return []
     spread = [e / s for e, s in ratios]
-    return ["", f"MSE excess: each timed render's mean squared error against the committed Mitsuba reference of its case, "
-                f"less the reference's own noise (mean(var_ref / spp_ref)), averaged over the {_times(data['repeats'], 'timed render')}; "
+    renders = data.get("mse_renders", data["repeats"])
+    return ["", f"MSE excess: a render's mean squared error against the committed Mitsuba reference of its case, "
+                f"less the reference's own noise (mean(var_ref / spp_ref)), averaged over {_times(max(renders, data['repeats']), 'render')} "
+                f"of distinct seeds (the {_times(data['repeats'], 'timed render')} and untimed others); "
                 f"efficiency ratio: 1 / (MSE excess x median time), mcrt's over Mitsuba's ('-': no committed reference of "
                 f"that case). At few samples per pixel a single render's MSE swings with the rare bright paths, so the "
                 f"efficiency ratio scatters around the speed-up: in this run it lies between {min(spread):.2f} and "

@@ -104,6 +104,7 @@ import numpy as np
 
 from mcrt.bsdf import lambertian_f
 from mcrt.film import Progress, RenderResult, run_passes
+from mcrt.minmax import fmax, fmin, sqrt0
 from mcrt.sampling import coordinate_frame, cosine_about_normal, to_world
 from mcrt.scene import Mirror, RenderSettings, Scene, Sphere
 
@@ -234,7 +235,7 @@ class LightTracer:
         n = (0.0, 0.0, light.normal_z)
         if self.cones is None:
             d = m.Array3f(*cosine_about_normal(rng.next_1d(), rng.next_1d(), (m.Float(n[0]), m.Float(n[1]), m.Float(n[2]))))
-            pdf = dr.maximum(d.z * light.normal_z, 0.0) / math.pi
+            pdf = fmax(d.z * light.normal_z, 0.0) / math.pi
         else:
             d, pdf = self._sample_cones(y0, rng)
         cos0 = d.z * light.normal_z
@@ -252,14 +253,14 @@ class LightTracer:
             to_c = m.Array3f(*c) - y0
             inv = dr.rsqrt(dr.squared_norm(to_c))
             s2 = dr.square(r * inv)
-            frames.append((to_c * inv, s2, dr.safe_sqrt(1.0 - s2)))
+            frames.append((to_c * inv, s2, sqrt0(1.0 - s2)))
         return frames
 
     def _sample_cones(self, y0, rng):
         """A direction uniform in the cone of one mirror sphere chosen uniformly, and the mixture's density."""
         m = self.m
         count = len(self.cones)
-        pick = m.UInt32(dr.minimum(rng.next_1d() * count, count - 1)) if count > 1 else m.UInt32(0)
+        pick = m.UInt32(fmin(rng.next_1d() * count, count - 1)) if count > 1 else m.UInt32(0)
         frames = self._cone_frames(y0)
         axis, s2, cos_max = frames[0]
         for k in range(1, count):
@@ -268,7 +269,7 @@ class LightTracer:
             cos_max = dr.select(pick == k, frames[k][2], cos_max)
         one_minus = s2 / (1.0 + cos_max)  # 1 - cos theta_s without cancellation
         cos_t = 1.0 - rng.next_1d() * one_minus
-        sin_t = dr.safe_sqrt((1.0 - cos_t) * (1.0 + cos_t))
+        sin_t = sqrt0((1.0 - cos_t) * (1.0 + cos_t))
         sp, cp = dr.sincos(2.0 * math.pi * rng.next_1d())
         s, t = coordinate_frame(axis.x, axis.y, axis.z)
         d = m.Array3f(*to_world((sin_t * cp, sin_t * sp, cos_t), s, t, (axis.x, axis.y, axis.z)))
@@ -326,7 +327,7 @@ class LightTracer:
         if ratio is not None:  # the light tracer's balance weight, q / (1 + q)
             q = self.caustic_paths * ratio * dr.rcp(pinhole_importance(cos_cam, self.pixel_area) * g)
             c = c * (q * dr.rcp(1.0 + q))
-        pixel = m.UInt32(dr.minimum(row, self.height - 1)) * self.width + m.UInt32(dr.minimum(col, self.width - 1))
+        pixel = m.UInt32(fmin(row, self.height - 1)) * self.width + m.UInt32(fmin(col, self.width - 1))
         for k in range(3):
             fixed = m.Int64(dr.round(m.Float64(c[k]) * float(2**SPLAT_BITS)))
             dr.scatter_reduce(dr.ReduceOp.Add, acc, fixed, pixel * 3 + k, ok)

@@ -67,6 +67,7 @@ import drjit as dr
 
 from mcrt.bsdf import LAMBERTIAN_SAMPLERS, lambertian_f, lambertian_weight, reflect, sample_lambertian
 from mcrt.light import solid_angle_pdf
+from mcrt.minmax import fmin
 from mcrt.sampling import balance_heuristic, cosine_hemisphere_pdf
 
 UNBOUNDED = 2**32 - 1
@@ -375,7 +376,7 @@ class PathEstimator:
             if opt.roulette_start is not None:
                 diffuse = diffuse & (depth >= opt.roulette_start)
             return dr.select(diffuse, beta * 0.8, beta), alive & (~diffuse | survive)
-        q = dr.minimum(_max_component(beta), 0.95) if opt.roulette_survival is None else opt.roulette_survival
+        q = fmin(_max_component(beta), 0.95) if opt.roulette_survival is None else opt.roulette_survival
         roulette = alive & (depth >= (opt.rr_depth if opt.roulette_start is None else opt.roulette_start))
         survive = sampler.next_1d() < q
         return dr.select(roulette, beta * dr.rcp(q), beta), alive & (~roulette | survive)

@@ -219,30 +219,41 @@ def run_passes(pass_sums: PassFn, *, width: int, height: int, spp: int, spp_per_
     return PassTotals(mean, var, done, clock['wall'], clock['compile'])
 
 
-def tile_mean_variance(s1, s2, n: int) -> tuple[np.ndarray, np.ndarray]:
-    """Mean and unbiased per-sample variance (float32, pixels x 3) of a tile from its device sums (three Float64 arrays each).
+def tile_mean_variance(s1, s2, n: int) -> np.ndarray:
+    """Mean and unbiased per-sample variance of a tile from its device sums (three Float64 arrays each).
 
-    The formulas of :class:`Moments`, in one small Dr.Jit kernel, with the
-    count opaque as in :func:`mean_variance`; the six channels come back
-    interleaved in one array (one copy from the device).
+    The formulas of :class:`Moments`, with the count opaque as in
+    :func:`mean_variance`, in one small Dr.Jit kernel whose lanes are the
+    entries of the result: a float32 array of shape (2, pixels, 3), mean
+    then variance, returned as a view of the kernel's output (one copy from
+    the device, none on the host).
     """
     import drjit as dr
 
     Float64 = type(s1[0])
     Float, UInt32 = dr.float32_array_t(Float64), dr.uint32_array_t(Float64)
     size = dr.width(s1[0])
+    j = dr.arange(UInt32, 6 * size)  # (moment, pixel, channel)
+    half = dr.opaque(UInt32, 3 * size)  # opaque: one kernel for every tile size
+    second = j >= half
+    k = dr.select(second, j - half, j)
+    pixel, channel = k // 3, k % 3
+
+    def gather(sums):
+        out = dr.gather(Float64, sums[2], pixel)
+        for c in (1, 0):
+            out = dr.select(channel == c, dr.gather(Float64, sums[c], pixel), out)
+        return out
+
     count = dr.opaque(Float64, n)
-    mean = [Float(a / count) for a in s1]
+    a = gather(s1)
+    mean = a / count
     if n < 2:
-        var = [dr.zeros(Float, size) for _ in s1]
+        out = dr.select(second, 0.0, mean)
     else:
-        var = [Float(dr.maximum((b - a * a / count) / dr.opaque(Float64, n - 1), 0.0)) for a, b in zip(s1, s2)]
-    out = dr.zeros(Float, 6 * size)
-    idx = dr.arange(UInt32, size) * 6
-    for c, v in enumerate(mean + var):
-        dr.scatter(out, v, idx + c)
-    both = out.numpy().reshape(size, 6)
-    return both[:, :3], both[:, 3:]
+        var = dr.maximum((gather(s2) - a * a / count) / dr.opaque(Float64, n - 1), 0.0)
+        out = dr.select(second, var, mean)
+    return Float(out).numpy().reshape(2, size, 3)
 
 
 #: launch(acc, first_pixel, pixels, first_sample, n) -> acc: the tile's running sums after n more samples per pixel.
@@ -250,7 +261,7 @@ LaunchFn = Callable[[object, int, int, int, int], object]
 
 
 def run_tiles(launch: LaunchFn, *, width: int, height: int, spp: int, tile_pixels: int, spp_per_pass: int,
-              progress: Progress, max_launches: int | None = None) -> PassTotals:
+              progress: Progress, pixel_ranges: list[tuple[int, int]] | None = None) -> PassTotals:
     """Render tile by tile: every pass of one tile of consecutive pixels, then the next tile.
 
     Memory is the output image and one tile's sums, whatever the resolution
@@ -259,35 +270,41 @@ def run_tiles(launch: LaunchFn, *, width: int, height: int, spp: int, tile_pixel
     first pass) and returns them, as (sums of x, sums of x^2), three evaluated
     Float64 arrays each. A tile's mean and variance are formed on the device
     and copied into the image when its last pass is done.
-    ``max_launches`` stops early (benchmarks time a prefix of a long render;
-    the image is then unfinished): ``PassTotals.paths`` counts the paths traced.
+    ``pixel_ranges`` ((first pixel, count) pairs, default the whole image)
+    renders those pixels alone and leaves the others 0 (benchmarks time
+    bands of rows of a long render): ``PassTotals.paths`` counts the paths traced.
     """
     import drjit as dr
 
     if spp_per_pass < 1 or tile_pixels < 1:
         raise ValueError(f"spp_per_pass and tile_pixels must be >= 1, got {spp_per_pass} and {tile_pixels}")
     pixels = width * height
-    mean, var = np.zeros((pixels, 3), np.float32), np.zeros((pixels, 3), np.float32)
+    ranges = pixel_ranges or [(0, pixels)]
+    if any(first < 0 or count < 1 or first + count > pixels for first, count in ranges):
+        raise ValueError(f"pixel ranges must lie in [0, {pixels}), got {ranges}")
+    image = None  # (2, pixels, 3): mean and variance
     with _clock() as clock:
         launches, paths = 0, 0
-        for p0 in range(0, pixels, tile_pixels):
-            count, acc = min(tile_pixels, pixels - p0), None
-            for first in range(0, spp, spp_per_pass):
-                n = min(spp_per_pass, spp - first)
-                acc = launch(acc, p0, count, first, n)
-                clock["drain"]()  # the history keeps every launch's kernel source: empty it as the render goes
-                launches, paths = launches + 1, paths + count * n
-                if progress.enabled:
-                    dr.sync_thread()  # the kernels run asynchronously: wait, so the time left is right
-                    progress.update(launches)
-                if max_launches is not None and launches >= max_launches:
-                    break
-            if max_launches is not None and launches >= max_launches:
-                dr.sync_thread()
-                break
-            mean[p0:p0 + count], var[p0:p0 + count] = tile_mean_variance(*acc, spp)
+        for start, length in ranges:
+            for p0 in range(start, start + length, tile_pixels):
+                count, acc = min(tile_pixels, start + length - p0), None
+                for first in range(0, spp, spp_per_pass):
+                    n = min(spp_per_pass, spp - first)
+                    acc = launch(acc, p0, count, first, n)
+                    clock["drain"]()  # the history keeps every launch's kernel source: empty it as the render goes
+                    launches, paths = launches + 1, paths + count * n
+                    if progress.enabled:
+                        dr.sync_thread()  # the kernels run asynchronously: wait, so the time left is right
+                        progress.update(launches)
+                tile = tile_mean_variance(*acc, spp)
+                if count == pixels:
+                    image = tile  # one tile: the kernel's output is the image (a fresh host copy costs page faults)
+                else:
+                    if image is None:
+                        image = np.zeros((2, pixels, 3), np.float32)
+                    image[:, p0:p0 + count] = tile
     shape = (height, width, 3)
-    return PassTotals(mean.reshape(shape), var.reshape(shape), spp, clock["wall"], clock["compile"], paths or pixels * spp)
+    return PassTotals(image[0].reshape(shape), image[1].reshape(shape), spp, clock["wall"], clock["compile"], paths)
 
 
 @contextlib.contextmanager

@@ -38,6 +38,7 @@ from dataclasses import dataclass
 import drjit as dr
 import numpy as np
 
+from mcrt.minmax import clamp, fmax, fmin, sqrt0
 from mcrt.scene import Mirror, Scene, Sphere, Tetrahedron
 
 INTERSECTORS = ("convex", "triangles")
@@ -355,7 +356,7 @@ class Geometry:
         m = self.m
         center, radius = ball
         oc = const3(m, center) - o
-        b = dr.clip(dr.dot(oc, d), 0.0, tmax)
+        b = clamp(dr.dot(oc, d), 0.0, tmax)
         near = active & (dr.squared_norm(dr.fma(-b, d, oc)) <= radius * radius)
         blocked = m.Bool(False)
         if near:
@@ -383,11 +384,11 @@ class Geometry:
         disc = r * r - dr.dot(q, q)
         cc = dr.dot(oc, oc) - r * r
         # Stable roots: t0 t1 = cc, t0 + t1 = -2b.
-        h = -b - dr.copysign(dr.safe_sqrt(disc), b)
+        h = -b - dr.copysign(sqrt0(disc), b)
         t0 = cc / h
         t1 = h
-        near = dr.minimum(t0, t1)
-        far = dr.maximum(t0, t1)
+        near = fmin(t0, t1)
+        far = fmax(t0, t1)
         t = dr.select(near > 0, near, far)
         return dr.select((disc >= 0) & (t > 0), t, dr.inf)
 
@@ -406,7 +407,7 @@ class Geometry:
         q = dr.fma(-b, d, oc)
         disc = r * r - dr.dot(q, q)
         outside = dr.dot(oc, oc) > r * r
-        near = -b - dr.sqrt(dr.maximum(disc, 0.0))
+        near = -b - sqrt0(disc)
         return (disc >= 0) & (~outside | (b < 0)) & (near < tmax)
 
     def _light(self, o, d):

@@ -32,6 +32,8 @@ import math
 
 import drjit as dr
 
+from mcrt.minmax import clamp, fmax, sqrt0
+
 INV_PI = 1.0 / math.pi
 
 
@@ -40,13 +42,13 @@ def square_to_cosine_hemisphere(u1, u2):
     r = dr.sqrt(u1)
     phi = 2.0 * math.pi * u2
     s, c = dr.sincos(phi)
-    return r * c, r * s, dr.safe_sqrt(1.0 - u1)
+    return r * c, r * s, sqrt0(1.0 - u1)
 
 
 def square_to_uniform_sphere(u1, u2):
     """A uniform point on the unit sphere: z = 1 - 2 u1, phi = 2 pi u2 (Archimedes)."""
     z = 1.0 - 2.0 * u1
-    r = 2.0 * dr.safe_sqrt(u1 - u1 * u1)  # sqrt(1 - z^2) without cancellation near the poles
+    r = 2.0 * sqrt0(u1 - u1 * u1)  # sqrt(1 - z^2) without cancellation near the poles
     s, c = dr.sincos(2.0 * math.pi * u2)
     return r * c, r * s, z
 
@@ -68,13 +70,13 @@ def cosine_about_normal(u1, u2, n):
 
 def cosine_hemisphere_pdf(cos_theta):
     """pdf_solid_angle of the cosine warp: cos(theta) / pi (0 below the horizon)."""
-    return dr.maximum(cos_theta, 0.0) * INV_PI
+    return fmax(cos_theta, 0.0) * INV_PI
 
 
 def square_to_uniform_hemisphere(u1, u2):
     """Local (x, y, z) of a uniformly distributed direction about +z."""
     z = u1
-    r = dr.safe_sqrt(1.0 - z * z)
+    r = sqrt0(1.0 - z * z)
     s, c = dr.sincos(2.0 * math.pi * u2)
     return r * c, r * s, z
 
@@ -82,7 +84,7 @@ def square_to_uniform_hemisphere(u1, u2):
 def square_to_uniform_ball(u1, u2, u3):
     """A uniform point inside the unit ball: radius u1^(1/3), uniform direction."""
     z = 1.0 - 2.0 * u2
-    rr = dr.safe_sqrt(1.0 - z * z)
+    rr = sqrt0(1.0 - z * z)
     s, c = dr.sincos(2.0 * math.pi * u3)
     r = dr.cbrt(u1)
     return r * rr * c, r * rr * s, r * z
@@ -148,20 +150,20 @@ def square_to_spherical_rectangle(u1, u2, x0, y0, z0, x1, y1):
     n1z = x1 * dr.rsqrt(zz + x1 * x1)
     n2z = y1 * dr.rsqrt(zz + y1 * y1)
     n3z = -x0 * dr.rsqrt(zz + x0 * x0)
-    g0 = dr.acos(dr.clip(-n0z * n1z, -1.0, 1.0))
-    g1 = dr.acos(dr.clip(-n1z * n2z, -1.0, 1.0))
-    g2 = dr.acos(dr.clip(-n2z * n3z, -1.0, 1.0))
-    g3 = dr.acos(dr.clip(-n3z * n0z, -1.0, 1.0))
+    g0 = dr.acos(clamp(-n0z * n1z, -1.0, 1.0))
+    g1 = dr.acos(clamp(-n1z * n2z, -1.0, 1.0))
+    g2 = dr.acos(clamp(-n2z * n3z, -1.0, 1.0))
+    g3 = dr.acos(clamp(-n3z * n0z, -1.0, 1.0))
     omega = g0 + g1 + g2 + g3 - 2.0 * math.pi
     a = u1 * omega - (g2 + g3)
     sin_a, cos_a = dr.sincos(a)
     fu = (cos_a * n0z - n2z) / sin_a
-    cu = dr.clip(dr.copysign(dr.rsqrt(fu * fu + n0z * n0z), fu), -1.0 + 2.0**-23, 1.0 - 2.0**-23)
-    xu = dr.clip(-(cu * z0) * dr.rsqrt(1.0 - cu * cu), x0, x1)
+    cu = clamp(dr.copysign(dr.rsqrt(fu * fu + n0z * n0z), fu), -1.0 + 2.0**-23, 1.0 - 2.0**-23)
+    xu = clamp(-(cu * z0) * dr.rsqrt(1.0 - cu * cu), x0, x1)
     d2 = xu * xu + zz
     h0 = y0 * dr.rsqrt(d2 + y0 * y0)
     h1 = y1 * dr.rsqrt(d2 + y1 * y1)
     hv = dr.fma(u2, h1 - h0, h0)
     hv2 = hv * hv
-    yv = dr.select(hv2 < 1.0 - 1e-6, hv * dr.sqrt(d2) * dr.rsqrt(dr.maximum(1.0 - hv2, 1e-12)), y1)
-    return xu, dr.clip(yv, y0, y1), omega
+    yv = dr.select(hv2 < 1.0 - 1e-6, hv * dr.sqrt(d2) * dr.rsqrt(fmax(1.0 - hv2, 1e-12)), y1)
+    return xu, clamp(yv, y0, y1), omega

@@ -113,7 +113,7 @@ class Tracer:
 
     def layout(self, spp: int, spp_per_pass: int | None = None) -> tuple[int, int, int]:
         """(lanes per pixel, paths per lane, samples per pixel of one pass) of a render of this tracer at ``spp``."""
-        k, b = lane_layout(self.width * self.height, spp_per_pass or spp)
+        k, b = lane_layout(self.width * self.height, spp_per_pass or spp, self.backend)
         return k, b, min(k * b, spp_per_pass or spp)
 
     def pixel_sums(self, seed: int, pixels, first_sample: int, n: int, *, spp_per_pass: int | None = None):
@@ -139,7 +139,7 @@ class Tracer:
             raise ValueError(f"pixel indices must lie in [0, {self.width * self.height}), got {idx.min()}..{idx.max()}")
         if n < 1 or first_sample < 0:
             raise ValueError(f"need n >= 1 and first_sample >= 0, got n={n}, first_sample={first_sample}")
-        k, b = lane_layout(max(idx.size, 1), spp_per_pass or n)
+        k, b = lane_layout(max(idx.size, 1), spp_per_pass or n, self.backend)
         per_pass = min(k * b, spp_per_pass or n)
         tile = max(1, TILE_LANES // k)
         s1, s2 = np.zeros((idx.size, 3)), np.zeros((idx.size, 3))
@@ -164,7 +164,7 @@ class Tracer:
         if not 1 <= n <= PASS_SAMPLES:
             raise ValueError(f"a pass holds 1 to {PASS_SAMPLES} samples per pixel, got {n}")
         m, P = self.m, self.width * self.height
-        k, b = lane_layout(P, n)
+        k, b = lane_layout(P, n, self.backend)
         tile = max(1, TILE_LANES // k)
         out = dr.zeros(m.Float64, 6 * P)
         for p0 in range(0, P, tile):
@@ -260,9 +260,13 @@ class Tracer:
 #: Paths one lane traces in turn, at most: its float32 sums of x and x^2 stay exact to about a
 #: millionth, and a packet's lanes, each with this many paths, end close together.
 PATHS_PER_LANE = 16
-#: Lanes a launch has at least, where it has the samples: Dr.Jit's LLVM backend hands out blocks
-#: of 16384 lanes to its threads, and a launch of one block would keep one core busy.
-MIN_LANES = 1 << 16
+#: Lanes a launch has at least on the CPU, where it has the samples. Dr.Jit's LLVM backend splits a
+#: launch of up to 2 x 16384 lanes per core into one block per core, larger ones into blocks of
+#: 16384: 4096 lanes (256 packets) keep 16 cores busy with work that evens out, and leave a
+#: 64x64 image its 16 paths per lane.
+MIN_LANES = 1 << 12
+#: The same on a GPU, which needs many more threads in flight to hide its latencies.
+MIN_LANES_CUDA = 1 << 16
 #: Lanes a launch has at most (a tile holds TILE_LANES / k pixels): bounds a tile's sums and
 #: leaves enough launches for the progress line, whatever the resolution.
 TILE_LANES = 1 << 18
@@ -270,19 +274,21 @@ TILE_LANES = 1 << 18
 PASS_SAMPLES = 1 << 16
 
 
-def lane_layout(pixels: int, n: int) -> tuple[int, int]:
+def lane_layout(pixels: int, n: int, backend: str = "llvm") -> tuple[int, int]:
     """(k lanes per pixel, b paths per lane) of launches of up to ``n`` samples per pixel over ``pixels`` pixels.
 
-    One lane per pixel where the pixels alone give MIN_LANES lanes; fewer
-    pixels get more lanes each (a power of two, no more than n needs), so a
-    launch keeps every core busy. Each lane then traces b = ceil(n / k)
-    samples, at most PATHS_PER_LANE; a pass holds k b samples per pixel.
+    One lane per pixel where the pixels alone give MIN_LANES lanes
+    (MIN_LANES_CUDA on the cuda backend); fewer pixels get more lanes each
+    (a power of two, no more than n needs), so a launch keeps every core
+    busy. Each lane then traces b = ceil(n / k) samples, at most
+    PATHS_PER_LANE; a pass holds k b samples per pixel.
     """
     if pixels < 1 or n < 1:
         raise ValueError(f"need pixels >= 1 and n >= 1, got {pixels} and {n}")
+    min_lanes = MIN_LANES_CUDA if backend == "cuda" else MIN_LANES
     k = 1
-    if pixels < MIN_LANES:
-        k = min(1 << (-(-MIN_LANES // pixels) - 1).bit_length(), 1 << (n - 1).bit_length())
+    if pixels < min_lanes:
+        k = min(1 << (-(-min_lanes // pixels) - 1).bit_length(), 1 << (n - 1).bit_length())
     return k, min(PATHS_PER_LANE, -(-n // k))
 
 
@@ -296,9 +302,9 @@ def pixel_range(m, first: int, count: int):
 _TRACERS: dict = {}
 
 
-def _tracer(scene: Scene, *args) -> Tracer:
+def _tracer(scene: Scene, *args, scene_hash: str | None = None) -> Tracer:
     """A Tracer for these settings, reused across renders of the same scene content (a few kept)."""
-    key = (scene.content_hash(), scene.path, *args)
+    key = (scene_hash or scene.content_hash(), scene.path, *args)
     tracer = _TRACERS.get(key)
     if tracer is None:
         tracer = Tracer(scene, *args)
@@ -311,7 +317,7 @@ def _tracer(scene: Scene, *args) -> Tracer:
 def render_tracer(scene: Scene, settings: RenderSettings, *, backend: str = "llvm", progress: bool = True,
                   spp_per_pass: int | None = None, mutants=(), intersector: str = "convex", mis: bool | None = None,
                   precision_guard: bool = True, mirror_caustics: str = "all", caustic_light_paths: float = 0.0,
-                  tile_pixels: int | None = None, max_launches: int | None = None, **tricks) -> RenderResult:
+                  tile_pixels: int | None = None, rows: list[tuple[int, int]] | None = None, **tricks) -> RenderResult:
     """Render ``scene`` at ``settings`` with the standalone tracer: mean and per-sample variance.
 
     Called through :func:`mcrt.render.render` (renderer ``mcrt``). ``mis``
@@ -326,9 +332,9 @@ def render_tracer(scene: Scene, settings: RenderSettings, *, backend: str = "llv
     D ... D S+ L alone, to check it. ``spp_per_pass`` caps the samples per pixel of one
     launch (default: as :func:`lane_layout` deals them); ``tile_pixels``
     sets the pixels of a tile (default TILE_LANES / lanes per pixel) and
-    never changes the image. ``max_launches`` stops after that many launches
-    (benchmarks: a prefix of a long render; the image is unfinished,
-    ``extra['paths']`` counts the paths traced).
+    never changes the image. ``rows`` ((first row, count) bands) renders
+    those rows alone and leaves the rest of the image 0 (benchmarks: a part
+    of a long render; ``extra['paths']`` counts the paths traced).
     """
     import drjit as dr
 
@@ -336,17 +342,20 @@ def render_tracer(scene: Scene, settings: RenderSettings, *, backend: str = "llv
     caustics = (("mirror_caustics", mirror_caustics),) if mirror_caustics != "all" else ()
     if caustic_light_paths:  # mirror_caustics 'mis' (mcrt.bidir)
         caustics += (("caustic_light_paths", caustic_light_paths),)
+    scene_hash = scene.content_hash()
     tracer = _tracer(scene, s.camera, s.width, s.height, s.max_depth, s.light_samples, s.rr_depth, backend, intersector,
-                     frozenset(mutants), precision_guard, mis, tuple(sorted(trick_options(tricks) + caustics)))
+                     frozenset(mutants), precision_guard, mis, tuple(sorted(trick_options(tricks) + caustics)),
+                     scene_hash=scene_hash)
     k, b, per_pass = tracer.layout(s.spp, spp_per_pass)
     tile = tile_pixels or max(1, TILE_LANES // k)
-    total = -(-(s.width * s.height) // tile) * -(-s.spp // per_pass)
+    ranges = [(first * s.width, count * s.width) for first, count in rows] if rows else [(0, s.width * s.height)]
+    total = sum(-(-count // tile) for _, count in ranges) * -(-s.spp // per_pass)
 
     def launch(acc, p0, count, first, n):
         return tracer.launch(s.seed, acc, range(p0, p0 + count), first, n, k, b)
 
     totals = run_tiles(launch, width=s.width, height=s.height, spp=s.spp, tile_pixels=tile, spp_per_pass=per_pass,
-                       progress=Progress(total, label="mcrt", unit="passes", enabled=progress), max_launches=max_launches)
+                       progress=Progress(total, label="mcrt", unit="passes", enabled=progress), pixel_ranges=ranges)
     mean, var = encode_output(totals.mean, totals.variance, output_encoding(tracer.mutants))
     return RenderResult(
         mean=mean,
@@ -355,7 +364,7 @@ def render_tracer(scene: Scene, settings: RenderSettings, *, backend: str = "llv
         seed=s.seed,
         max_depth=s.max_depth,
         renderer="mcrt",
-        scene_hash=scene.content_hash(),
+        scene_hash=scene_hash,
         camera=s.camera,
         wall_time=totals.wall_time,
         compile_time=totals.compile_time,

@@ -11,7 +11,7 @@ import json
 import re
 import statistics
 
-from mcrt.bench import BenchCase, bench_cases, kernel_profile, run_bench
+from mcrt.bench import BenchCase, bench_cases, bounded_rows, kernel_profile, run_bench
 from mcrt.bench_report import LOG_HEADING, format_profile, format_table, markdown, write_report
 from mcrt.cli import build_parser, main
 from mcrt.scene import load_scene
@@ -178,17 +178,25 @@ def test_report_goals_and_limits_from_recorded_rows(tmp_path):
 
 
 def test_run_bench_bounds_long_renders():
-    """Cases above max_paths are timed on a part: mcrt's first launches, Mitsuba's first rows; no MSE then."""
-    from mcrt.tracer import TILE_LANES
-
-    rows = run_bench(load_scene(), [BenchCase("near", 600, 600, 1, 1)], repeats=1, progress=False,
-                     max_paths={"mcrt": 1000, "mitsuba": 1300})
+    """Cases above max_paths are timed by both renderers on the same bands of rows; no MSE then."""
+    rows = run_bench(load_scene(), [BenchCase("near", 600, 600, 1, 1)], repeats=1, progress=False, max_paths=2500)
     mcrt, mitsuba = rows
     assert mcrt.bounded and mitsuba.bounded and mcrt.mse_excess is None and mitsuba.mse_excess is None
-    assert mitsuba.paths == 2 * 600  # 2 rows of 600 pixels at 1 spp: at most 1300 paths
-    assert mcrt.paths == TILE_LANES < 600 * 600  # one whole launch, at least 1000 paths
+    assert mcrt.paths == mitsuba.paths == 4 * 600  # 4 rows of 600 pixels at 1 spp: at most 2500 paths
     assert all(r.paths_per_second == r.paths / statistics.median(r.times) for r in rows)
     assert "(part)" in format_table(rows)
+
+
+def test_bounded_rows_spread_down_the_image():
+    """Up to BANDS equal bands, centred in equal parts of the image, within it; none where the case fits."""
+    assert bounded_rows(BenchCase("near", 64, 64, 16, 8), 1 << 21) is None
+    assert bounded_rows(BenchCase("near", 4096, 4096, 16, 8), 1 << 21) == [(508, 8), (1532, 8), (2556, 8), (3580, 8)]
+    assert bounded_rows(BenchCase("near", 4096, 4096, 1024, 8), 1 << 21) == [(2048, 1)]
+    assert bounded_rows(BenchCase("near", 256, 256, 1024, 8), 1 << 21) == [(31, 2), (95, 2), (159, 2), (223, 2)]
+    for res, spp in ((600, 7), (256, 256), (4096, 3)):
+        bands = bounded_rows(BenchCase("far", res, res, spp, 8), 1 << 20)
+        assert all(0 <= first and first + n <= res for first, n in bands) and len({n for _, n in bands}) == 1
+        assert sum(n for _, n in bands) * res * spp <= 1 << 20
 
 
 def test_report_without_log_or_sweep(tmp_path):

@@ -124,3 +124,21 @@ def test_the_install_ships_every_package_of_the_source():
     assert set(tool["packages"]) == code | data
     assert tool["package-dir"] == {"mcrt.plugins": "plugins", "mcrt.data": "reference"}
     assert set(tool["package-data"]) == data
+
+
+def test_path_kernel_code_takes_minima_by_select():
+    """The modules traced into the path kernels use mcrt.minmax, not Dr.Jit's float minimum, maximum or clip.
+
+    Those lower to llvm.minimum / llvm.maximum, which LLVM's x86 back end
+    sometimes scalarises and then cannot select, aborting the process
+    (mcrt.minmax's docstring); which kernel it hits changes with unrelated
+    edits, so this checks the source rather than one compiled kernel.
+    """
+    import re
+
+    root = Path(mcrt.__file__).parent
+    kernel = ["estimator.py", "geometry.py", "sampling.py", "light.py", "bsdf.py", "camera.py", "host.py", "rng.py", "bidir.py"]
+    call = re.compile(r"\bdr\.(minimum|maximum|clip|safe_sqrt)\(")
+    found = [f"{name}:{i}" for name in kernel for i, line in enumerate((root / name).read_text().splitlines(), 1)
+             if call.search(line)]
+    assert not found, f"dr.minimum/maximum/clip/safe_sqrt in path-kernel code: {', '.join(found)}"

@@ -101,16 +101,19 @@ def test_lane_layout():
     """Lanes per pixel and the paths each lane traces in turn.
 
     One lane of up to PATHS_PER_LANE paths per pixel where the pixels fill
-    MIN_LANES lanes (256x256 and up); small images get more lanes per pixel
-    (a power of two), no more than the samples need.
+    MIN_LANES lanes (64x64 and up on the CPU, 256x256 and up on a GPU);
+    smaller images get more lanes per pixel (a power of two), no more than
+    the samples need.
     """
     from mcrt.tracer import MIN_LANES, PATHS_PER_LANE, lane_layout
 
     big, small = 256 * 256, 64 * 64
     assert [lane_layout(big, n) for n in (1, 3, 16, 17, 1024)] == [(1, 1), (1, 3), (1, 16), (1, 16), (1, 16)]
     assert [lane_layout(4096 * 4096, n) for n in (1, 1024)] == [(1, 1), (1, 16)]
-    assert [lane_layout(small, n) for n in (1, 3, 16, 40, 1024)] == [(1, 1), (4, 1), (16, 1), (16, 3), (16, 16)]
+    assert [lane_layout(small, n) for n in (1, 3, 16, 40, 1024)] == [(1, 1), (1, 3), (1, 16), (1, 16), (1, 16)]
+    assert [lane_layout(32 * 32, n) for n in (1, 3, 16, 40, 1024)] == [(1, 1), (4, 1), (4, 4), (4, 10), (4, 16)]
     assert lane_layout(12 * 10, 40) == (64, 1)
+    assert [lane_layout(small, n, "cuda") for n in (1, 3, 16, 40, 1024)] == [(1, 1), (4, 1), (16, 1), (16, 3), (16, 16)]
     for pixels in (1, 7, 120, small, big, 800 * 800):
         for n in (1, 2, 5, 16, 100, 1000):
             k, b = lane_layout(pixels, n)
@@ -210,7 +213,7 @@ def test_lanes_tracing_several_paths_agree_with_one_path_per_lane(scene, monkeyp
     a = render_with(71, MIN_LANES=1024 * 256 // paths_per_lane, PATHS_PER_LANE=paths_per_lane)
     assert tracer.lane_layout(32 * 32, 256) == (256 // paths_per_lane, paths_per_lane)
     b = render_with(72, MIN_LANES=default_min_lanes, PATHS_PER_LANE=1)
-    assert tracer.lane_layout(32 * 32, 256) == (64, 1)  # 4 passes of 64
+    assert tracer.lane_layout(32 * 32, 256) == (4, 1)  # 64 passes of 4
     c = compare_images(a, b, alpha=ALPHA)
     assert c.passed, c.summary()
 
