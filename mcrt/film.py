@@ -219,21 +219,20 @@ def run_passes(pass_sums: PassFn, *, width: int, height: int, spp: int, spp_per_
     return PassTotals(mean, var, done, clock['wall'], clock['compile'])
 
 
-def tile_mean_variance(s1, s2, n: int) -> np.ndarray:
+def tile_mean_variance(s1, s2, n: int):
     """Mean and unbiased per-sample variance of a tile from its device sums (three Float64 arrays each).
 
     The formulas of :class:`Moments`, with the count opaque as in
-    :func:`mean_variance`, in one small Dr.Jit kernel whose lanes are the
-    entries of the result: a float32 array of shape (2, pixels, 3), mean
-    then variance, returned as a view of the kernel's output (one copy from
-    the device, none on the host).
+    :func:`mean_variance`, as one unevaluated float32 Dr.Jit array laid out
+    (moment, pixel, channel): the tile's mean, then its variance. Its lanes
+    are the entries, so writing it into the image is one kernel.
     """
     import drjit as dr
 
     Float64 = type(s1[0])
     Float, UInt32 = dr.float32_array_t(Float64), dr.uint32_array_t(Float64)
     size = dr.width(s1[0])
-    j = dr.arange(UInt32, 6 * size)  # (moment, pixel, channel)
+    j = dr.arange(UInt32, 6 * size)
     half = dr.opaque(UInt32, 3 * size)  # opaque: one kernel for every tile size
     second = j >= half
     k = dr.select(second, j - half, j)
@@ -247,13 +246,10 @@ def tile_mean_variance(s1, s2, n: int) -> np.ndarray:
 
     count = dr.opaque(Float64, n)
     a = gather(s1)
-    mean = a / count
     if n < 2:
-        out = dr.select(second, 0.0, mean)
-    else:
-        var = dr.maximum((gather(s2) - a * a / count) / dr.opaque(Float64, n - 1), 0.0)
-        out = dr.select(second, var, mean)
-    return Float(out).numpy().reshape(2, size, 3)
+        return Float(dr.select(second, 0.0, a / count))
+    var = dr.maximum((gather(s2) - a * a / count) / dr.opaque(Float64, n - 1), 0.0)
+    return Float(dr.select(second, var, a / count))
 
 
 #: launch(acc, first_pixel, pixels, first_sample, n) -> acc: the tile's running sums after n more samples per pixel.
@@ -270,9 +266,10 @@ def run_tiles(launch: LaunchFn, *, width: int, height: int, spp: int, tile_pixel
     first pass) and returns them, as (sums of x, sums of x^2), three evaluated
     Float64 arrays each. A tile's mean and variance are formed on the device
     and copied into the image when its last pass is done.
-    ``pixel_ranges`` ((first pixel, count) pairs, default the whole image)
-    renders those pixels alone and leaves the others 0 (benchmarks time
-    bands of rows of a long render): ``PassTotals.paths`` counts the paths traced.
+    ``pixel_ranges`` ((first pixel, count) pairs of whole rows, default the
+    whole image) renders those pixels alone, and the image holds them alone,
+    their rows stacked in order (benchmarks time bands of a long render, as
+    a crop): ``PassTotals.paths`` counts the paths traced.
     """
     import drjit as dr
 
@@ -280,11 +277,14 @@ def run_tiles(launch: LaunchFn, *, width: int, height: int, spp: int, tile_pixel
         raise ValueError(f"spp_per_pass and tile_pixels must be >= 1, got {spp_per_pass} and {tile_pixels}")
     pixels = width * height
     ranges = pixel_ranges or [(0, pixels)]
-    if any(first < 0 or count < 1 or first + count > pixels for first, count in ranges):
-        raise ValueError(f"pixel ranges must lie in [0, {pixels}), got {ranges}")
-    image = None  # (2, pixels, 3): mean and variance
+    if any(first < 0 or count < 1 or first + count > pixels or first % width or count % width for first, count in ranges):
+        raise ValueError(f"pixel ranges must be whole rows within the {width}x{height} image, got {ranges}")
+    covered = sum(count for _, count in ranges)
+    # The image on the device, laid out (moment, pixel, channel), every entry written by a tile: memory
+    # the allocator recycles across renders (a fresh host copy of a large image costs its page faults).
+    image = None
     with _clock() as clock:
-        launches, paths = 0, 0
+        launches, paths, done = 0, 0, 0  # done: pixels of the image written so far
         for start, length in ranges:
             for p0 in range(start, start + length, tile_pixels):
                 count, acc = min(tile_pixels, start + length - p0), None
@@ -297,14 +297,19 @@ def run_tiles(launch: LaunchFn, *, width: int, height: int, spp: int, tile_pixel
                         dr.sync_thread()  # the kernels run asynchronously: wait, so the time left is right
                         progress.update(launches)
                 tile = tile_mean_variance(*acc, spp)
-                if count == pixels:
-                    image = tile  # one tile: the kernel's output is the image (a fresh host copy costs page faults)
+                if count == covered:
+                    image = tile  # one tile: its output is the image
                 else:
                     if image is None:
-                        image = np.zeros((2, pixels, 3), np.float32)
-                    image[:, p0:p0 + count] = tile
-    shape = (height, width, 3)
-    return PassTotals(image[0].reshape(shape), image[1].reshape(shape), spp, clock["wall"], clock["compile"], paths)
+                        image = dr.empty(type(tile), 6 * covered)
+                    UInt32 = dr.uint32_array_t(type(tile))
+                    j = dr.arange(UInt32, 6 * count)  # opaque offsets: one kernel for every tile
+                    shift = dr.select(j >= dr.opaque(UInt32, 3 * count), dr.opaque(UInt32, 3 * (covered - count)), 0)
+                    dr.scatter(image, tile, j + shift + dr.opaque(UInt32, 3 * done))
+                dr.eval(image)
+                done += count
+    out = image.numpy().reshape(2, covered // width, width, 3)  # a view of the device's memory
+    return PassTotals(out[0], out[1], spp, clock["wall"], clock["compile"], paths)
 
 
 @contextlib.contextmanager

@@ -333,8 +333,9 @@ def render_tracer(scene: Scene, settings: RenderSettings, *, backend: str = "llv
     launch (default: as :func:`lane_layout` deals them); ``tile_pixels``
     sets the pixels of a tile (default TILE_LANES / lanes per pixel) and
     never changes the image. ``rows`` ((first row, count) bands) renders
-    those rows alone and leaves the rest of the image 0 (benchmarks: a part
-    of a long render; ``extra['paths']`` counts the paths traced).
+    those rows alone, stacked in order as the image, like a crop
+    (benchmarks: a part of a long render; ``extra['paths']`` counts the
+    paths traced).
     """
     import drjit as dr
 

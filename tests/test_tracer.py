@@ -126,8 +126,9 @@ def test_tiling_does_not_change_the_image(scene):
     """Seeding depends on (seed, pixel, sample) alone: tiles of 37 pixels (the last one short) against one tile.
 
     The same render (24x20, 40 spp, seed 9) in tiles of 37 pixels, of 1 pixel
-    and whole: mean and variance equal bit for bit. Other pass sizes deal
-    the same samples into other partial sums: equal to float32 rounding.
+    and whole: mean and variance equal bit for bit, and so are two bands of
+    rows rendered alone. Other pass sizes deal the same samples into other
+    partial sums: equal to float32 rounding.
     """
     from mcrt.tracer import render_tracer
 
@@ -143,6 +144,10 @@ def test_tiling_does_not_change_the_image(scene):
         np.testing.assert_allclose(r.variance, whole.variance, rtol=1e-3, atol=1e-6)
     other = render_tracer(scene, replace(s, seed=10), progress=False)
     assert not np.array_equal(other.mean, whole.mean)
+    bands = render_tracer(scene, s, progress=False, rows=[(2, 3), (15, 1)], tile_pixels=37)  # a crop of two bands
+    keep = [2, 3, 4, 15]
+    assert bands.mean.shape == (4, 24, 3) and int(bands.extra["paths"]) == 4 * 24 * 40
+    assert np.array_equal(bands.mean, whole.mean[keep]) and np.array_equal(bands.variance, whole.variance[keep])
 
 
 def test_pixel_sums_are_the_render_samples(scene):
