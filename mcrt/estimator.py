@@ -210,22 +210,18 @@ class PathEstimator:
 
     # ------------------------------------------------------------------
     @dr.syntax
-    def path_sums(self, o, d, sampler, paths=1, camera_ray=None, active=True, new_path=None):
-        """Sums of x and x^2 over ``paths`` radiance samples x traced in turn by each lane.
+    def path_sums(self, o, d, sampler, active=True, new_path=None):
+        """Sums of x and x^2 over the radiance samples x traced in turn by each lane.
 
-        The first path starts along the rays (o, d). Where ``camera_ray(u, v)``
-        is given, a lane whose path ended starts its next one in the same
-        loop iteration (path regeneration): a packet then runs until its
-        lanes' total work is done instead of until its longest path ends.
-        The new path's camera jitter reuses the two numbers the ended path
-        drew for its next direction: a path ends at the light, at the depth
-        limit or by roulette, none of which depends on them, and it never
-        traced that direction. Where ``new_path(restart, sampler)`` is
-        given instead, it starts the next path of the lanes in ``restart``
-        (it may reseed their random streams) and returns the camera rays
-        (o, d) of every lane. ``paths`` (UInt32) counts the lane's paths,
-        at least one. Returns (sum x, sum x^2, hit), ``hit`` whether the
-        first ray hit anything.
+        The first path starts along the rays (o, d). Without ``new_path`` a
+        lane traces that one path. With it, ``new_path(ended, sampler)``,
+        given the lanes whose path ended (or that have none in flight),
+        returns (restart, o, d): the lanes that start another path (it may reseed their random streams) and the
+        camera rays of every lane; a restarted lane follows its new ray in
+        the same loop iteration (path regeneration), so a packet runs until
+        its lanes' total work is done instead of until its longest path
+        ends. Returns (sum x, sum x^2, hit), ``hit`` whether the first ray
+        hit anything.
         """
         # Plain Python values only: dr.syntax treats the locals the loop reads as loop state.
         host = self.host
@@ -240,7 +236,6 @@ class PathEstimator:
         pdf_bsdf = host.Float(0.0)  # solid-angle pdf of the last cosine direction (for MIS)
         sum_x = host.Spectrum(0.0)  # the lane's finished samples: sum of x
         sum_x2 = host.Spectrum(0.0)  # and of x^2
-        left = host.UInt32(paths - 1)  # paths the lane has still to start
         hit_first = host.Bool(False)  # the first ray hit something
         eye_diffuse = host.Bool(False)  # the current path's first vertex is diffuse (mirror_caustics)
         cam_density = host.Float(0.0)  # area density of the first vertex per camera sample (mirror_caustics 'mis')
@@ -297,15 +292,10 @@ class PathEstimator:
             sum_x = dr.select(ended, sum_x + L, sum_x)
             sum_x2 = dr.select(ended, dr.fma(L, L, sum_x2), sum_x2)
             L = dr.select(ended, 0.0, L)
-            if camera_ray is None and new_path is None:
+            if new_path is None:
                 active = alive
             else:
-                restart = ended & (left > 0)
-                left = dr.select(restart, left - 1, left)
-                if new_path is None:
-                    o_new, d_new = camera_ray(u1, u2)
-                else:
-                    o_new, d_new = new_path(restart, sampler)
+                restart, o_new, d_new = new_path(ended, sampler)
                 o = dr.select(restart, o_new, o)
                 d = dr.select(restart, d_new, d)
                 beta = dr.select(restart, 1.0, beta)

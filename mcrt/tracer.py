@@ -238,14 +238,16 @@ class Tracer:
         def camera_ray(u, v):
             return eye, self.camera_model.direction(col, row, u, v)
 
-        def new_path(restart, streams):
+        stop = first + start + paths  # one past the lane's last sample
+
+        def new_path(ended, streams):
+            restart = ended & (streams.sample + 1 < stop)
             streams.restart(restart)
-            return camera_ray(streams.next_1d(), streams.next_1d())
+            return restart, *camera_ray(streams.next_1d(), streams.next_1d())
 
         o, d = camera_ray(rng.next_1d(), rng.next_1d())
         # Lanes past n (paths 0) pad the launch to whole lanes of b: inactive, their sums stay 0.
-        sum_x, sum_x2, _ = self.estimator.path_sums(o, d, rng, paths=dr.maximum(paths, 1), active=paths > 0,
-                                                    new_path=new_path)
+        sum_x, sum_x2, _ = self.estimator.path_sums(o, d, rng, active=paths > 0, new_path=new_path)
         sums = [m.Float64(v[c]) for v in (sum_x, sum_x2) for c in range(3)]
         if k > 1:
             dr.eval(sums)  # once: a block sum of an unevaluated result would rerun the path kernel per channel
