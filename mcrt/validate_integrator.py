@@ -146,7 +146,8 @@ def _describe(r, spec) -> dict[str, Any]:
 
 def validate_integrator(scene, integrator, against, *, budget: float = 2.0, seed: int = 1, res: int | None = None,
                         scene_against=None, alpha: float = 0.01, tile: int = 8, backend: str = "llvm",
-                        seconds_per_spp: tuple[float, float] | None = None, calibration_spp: int = 32) -> dict[str, Any]:
+                        seconds_per_spp: tuple[float, float] | None = None, calibration_spp: int = 32,
+                        spp: int | None = None) -> dict[str, Any]:
     """Render ``scene`` with ``integrator`` (A) and ``against`` (B) at equal time and compare them.
 
     ``scene`` is a Mitsuba scene dictionary, XML path or loaded scene
@@ -154,6 +155,9 @@ def validate_integrator(scene, integrator, against, *, budget: float = 2.0, seed
     scene); ``integrator``/``against`` are names or dictionaries. Seeds:
     A renders with 2 seed, B with 2 seed + 1 (recorded). ``budget`` is each
     render's time in seconds; ``seconds_per_spp`` skips the calibration.
+    ``spp`` renders both at that many samples per pixel instead (equal
+    samples, no calibration): the verdict is then a function of the seeds
+    alone, the same on every machine.
     Returns a JSON-ready dictionary: ``passed``, ``summary``, ``a``, ``b``
     (spp, seed, times, MSE, efficiency), ``efficiency_ratio`` (A over B),
     ``seconds_per_spp`` and the :class:`mcrt.stats.Comparison` under
@@ -162,10 +166,14 @@ def validate_integrator(scene, integrator, against, *, budget: float = 2.0, seed
     from mcrt.stats import compare
 
     scene_b = scene if scene_against is None else scene_against
-    if seconds_per_spp is None:
-        seconds_per_spp = (calibrate(scene, integrator, spp=calibration_spp, res=res, backend=backend),
-                           calibrate(scene_b, against, spp=calibration_spp, res=res, backend=backend))
-    spp_a, spp_b = spp_for(budget, seconds_per_spp[0], integrator), spp_for(budget, seconds_per_spp[1], against)
+    if spp is not None:
+        spp_a = spp_b = spp
+        seconds_per_spp = None
+    else:
+        if seconds_per_spp is None:
+            seconds_per_spp = (calibrate(scene, integrator, spp=calibration_spp, res=res, backend=backend),
+                               calibrate(scene_b, against, spp=calibration_spp, res=res, backend=backend))
+        spp_a, spp_b = spp_for(budget, seconds_per_spp[0], integrator), spp_for(budget, seconds_per_spp[1], against)
     a = _render(scene, integrator, spp_a, 2 * seed, res, backend)
     b = _render(scene_b, against, spp_b, 2 * seed + 1, res, backend)
     c = compare(a, b, policy="independent", alpha=alpha, tile=tile)
@@ -174,8 +182,8 @@ def validate_integrator(scene, integrator, against, *, budget: float = 2.0, seed
         "passed": bool(c.passed),
         "summary": c.summary(),
         "policy": "independent",
-        "budget": budget,
-        "seconds_per_spp": list(seconds_per_spp),
+        "budget": None if spp is not None else budget,
+        "seconds_per_spp": list(seconds_per_spp) if seconds_per_spp else None,
         "a": da,
         "b": db,
         "efficiency_ratio": da["efficiency"] / db["efficiency"],
@@ -274,6 +282,9 @@ def register(sub) -> None:
                    help="with --report: a configuration known to differ from A (e.g. path:max_depth=7), reported as "
                         "detection rate (repeatable; default: none)")
     p.add_argument("--budget", type=float, default=2.0, help="seconds per render, for equal time (default: 2.0)")
+    p.add_argument("--spp", type=int, default=None,
+                   help="render both at this many samples per pixel instead of at equal time: the verdict is then "
+                        "a function of the seeds alone (one run, not with --seeds; default: equal time)")
     p.add_argument("--res", type=int, default=None, help="square resolution N x N (default: the scene's film)")
     p.add_argument("--seed", type=int, default=1, help="A renders with seed 2 SEED, B with 2 SEED + 1 (default: 1)")
     p.add_argument("--alpha", type=float, default=0.01, help="family-wise error rate of the tile tests, Holm (default: 0.01)")
@@ -303,6 +314,8 @@ def cmd_validate_integrator(args) -> int:
             raise ValueError("--seeds N and --report DIR go together")
         if args.seeds == 0 and (len(againsts) > 1 or wrongs):
             raise ValueError("several --against or a --wrong need --seeds N --report DIR")
+        if args.spp is not None and (args.seeds or args.spp < 1):
+            raise ValueError("--spp needs a positive count and a single run (no --seeds)")
     except ValueError as e:
         print(f"mcrt validate-integrator: {e}", file=sys.stderr)
         return EXIT_UNUSABLE
@@ -314,7 +327,7 @@ def cmd_validate_integrator(args) -> int:
         return EXIT_OK
     try:
         r = validate_integrator(scene, integrator, againsts[0], budget=args.budget, seed=args.seed, res=args.res,
-                                alpha=args.alpha, tile=args.tile, backend=args.backend)
+                                alpha=args.alpha, tile=args.tile, backend=args.backend, spp=args.spp)
     except (ValueError, RuntimeError) as e:
         print(f"mcrt validate-integrator: {e}", file=sys.stderr)
         return EXIT_UNUSABLE
