@@ -66,7 +66,7 @@ class BenchRow:
 
 
 #: Paths a timed render traces at most (module docstring), unless run_bench is told otherwise.
-MAX_PATHS = 1 << 21
+MAX_PATHS = 1 << 22
 #: Renders (distinct seeds) whose MSE against the committed reference is averaged, timed ones included.
 MSE_RENDERS = 16
 
@@ -137,11 +137,16 @@ def bounded_rows(c: BenchCase, max_paths: int) -> list[tuple[int, int]] | None:
     one), in up to BANDS equal bands centred in equal parts of the image:
     the top of an image (the ceiling and the light) costs less per path than
     its middle, so a band at the top alone would misstate both renderers.
+    Fewer bands where a band would hold fewer pixels than mcrt's launches
+    have lanes (mcrt.tracer.MIN_LANES): a launch that small is not the
+    render's.
     """
+    from mcrt.tracer import MIN_LANES
+
     if c.width * c.height * c.spp <= max_paths:
         return None
     rows = max(1, min(c.height, max_paths // (c.width * c.spp)))
-    parts = min(BANDS, rows)
+    parts = max(1, min(BANDS, rows, rows * c.width // MIN_LANES))
     per = rows // parts
     return [(min(c.height - per, max(0, round((i + 0.5) * c.height / parts - per / 2))), per) for i in range(parts)]
 
@@ -323,6 +328,46 @@ def memory_runs(runs=MEMORY_RUNS, *, progress: bool = True) -> list[dict]:
     return out
 
 
+def flatness(scene, *, cameras, resolutions, spp: int = 16, max_depth: int = 8, rounds: int = 9,
+             max_paths: int = MAX_PATHS, backend: str = "llvm", intersector: str = "convex",
+             progress: bool = True) -> dict:
+    """mcrt's paths per second at each resolution, renders interleaved: one per resolution per round, in turn.
+
+    Cases timed minutes apart see a shared machine at different speeds;
+    here every resolution is timed in every round, so drift slows them
+    alike and the medians compare resolutions. Renders over ``max_paths``
+    paths are timed on bands of rows (:func:`bounded_rows`); one warm-up
+    render each first.
+    """
+    from mcrt.tracer import render_tracer
+
+    cases = [BenchCase(cam, r, r, spp, max_depth) for cam in cameras for r in resolutions]
+    times: dict[int, list[float]] = {i: [] for i in range(len(cases))}
+    paths: dict[int, int] = {}
+
+    def one(i: int, seed: int) -> float:
+        c = cases[i]
+        s = replace(scene.settings(camera=c.camera, width=c.width, height=c.height, spp=c.spp, max_depth=c.max_depth),
+                    seed=seed)
+        t0 = time.perf_counter()
+        r = render_tracer(scene, s, backend=backend, intersector=intersector, progress=False,
+                          rows=bounded_rows(c, max_paths))
+        paths[i] = int(r.extra["paths"])
+        return time.perf_counter() - t0
+
+    for i in range(len(cases)):
+        one(i, 1000)
+    for k in range(rounds):
+        for i in range(len(cases)):
+            times[i].append(one(i, k))
+        if progress:
+            print(f"  interleaved throughput: round {k + 1}/{rounds}", file=sys.stderr, flush=True)
+    rows = [{"camera": c.camera, "width": c.width, "height": c.height, "paths": paths[i], "times": times[i],
+             "bounded": bounded_rows(c, max_paths) is not None,
+             "paths_per_second": paths[i] / statistics.median(times[i])} for i, c in enumerate(cases)]
+    return {"spp": spp, "max_depth": max_depth, "rounds": rounds, "rows": rows}
+
+
 def peak_memory_mib() -> float:
     """Peak resident memory of this process (Linux reports KiB)."""
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
@@ -371,7 +416,7 @@ def simd_extension() -> str | None:
 def bench_data(rows: list[BenchRow], *, command: str, backend: str, intersector: str, repeats: int,
                profile: list[ProfileRow] = (), profile_case: dict | None = None, memory: list[dict] = (),
                limits: dict | None = None, max_paths: int = MAX_PATHS, mse_renders: int = MSE_RENDERS,
-               seconds: float | None = None) -> dict:
+               flat: dict | None = None, seconds: float | None = None) -> dict:
     """The run as one JSON-ready dictionary: what ``--json`` writes and :mod:`mcrt.bench_report` reads.
 
     Machine and versions come from :func:`mcrt.provenance.provenance`, with
@@ -390,7 +435,8 @@ def bench_data(rows: list[BenchRow], *, command: str, backend: str, intersector:
             "rows": [dict(asdict(r), median_time=statistics.median(r.times)) for r in rows],
             "peak_memory_mib": peak_memory_mib(),
             "kernel_profile": [asdict(r) for r in profile], "kernel_profile_case": profile_case,
-            "max_paths": max_paths, "bands": BANDS, "mse_renders": mse_renders, "memory_runs": list(memory), "limits": limits,
+            "max_paths": max_paths, "bands": BANDS, "mse_renders": mse_renders, "flatness": flat,
+            "memory_runs": list(memory), "limits": limits,
             "load_end": list(os.getloadavg()), "seconds": seconds, "gpu": gpu_note(backend)}
 
 
@@ -444,6 +490,10 @@ def register(sub) -> None:
     p.add_argument("--max-paths", type=int, default=MAX_PATHS,
                    help=f"time renders of more paths on up to {BANDS} bands of their rows, the same for every renderer "
                         f"(default {MAX_PATHS})")
+    p.add_argument("--flatness", type=int, default=0, metavar="ROUNDS",
+                   help="also time mcrt alone at every --res and camera (the first --spp, the last --max-depth) in "
+                        "ROUNDS interleaved rounds, one render per resolution each: its throughput against "
+                        "resolution without the machine's drift between cases (default: 0, off)")
     p.add_argument("--memory", action="store_true",
                    help="also measure the peak memory of whole mcrt renders up to 4096x4096 at 1024 spp, each in a fresh "
                         "process (default: off)")
@@ -515,10 +565,14 @@ def cmd_bench(args) -> int:
 
         limits = kernel_limits(scene, camera=cameras[0], res=args.profile_res, spp=spps[-1], max_depth=depths[-1],
                                backend=args.backend)
+    flat = None
+    if args.flatness:
+        flat = flatness(scene, cameras=cameras, resolutions=resolutions, spp=spps[0], max_depth=depths[-1],
+                        rounds=args.flatness, max_paths=max_paths, backend=args.backend, intersector=args.intersector)
     memory = memory_runs() if args.memory else []
     data = bench_data(rows, command=command_line(args.bench_parser, args), backend=args.backend,
                       intersector=args.intersector, repeats=args.repeats, profile=profile, profile_case=profile_case,
-                      memory=memory, limits=limits, max_paths=max_paths, mse_renders=args.mse_renders,
+                      memory=memory, limits=limits, max_paths=max_paths, mse_renders=args.mse_renders, flat=flat,
                       seconds=time.perf_counter() - t0)
     prov, v = data["provenance"], data["provenance"]["versions"]
     print(f"mcrt {v['mcrt']}, Mitsuba {v['mitsuba']}, Dr.Jit {v['drjit']}, {prov['drjit_threads']} threads, "

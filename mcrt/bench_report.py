@@ -299,7 +299,19 @@ def goals(data: dict) -> list[tuple[str, bool | None, str]]:
     if small:
         v, where = worst(small)
         out.append(("at least 10x at 1 spp and at 64x64", v >= 10, f"lowest {v:.1f}x ({where}) over {len(small)} cases"))
-    for cam in sorted({r["case"]["camera"] for r in _rows(data["rows"])}):
+    flat = data.get("flatness")
+    for cam in sorted({r["camera"] for r in flat["rows"]} if flat else ()):
+        mine = [r for r in flat["rows"] if r["camera"] == cam]
+        at = [r for r in mine if r["width"] == 4096]
+        if at:
+            best = max(mine, key=lambda r: r["paths_per_second"])
+            ratio = at[0]["paths_per_second"] / best["paths_per_second"]
+            out.append((f"mcrt's throughput at 4096x4096 within 15 % of its best ({cam} camera, depth {flat['max_depth']}, "
+                        f"{flat['spp']} spp, renders interleaved)", ratio >= 0.85,
+                        f"{ratio * 100:.0f} % of its best: {at[0]['paths_per_second'] / 1e6:.1f} M paths/s against "
+                        f"{best['paths_per_second'] / 1e6:.1f} at {best['width']}x{best['height']} (medians of "
+                        f"{flat['rounds']} interleaved rounds)"))
+    for cam in sorted({r["case"]["camera"] for r in _rows(data["rows"])} if not flat else ()):
         mine = [r for r in _rows(data["rows"]) if r["renderer"] == "mcrt" and r["case"]["camera"] == cam
                 and r["case"]["max_depth"] == 8 and r["case"].get("light_samples", 1) == 1 and r["case"]["spp"] >= 16]
         at = [r for r in mine if r["case"]["width"] == 4096]
@@ -322,6 +334,27 @@ def goals(data: dict) -> list[tuple[str, bool | None, str]]:
         out.append(("equal-time efficiency keeps pace with the speed-up", lo[0] / lo[1] >= 0.85,
                     f"efficiency ratio {lo[0]:.1f}x against a speed-up of {lo[1]:.1f}x at the furthest case "
                     f"({_case_text(lo[2])}; {len(eff)} cases with a committed reference)"))
+    return out
+
+
+def _flatness_section(data: dict) -> list[str]:
+    flat = data.get("flatness")
+    if not flat:
+        return []
+    out = ["", "## Throughput against resolution, renders interleaved", "",
+           f"mcrt alone, {flat['spp']} spp, max depth {flat['max_depth']}: {flat['rounds']} rounds, each rendering every "
+           f"resolution once in turn after one warm-up render each (`--flatness`), so a machine whose speed drifts "
+           f"slows every resolution alike; medians of the rounds. Renders over {data.get('max_paths', 0):,} paths "
+           f"are timed on the bands of rows of the table above.", "",
+           "| camera | resolution | paths per render | median s | M paths/s | share of the camera's best |",
+           "|---|---|---|---|---|---|"]
+    for cam in sorted({r["camera"] for r in flat["rows"]}):
+        mine = [r for r in flat["rows"] if r["camera"] == cam]
+        best = max(r["paths_per_second"] for r in mine)
+        for r in mine:
+            part = " (part)" if r["bounded"] else ""
+            out.append(f"| {cam} | {r['width']}x{r['height']} | {r['paths']:,}{part} | {statistics.median(r['times']):.4f} | "
+                       f"{r['paths_per_second'] / 1e6:.2f} | {100 * r['paths_per_second'] / best:.0f} % |")
     return out
 
 
@@ -537,7 +570,7 @@ def markdown(data: dict, out_dir: Path, *, json_path: Path | None = None, tried:
              "## Paths per second", "", format_table(data["rows"]), "",
              f"Peak memory of the benchmark process: {data['peak_memory_mib']:.0f} MiB.",
              *_efficiency(data), *_goals_section(data), *_plots_section(data, out_dir), *_spp_section(data),
-             *_memory_section(data), *_profile_section(data), *_limits_section(data), *_gpu_section(data),
+             *_flatness_section(data), *_memory_section(data), *_profile_section(data), *_limits_section(data), *_gpu_section(data),
              *_reading(data, out_dir)]
     if tried:
         lines += _log_section(Path(tried), out_dir)
