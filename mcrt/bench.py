@@ -339,9 +339,11 @@ def flatness(scene, *, cameras, resolutions, spp: int = 16, max_depth: int = 8, 
     paths are timed on bands of rows (:func:`bounded_rows`); one warm-up
     render each first.
     """
-    from mcrt.tracer import render_tracer
+    from mcrt.tracer import TRACERS_KEPT, render_tracer
 
     cases = [BenchCase(cam, r, r, spp, max_depth) for cam in cameras for r in resolutions]
+    if len(cases) > TRACERS_KEPT:  # more would rebuild a tracer (and trace its kernel again) every round
+        raise ValueError(f"--flatness interleaves at most {TRACERS_KEPT} cameras x resolutions, got {len(cases)}")
     times: dict[int, list[float]] = {i: [] for i in range(len(cases))}
     paths: dict[int, int] = {}
 

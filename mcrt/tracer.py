@@ -302,6 +302,8 @@ def pixel_range(m, first: int, count: int):
 
 
 _TRACERS: dict = {}
+#: Tracers kept for reuse (a benchmark interleaving this many configurations reuses each one's kernels).
+TRACERS_KEPT = 16
 
 
 def _tracer(scene: Scene, *args, scene_hash: str | None = None) -> Tracer:
@@ -310,7 +312,7 @@ def _tracer(scene: Scene, *args, scene_hash: str | None = None) -> Tracer:
     tracer = _TRACERS.get(key)
     if tracer is None:
         tracer = Tracer(scene, *args)
-        if len(_TRACERS) >= 8:
+        if len(_TRACERS) >= TRACERS_KEPT:
             _TRACERS.pop(next(iter(_TRACERS)))
         _TRACERS[key] = tracer
     return tracer
