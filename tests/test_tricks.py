@@ -304,3 +304,16 @@ def test_the_report_command_writes_index_data_and_figures(tmp_path):
     assert all((out / f).is_file() for f in d["files"])
     md = (out / "index.md").read_text()
     assert "## Verdicts" in md and d["verdicts"][0].split(":")[0] in md
+
+
+def test_denoise_without_pyoidn_fails_before_rendering(scene, monkeypatch):
+    """Without the denoise extra, --denoise says how to install it, and no render is spent first."""
+    import sys
+
+    import mcrt.tracer
+    from mcrt.tricks.render import render_mcrt
+
+    monkeypatch.setitem(sys.modules, "pyoidn", None)  # import pyoidn now raises ImportError
+    monkeypatch.setattr(mcrt.tracer, "render_tracer", lambda *a, **k: pytest.fail("rendered before the check"))
+    with pytest.raises(RuntimeError, match=r"pip install 'mcrt\[denoise\]'"):
+        render_mcrt(scene, scene.settings(width=8, height=8, spp=1), denoise="color")

@@ -22,7 +22,8 @@ from mcrt.film import RenderResult
 from mcrt.tricks.aov import Buffers
 
 
-def _pyoidn():
+def require_denoiser():
+    """pyoidn, or a RuntimeError saying how to install it."""
     try:
         import pyoidn
     except ImportError:
@@ -32,7 +33,7 @@ def _pyoidn():
 
 def denoise_image(color: np.ndarray, buffers: Buffers | None, *, quality: str = "high") -> np.ndarray:
     """OIDN's RT filter on HDR ``color`` (H, W, 3), guided by ``buffers`` (None: colour alone)."""
-    pyoidn = _pyoidn()
+    pyoidn = require_denoiser()
     c = np.ascontiguousarray(np.maximum(np.nan_to_num(color, nan=0.0, posinf=0.0), 0.0), dtype=np.float32)
     if buffers is None:
         return pyoidn.denoise(c, hdr=True, quality=quality)

@@ -17,8 +17,12 @@ def render_mcrt(scene: Scene, settings: RenderSettings, *, adaptive: str | None 
     """render_tracer, or a bidirectional (``bidirectional``) or adaptive render (``adaptive``), then denoised (``denoise``) where asked."""
     from mcrt.tracer import render_tracer
 
-    if denoise is not None and denoise not in DENOISE_GUIDES:
-        raise ValueError(f"denoise must be one of {', '.join(DENOISE_GUIDES)}, got {denoise!r}")
+    if denoise is not None:
+        if denoise not in DENOISE_GUIDES:
+            raise ValueError(f"denoise must be one of {', '.join(DENOISE_GUIDES)}, got {denoise!r}")
+        from mcrt.tricks.denoise import require_denoiser
+
+        require_denoiser()  # before the render, not after it
     bidirectional = options.pop("bidirectional", False)
     if adaptive is None and bidirectional:
         from mcrt.bidir import render_bidirectional
