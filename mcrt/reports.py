@@ -40,7 +40,7 @@ REPORTS: tuple[Report, ...] = (
            "numerically hard scenes: agreement, float32 limits, fireflies"),
     Report("bench", "bench --res 64 --res 256 --res 512 --res 1024 --res 2048 --res 4096 --spp-sweep 1 --spp-sweep 4 "
            "--spp-sweep 64 --spp-sweep 256 --spp-sweep 1024 --sweep-res 256 --sweep-res 4096 --depth-sweep 2 "
-           "--depth-sweep -1 --course 1 --course 30 --flatness 7 --memory --limits --repeats 5 --profile "
+           "--depth-sweep -1 --course 1 --course 30 --flatness 7 --memory --limits --profile "
            "--report reports/bench",
            "paths per second and efficiency against Mitsuba from 64x64 to 4096x4096 and 1 to 1024 spp, peak memory, "
            "where the kernel's time goes and how far it is from the machine"),
