@@ -216,12 +216,12 @@ class PathEstimator:
         The first path starts along the rays (o, d). Without ``new_path`` a
         lane traces that one path. With it, ``new_path(ended, sampler)``,
         given the lanes whose path ended (or that have none in flight),
-        returns (restart, o, d): the lanes that start another path (it may reseed their random streams) and the
-        camera rays of every lane; a restarted lane follows its new ray in
-        the same loop iteration (path regeneration), so a packet runs until
-        its lanes' total work is done instead of until its longest path
-        ends. Returns (sum x, sum x^2, hit), ``hit`` whether the first ray
-        hit anything.
+        returns (restart, o, d): the lanes that start another path (it may
+        reseed their random streams) and the camera rays of every lane; a
+        restarted lane follows its new ray in the same loop iteration (path
+        regeneration), so a packet runs until its lanes' total work is done
+        instead of until its longest path ends. Returns (sum x, sum x^2,
+        hit), ``hit`` whether the first ray hit anything.
         """
         # Plain Python values only: dr.syntax treats the locals the loop reads as loop state.
         host = self.host

@@ -148,7 +148,7 @@ def validate_integrator(scene, integrator, against, *, budget: float = 2.0, seed
                         scene_against=None, alpha: float = 0.01, tile: int = 8, backend: str = "llvm",
                         seconds_per_spp: tuple[float, float] | None = None, calibration_spp: int = 32,
                         spp: int | None = None) -> dict[str, Any]:
-    """Render ``scene`` with ``integrator`` (A) and ``against`` (B) at equal time and compare them.
+    """Render ``scene`` with ``integrator`` (A) and ``against`` (B) at equal time (or equal ``spp``) and compare them.
 
     ``scene`` is a Mitsuba scene dictionary, XML path or loaded scene
     (``scene_against``, default ``scene``, is B's: a deliberately changed
