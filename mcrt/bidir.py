@@ -36,7 +36,7 @@ ends of a specular chain), so the ratio reduces to the ends of the path:
 with p_A and p_w the light tracer's densities of its first point and
 direction, theta_0 the angle of w0 to the light's normal, and p_cam the
 density of x1 for one camera sample of its pixel. The path tracer evaluates
-it where it hits the light (:meth:`LightTracer.path_weight`), the light
+it where it hits the light (:meth:`CausticDensities.path_weight`), the light
 tracer where it splats. N / n is a nominal constant (light_paths W H): the
 weights add up to one whatever it is. Near the eye, where a pixel's patch is
 small and the light tracer rarely hits it, the path tracer takes over.
@@ -103,10 +103,18 @@ import drjit as dr
 import numpy as np
 
 from mcrt.bsdf import lambertian_f
+from mcrt.camera import Pinhole
+from mcrt.estimator import PathEstimator
 from mcrt.film import Progress, RenderResult, run_passes
+from mcrt.host import McrtHost
+from mcrt.light import RectangleLight
 from mcrt.minmax import fmax, fmin, sqrt0
+from mcrt.mutants import check_mutants
+from mcrt.options import Caustics, trick_options
+from mcrt.rng import WeylRng
 from mcrt.sampling import coordinate_frame, cosine_about_normal, to_world
 from mcrt.scene import Mirror, RenderSettings, Scene, Sphere
+from mcrt.tracer import Tracer, backend_module, stream_keys
 
 #: Passes (batches) of the light tracer, at most and at least: its variance's degrees of freedom + 1.
 BATCHES, MIN_BATCHES = 32, 8
@@ -129,48 +137,97 @@ def pinhole_importance(cos_theta, pixel_area, *, cos_power: int = 3):
     return dr.rcp(pixel_area * cos_theta**cos_power)
 
 
-class LightTracer:
-    """The light tracer of the module docstring for one :class:`mcrt.tracer.Tracer` (its scene, camera and estimator).
+def mirror_cones(scene: Scene):
+    """(centre, radius) of the mirror spheres whose cones a light subpath's first direction samples; None: cosine directions.
 
-    ``importance_cos_power`` is :func:`pinhole_importance`'s (3, the correct importance).
+    Cones need every mirror to be a sphere that the light lies outside of.
+    """
+    mirrors = [o for o in scene.objects if isinstance(o.material, Mirror)]
+    if not mirrors or not all(isinstance(o, Sphere) for o in mirrors):
+        return None
+    light = scene.light
+    lo = np.asarray(light.center, float) - np.array([light.size[0] / 2, light.size[1] / 2, 0.0])
+    hi = np.asarray(light.center, float) + np.array([light.size[0] / 2, light.size[1] / 2, 0.0])
+    for s in mirrors:
+        nearest = np.clip(np.asarray(s.center, float), lo, hi)
+        if np.linalg.norm(nearest - np.asarray(s.center, float)) <= s.radius * (1 + 1e-4):
+            return None
+    return [(tuple(float(x) for x in s.center), float(s.radius)) for s in mirrors]
+
+
+class CausticDensities:
+    """What both strategies know of a class C path's densities: the camera's and the light tracer's (module docstring).
+
+    Built from the scene, the camera at its resolution (:class:`mcrt.camera.Pinhole`)
+    and ``light_paths``, N / n of the balance heuristic (light subpaths per
+    camera sample of a pixel; 0 for binary weights). The path tracer's
+    estimator is given it (``caustic_pdfs``) to weigh its light hits; the
+    light tracer draws its first directions from its cones and splats
+    through its camera frame.
     """
 
-    def __init__(self, tracer, *, importance_cos_power: int = 3):
-        self.tracer, self.m = tracer, tracer.m
-        self.estimator = tracer.estimator
-        self.host = tracer.estimator.host
-        self.max_depth = tracer.options.depth_limit
-        self.cos_power = importance_cos_power
-        cam = tracer.camera_model
-        self.width, self.height = cam.width, cam.height
-        self.eye, self.forward = cam.eye, cam.center
-        tx, ty = math.hypot(*cam.half_right), math.hypot(*cam.half_up)
-        self.right = tuple(x / tx for x in cam.half_right)
-        self.up = tuple(x / ty for x in cam.half_up)
+    def __init__(self, scene: Scene, camera: Pinhole, m, *, light_paths: float = 0.0):
+        self.m = m
+        self.light = RectangleLight(scene.light, m)
+        self.width, self.height = camera.width, camera.height
+        self.eye, self.forward = camera.eye, camera.center
+        tx, ty = math.hypot(*camera.half_right), math.hypot(*camera.half_up)
+        self.right = tuple(x / tx for x in camera.half_right)
+        self.up = tuple(x / ty for x in camera.half_up)
         self.tx, self.ty = tx, ty
         self.pixel_area = (2.0 * tx / self.width) * (2.0 * ty / self.height)
-        self.cones = self._mirror_cones(tracer.geometry.scene)
-        # With balance weights (mirror_caustics 'mis'): N / n, light subpaths per camera sample of a pixel.
-        self.caustic_paths = tracer.options.caustic_light_paths
+        self.cones = mirror_cones(scene)
+        self.caustic_paths = light_paths
+
+    def camera_density(self, d, hit):
+        """Area density at the first vertex of one camera sample of its pixel: W cos(theta_x) / t^2 (d from the eye)."""
+        cos_cam = dr.dot(self.m.Array3f(*self.forward), d)
+        return pinhole_importance(cos_cam, self.pixel_area) * (-dr.dot(hit.n, d) * dr.rcp(dr.square(hit.t)))
+
+    def light_ratio(self, y0, w0, cos0):
+        """pi p_A(y0) p_w(w0) / cos(theta_0): the light side of the densities' ratio (p_w without the sampled sphere's index)."""
+        light = self.light
+        if self.cones is None:
+            return light.pdf_area  # p_w = cos / pi
+        pdf = self.m.Float(0.0)
+        for axis, s2, cos_max in self.cone_frames(y0):
+            pdf += dr.select(dr.dot(w0, axis) >= cos_max, 1.0 / (2.0 * math.pi * (s2 / (1.0 + cos_max))), 0.0)
+        return pdf * (math.pi * light.pdf_area / len(self.cones)) / cos0
+
+    def path_weight(self, hit, d, cam_density):
+        """The path tracer's balance weight 1 / (1 + q) of a light hit along d that ends a path eye D ... D S+ L."""
+        q = self.caustic_paths * self.light_ratio(hit.p, -d, hit.light_cos) * dr.rcp(cam_density)
+        return dr.rcp(1.0 + q)
+
+    def cone_frames(self, y0):
+        """(axis, sin^2 theta_s, cos theta_s) of each mirror sphere's cone seen from y0."""
+        m = self.m
+        frames = []
+        for c, r in self.cones:
+            to_c = m.Array3f(*c) - y0
+            inv = dr.rsqrt(dr.squared_norm(to_c))
+            s2 = dr.square(r * inv)
+            frames.append((to_c * inv, s2, sqrt0(1.0 - s2)))
+        return frames
+
+
+class LightTracer:
+    """The light tracer of the module docstring, on the path tracer's host and estimator.
+
+    ``host`` (:class:`mcrt.host.McrtHost`) and ``estimator`` are the path
+    tracer's (its bounces and roulette); ``densities`` its camera frame, cones
+    and balance weights. ``importance_cos_power`` is
+    :func:`pinhole_importance`'s (3, the correct importance).
+    """
+
+    def __init__(self, host: McrtHost, estimator: PathEstimator, densities: CausticDensities, *,
+                 importance_cos_power: int = 3):
+        self.host, self.estimator, self.densities = host, estimator, densities
+        self.m = densities.m
+        self.max_depth = estimator.max_depth
+        self.cos_power = importance_cos_power
+        self.width, self.height = densities.width, densities.height
         self._frozen = dr.freeze(self._light_pass, limit=4, warn_after=64)
-
-    @staticmethod
-    def _mirror_cones(scene: Scene):
-        """(centre, radius) of the mirror spheres whose cones the first direction samples; None: cosine directions.
-
-        Cones need every mirror to be a sphere that the light lies outside of.
-        """
-        mirrors = [o for o in scene.objects if isinstance(o.material, Mirror)]
-        if not mirrors or not all(isinstance(o, Sphere) for o in mirrors):
-            return None
-        light = scene.light
-        lo = np.asarray(light.center, float) - np.array([light.size[0] / 2, light.size[1] / 2, 0.0])
-        hi = np.asarray(light.center, float) + np.array([light.size[0] / 2, light.size[1] / 2, 0.0])
-        for s in mirrors:
-            nearest = np.clip(np.asarray(s.center, float), lo, hi)
-            if np.linalg.norm(nearest - np.asarray(s.center, float)) <= s.radius * (1 + 1e-4):
-                return None
-        return [(tuple(float(x) for x in s.center), float(s.radius)) for s in mirrors]
 
     # ------------------------------------------------------------------
     def pass_moments(self, seed: int, pass_index: int, paths: int):
@@ -180,14 +237,10 @@ class LightTracer:
         docstring's batch means). The work is :meth:`_light_pass`, frozen:
         recorded once per ``paths`` and replayed, the seed's keys opaque.
         """
-        from mcrt.tracer import stream_keys
-
         k0, k1 = stream_keys(seed, _LIGHT_STREAMS + pass_index)
         return self._frozen(dr.opaque(self.m.UInt32, k0), dr.opaque(self.m.UInt32, k1), paths)
 
     def _light_pass(self, key0, key1, paths: int):
-        from mcrt.rng import WeylRng
-
         m = self.m
         rng = WeylRng.seeded(m, paths, key0, key1)
         size = 3 * self.width * self.height
@@ -201,27 +254,6 @@ class LightTracer:
         dr.eval(out)
         return out
 
-    # ---- Densities both strategies evaluate (balance weights) -----------
-    def camera_density(self, d, hit):
-        """Area density at the first vertex of one camera sample of its pixel: W cos(theta_x) / t^2 (d from the eye)."""
-        cos_cam = dr.dot(self.m.Array3f(*self.forward), d)
-        return pinhole_importance(cos_cam, self.pixel_area) * (-dr.dot(hit.n, d) * dr.rcp(dr.square(hit.t)))
-
-    def light_ratio(self, y0, w0, cos0):
-        """pi p_A(y0) p_w(w0) / cos(theta_0): the light side of the densities' ratio (p_w without the sampled sphere's index)."""
-        light = self.host.light
-        if self.cones is None:
-            return light.pdf_area  # p_w = cos / pi
-        pdf = self.m.Float(0.0)
-        for axis, s2, cos_max in self._cone_frames(y0):
-            pdf += dr.select(dr.dot(w0, axis) >= cos_max, 1.0 / (2.0 * math.pi * (s2 / (1.0 + cos_max))), 0.0)
-        return pdf * (math.pi * light.pdf_area / len(self.cones)) / cos0
-
-    def path_weight(self, hit, d, cam_density):
-        """The path tracer's balance weight 1 / (1 + q) of a light hit along d that ends a path eye D ... D S+ L."""
-        q = self.caustic_paths * self.light_ratio(hit.p, -d, hit.light_cos) * dr.rcp(cam_density)
-        return dr.rcp(1.0 + q)
-
     # ---- Light subpaths --------------------------------------------------
     def emit(self, rng):
         """(origin, direction, Le cos / (p_A p_w), light_ratio, cos > 0) of light subpaths.
@@ -233,7 +265,7 @@ class LightTracer:
         (cx, cy, cz), (hx, hy) = light.center, light.half
         y0 = m.Array3f(dr.fma(u1, 2.0 * hx, cx - hx), dr.fma(u2, 2.0 * hy, cy - hy), cz)  # RectangleLight.sample's point
         n = (0.0, 0.0, light.normal_z)
-        if self.cones is None:
+        if self.densities.cones is None:
             d = m.Array3f(*cosine_about_normal(rng.next_1d(), rng.next_1d(), (m.Float(n[0]), m.Float(n[1]), m.Float(n[2]))))
             pdf = fmax(d.z * light.normal_z, 0.0) / math.pi
         else:
@@ -241,27 +273,16 @@ class LightTracer:
         cos0 = d.z * light.normal_z
         valid = cos0 > 0  # the light emits on its normal's side only
         power = dr.select(valid, light.emitted() * (cos0 * light.area / pdf), 0.0)
-        ratio = self.light_ratio(y0, d, cos0) if self.caustic_paths else None
-        origin = dr.fma(m.Array3f(*n), self.host.geo.offset(y0), y0)
+        ratio = self.densities.light_ratio(y0, d, cos0) if self.densities.caustic_paths else None
+        origin = self.host.offset_along(y0, m.Array3f(*n))
         return origin, d, power, ratio, valid
-
-    def _cone_frames(self, y0):
-        """(axis, sin^2 theta_s, cos theta_s) of each mirror sphere's cone seen from y0."""
-        m = self.m
-        frames = []
-        for c, r in self.cones:
-            to_c = m.Array3f(*c) - y0
-            inv = dr.rsqrt(dr.squared_norm(to_c))
-            s2 = dr.square(r * inv)
-            frames.append((to_c * inv, s2, sqrt0(1.0 - s2)))
-        return frames
 
     def _sample_cones(self, y0, rng):
         """A direction uniform in the cone of one mirror sphere chosen uniformly, and the mixture's density."""
         m = self.m
-        count = len(self.cones)
+        count = len(self.densities.cones)
         pick = m.UInt32(fmin(rng.next_1d() * count, count - 1)) if count > 1 else m.UInt32(0)
-        frames = self._cone_frames(y0)
+        frames = self.densities.cone_frames(y0)
         axis, s2, cos_max = frames[0]
         for k in range(1, count):
             axis = dr.select(pick == k, frames[k][0], axis)
@@ -304,28 +325,28 @@ class LightTracer:
 
     def splat(self, acc, hit, value, ratio, active):
         """Add value f cos(theta_y) / d^2 W (times the balance weight q / (1 + q)) to the pixel that sees the hit."""
-        m, host = self.m, self.host
-        to_eye = m.Array3f(*self.eye) - hit.p
+        m, host, cam = self.m, self.host, self.densities
+        to_eye = m.Array3f(*cam.eye) - hit.p
         inv_d = dr.rsqrt(dr.squared_norm(to_eye))
         w = to_eye * inv_d
         cos_y = dr.dot(hit.n, w)
-        cos_cam = -dr.dot(m.Array3f(*self.forward), w)
+        cos_cam = -dr.dot(m.Array3f(*cam.forward), w)
         ok = active & (cos_y > 0) & (cos_cam > 0)
         # The film coordinates (s_x, s_y) of mcrt.camera.Pinhole.film, inverted.
-        sx = -dr.dot(m.Array3f(*self.right), w) / (self.tx * cos_cam)
-        sy = -dr.dot(m.Array3f(*self.up), w) / (self.ty * cos_cam)
+        sx = -dr.dot(m.Array3f(*cam.right), w) / (cam.tx * cos_cam)
+        sy = -dr.dot(m.Array3f(*cam.up), w) / (cam.ty * cos_cam)
         col = (sx + 1.0) * (0.5 * self.width)
         row = (1.0 - sy) * (0.5 * self.height)
         ok &= (col >= 0) & (col < self.width) & (row >= 0) & (row < self.height)
         # A closest hit rather than a shadow test: the light's rectangle blocks the eye too.
         origin = host.spawn_origin(hit)
-        to_eye_o = m.Array3f(*self.eye) - origin
+        to_eye_o = m.Array3f(*cam.eye) - origin
         ok &= host.intersect(origin, w, ok).t > dr.norm(to_eye_o)
-        f = lambertian_f(hit.color, inv_pi=self.estimator.opt.brdf_inv_pi)
+        f = lambertian_f(hit.color, inv_pi=self.estimator.opt.mutations.brdf_inv_pi)
         g = cos_y * dr.square(inv_d)
-        c = value * f * (g * pinhole_importance(cos_cam, self.pixel_area, cos_power=self.cos_power))
+        c = value * f * (g * pinhole_importance(cos_cam, cam.pixel_area, cos_power=self.cos_power))
         if ratio is not None:  # the light tracer's balance weight, q / (1 + q)
-            q = self.caustic_paths * ratio * dr.rcp(pinhole_importance(cos_cam, self.pixel_area) * g)
+            q = cam.caustic_paths * ratio * dr.rcp(pinhole_importance(cos_cam, cam.pixel_area) * g)
             c = c * (q * dr.rcp(1.0 + q))
         pixel = m.UInt32(fmin(row, self.height - 1)) * self.width + m.UInt32(fmin(col, self.width - 1))
         for k in range(3):
@@ -337,18 +358,52 @@ class LightTracer:
 PARTS = ("both", "path", "light", "caustics")
 WEIGHTS = ("balance", "binary")
 
-_LIGHT_TRACERS: dict = {}
+#: Path tracers with their caustic split, densities and light tracers, kept for reuse (their kernels are recorded once).
+_KEPT: dict = {}
+KEPT = 8
 
 
-def _light_tracer(tracer, cos_power: int) -> LightTracer:
-    """The LightTracer of a cached Tracer (mcrt.tracer._tracer), kept with it so its frozen pass is recorded once."""
-    key = (id(tracer), cos_power)
-    entry = _LIGHT_TRACERS.get(key)
-    if entry is None or entry[0] is not tracer:
-        if len(_LIGHT_TRACERS) >= 8:
-            _LIGHT_TRACERS.pop(next(iter(_LIGHT_TRACERS)))
-        entry = _LIGHT_TRACERS[key] = (tracer, LightTracer(tracer, importance_cos_power=cos_power))
-    return entry[1]
+def _path_tracer(scene: Scene, s: RenderSettings, *, caustics: Caustics, backend: str, intersector: str, mis: bool | None,
+                 precision_guard: bool, mutants: frozenset = frozenset(), tricks: tuple = ()):
+    """(Tracer, CausticDensities, light tracers by importance power) for a render of ``scene`` at ``s`` with ``caustics``."""
+    key = (scene.content_hash(), scene.path, s.camera, s.width, s.height, s.max_depth, s.light_samples, s.rr_depth,
+           backend, intersector, mis, precision_guard, mutants, tricks, caustics)
+    entry = _KEPT.get(key)
+    if entry is None:
+        densities = CausticDensities(scene, Pinhole(scene.camera(s.camera), s.width, s.height), backend_module(backend),
+                                     light_paths=caustics.caustic_light_paths)
+        tracer = Tracer(scene, s.camera, s.width, s.height, s.max_depth, s.light_samples, s.rr_depth, backend, intersector,
+                        mutants, precision_guard, mis, tricks, caustics=caustics,
+                        caustic_pdfs=densities if caustics.caustic_light_paths else None)
+        if len(_KEPT) >= KEPT:
+            _KEPT.pop(next(iter(_KEPT)))
+        entry = _KEPT[key] = (tracer, densities, {})
+    return entry
+
+
+def _light_tracer(entry, cos_power: int) -> LightTracer:
+    """The light tracer of a kept path tracer (on its host and estimator), kept with it: its pass is recorded once."""
+    tracer, densities, light_tracers = entry
+    if cos_power not in light_tracers:
+        light_tracers[cos_power] = LightTracer(tracer.estimator.host, tracer.estimator, densities,
+                                               importance_cos_power=cos_power)
+    return light_tracers[cos_power]
+
+
+def render_caustic_split(scene: Scene, settings: RenderSettings, *, mirror_caustics: str, backend: str = "llvm",
+                         progress: bool = True, spp_per_pass: int | None = None, mutants=(), intersector: str = "convex",
+                         mis: bool | None = None, precision_guard: bool = True, **tricks) -> RenderResult:
+    """The path tracer alone with ``mirror_caustics`` 'skip' or 'only' (:class:`mcrt.options.Caustics`): renderer ``mcrt``'s option.
+
+    'only' renders the paths eye D ... D S+ L alone, to check the light
+    tracer against; 'skip' everything else.
+    """
+    if mirror_caustics not in ("skip", "only"):
+        raise ValueError(f"mirror_caustics must be 'skip' or 'only' without a light tracer, got {mirror_caustics!r}")
+    s = settings
+    tracer = _path_tracer(scene, s, caustics=Caustics(mirror_caustics), backend=backend, intersector=intersector, mis=mis,
+                          precision_guard=precision_guard, mutants=check_mutants(mutants), tricks=trick_options(tricks))[0]
+    return tracer.render(seed=s.seed, spp=s.spp, progress=progress, spp_per_pass=spp_per_pass)
 
 
 def batch_count(paths: int) -> int:
@@ -377,11 +432,11 @@ def render_bidirectional(scene: Scene, settings: RenderSettings, *, backend: str
                          importance_cos_power: int = 3, **tricks) -> RenderResult:
     """Render ``scene`` with the path tracer and, for the paths eye D ... D S+ L (class C), light tracing.
 
-    Renderer ``mcrt`` with ``bidirectional=True`` (:mod:`mcrt.tricks.render`)
+    Renderer ``mcrt`` with ``bidirectional=True`` (:func:`mcrt.render.render`)
     calls it with that renderer's options; it refuses ``mutants`` and
     ``mirror_caustics`` (it sets those itself). The path tracer renders
     ``settings`` as plain mcrt does (``spp_per_pass`` and ``tricks``,
-    mcrt.tricks.options, are its),
+    :data:`mcrt.options.TRICK_OPTIONS`, are its),
     the light tracer ``light_paths`` subpaths per camera sample (light_paths
     spp W H in all). ``weights`` 'balance' shares class C between them by
     the balance heuristic, 'binary' leaves it to the light tracer alone
@@ -395,9 +450,6 @@ def render_bidirectional(scene: Scene, settings: RenderSettings, *, backend: str
     (to compare with plain mcrt's ``mirror_caustics='only'``);
     ``importance_cos_power`` as in :func:`pinhole_importance`.
     """
-    from mcrt.tracer import _tracer, render_tracer
-    from mcrt.tricks.options import trick_options
-
     if mutants or mirror_caustics != "all":
         raise ValueError("bidirectional rendering takes no mutants and no mirror_caustics (it sets them itself)")
     tricks = trick_options(tricks)
@@ -411,30 +463,26 @@ def render_bidirectional(scene: Scene, settings: RenderSettings, *, backend: str
     # N / n of the balance heuristic: light subpaths per camera sample of a pixel (nominal; any constant is unbiased).
     ratio = light_paths * s.width * s.height if weights == "balance" else 0.0
     caustics = "only" if part == "caustics" else ("mis" if ratio else "skip")
-    options = (("mirror_caustics", caustics),) + ((("caustic_light_paths", ratio),) if ratio else ())
-    common = dict(backend=backend, intersector=intersector, mis=mis, precision_guard=precision_guard)
-    tracer = _tracer(scene, s.camera, s.width, s.height, s.max_depth, s.light_samples, s.rr_depth, backend,
-                     intersector, frozenset(), precision_guard, mis, tuple(sorted((*tricks, *options))))
-    if ratio:
-        tracer.estimator.caustic_pdfs = _light_tracer(tracer, 3)  # before the path kernel is first recorded
+    entry = _path_tracer(scene, s, caustics=Caustics(caustics, ratio), backend=backend, intersector=intersector, mis=mis,
+                         precision_guard=precision_guard, tricks=tricks)
+    tracer = entry[0]
     shape = (s.height, s.width, 3)
     mean, var_of_mean = np.zeros(shape, np.float64), np.zeros(shape, np.float64)
     wall = compile_time = 0.0
     extra = {}
     if part == "path" or part == "both" or (part == "caustics" and ratio):  # binary: the light tracer's class alone
-        pt = render_tracer(scene, s, progress=progress, spp_per_pass=spp_per_pass, mirror_caustics=caustics,
-                           caustic_light_paths=ratio, **common, **dict(tricks))
+        pt = tracer.render(seed=s.seed, spp=s.spp, progress=progress, spp_per_pass=spp_per_pass)
         mean += pt.mean
         var_of_mean += pt.variance.astype(np.float64) / pt.spp
         wall, compile_time, extra = pt.wall_time, pt.compile_time or 0.0, dict(pt.extra)
     if part != "path":
-        light = _light_tracer(tracer, importance_cos_power)
+        light = _light_tracer(entry, importance_cos_power)
         totals, paths, batches = light_batches(light, seed=s.seed, paths=round(light_paths * s.spp * s.width * s.height),
                                                progress=progress)
         mean += totals.mean
         var_of_mean += totals.variance.astype(np.float64) / batches
         wall, compile_time = wall + totals.wall_time, compile_time + totals.compile_time
-        extra.update(mis=str(tracer.options.mis).lower(), light_paths=str(paths), light_batches=str(batches))
+        extra.update(mis=str(tracer.options.settings.mis).lower(), light_paths=str(paths), light_batches=str(batches))
     return RenderResult(
         mean=mean.astype(np.float32),
         variance=(var_of_mean * s.spp).astype(np.float32),

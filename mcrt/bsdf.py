@@ -21,6 +21,7 @@ import math
 
 import drjit as dr
 
+from mcrt.options import LAMBERTIAN_SAMPLERS
 from mcrt.sampling import (
     INV_PI,
     coordinate_frame,
@@ -30,8 +31,6 @@ from mcrt.sampling import (
     to_world,
 )
 
-#: How a Lambertian direction is drawn: correctly, or by two catalogued mistakes.
-LAMBERTIAN_SAMPLERS = ("cosine", "uniform_as_cosine", "ball_plus_normal")
 
 
 def lambertian_f(albedo, *, inv_pi: bool = True):

@@ -10,8 +10,11 @@ Column 0 is on the left, row 0 at the top. For the canonical cameras the plane
 is x = 0 and the point (0, 1 - 2 (i + u) / W, 1 - 2 (j + v) / H).
 
 :meth:`Pinhole.direction` is the one implementation: the tracer's kernel
-calls it on Dr.Jit arrays, and the same code runs on NumPy arrays for the
-closed-form images and the Mitsuba cross-check.
+calls it on Dr.Jit arrays (through :meth:`Pinhole.pixel_position` and
+:meth:`Pinhole.ray`: pixel index to column and row, then to the ray), and the
+same code runs on NumPy arrays for the closed-form images and the Mitsuba
+cross-check. Where in its pixel a sample lands, the jitter (u, v), is the
+tracer's to draw (:func:`mcrt.tracer.pixel_jitter`).
 """
 
 from __future__ import annotations
@@ -52,6 +55,15 @@ class Pinhole:
         if not self.jitter:
             u = v = 0.5
         return _fma(col + u, 2.0 / self.width, -1.0), _fma(row + v, -2.0 / self.height, 1.0)
+
+    def pixel_position(self, pixel):
+        """(column, row) as floats of pixel indices ``pixel`` (row-major: row * width + column), a Dr.Jit UInt32."""
+        m = sys.modules[type(pixel).__module__]
+        return m.Float(pixel % self.width), m.Float(pixel // self.width)
+
+    def ray(self, col, row, u, v):
+        """(origin, unit direction) of the primary rays through pixel (col, row) at jitter (u, v): Dr.Jit arrays."""
+        return sys.modules[type(col).__module__].Array3f(*self.eye), self.direction(col, row, u, v)
 
     def direction(self, col, row, u, v):
         """Unit direction of the ray through pixel (col, row) at jitter (u, v).

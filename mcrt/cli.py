@@ -117,7 +117,7 @@ def cmd_render(args) -> int:
 
 
 def _trick_flags(args) -> dict:
-    """The efficiency tricks given on the command line (mcrt.tricks.options), as renderer options."""
+    """The efficiency tricks given on the command line (mcrt.options.TRICK_OPTIONS and mcrt.render.RENDER_TRICKS), as renderer options."""
     names = ("roulette", "roulette_survival", "roulette_start", "light_sampling", "adaptive", "denoise")
     return {n: getattr(args, n) for n in names if getattr(args, n, None) not in (None, False)}
 

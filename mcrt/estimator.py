@@ -34,50 +34,31 @@ Le V cos(theta_x) Omega is bounded without MIS.
 
 The host
 --------
-:class:`PathEstimator` never asks which scene it runs in. A host provides
+:class:`PathEstimator` never asks which scene it runs in: it asks a
+:class:`Host` (a typing.Protocol, below) for closest hits, light samples,
+occlusion and spawned rays; solid-angle light sampling is an optional
+capability (:class:`SolidAngleLightHost`).
 
-- ``intersect(o, d, active) -> Hit``: the closest hit of rays (o, d);
-- ``sample_light(x, u1, u2, active) -> mcrt.light.LightSample``: a point on a
-  light with its radiance and area density;
-- ``light_pdf_area(hit, o, active)``: the area density with which
-  ``sample_light`` would have chosen a hit light point (for MIS);
-- ``occluded(o, d, tmax, active) -> Bool``: whether anything but the light
-  blocks o + t d for 0 < t < tmax (tmax None: the whole ray, which always
-  meets something in a closed scene);
-- ``spawn_origin(hit)``: the origin of rays leaving a hit, offset against
-  self-intersection on the side the ray arrived from;
-- the array types ``Float``, ``UInt32``, ``Bool``, ``Vector3f``, ``Spectrum``
-  and what the scene holds: ``has_diffuse``, ``has_mirror``,
-  ``has_unsampled_emission``, ``rays_escape``.
-
-:mod:`mcrt.host` implements it on mcrt's own geometry (a kernel specialised
-to the scene: nothing is traced that the scene lacks) and
-:mod:`mcrt.plugins` on a Mitsuba scene, so that the standalone tracer and
-the Mitsuba plugin run this estimator by construction.
-
-Every bug of the catalogue (:mod:`mcrt.mutants`) is a named option of
-:class:`EstimatorOptions` whose default is the correct physics.
+Its inputs are explicit: the host, :class:`mcrt.options.EstimatorOptions`
+(render settings, catalogued mutations, tricks, the caustic split), and, for
+balance weights against a light tracer, that tracer's densities
+(``caustic_pdfs``, :mod:`mcrt.bidir`). Every bug of the catalogue
+(:mod:`mcrt.mutants`) is a value of a typed field of
+:class:`mcrt.options.Mutations` whose default is the correct physics.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Protocol, runtime_checkable
 
 import drjit as dr
 
-from mcrt.bsdf import LAMBERTIAN_SAMPLERS, lambertian_f, lambertian_weight, reflect, sample_lambertian
+from mcrt.bsdf import lambertian_f, lambertian_weight, reflect, sample_lambertian
 from mcrt.light import solid_angle_pdf
 from mcrt.minmax import fmin
+from mcrt.options import EstimatorOptions
 from mcrt.sampling import balance_heuristic, cosine_hemisphere_pdf
-
-UNBOUNDED = 2**32 - 1
-
-#: What the path tracer does with the paths eye D ... D S+ L (EstimatorOptions.mirror_caustics).
-MIRROR_CAUSTICS = ("all", "skip", "only", "mis")
-
-#: Light sampling strategies: uniform in area on the light, or uniform in the solid angle it subtends
-#: (the spherical rectangle of :func:`mcrt.sampling.square_to_spherical_rectangle`).
-LIGHT_SAMPLING = ("area", "solid_angle")
 
 #: Shadow rays stop this fraction short of the light point, so that they never hit the light itself.
 SHADOW_TMAX_SCALE = 1.0 - 2.0**-12
@@ -112,77 +93,50 @@ class Hit:
     extra: object = None  # what the host keeps for its own later calls (Mitsuba's SurfaceInteraction)
 
 
-@dataclass(frozen=True)
-class EstimatorOptions:
-    """The estimator's settings, then its named physics options.
+class Host(Protocol):
+    """What :class:`PathEstimator` asks of the scene it runs in (required of every host).
 
-    The physics options' defaults are the correct estimator; each other value
-    is one catalogued bug (:data:`mcrt.mutants.MUTANTS` maps bug names to them).
+    :class:`mcrt.host.McrtHost` implements it on mcrt's own geometry (a
+    kernel specialised to the scene: nothing is traced that the scene lacks)
+    and :class:`mcrt.plugins.host.MitsubaHost` on a Mitsuba scene, so the
+    standalone tracer and the Mitsuba plugin run this estimator by
+    construction.
     """
 
-    max_depth: int = 8  # longest path in segments; -1 unbounded
-    light_samples: int = 1  # K, points sampled on the light per Lambertian vertex
-    rr_depth: int = 5  # depth from which Russian roulette runs
-    mis: bool = False  # combine light samples and the cosine direction by the balance heuristic
-    hide_emitters: bool = False  # do not count emitters seen directly from the eye
+    # The array types of the host's backend.
+    Float: type
+    UInt32: type
+    Bool: type
+    Vector3f: type
+    Spectrum: type
+    # What the scene holds (Python bools: code for what a scene lacks is not traced).
+    has_diffuse: bool
+    has_mirror: bool
+    has_unsampled_emission: bool  # surfaces that emit where no light sample reaches (counted at every hit)
+    rays_escape: bool  # rays can leave the scene (false for the closed room)
 
-    lambertian_sampler: str = "cosine"  # mcrt.bsdf.LAMBERTIAN_SAMPLERS
-    brdf_inv_pi: bool = True  # the Lambertian BRDF is albedo / pi
-    nee_cos_surface: bool = True  # the geometry term has the cosine at the receiver
-    nee_cos_light: bool = True  # ... the cosine at the light
-    nee_inv_dist2: bool = True  # ... the 1 / d^2
-    nee_pdf_area: bool = True  # the light sample is divided by its area density (1 / A for one light)
-    count_emission: str = "unsampled"  # 'unsampled': where no light sample found it; 'always': counted twice
-    roulette: str = "unbiased"  # 'unbiased', or 'course2023': absorb with 0.75, else times 0.8
-    mirror_sign: float = 1.0  # -1: the mirror reflects the wrong way
-    extra_depth: int = 0  # segments added to a bounded max_depth
-    spawn_offset: bool = True  # rays leave a surface from an offset origin
-    shadow_bounded: bool = True  # shadow rays stop short of the light point
-    light_one_sided: bool = True  # the light emits from the side its normal points to only
+    def intersect(self, o, d, active=True) -> Hit:
+        """The closest hit of rays (o, d), d of unit length."""
 
-    # Efficiency tricks (mcrt.tricks); the defaults are the estimator above.
-    roulette_survival: float | None = None  # fixed survival probability; None: the scheme's (min(max beta, 0.95); 0.25)
-    roulette_start: int | None = None  # first depth roulette runs at; None: the scheme's (rr_depth; 1)
-    light_sampling: str = "area"  # 'area': uniform on the light; 'solid_angle': uniform in its solid angle
-    # Paths eye D ... D S+ L (first vertex diffuse, last a mirror): 'all' counts them; 'skip' leaves
-    # them to mcrt.bidir's light tracer; 'only' counts them alone (to check that light tracer); 'mis'
-    # counts them with the balance weight against the light tracer (PathEstimator.caustic_pdfs).
-    mirror_caustics: str = "all"
-    caustic_light_paths: float = 0.0  # > 0: balance weights ('mis', 'only'); the light subpaths per camera sample of a pixel
+    def sample_light(self, x, u1, u2, active=True):
+        """A point on a light seen from x (:class:`mcrt.light.LightSample`: radiance and area density)."""
 
-    def __post_init__(self):
-        if self.max_depth < -1:
-            raise ValueError(f"max_depth must be -1 (unbounded) or >= 0, got {self.max_depth}")
-        if self.light_samples < 1:
-            raise ValueError(f"light_samples must be >= 1, got {self.light_samples}")
-        if self.rr_depth < 1:
-            raise ValueError(f"rr_depth must be >= 1, got {self.rr_depth}")
-        if self.lambertian_sampler not in LAMBERTIAN_SAMPLERS:
-            raise ValueError(f"lambertian_sampler must be one of {', '.join(LAMBERTIAN_SAMPLERS)}")
-        if self.count_emission not in ("unsampled", "always"):
-            raise ValueError("count_emission must be 'unsampled' or 'always'")
-        if self.roulette not in ("unbiased", "course2023"):
-            raise ValueError("roulette must be 'unbiased' or 'course2023'")
-        if self.roulette_survival is not None and not 0.0 < self.roulette_survival <= 1.0:
-            raise ValueError(f"roulette_survival must be in (0, 1], got {self.roulette_survival}")
-        if self.roulette_start is not None and self.roulette_start < 1:
-            raise ValueError(f"roulette_start must be >= 1, got {self.roulette_start}")
-        if self.light_sampling not in LIGHT_SAMPLING:
-            raise ValueError(f"light_sampling must be one of {', '.join(LIGHT_SAMPLING)}, got {self.light_sampling!r}")
-        if self.mirror_caustics not in MIRROR_CAUSTICS:
-            raise ValueError(f"mirror_caustics must be one of {', '.join(MIRROR_CAUSTICS)}, got {self.mirror_caustics!r}")
-        if (self.mirror_caustics == "mis" and self.caustic_light_paths <= 0) or (
-                self.caustic_light_paths and self.mirror_caustics not in ("mis", "only")):
-            raise ValueError("mirror_caustics 'mis' needs caustic_light_paths > 0, and only 'mis' and 'only' take them")
-        if self.light_sampling == "solid_angle" and self.mis:
-            # Its weight Le cos_x Omega is bounded, which is what MIS is there for; the MIS weight of a
-            # light hit would need the solid angle seen from the ray's origin, which no host provides.
-            raise ValueError("solid-angle light sampling runs without MIS (its weight is bounded)")
+    def light_pdf_area(self, hit: Hit, active=True):
+        """The area density with which :meth:`sample_light` would have chosen a hit light point (for MIS)."""
 
-    @property
-    def depth_limit(self) -> int:
-        """max_depth as the loop compares it: UNBOUNDED for -1, plus ``extra_depth`` otherwise."""
-        return UNBOUNDED if self.max_depth == -1 else self.max_depth + self.extra_depth
+    def occluded(self, o, d, tmax, active=True):
+        """Whether anything but the light blocks o + t d, 0 < t < tmax (None: the whole ray; a closed scene blocks it)."""
+
+    def spawn_origin(self, hit: Hit):
+        """The origin of rays leaving a hit, offset against self-intersection on the side the ray arrived from."""
+
+
+@runtime_checkable
+class SolidAngleLightHost(Host, Protocol):
+    """An optional capability: light points uniform in the solid angle the light subtends (``light_sampling='solid_angle'``)."""
+
+    def sample_light_solid_angle(self, x, u1, u2, active=True):
+        """A point on the light uniform in its solid angle seen from x (pdf_area cos_y / (d^2 Omega))."""
 
 
 def _max_component(v):
@@ -194,19 +148,26 @@ def _max_component(v):
 
 
 class PathEstimator:
-    """The path loop of the module docstring on one host."""
+    """The path loop of the module docstring on one host.
 
-    #: With mirror_caustics 'mis': the densities both strategies evaluate (mcrt.bidir.LightTracer), set by mcrt.bidir.
-    caustic_pdfs = None
+    ``caustic_pdfs``: with balance weights for the paths eye D ... D S+ L
+    (``options.caustics.caustic_light_paths`` > 0), the densities that both
+    the path tracer and the light tracer evaluate
+    (:class:`mcrt.bidir.CausticDensities`).
+    """
 
-    def __init__(self, host, options: EstimatorOptions):
+    def __init__(self, host: Host, options: EstimatorOptions, *, caustic_pdfs=None):
         self.host, self.opt = host, options
         self.max_depth = options.depth_limit
-        if options.light_sampling == "solid_angle" and not hasattr(host, "sample_light_solid_angle"):
+        if options.tricks.light_sampling == "solid_angle" and not isinstance(host, SolidAngleLightHost):
             raise ValueError(f"{type(host).__name__} has no solid-angle light sampling (mcrt's own host has)")
+        if options.caustics.caustic_light_paths > 0 and caustic_pdfs is None:
+            raise ValueError("mirror_caustics 'mis' needs the light tracer's densities (caustic_pdfs, mcrt.bidir)")
+        self.caustic_pdfs = caustic_pdfs
         # Whether light found by a diffuse bounce counts: only then does a
         # path whose last vertex is diffuse need its final segment traced.
-        self.diffuse_sees_emission = options.mis or host.has_unsampled_emission or options.count_emission == "always"
+        self.diffuse_sees_emission = (options.settings.mis or host.has_unsampled_emission
+                                      or options.mutations.count_emission == "always")
 
     # ------------------------------------------------------------------
     @dr.syntax
@@ -225,8 +186,9 @@ class PathEstimator:
         """
         # Plain Python values only: dr.syntax treats the locals the loop reads as loop state.
         host = self.host
-        spawn_offset, mis, brdf_inv_pi = self.opt.spawn_offset, self.opt.mis, self.opt.brdf_inv_pi
-        caustics = self.opt.mirror_caustics
+        spawn_offset, brdf_inv_pi = self.opt.mutations.spawn_offset, self.opt.mutations.brdf_inv_pi
+        mis = self.opt.settings.mis
+        caustics = self.opt.caustics.mirror_caustics
 
         # ---- Loop state.
         L = host.Spectrum(0.0)  # radiance of the current path gathered so far
@@ -239,9 +201,7 @@ class PathEstimator:
         hit_first = host.Bool(False)  # the first ray hit something
         eye_diffuse = host.Bool(False)  # the current path's first vertex is diffuse (mirror_caustics)
         cam_density = host.Float(0.0)  # area density of the first vertex per camera sample (mirror_caustics 'mis')
-        balance = self.opt.caustic_light_paths > 0
-        if balance and self.caustic_pdfs is None:
-            raise ValueError("mirror_caustics 'mis' needs the light tracer's densities (mcrt.bidir sets caustic_pdfs)")
+        balance = self.opt.caustics.caustic_light_paths > 0
         active = host.Bool(active) & (self.max_depth > 0)  # the lane has a path in flight
 
         while dr.hint(active, label="mcrt_path"):
@@ -317,36 +277,36 @@ class PathEstimator:
         (``eye_diffuse``): the paths eye D ... D S+ L.
         """
         opt = self.opt
-        cos_y = hit.light_cos if opt.light_one_sided else dr.abs(hit.light_cos)
+        cos_y = hit.light_cos if opt.mutations.light_one_sided else dr.abs(hit.light_cos)
         seen = hit.light & (cos_y > 0)
         weight = 1.0
-        if opt.count_emission == "always":
+        if opt.mutations.count_emission == "always":
             counted = seen
-        elif not opt.mis:
+        elif not opt.settings.mis:
             counted = seen & specular
         else:
             counted = seen
             p_light = solid_angle_pdf(self.host.light_pdf_area(hit, active), dr.square(hit.t), cos_y)
-            weight = dr.select(specular, 1.0, balance_heuristic(1, pdf_bsdf, opt.light_samples, p_light))
-        if opt.hide_emitters:
+            weight = dr.select(specular, 1.0, balance_heuristic(1, pdf_bsdf, opt.settings.light_samples, p_light))
+        if opt.settings.hide_emitters:
             counted = counted & (depth > 1)
-        if opt.mirror_caustics != "all":
+        if opt.caustics.mirror_caustics != "all":
             caustic = specular & eye_diffuse  # after a mirror (specular at depth > 1: eye_diffuse is false at depth 1)
-            if opt.mirror_caustics in ("skip", "only"):
-                counted = counted & (caustic if opt.mirror_caustics == "only" else ~caustic)
-            if opt.caustic_light_paths:
+            if opt.caustics.mirror_caustics in ("skip", "only"):
+                counted = counted & (caustic if opt.caustics.mirror_caustics == "only" else ~caustic)
+            if opt.caustics.caustic_light_paths:
                 weight = dr.select(caustic, caustic_weight, weight)
         return dr.select(counted, hit.light_radiance * weight, 0.0)
 
     def scatter(self, d, hit, alive, u1, u2, sampler):
         """Next direction from (u1, u2), its weight f cos / pdf, and whether the bounce was specular (a mirror)."""
         host, opt = self.host, self.opt
-        d_next = sample_lambertian(host.Vector3f, hit.n, u1, u2, sampler, method=opt.lambertian_sampler)
-        weight = lambertian_weight(hit.color, inv_pi=opt.brdf_inv_pi)
+        d_next = sample_lambertian(host.Vector3f, hit.n, u1, u2, sampler, method=opt.mutations.lambertian_sampler)
+        weight = lambertian_weight(hit.color, inv_pi=opt.mutations.brdf_inv_pi)
         if not host.has_mirror:
             return d_next, weight, host.Bool(False)
         mirror = alive & hit.mirror
-        r = reflect(d, hit.n, sign=opt.mirror_sign)
+        r = reflect(d, hit.n, sign=opt.mutations.mirror_sign)
         return dr.select(mirror, r, d_next), dr.select(mirror, hit.color, weight), mirror
 
     def roulette(self, beta, depth, diffuse, alive, sampler):
@@ -360,29 +320,29 @@ class PathEstimator:
         vertex unless ``roulette_start`` is given.
         """
         opt = self.opt
-        if opt.roulette == "course2023":
-            absorb = 0.75 if opt.roulette_survival is None else 1.0 - opt.roulette_survival
+        if opt.mutations.roulette == "course2023":
+            absorb = 0.75 if opt.tricks.roulette_survival is None else 1.0 - opt.tricks.roulette_survival
             survive = sampler.next_1d() >= absorb
-            if opt.roulette_start is not None:
-                diffuse = diffuse & (depth >= opt.roulette_start)
+            if opt.tricks.roulette_start is not None:
+                diffuse = diffuse & (depth >= opt.tricks.roulette_start)
             return dr.select(diffuse, beta * 0.8, beta), alive & (~diffuse | survive)
-        q = fmin(_max_component(beta), 0.95) if opt.roulette_survival is None else opt.roulette_survival
-        roulette = alive & (depth >= (opt.rr_depth if opt.roulette_start is None else opt.roulette_start))
+        q = fmin(_max_component(beta), 0.95) if opt.tricks.roulette_survival is None else opt.tricks.roulette_survival
+        roulette = alive & (depth >= (opt.settings.rr_depth if opt.tricks.roulette_start is None else opt.tricks.roulette_start))
         survive = sampler.next_1d() < q
         return dr.select(roulette, beta * dr.rcp(q), beta), alive & (~roulette | survive)
 
     # ------------------------------------------------------------------
     def direct_light(self, origin, n, sampler, active):
         """(1/K) sum_k Le V G / p_A over K light samples: the direct light over f. K = 1 traces no loop."""
-        if self.opt.light_samples == 1:
+        if self.opt.settings.light_samples == 1:
             return self.light_sample(origin, n, sampler, active)
-        return self._light_sample_loop(origin, n, sampler, active) * (1.0 / self.opt.light_samples)
+        return self._light_sample_loop(origin, n, sampler, active) * (1.0 / self.opt.settings.light_samples)
 
     @dr.syntax
     def _light_sample_loop(self, origin, n, sampler, active):
         acc = self.host.Spectrum(0.0)  # sum of the light samples so far
         k = self.host.UInt32(0)  # light samples drawn
-        while dr.hint(active & (k < self.opt.light_samples), label="mcrt_light_samples"):
+        while dr.hint(active & (k < self.opt.settings.light_samples), label="mcrt_light_samples"):
             acc += self.light_sample(origin, n, sampler, active)
             k += 1
         return acc
@@ -395,28 +355,28 @@ class PathEstimator:
         sampling's share of it).
         """
         host, opt = self.host, self.opt
-        sample = host.sample_light if opt.light_sampling == "area" else host.sample_light_solid_angle
+        sample = host.sample_light if opt.tricks.light_sampling == "area" else host.sample_light_solid_angle
         ls = sample(origin, sampler.next_1d(), sampler.next_1d(), active)
         cos_x = dr.dot(n, ls.wi)
-        cos_y = ls.cos_y if opt.light_one_sided else dr.abs(ls.cos_y)
+        cos_y = ls.cos_y if opt.mutations.light_one_sided else dr.abs(ls.cos_y)
         valid = active & (cos_x > 0) & (cos_y > 0)
         g = self.geometry_term(cos_x, cos_y, ls.inv_dist)
-        tmax = ls.dist2 * ls.inv_dist * SHADOW_TMAX_SCALE if opt.shadow_bounded else None
+        tmax = ls.dist2 * ls.inv_dist * SHADOW_TMAX_SCALE if opt.mutations.shadow_bounded else None
         blocked = host.occluded(origin, ls.wi, tmax, valid)
-        if opt.mis:
+        if opt.settings.mis:
             p_light = solid_angle_pdf(ls.pdf_area, ls.dist2, cos_y)
-            g = g * balance_heuristic(opt.light_samples, p_light, 1, cosine_hemisphere_pdf(cos_x))
-        pdf = ls.pdf_area if opt.nee_pdf_area else 1.0
+            g = g * balance_heuristic(opt.settings.light_samples, p_light, 1, cosine_hemisphere_pdf(cos_x))
+        pdf = ls.pdf_area if opt.mutations.nee_pdf_area else 1.0
         return dr.select(valid & ~blocked, ls.radiance * (g / pdf), 0.0)
 
     def geometry_term(self, cos_x, cos_y, inv_dist):
         """G = cos_x cos_y / d^2, less the factors a catalogued bug leaves out."""
         opt = self.opt
         g = self.host.Float(1.0)
-        if opt.nee_cos_surface:
+        if opt.mutations.nee_cos_surface:
             g = cos_x
-        if opt.nee_cos_light:
+        if opt.mutations.nee_cos_light:
             g = g * cos_y
-        if opt.nee_inv_dist2:
+        if opt.mutations.nee_inv_dist2:
             g = g * dr.square(inv_dist)
         return g

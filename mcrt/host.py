@@ -18,7 +18,12 @@ from mcrt.light import RectangleLight
 
 
 class McrtHost:
-    """The estimator's host on a :class:`mcrt.geometry.Geometry` of backend ``geometry.m``."""
+    """The estimator's host (:class:`mcrt.estimator.Host`, with solid-angle light sampling) on a
+    :class:`mcrt.geometry.Geometry` of backend ``geometry.m``.
+
+    ``light`` (:class:`mcrt.light.RectangleLight`) is the scene's light, for
+    :mod:`mcrt.bidir`'s light tracer too.
+    """
 
     rays_escape = False  # the room is closed: every ray hits something
 
@@ -67,7 +72,11 @@ class McrtHost:
 
     def spawn_origin(self, hit):
         """p moved off the surface along the arriving side's normal by :meth:`mcrt.geometry.Geometry.offset`."""
-        return dr.fma(hit.n, self.geo.offset(hit.p), hit.p)
+        return self.offset_along(hit.p, hit.n)
+
+    def offset_along(self, p, n):
+        """p moved along the unit vector n by :meth:`mcrt.geometry.Geometry.offset` (rays leaving a surface start there)."""
+        return dr.fma(n, self.geo.offset(p), p)
 
     # ------------------------------------------------------------------
     def surface_color(self, sid):

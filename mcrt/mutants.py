@@ -7,8 +7,9 @@ the API (``mutants=("nee_no_cos_light",)``) or on the command line
 (``--mutant NAME``); a scene file cannot switch one on.
 
 A mutant is not a branch in the physics: it is a value of a typed option,
-of the estimator (:class:`mcrt.estimator.EstimatorOptions`), the camera
-(:class:`mcrt.camera.Pinhole`'s jitter), the output encoding or the scene.
+of the estimator (a field of :class:`mcrt.options.Mutations`), the camera
+(:class:`mcrt.camera.Pinhole`'s jitter), the output encoding
+(:func:`mcrt.srgb.encode_output`) or the scene.
 The standalone tracer and the Mitsuba plugin take the same options, so every
 mutant runs on both.
 """
@@ -18,6 +19,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 from typing import Callable
 
+from mcrt.options import Mutations
 from mcrt.scene import Scene
 
 
@@ -35,10 +37,13 @@ class Mutant:
     """One catalogued bug: what it does, and the option values that make it."""
 
     description: str
-    estimator: dict = field(default_factory=dict)  # EstimatorOptions fields and their buggy values
+    mutations: dict = field(default_factory=dict)  # fields of mcrt.options.Mutations and their buggy values
     jitter: bool = True  # False: every camera sample through the pixel centre
     output: str = "linear"  # 'srgb': the image written sRGB-encoded
     scene: Callable[[Scene], Scene] | None = None  # a change of the scene itself
+
+    def __post_init__(self):
+        Mutations(**self.mutations)  # typed: an unknown field or a bad value fails here, on import
 
 
 CATALOGUE: dict[str, Mutant] = {
@@ -46,50 +51,50 @@ CATALOGUE: dict[str, Mutant] = {
         "Russian roulette without dividing by the survival probability: at each diffuse bounce the path is "
         "absorbed with probability 0.75 and otherwise continues with its throughput times 0.8 (the 2023 "
         "course report's scheme) instead of divided by 0.25. Indirect light is too dark.",
-        estimator={"roulette": "course2023"},
+        mutations={"roulette": "course2023"},
     ),
     "nee_no_cos_light": Mutant(
         "Next-event estimation without the cosine at the light: direct light too bright at grazing angles to "
         "the light, far from it.",
-        estimator={"nee_cos_light": False},
+        mutations={"nee_cos_light": False},
     ),
     "nee_no_cos_surface": Mutant(
         "Next-event estimation without the cosine at the receiving surface: walls lit at grazing angles too "
         "bright.",
-        estimator={"nee_cos_surface": False},
+        mutations={"nee_cos_surface": False},
     ),
     "nee_no_inv_dist2": Mutant(
         "Next-event estimation without the 1/d^2 of the geometry term: direct light wrong by the squared "
         "distance to the light (far surfaces much too bright).",
-        estimator={"nee_inv_dist2": False},
+        mutations={"nee_inv_dist2": False},
     ),
     "nee_no_area": Mutant(
         "The light's pdf without its area (pdf 1 instead of 1/A): direct light scaled by 1/A (4x too dark for "
         "the 2x2 light).",
-        estimator={"nee_pdf_area": False},
+        mutations={"nee_pdf_area": False},
     ),
     "double_count": Mutant(
         "Emission counted both by next-event estimation and when a BSDF-sampled ray after a diffuse bounce "
         "hits the light: direct light counted twice.",
-        estimator={"count_emission": "always"},
+        mutations={"count_emission": "always"},
     ),
     "uniform_as_cosine": Mutant(
         "Uniform hemisphere directions weighted as if cosine-distributed: indirect light wrong (grazing "
         "directions over-weighted).",
-        estimator={"lambertian_sampler": "uniform_as_cosine"},
+        mutations={"lambertian_sampler": "uniform_as_cosine"},
     ),
     "ball_plus_normal": Mutant(
         "Lambertian directions from a random point inside the unit ball plus the normal (the point must be on "
         "the sphere): not cosine-distributed, indirect light wrong.",
-        estimator={"lambertian_sampler": "ball_plus_normal"},
+        mutations={"lambertian_sampler": "ball_plus_normal"},
     ),
     "brdf_no_inv_pi": Mutant(
         "Lambertian BRDF albedo instead of albedo/pi: every reflection pi times too bright.",
-        estimator={"brdf_inv_pi": False},
+        mutations={"brdf_inv_pi": False},
     ),
     "mirror_wrong_sign": Mutant(
         "Mirror reflection with the wrong sign: the reflected ray points into the sphere, which turns black.",
-        estimator={"mirror_sign": -1.0},
+        mutations={"mirror_sign": -1.0},
     ),
     "no_jitter": Mutant(
         "No pixel jitter: every sample through the pixel centre (aliased edges, box filter ignored).",
@@ -97,17 +102,17 @@ CATALOGUE: dict[str, Mutant] = {
     ),
     "depth_off_by_one": Mutant(
         "Maximum depth off by one: one bounce too many.",
-        estimator={"extra_depth": 1},
+        mutations={"extra_depth": 1},
     ),
     "no_offset": Mutant(
         "No offset on continuation and shadow rays: rays leaving a surface can hit it again (shadow acne, "
         "dark speckles on curved and convex objects).",
-        estimator={"spawn_offset": False},
+        mutations={"spawn_offset": False},
     ),
     "shadow_unbounded": Mutant(
         "Shadow rays not bounded by the distance to the light: whatever lies beyond the light (the ceiling) "
         "blocks it, so there is no direct light.",
-        estimator={"shadow_bounded": False},
+        mutations={"shadow_bounded": False},
     ),
     "gamma_output": Mutant(
         "Output gamma-encoded (sRGB) instead of linear radiance.",
@@ -119,7 +124,7 @@ CATALOGUE: dict[str, Mutant] = {
     ),
     "light_two_sided": Mutant(
         "The light emitting from both sides: its upper side lights the ceiling around it.",
-        estimator={"light_one_sided": False},
+        mutations={"light_one_sided": False},
     ),
 }
 
@@ -137,11 +142,11 @@ def check_mutants(names) -> frozenset[str]:
     return names
 
 
-def estimator_overrides(names) -> dict:
-    """The :class:`mcrt.estimator.EstimatorOptions` values that the mutants ``names`` set."""
+def mutation_values(names) -> dict:
+    """The :class:`mcrt.options.Mutations` fields that the mutants ``names`` set, and their values."""
     out: dict = {}
     for n in sorted(check_mutants(names)):
-        out.update(CATALOGUE[n].estimator)
+        out.update(CATALOGUE[n].mutations)
     return out
 
 

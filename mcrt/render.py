@@ -21,6 +21,13 @@ have is refused with a one-line ``ValueError`` naming both::
     a = render(scene, s, seed=1)                                  # renderer="mcrt"
     b = render(scene, s, renderer="mitsuba", seed=2)
     c = render(scene, s, renderer="plugin", seed=3, mutants=("nee_no_cos_light",))
+
+Renderer ``mcrt`` is the standalone tracer (:func:`mcrt.tracer.render_tracer`)
+at its defaults; its options ``bidirectional`` (:mod:`mcrt.bidir`),
+``mirror_caustics`` (the path tracer's share of the paths eye D ... D S+ L),
+``adaptive`` (:mod:`mcrt.tricks.adaptive`) and ``denoise``
+(:mod:`mcrt.tricks.denoise`) render with those renderers instead
+(:func:`render_mcrt`).
 """
 
 from __future__ import annotations
@@ -30,10 +37,16 @@ from typing import Callable
 
 from mcrt.film import RenderResult
 from mcrt.scene import RenderSettings, Scene
-from mcrt.tricks.options import RENDER_TRICKS, TRICK_OPTIONS
+from mcrt.options import TRICK_OPTIONS
 
 #: Options that every renderer takes, with their defaults.
 COMMON_OPTIONS = {"backend": "llvm", "progress": True, "spp_per_pass": None}
+
+#: Tricks that work on whole renders, options of the ``mcrt`` renderer: ``adaptive`` one of
+#: mcrt.tricks.adaptive.SCHEMES, ``denoise`` one of :data:`DENOISE_GUIDES`.
+RENDER_TRICKS = {"adaptive": None, "denoise": None}
+#: What guides the denoiser: the first-hit albedo and normal buffers, or the colour alone.
+DENOISE_GUIDES = ("albedo+normal", "color")
 
 
 @dataclass(frozen=True)
@@ -55,9 +68,59 @@ class Renderer:
         return self.load()(scene, settings, **{**known, **options})
 
 
-def _tracer():
-    from mcrt.tricks.render import render_mcrt  # render_tracer, with adaptive sampling and denoising as options
+def render_mcrt(scene: Scene, settings: RenderSettings, *, adaptive: str | None = None, denoise: str | None = None,
+                bidirectional: bool = False, mirror_caustics: str = "all", **options) -> RenderResult:
+    """Renderer ``mcrt``: the standalone tracer, or a bidirectional, caustic-split or adaptive render, then denoised where asked.
 
+    At its defaults it is :func:`mcrt.tracer.render_tracer` itself.
+    """
+    from mcrt.tracer import render_tracer
+
+    if denoise is not None:
+        if denoise not in DENOISE_GUIDES:
+            raise ValueError(f"denoise must be one of {', '.join(DENOISE_GUIDES)}, got {denoise!r}")
+        from mcrt.tricks.denoise import require_denoiser
+
+        require_denoiser()  # before the render, not after it
+    if adaptive is not None:
+        result = _adaptive(scene, settings, adaptive, {**options, "bidirectional": bidirectional,
+                                                      "mirror_caustics": mirror_caustics})
+    elif bidirectional:
+        from mcrt.bidir import render_bidirectional
+
+        result = render_bidirectional(scene, settings, mirror_caustics=mirror_caustics, **options)
+    elif mirror_caustics != "all":
+        from mcrt.bidir import render_caustic_split
+
+        result = render_caustic_split(scene, settings, mirror_caustics=mirror_caustics, **options)
+    else:
+        result = render_tracer(scene, settings, **options)
+    if denoise is None:
+        return result
+    from mcrt.tricks.aov import first_hit_buffers
+    from mcrt.tricks.denoise import denoise_result
+
+    s = settings
+    buffers = first_hit_buffers(scene, s.camera, s.width, s.height, backend=options.get("backend", "llvm")) \
+        if denoise == "albedo+normal" else None
+    return denoise_result(result, buffers)
+
+
+#: The estimator's options an adaptive render keeps at their defaults (it renders with the default estimator).
+ADAPTIVE_FIXED = {**TRICK_OPTIONS, "mutants": (), "intersector": "convex", "mis": None, "bidirectional": False,
+                  "mirror_caustics": "all"}
+
+
+def _adaptive(scene: Scene, settings: RenderSettings, scheme: str, options: dict) -> RenderResult:
+    from mcrt.tricks.adaptive import render_adaptive
+
+    other = sorted(k for k, d in ADAPTIVE_FIXED.items() if k in options and options[k] != d and (d != () or options[k]))
+    if other:
+        raise ValueError(f"adaptive sampling renders with the default estimator: it takes no option {other[0]!r}")
+    return render_adaptive(scene, settings, scheme=scheme, backend=options.get("backend", "llvm")).result
+
+
+def _mcrt():
     return render_mcrt
 
 
@@ -78,7 +141,7 @@ RENDERERS: dict[str, Renderer] = {
     for r in (
         Renderer("mcrt", "the standalone Dr.Jit tracer", "mcrt", "mcrt",
                  {"mutants": (), "intersector": "convex", "mis": None, "precision_guard": True, **TRICK_OPTIONS,
-                  "bidirectional": False, "mirror_caustics": "all", **RENDER_TRICKS}, _tracer),
+                  "bidirectional": False, "mirror_caustics": "all", **RENDER_TRICKS}, _mcrt),
         Renderer("plugin", "mcrt's estimator as the Mitsuba integrator 'mcrt'", "mitsuba", "mcrt",
                  {"mutants": (), "mis": None}, _plugin),
         Renderer("mitsuba", "Mitsuba 3's path integrator", "mitsuba", "mitsuba", {"integrator": "path"}, _mitsuba),

@@ -19,23 +19,22 @@ seed or spp does not recompile it.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
+from dataclasses import dataclass, field, replace
 
 import mcrt  # noqa: F401  (sets DRJIT_LIBLLVM_PATH before drjit loads)
 from mcrt.camera import Pinhole
-from mcrt.estimator import EstimatorOptions, PathEstimator
+from mcrt.estimator import PathEstimator
 from mcrt.film import Progress, RenderResult, run_tiles
-from mcrt.imageio import encode_output
 from mcrt.geometry import Geometry
 from mcrt.host import McrtHost
 from mcrt.light import needs_mis
 from mcrt.llvm import require_llvm
-from mcrt.mutants import camera_jitter, check_mutants, estimator_overrides, mutate_scene, output_encoding
+from mcrt.mutants import camera_jitter, check_mutants, mutate_scene, mutation_values, output_encoding
+from mcrt.options import Caustics, EstimatorOptions, trick_options
 from mcrt.precision import check_precision
 from mcrt.rng import SampleStreams
 from mcrt.scene import RenderSettings, Scene
-from mcrt.tricks.options import trick_options
+from mcrt.srgb import encode_output
 
 BACKENDS = ("llvm", "cuda")
 
@@ -72,9 +71,23 @@ def stream_keys(seed: int, pass_index: int = 0) -> tuple[int, int]:
     return key & 0xFFFFFFFF, key >> 32
 
 
+def pixel_jitter(streams):
+    """(u, v) in [0, 1)^2: where in its pixel a camera sample passes (the next two numbers of its stream).
+
+    The one place the tracer draws a camera sample's position in its pixel;
+    :meth:`mcrt.camera.Pinhole.ray` maps it to the ray.
+    """
+    return streams.next_1d(), streams.next_1d()
+
+
 @dataclass
 class Tracer:
-    """A compiled view of one scene and camera for repeated passes."""
+    """A compiled view of one scene and camera for repeated passes.
+
+    ``caustics`` and ``caustic_pdfs`` are the estimator's split of the paths
+    eye D ... D S+ L with a light tracer (:class:`mcrt.options.Caustics`;
+    :mod:`mcrt.bidir` builds them): plain path tracing by default.
+    """
 
     scene: Scene
     camera: str
@@ -88,7 +101,9 @@ class Tracer:
     mutants: frozenset = frozenset()
     precision_guard: bool = True
     mis: bool | None = None  # None: where the scene needs it (mcrt.light.needs_mis)
-    tricks: tuple = ()  # sorted (name, value) pairs of EstimatorOptions' efficiency tricks (mcrt.tricks.options)
+    tricks: tuple = ()  # sorted (name, value) pairs of the renderer's tricks (mcrt.options.TRICK_OPTIONS)
+    caustics: Caustics = field(default_factory=Caustics)
+    caustic_pdfs: object = None  # the light tracer's densities, with caustics.caustic_light_paths > 0
 
     def __post_init__(self):
         import drjit as dr
@@ -99,15 +114,15 @@ class Tracer:
         if self.precision_guard:
             check_precision(scene)  # refuse scenes where float32 would silently give a wrong image
         self.geometry = Geometry(scene, self.m, self.intersector)
-        tricks, overrides = dict(self.tricks), estimator_overrides(self.mutants)
+        tricks, overrides = dict(self.tricks), mutation_values(self.mutants)
         if set(tricks) & set(overrides):
             raise ValueError(f"option {sorted(set(tricks) & set(overrides))[0]} is set both by a trick and by a mutant")
         solid_angle = tricks.get("light_sampling") == "solid_angle"  # bounded weights: no MIS needed
-        self.options = EstimatorOptions(
+        self.options = replace(EstimatorOptions.build(
             max_depth=self.max_depth, light_samples=self.light_samples, rr_depth=self.rr_depth,
             mis=(needs_mis(scene) and not solid_angle) if self.mis is None else self.mis, **overrides, **tricks,
-        )
-        self.estimator = PathEstimator(McrtHost(self.geometry), self.options)
+        ), caustics=self.caustics)
+        self.estimator = PathEstimator(McrtHost(self.geometry), self.options, caustic_pdfs=self.caustic_pdfs)
         self.camera_model = Pinhole(scene.camera(self.camera), self.width, self.height, jitter=camera_jitter(self.mutants))
         self._frozen_launch = dr.freeze(self._launch_kernel, limit=8, warn_after=64)  # one recording per layout, a few kept
 
@@ -115,6 +130,60 @@ class Tracer:
         """(lanes per pixel, paths per lane, samples per pixel of one pass) of a render of this tracer at ``spp``."""
         k, b = lane_layout(self.width * self.height, spp_per_pass or spp, self.backend)
         return k, b, min(k * b, spp_per_pass or spp)
+
+    def render(self, *, seed: int, spp: int, progress: bool = True, spp_per_pass: int | None = None,
+               tile_pixels: int | None = None, rows: list[tuple[int, int]] | None = None,
+               scene_hash: str | None = None) -> RenderResult:
+        """The image of ``spp`` samples per pixel at ``seed``: mean and per-sample variance.
+
+        ``spp_per_pass`` caps the samples per pixel of one launch (default:
+        as :func:`lane_layout` deals them); ``tile_pixels`` sets the pixels
+        of a tile (default TILE_LANES / lanes per pixel) and never changes
+        the image. ``rows`` ((first row, count) bands) renders those rows
+        alone, stacked in order as the image, like a crop (benchmarks: a
+        part of a long render; ``extra['paths']`` counts the paths traced).
+        """
+        import drjit as dr
+
+        k, b, per_pass = self.layout(spp, spp_per_pass)
+        tile = tile_pixels or max(1, TILE_LANES // k)
+        W, H = self.width, self.height
+        ranges = [(first * W, count * W) for first, count in rows] if rows else [(0, W * H)]
+        total = sum(-(-count // tile) for _, count in ranges) * -(-spp // per_pass)
+
+        def launch(acc, p0, count, first, n):
+            return self.launch(seed, acc, range(p0, p0 + count), first, n, k, b)
+
+        totals = run_tiles(launch, width=W, height=H, spp=spp, tile_pixels=tile, spp_per_pass=per_pass,
+                           progress=Progress(total, label="mcrt", unit="passes", enabled=progress), pixel_ranges=ranges)
+        mean, var = encode_output(totals.mean, totals.variance, output_encoding(self.mutants))
+        c = self.caustics  # recorded with the tricks, where not plain path tracing
+        named = sorted((*self.tricks, *((("mirror_caustics", c.mirror_caustics),) if c.mirror_caustics != "all" else ()),
+                        *((("caustic_light_paths", c.caustic_light_paths),) if c.caustic_light_paths else ())))
+        return RenderResult(
+            mean=mean,
+            variance=var,
+            spp=totals.spp,
+            seed=seed,
+            max_depth=self.max_depth,
+            renderer="mcrt",
+            scene_hash=scene_hash or self.scene.content_hash(),
+            camera=self.camera,
+            wall_time=totals.wall_time,
+            compile_time=totals.compile_time,
+            extra={
+                "backend": self.backend,
+                "intersector": self.intersector,
+                "light_samples": str(self.light_samples),
+                "mis": str(self.options.settings.mis).lower(),
+                "rr_depth": str(self.rr_depth),
+                "mutants": ",".join(sorted(self.mutants)),
+                **({"tricks": ",".join(f"{k}={v}" for k, v in named)} if named else {}),
+                "paths": str(totals.paths),
+                "drjit_version": dr.__version__,
+                "mcrt_version": mcrt.__version__,
+            },
+        )
 
     def pixel_sums(self, seed: int, pixels, first_sample: int, n: int, *, spp_per_pass: int | None = None):
         """Sums of x and of x^2 over samples ``first_sample`` .. ``first_sample + n - 1`` of each of ``pixels``.
@@ -222,7 +291,6 @@ class Tracer:
         import drjit as dr
 
         m = self.m
-        W = self.width
         key0, key1, first, n, p0 = (dr.gather(m.UInt32, params, i) for i in range(5))
         idx = dr.arange(m.UInt32, count * k)
         i = idx >> (k.bit_length() - 1) if k > 1 else idx  # the lane's pixel among the launch's
@@ -230,22 +298,17 @@ class Tracer:
         pixel = p0 + i if pixels is None else (dr.gather(m.UInt32, pixels, i) if k > 1 else m.UInt32(pixels))
         start = lane * b  # the lane's first sample, counted from ``first``
         paths = dr.select(n > start, dr.minimum(n - start, b), 0)
-        col = m.Float(pixel % W)
-        row = m.Float(pixel // W)
         rng = SampleStreams.start(pixel, first + start, key0, key1)
-        eye = m.Array3f(*self.camera_model.eye)
-
-        def camera_ray(u, v):
-            return eye, self.camera_model.direction(col, row, u, v)
-
+        camera = self.camera_model
+        col, row = camera.pixel_position(pixel)
         stop = first + start + paths  # one past the lane's last sample
 
         def new_path(ended, streams):
             restart = ended & (streams.sample + 1 < stop)
             streams.restart(restart)
-            return restart, *camera_ray(streams.next_1d(), streams.next_1d())
+            return restart, *camera.ray(col, row, *pixel_jitter(streams))
 
-        o, d = camera_ray(rng.next_1d(), rng.next_1d())
+        o, d = camera.ray(col, row, *pixel_jitter(rng))
         # Lanes past n (paths 0) pad the launch to whole lanes of b: inactive, their sums stay 0.
         sum_x, sum_x2, _ = self.estimator.path_sums(o, d, rng, active=paths > 0, new_path=new_path)
         sums = [m.Float64(v[c]) for v in (sum_x, sum_x2) for c in range(3)]
@@ -320,8 +383,8 @@ def _tracer(scene: Scene, *args, scene_hash: str | None = None) -> Tracer:
 
 def render_tracer(scene: Scene, settings: RenderSettings, *, backend: str = "llvm", progress: bool = True,
                   spp_per_pass: int | None = None, mutants=(), intersector: str = "convex", mis: bool | None = None,
-                  precision_guard: bool = True, mirror_caustics: str = "all", caustic_light_paths: float = 0.0,
-                  tile_pixels: int | None = None, rows: list[tuple[int, int]] | None = None, **tricks) -> RenderResult:
+                  precision_guard: bool = True, tile_pixels: int | None = None, rows: list[tuple[int, int]] | None = None,
+                  **tricks) -> RenderResult:
     """Render ``scene`` at ``settings`` with the standalone tracer: mean and per-sample variance.
 
     Called through :func:`mcrt.render.render` (renderer ``mcrt``). ``mis``
@@ -329,60 +392,13 @@ def render_tracer(scene: Scene, settings: RenderSettings, *, backend: str = "llv
     needs it). ``precision_guard=False`` renders scenes that
     :func:`mcrt.precision.check_precision` would refuse (only to measure
     where float32 breaks). ``tricks`` are the estimator's efficiency tricks
-    (:data:`mcrt.tricks.options.TRICK_OPTIONS`, off at their defaults).
-    ``mirror_caustics`` and ``caustic_light_paths``
-    (:class:`mcrt.estimator.EstimatorOptions`) are for
-    :func:`mcrt.bidir.render_bidirectional`; 'only' renders the paths eye
-    D ... D S+ L alone, to check it. ``spp_per_pass`` caps the samples per pixel of one
-    launch (default: as :func:`lane_layout` deals them); ``tile_pixels``
-    sets the pixels of a tile (default TILE_LANES / lanes per pixel) and
-    never changes the image. ``rows`` ((first row, count) bands) renders
-    those rows alone, stacked in order as the image, like a crop
-    (benchmarks: a part of a long render; ``extra['paths']`` counts the
-    paths traced).
+    (:data:`mcrt.options.TRICK_OPTIONS`, off at their defaults). The other
+    options are :meth:`Tracer.render`'s. Tracers are kept for reuse across
+    renders of the same scene content (their kernels are recorded once).
     """
-    import drjit as dr
-
     s = settings
-    caustics = (("mirror_caustics", mirror_caustics),) if mirror_caustics != "all" else ()
-    if caustic_light_paths:  # mirror_caustics 'mis' (mcrt.bidir)
-        caustics += (("caustic_light_paths", caustic_light_paths),)
     scene_hash = scene.content_hash()
     tracer = _tracer(scene, s.camera, s.width, s.height, s.max_depth, s.light_samples, s.rr_depth, backend, intersector,
-                     frozenset(mutants), precision_guard, mis, tuple(sorted(trick_options(tricks) + caustics)),
-                     scene_hash=scene_hash)
-    k, b, per_pass = tracer.layout(s.spp, spp_per_pass)
-    tile = tile_pixels or max(1, TILE_LANES // k)
-    ranges = [(first * s.width, count * s.width) for first, count in rows] if rows else [(0, s.width * s.height)]
-    total = sum(-(-count // tile) for _, count in ranges) * -(-s.spp // per_pass)
-
-    def launch(acc, p0, count, first, n):
-        return tracer.launch(s.seed, acc, range(p0, p0 + count), first, n, k, b)
-
-    totals = run_tiles(launch, width=s.width, height=s.height, spp=s.spp, tile_pixels=tile, spp_per_pass=per_pass,
-                       progress=Progress(total, label="mcrt", unit="passes", enabled=progress), pixel_ranges=ranges)
-    mean, var = encode_output(totals.mean, totals.variance, output_encoding(tracer.mutants))
-    return RenderResult(
-        mean=mean,
-        variance=var,
-        spp=totals.spp,
-        seed=s.seed,
-        max_depth=s.max_depth,
-        renderer="mcrt",
-        scene_hash=scene_hash,
-        camera=s.camera,
-        wall_time=totals.wall_time,
-        compile_time=totals.compile_time,
-        extra={
-            "backend": backend,
-            "intersector": intersector,
-            "light_samples": str(s.light_samples),
-            "mis": str(tracer.options.mis).lower(),
-            "rr_depth": str(s.rr_depth),
-            "mutants": ",".join(sorted(tracer.mutants)),
-            **({"tricks": ",".join(f"{k}={v}" for k, v in tracer.tricks)} if tracer.tricks else {}),
-            "paths": str(totals.paths),
-            "drjit_version": dr.__version__,
-            "mcrt_version": mcrt.__version__,
-        },
-    )
+                     frozenset(mutants), precision_guard, mis, trick_options(tricks), scene_hash=scene_hash)
+    return tracer.render(seed=s.seed, spp=s.spp, progress=progress, spp_per_pass=spp_per_pass, tile_pixels=tile_pixels,
+                         rows=rows, scene_hash=scene_hash)

@@ -86,7 +86,6 @@ import mcrt  # noqa: F401  (sets DRJIT_LIBLLVM_PATH before drjit is imported)
 import mitsuba as mi
 
 from mcrt.film import RenderResult
-from mcrt.imageio import encode_output
 from mcrt.light import needs_mis
 from mcrt.mitsuba import _use, render_mitsuba
 from mcrt.mutants import CATALOGUE, camera_jitter, check_mutants, mutate_scene, output_encoding
@@ -94,6 +93,7 @@ from mcrt.plugins.host import MitsubaHost
 from mcrt.plugins.integrator import NAME, _on_variant_change, integrator_class, parse_mutants, register
 from mcrt.plugins.scene_check import check_scene
 from mcrt.scene import RenderSettings, Scene
+from mcrt.srgb import encode_output
 
 __all__ = ["MitsubaHost", "McrtIntegrator", "check_scene", "integrator_class", "parse_mutants", "register", "render_plugin"]
 
@@ -128,7 +128,7 @@ def render_plugin(scene: Scene, settings: RenderSettings, *, backend: str = "llv
     _use(backend)
     register()
     integrator = {"type": NAME, "light_samples": int(settings.light_samples), "mis": use_mis,
-                  "mutant": ",".join(sorted(n for n in names if CATALOGUE[n].estimator))}
+                  "mutant": ",".join(sorted(n for n in names if CATALOGUE[n].mutations))}
     r = render_mitsuba(mutated, settings, backend=backend, progress=progress, spp_per_pass=spp_per_pass,
                        integrator=integrator, jitter=camera_jitter(names))
     mean, var = encode_output(r.mean, r.variance, output_encoding(names))

@@ -11,8 +11,9 @@ from __future__ import annotations
 import mcrt  # noqa: F401  (sets DRJIT_LIBLLVM_PATH before drjit is imported)
 import mitsuba as mi
 
-from mcrt.estimator import EstimatorOptions, PathEstimator
-from mcrt.mutants import CATALOGUE, check_mutants, estimator_overrides
+from mcrt.estimator import PathEstimator
+from mcrt.options import EstimatorOptions
+from mcrt.mutants import CATALOGUE, check_mutants, mutation_values
 from mcrt.plugins.host import MitsubaHost
 from mcrt.plugins.scene_check import check_scene
 
@@ -30,7 +31,7 @@ def parse_mutants(spec) -> frozenset[str]:
     if isinstance(spec, str):
         spec = [s.strip() for s in spec.split(",")]
     names = check_mutants(s for s in spec if s)
-    other = sorted(n for n in names if not CATALOGUE[n].estimator)
+    other = sorted(n for n in names if not CATALOGUE[n].mutations)
     if other:
         raise ValueError(
             f"mcrt integrator: mutant {other[0]!r} changes the camera, the output or the scene, not the estimator: "
@@ -49,16 +50,16 @@ def _define_class():
             super().__init__(props)
             try:
                 self.mutants = parse_mutants(props.get("mutant", ""))
-                self.options = EstimatorOptions(
+                self.options = EstimatorOptions.build(
                     max_depth=int(props.get("max_depth", 8)), light_samples=int(props.get("light_samples", 1)),
                     rr_depth=int(props.get("rr_depth", 5)), mis=bool(props.get("mis", False)),
-                    hide_emitters=self.hide_emitters, **estimator_overrides(self.mutants),
+                    hide_emitters=self.hide_emitters, **mutation_values(self.mutants),
                 )
             except ValueError as e:
                 raise ValueError(str(e) if str(e).startswith("mcrt integrator:") else f"mcrt integrator: {e}") from None
 
         def to_string(self) -> str:
-            o = self.options
+            o = self.options.settings
             mut = f", mutant='{','.join(sorted(self.mutants))}'" if self.mutants else ""
             return (f"McrtIntegrator[max_depth={o.max_depth}, light_samples={o.light_samples}, rr_depth={o.rr_depth}, "
                     f"mis={o.mis}, hide_emitters={o.hide_emitters}{mut}]")

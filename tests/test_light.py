@@ -27,7 +27,8 @@ from scipy.stats import norm
 
 import mcrt
 from mcrt.closed_form import polygon_irradiance
-from mcrt.estimator import EstimatorOptions, PathEstimator
+from mcrt.estimator import PathEstimator
+from mcrt.options import EstimatorOptions
 from mcrt.sampling import balance_heuristic
 
 import drjit as dr  # noqa: E402  (after mcrt: it sets DRJIT_LIBLLVM_PATH)
@@ -84,7 +85,7 @@ HOSTS = {"mcrt": _mcrt_host, "mitsuba": _mitsuba_host}
 def light_sample_mean(scene, host_name, x, n, **options):
     """Mean and standard error of N light samples at x with normal n, green channel, on one host."""
     host, sampler = HOSTS[host_name](scene)
-    est = PathEstimator(host, EstimatorOptions(**options))
+    est = PathEstimator(host, EstimatorOptions.build(**options))
     origin = host.Vector3f(*(dr.full(host.Float, c, N) for c in x))
     value = est.light_sample(origin, host.Vector3f(*n), sampler, host.Bool(True))
     g = np.asarray(value[1].numpy(), dtype=np.float64)

@@ -27,7 +27,8 @@ import pytest
 from scipy.stats import norm
 
 import mcrt
-from mcrt.estimator import EstimatorOptions, PathEstimator
+from mcrt.estimator import PathEstimator
+from mcrt.options import EstimatorOptions
 from mcrt.render import render
 from mcrt.sampling import square_to_spherical_rectangle
 from mcrt.stats import chi2_gof
@@ -88,7 +89,7 @@ def test_the_course_roulette_as_a_trick_is_the_catalogued_bug(scene):
 ])
 def test_bad_trick_values_are_refused(options, message):
     with pytest.raises(ValueError, match=message):
-        EstimatorOptions(**options)
+        EstimatorOptions.build(**options)
 
 
 def test_whole_render_tricks_refuse_what_they_cannot_do(scene):
@@ -166,7 +167,7 @@ def _light_sample(scene, strategy, x, n, samples=200_000):
     from mcrt.rng import WeylRng
 
     host = McrtHost(Geometry(scene, m, "convex"))
-    est = PathEstimator(host, EstimatorOptions(light_sampling=strategy))
+    est = PathEstimator(host, EstimatorOptions.build(light_sampling=strategy))
     origin = m.Array3f(*(dr.full(m.Float, c, samples) for c in x))
     value = est.light_sample(origin, m.Array3f(*n), WeylRng.seeded(m, samples, m.UInt32(9), m.UInt32(10)), m.Bool(True))
     return np.asarray(value[1].numpy(), dtype=np.float64)
@@ -311,7 +312,7 @@ def test_denoise_without_pyoidn_fails_before_rendering(scene, monkeypatch):
     import sys
 
     import mcrt.tracer
-    from mcrt.tricks.render import render_mcrt
+    from mcrt.render import render_mcrt
 
     monkeypatch.setitem(sys.modules, "pyoidn", None)  # import pyoidn now raises ImportError
     monkeypatch.setattr(mcrt.tracer, "render_tracer", lambda *a, **k: pytest.fail("rendered before the check"))

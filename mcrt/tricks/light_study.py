@@ -42,13 +42,14 @@ def _sample(scene: Scene, strategy: str, x, n, samples: int, seed: int):
     import drjit as dr
     import drjit.llvm as m
 
-    from mcrt.estimator import EstimatorOptions, PathEstimator
+    from mcrt.estimator import PathEstimator
     from mcrt.geometry import Geometry
     from mcrt.host import McrtHost
+    from mcrt.options import EstimatorOptions
     from mcrt.rng import WeylRng
 
     host = McrtHost(Geometry(scene, m, "convex"))
-    est = PathEstimator(host, EstimatorOptions(light_sampling=strategy))
+    est = PathEstimator(host, EstimatorOptions.build(light_sampling=strategy))
     rng = WeylRng.seeded(m, samples, m.UInt32(seed), m.UInt32(seed + 1))
     # Opaque receivers: one kernel per strategy, not one per receiver.
     origin = m.Array3f(*(dr.opaque(m.Float, c, samples) for c in x))

@@ -2,7 +2,7 @@
 
 A :class:`Variant` is one configuration of one trick: the renderer options
 it passes to :func:`mcrt.render.render` (the estimator's tricks of
-:mod:`mcrt.tricks.options`), or a render that wraps the tracer (adaptive
+the ``mcrt`` renderer's :data:`mcrt.options.TRICK_OPTIONS`), or a render that wraps the tracer (adaptive
 sampling, denoising). ``claim`` is what theory says of its expectation
 ('unbiased' or 'biased'); the report sets it beside what the statistical
 comparison finds.
