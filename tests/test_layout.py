@@ -1,4 +1,5 @@
-"""The package's layout: no import cycles, and every package the source holds is one the install ships."""
+"""The package's layout: layers that import only downwards, no import cycles, and every package the source holds is one
+the install ships."""
 
 from __future__ import annotations
 
@@ -83,6 +84,98 @@ def test_no_import_cycles():
     graph["mcrt.report.run"] = graph["mcrt.report.run"] | {"mcrt.report"}
     graph["mcrt.report"] = graph["mcrt.report"] | {"mcrt.report.run"}
     assert cycles_through(graph, ("mcrt.grade", "mcrt.report")) == [["mcrt.report", "mcrt.report.run"]]
+
+
+#: The layers of mcrt, lowest first: (name, rank, module prefixes). A module may import modules of its own rank
+#: and below, never above. Each module belongs to the layer of its longest matching prefix. The README's
+#: Architecture section mirrors this table.
+LAYERS = (
+    ("foundation", 0, ("mcrt.llvm", "mcrt.exitcodes", "mcrt.minmax", "mcrt.srgb", "mcrt.util")),
+    ("renderer core", 1, ("mcrt", "mcrt.scene", "mcrt.camera", "mcrt.geometry", "mcrt.bsdf", "mcrt.light",
+                          "mcrt.sampling", "mcrt.rng", "mcrt.options", "mcrt.estimator", "mcrt.film", "mcrt.tracer",
+                          "mcrt.host", "mcrt.mutants", "mcrt.precision")),
+    ("renderers", 2, ("mcrt.render", "mcrt.bidir", "mcrt.plugins", "mcrt.mitsuba", "mcrt.tricks.adaptive",
+                      "mcrt.tricks.aov", "mcrt.tricks.denoise", "mcrt.closed_form")),
+    ("statistics and I/O", 2, ("mcrt.stats", "mcrt.imageio", "mcrt.metrics", "mcrt.compare", "mcrt.reference",
+                               "mcrt.provenance")),
+    ("studies and reports", 3, ("mcrt.report", "mcrt.validate", "mcrt.hardcases", "mcrt.tricks", "mcrt.bench",
+                                "mcrt.bench_limits", "mcrt.bench_report", "mcrt.threeway", "mcrt.validate_integrator",
+                                "mcrt.reports", "mcrt.pytest_plugin")),
+    ("grading and command line", 4, ("mcrt.grade", "mcrt.cli")),
+)
+
+
+def layer_of(module: str, layers=LAYERS) -> tuple[str, int] | None:
+    """(layer name, rank) of ``module``: the layer of its longest matching prefix; None where no prefix matches."""
+    best = None
+    for name, rank, prefixes in layers:
+        for p in prefixes:
+            if (module == p or module.startswith(p + ".")) and (best is None or len(p) > best[2]):
+                best = (name, rank, len(p))
+    return best[:2] if best else None
+
+
+def upward_imports(graph: dict[str, set[str]], layers=LAYERS) -> list[str]:
+    """'a (layer) imports b (higher layer)' for every import of a module from a layer above its own."""
+    out = []
+    for a in sorted(graph):
+        la = layer_of(a, layers)
+        for b in sorted(graph[a]):
+            lb = layer_of(b, layers)
+            if la and lb and lb[1] > la[1]:
+                out.append(f"{a} ({la[0]}) imports {b} ({lb[0]})")
+    return out
+
+
+def _mcrt_graph(package: Path = PACKAGE, plugins: Path = ROOT / "plugins") -> dict[str, set[str]]:
+    return import_graph({"mcrt": package, "mcrt.plugins": plugins})
+
+
+def test_every_module_has_a_layer():
+    """A new module is placed in LAYERS before it lands (the test names it)."""
+    assert [m for m in sorted(_mcrt_graph()) if layer_of(m) is None] == []
+
+
+def test_no_layer_imports_a_higher_one():
+    """The renderer core imports no renderer, study, report or grader; only the command line and grading are on top."""
+    graph = _mcrt_graph()
+    assert "mcrt.tracer" in graph and "mcrt.plugins.integrator" in graph and "mcrt.grade.grader" in graph
+    assert upward_imports(graph) == []
+    # The check sees an upward import: the core asking a study for its options, as it once did.
+    graph["mcrt.tracer"] = graph["mcrt.tracer"] | {"mcrt.tricks.study"}
+    assert upward_imports(graph) == ["mcrt.tracer (renderer core) imports mcrt.tricks.study (studies and reports)"]
+
+
+def test_layer_check_finds_an_import_planted_in_a_copy_of_the_source(tmp_path):
+    """The whole chain (files, ast, graph, layers) on a copy of the package with one function-level upward import."""
+    import shutil
+
+    copy = tmp_path / "mcrt"
+    shutil.copytree(PACKAGE, copy, ignore=shutil.ignore_patterns("__pycache__"))
+    assert upward_imports(_mcrt_graph(copy)) == []
+    camera = copy / "camera.py"
+    camera.write_text(camera.read_text() + "\n\ndef _planted():\n    from mcrt.grade import grader  # noqa: F401\n")
+    assert upward_imports(_mcrt_graph(copy)) == [
+        "mcrt.camera (renderer core) imports mcrt.grade (grading and command line)",
+        "mcrt.camera (renderer core) imports mcrt.grade.grader (grading and command line)",
+    ]
+
+
+def test_layer_lookup_takes_the_longest_prefix():
+    """On a synthetic table: a submodule listed apart from its package gets its own layer."""
+    layers = (("low", 0, ("p.a",)), ("high", 1, ("p", "p.b")))
+    assert layer_of("p.a.x", layers) == ("low", 0) and layer_of("p.c", layers) == ("high", 1)
+    assert layer_of("q", layers) is None
+    assert upward_imports({"p.a.x": {"p.b"}, "p.b": {"p.a.x"}}, layers) == ["p.a.x (low) imports p.b (high)"]
+
+
+def test_the_readme_architecture_section_names_every_layer():
+    """README's Architecture section mirrors LAYERS: each layer by name, in order."""
+    text = (ROOT / "README.md").read_text()
+    section = text[text.index("\n## Architecture"):]
+    section = section[:section.index("\n## ", 1)] if "\n## " in section[1:] else section
+    positions = [section.find(name) for name, _, _ in LAYERS]
+    assert -1 not in positions and positions == sorted(positions), positions
 
 
 def _recorded_commands() -> dict[str, str]:

@@ -79,19 +79,20 @@ def test_registered_and_loaded_from_a_dict():
     integ = mi.load_dict({"type": "mcrt", "max_depth": 3, "light_samples": 4, "rr_depth": 2, "mutant": "nee_no_area,rr_no_divide"})
     assert isinstance(integ, plugins.McrtIntegrator) and isinstance(integ, mi.SamplingIntegrator)
     o = integ.options
-    assert (o.max_depth, o.light_samples, o.rr_depth) == (3, 4, 2)
-    assert integ.mutants == {"nee_no_area", "rr_no_divide"} and not o.nee_pdf_area and o.roulette == "course2023"
+    assert (o.settings.max_depth, o.settings.light_samples, o.settings.rr_depth) == (3, 4, 2)
+    assert integ.mutants == {"nee_no_area", "rr_no_divide"}
+    assert not o.mutations.nee_pdf_area and o.mutations.roulette == "course2023"
     assert "light_samples=4" in integ.to_string()
     assert mi.load_dict({"type": "mcrt", "max_depth": -1}).options.depth_limit == 2**32 - 1  # unbounded
-    default = mi.load_dict({"type": "mcrt"}).options
+    default = mi.load_dict({"type": "mcrt"}).options.settings
     assert (default.max_depth, default.light_samples, default.rr_depth, default.mis) == (8, 1, 5, False)
-    assert mi.load_dict({"type": "mcrt", "mis": True}).options.mis
+    assert mi.load_dict({"type": "mcrt", "mis": True}).options.settings.mis
 
 
 def test_loaded_from_xml_and_rendered_by_mi_render():
     ms = mi.load_string(SMALL_XML)
     integ = ms.integrator()
-    assert isinstance(integ, plugins.McrtIntegrator) and integ.options.light_samples == 2 and integ.options.max_depth == 4
+    assert isinstance(integ, plugins.McrtIntegrator) and integ.options.settings.light_samples == 2 and integ.options.settings.max_depth == 4
     img = np.asarray(mi.render(ms, spp=8, seed=1))
     assert img.shape == (16, 16, 3) and np.all(np.isfinite(img)) and np.all(img >= 0)
     # The lit top of the orange sphere, black background; the light is out of view.
