@@ -34,7 +34,6 @@ import io
 import math
 import os
 import re
-import secrets
 import sys
 import tempfile
 import threading
@@ -47,6 +46,7 @@ from PIL import Image, ImageDraw, ImageFont
 
 from mcrt.film import RenderResult
 from mcrt.srgb import srgb_eotf, srgb_eotf_slope, srgb_oetf  # noqa: F401  (this module's PNG API uses them; others import them here)
+from mcrt.util import atomic
 
 PathLike = str | os.PathLike
 
@@ -89,28 +89,20 @@ def _read_bytes(path: PathLike, size: int = -1) -> bytes:
 
 
 def _atomic_write(path: PathLike, write: Callable[[str], None]) -> None:
-    """Run ``write(tmp)`` on a fresh file beside ``path``, then move it over ``path``.
+    """Run ``write(tmp)`` on a fresh file beside ``path``, then move it over ``path`` (:func:`mcrt.util.atomic.replacing`).
 
-    The temporary file is hidden (``.name.<pid>.<random>.tmp``) and removed on
-    any failure, so ``path`` is either the old file or the complete new one.
+    ``path`` is either the old file or the complete new one; a failure is
+    an :class:`ImageError` naming the file.
     """
     path = os.fspath(path)
-    folder, name = os.path.split(path)
-    tmp = os.path.join(folder, f".{name}.{os.getpid()}.{secrets.token_hex(4)}.tmp")
     try:
-        os.close(os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666))
+        with atomic.replacing(path) as tmp:
+            write(tmp)
+    except ImageError:
+        raise
     except OSError as e:
         raise ImageError(f"{path}: cannot write ({_one_line(e.strerror or e)})") from None
-    try:
-        write(tmp)
-        with open(tmp, "rb+") as f:
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    except BaseException as e:
-        with contextlib.suppress(OSError):
-            os.unlink(tmp)
-        if isinstance(e, ImageError) or not isinstance(e, Exception):
-            raise
+    except Exception as e:
         raise ImageError(f"{path}: cannot write ({_one_line(e)})") from e
 
 

@@ -1,8 +1,9 @@
 """Where a measurement was taken: facts that every report records.
 
 :func:`provenance` is the one dictionary every report, study and benchmark
-of the project stores beside its numbers; :func:`cpu_name` and
-:func:`source_hash` are its parts that other code needs alone (cache keys).
+of the project stores beside its numbers; :func:`machine`, :func:`cpu_name`
+and :func:`source_hash` are its parts that other code needs alone (the
+references' manifest, cache keys).
 """
 
 from __future__ import annotations
@@ -29,6 +30,11 @@ def cpu_name() -> str:
             if line.startswith("model name"):
                 return line.split(":", 1)[1].strip()
     return platform.processor() or platform.machine()
+
+
+def machine() -> dict[str, Any]:
+    """The machine a measurement ran on: ``cpu`` (:func:`cpu_name`), ``cores``, ``platform``."""
+    return {"cpu": cpu_name(), "cores": os.cpu_count(), "platform": platform.platform()}
 
 
 @functools.cache
@@ -90,7 +96,7 @@ def provenance(*, packages: tuple[str, ...] = (), **extra: Any) -> dict[str, Any
         "date": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
         "git_commit": git_commit(),
         "source_hash": source_hash(),
-        "machine": {"cpu": cpu_name(), "cores": os.cpu_count(), "platform": platform.platform()},
+        "machine": machine(),
         "versions": versions,
         "drjit_threads": dr.thread_count(),
         **extra,

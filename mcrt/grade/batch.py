@@ -36,6 +36,7 @@ from mcrt.grade.expected import Context, prepare_context
 from mcrt.grade.grader import STATUS_ERROR, STATUS_TIMEOUT, StudentResult, error_result
 from mcrt.grade.report import write_class, write_student
 from mcrt.grade.submissions import Submission, discover
+from mcrt.util.progress import log
 
 DEFAULT_MEMORY_MB = 4096
 STARTUP_TIMEOUT = 300.0
@@ -56,13 +57,9 @@ class ClassResult:
         return all(r.status == "graded" for r in self.results)
 
 
-def _log_stderr(line: str) -> None:
-    print(line, file=sys.stderr, flush=True)
-
-
 def grade_class(submissions: str | os.PathLike, assignment: Assignment, out: str | os.PathLike, *, jobs: int = 1,
                 timeout: float | None = None, cache_dir=None, single: bool = False, student: str | None = None,
-                context: Context | None = None, memory_mb: int = DEFAULT_MEMORY_MB, log=_log_stderr) -> ClassResult:
+                context: Context | None = None, memory_mb: int = DEFAULT_MEMORY_MB, log=log) -> ClassResult:
     """Grade every submission under ``submissions`` into ``out`` (see the module docstring).
 
     ``jobs`` worker processes (0: grade in this process, without timeouts);
@@ -159,7 +156,7 @@ class _Worker:
 
 
 def run_pool(subs: list[Submission], ctx: Context, out: Path, *, jobs: int, timeout: float, memory_mb: int = DEFAULT_MEMORY_MB,
-             log=_log_stderr) -> list[StudentResult]:
+             log=log) -> list[StudentResult]:
     """Grade ``subs`` with ``jobs`` supervised workers; every student gets a result and a results.json."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)

@@ -100,6 +100,7 @@ import numpy as np
 
 from mcrt.grade.assignment import Assignment
 from mcrt.grade.grader import StudentResult, TestResult
+from mcrt.util.fmt import short
 
 RUNNER = Path(__file__).with_name("_sandbox.py")
 FSIZE_LIMIT = 128 << 20  # any one file the student's process writes (its stdout included)
@@ -987,7 +988,7 @@ def _grade_code_checks(student, a, root, mod, problem, ctx, to, mem, tests, deta
     score = round(sum(t.score for t in tests), 4)
     maxs = sum(t.max_score for t in tests)
     failed = [t for t in tests if t.score < t.max_score]
-    shown = f"{score:.2f}".rstrip("0").rstrip(".")
+    shown = short(score)
     summary = (f"Full marks: {shown}/{maxs:g}." if not failed else
                f"{shown}/{maxs:g}. " + "; ".join(f"{t.name}: {t.output.splitlines()[0][:160]}" for t in failed[:2]))
     details["mode"] = "code"

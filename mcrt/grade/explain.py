@@ -71,6 +71,8 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from mcrt.scene import Lambertian, Mirror, Scene
+from mcrt.util.fmt import short as _num
+from mcrt.util.jsonsafe import json_safe
 
 #: Share of the excess chi-square the best candidate must explain to be named.
 NAMED = 0.5
@@ -276,16 +278,8 @@ class Candidate:
 
     def to_dict(self) -> dict:
         return {"mutant": self.key, "family": self.family, "description": self.text, "explained": self.explained,
-                "chi2": self.chi2, "value": _jsonable(self.value), "catalogue": self.catalogue, "where": self.where,
+                "chi2": self.chi2, "value": json_safe(self.value), "catalogue": self.catalogue, "where": self.where,
                 "amplitude": None, "chi2_best_amplitude": None}
-
-
-def _jsonable(v):
-    if isinstance(v, (tuple, list, np.ndarray)):
-        return [_jsonable(x) for x in v]
-    if isinstance(v, (np.floating, np.integer)):
-        return v.item()
-    return v
 
 
 def _fmt(v, digits: int = 2) -> str:
@@ -293,10 +287,6 @@ def _fmt(v, digits: int = 2) -> str:
     if len(set(round(x, digits) for x in v)) == 1:
         return f"{v[0]:.{digits}f}"
     return "(" + ", ".join(f"{x:.{digits}f}" for x in v) + ")"
-
-
-def _num(x: float) -> str:
-    return f"{x:.2f}".rstrip("0").rstrip(".")
 
 
 class _Fit:

@@ -73,6 +73,7 @@ from mcrt.grade.score import (
 from mcrt.grade.structure import detect as detect_structure
 from mcrt.grade.structure import families as structure_families
 from mcrt.grade.submissions import Submission, choose_images, read_manifest
+from mcrt.util.fmt import short as _num
 
 STATUS_GRADED = "graded"
 STATUS_ERROR = "error"
@@ -143,10 +144,6 @@ class _Rubric:
                 why = f"not graded: {self.blocked}" if self.blocked else "not graded"
                 out.append(TestResult(c.name, c.title, 0.0, c.points, why, c.visibility, "not graded"))
         return out
-
-
-def _num(x: float) -> str:
-    return f"{x:.2f}".rstrip("0").rstrip(".")
 
 
 def _fmt_pct(x: float) -> str:
@@ -873,7 +870,7 @@ class _Grader:
         score = round(sum(t.score for t in tests), 4)
         max_score = sum(t.max_score for t in tests)
         failed = [t for t in tests if t.status in ("failed", "not graded") and t.max_score > 0]
-        shown = f"{score:.2f}".rstrip("0").rstrip(".")
+        shown = _num(score)
         if not failed:
             summary = f"Full marks: {shown}/{max_score:g}. " + (self.headline or "")
         else:

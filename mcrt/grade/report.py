@@ -27,7 +27,6 @@ import html
 import io
 import json
 import math
-import os
 import statistics
 from collections import Counter
 from pathlib import Path
@@ -36,6 +35,9 @@ import numpy as np
 from PIL import Image
 
 from mcrt.stats.tiles import tile_box, tile_expand
+from mcrt.util import atomic
+from mcrt.util.fmt import short as _num
+from mcrt.util.jsonsafe import json_safe
 
 SCHEMA = "mcrt.grade.results/1"
 DIFF_VMAX = 0.25  # the relative-difference maps saturate at +-25 %
@@ -124,23 +126,6 @@ def render_figures(fig: dict) -> list[tuple[str, str, str]]:
 # --------------------------------------------------------------------------
 # Per student
 # --------------------------------------------------------------------------
-
-
-def _json_safe(x):
-    if isinstance(x, dict):
-        return {str(k): _json_safe(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [_json_safe(v) for v in x]
-    if isinstance(x, (np.floating, float)):
-        v = float(x)
-        return v if math.isfinite(v) else None
-    if isinstance(x, (np.integer,)):
-        return int(x)
-    if isinstance(x, (np.bool_,)):
-        return bool(x)
-    if isinstance(x, np.ndarray):
-        return _json_safe(x.tolist())
-    return x
 
 
 #: What a student can do about a failed criterion (results.json, per test); ``{...}`` from the assignment.
@@ -245,7 +230,7 @@ def results_json(res, assignment) -> dict:
     if res.notes:
         lines.append("")
         lines += [f"- Note: {md_text(n)}" if "\n" not in n.strip() else f"Note:\n\n{md_text(n)}" for n in res.notes]
-    return _json_safe({
+    return json_safe({
         "score": res.score,
         "max_score": res.max_score,
         "execution_time": round(res.elapsed, 3),
@@ -265,9 +250,7 @@ def results_json(res, assignment) -> dict:
 def write_json_atomic(path: Path, data: dict) -> None:
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    tmp.write_text(json.dumps(data, indent=1, allow_nan=False))
-    os.replace(tmp, path)
+    atomic.write_text(path, json.dumps(data, indent=1, allow_nan=False), fsync=False)
 
 
 def write_student(res, assignment, out_dir: Path) -> Path:
@@ -275,13 +258,9 @@ def write_student(res, assignment, out_dir: Path) -> Path:
     d = Path(out_dir) / res.student
     d.mkdir(parents=True, exist_ok=True)
     write_json_atomic(d / "results.json", results_json(res, assignment))
-    tmp = d / f".feedback.html.{os.getpid()}.tmp"
     try:
-        page = feedback_html(res, assignment)
-        tmp.write_text(page, encoding="utf-8", errors="replace")
-        os.replace(tmp, d / "feedback.html")
+        atomic.write_text(d / "feedback.html", feedback_html(res, assignment), errors="replace", fsync=False)
     except Exception as e:  # noqa: BLE001 - the page is a courtesy; results.json is what counts
-        tmp.unlink(missing_ok=True)
         (d / "feedback.html").write_text(f"<p>feedback page could not be written: {html.escape(str(e))}</p>",
                                          encoding="utf-8", errors="replace")
     return d
@@ -296,8 +275,6 @@ table{border-collapse:collapse;width:100%}td,th{border-bottom:1px solid #ddd;pad
 """
 
 
-def _num(x: float) -> str:
-    return f"{x:.2f}".rstrip("0").rstrip(".")
 
 
 def feedback_html(res, assignment) -> str:
@@ -373,8 +350,8 @@ def write_class(results: list, assignment, out_dir: Path, *, elapsed: float = 0.
     criteria = criteria if criteria is not None else [(c.name, c.points, c.title) for c in assignment.rubric]
     crit = [c[0] for c in criteria]
     maxs = sum(c[1] for c in criteria)
-    tmp = out / f".grades.csv.{os.getpid()}.tmp"
-    with open(tmp, "w", newline="", encoding="utf-8", errors="replace") as f:
+    with (atomic.replacing(out / "grades.csv", fsync=False) as tmp,
+          open(tmp, "w", newline="", encoding="utf-8", errors="replace") as f):
         w = csv.writer(f)
         w.writerow(["student", "status", "score", "max_score", *crit, "diagnosis", "summary", "seconds"])
         for r in sorted(results, key=lambda r: r.student):
@@ -382,7 +359,6 @@ def write_class(results: list, assignment, out_dir: Path, *, elapsed: float = 0.
             top = r.diagnosis[0]["mutant"] if r.diagnosis else ""
             w.writerow([r.student, r.status, f"{r.score:g}", f"{r.max_score:g}", *(f"{by.get(c, 0):g}" for c in crit), top,
                         r.summary[:300], f"{r.elapsed:.2f}"])
-    os.replace(tmp, out / "grades.csv")
 
     scores = [r.score for r in results]
     summ = {

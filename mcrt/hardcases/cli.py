@@ -6,7 +6,6 @@ or negative values or the renderers disagree.
 
 from __future__ import annotations
 
-import sys
 import time
 from pathlib import Path
 
@@ -17,6 +16,7 @@ from mcrt.hardcases.convergence import CONVERGENCE_CASES, convergence
 from mcrt.hardcases.markdown import case_table
 from mcrt.hardcases.output import REPORT_DIR, write_report
 from mcrt.hardcases.sweep import precision_sweep
+from mcrt.util.progress import log
 
 def register(subparsers) -> None:
     """Add ``mcrt hardcases`` to the ``mcrt`` command line."""
@@ -50,9 +50,6 @@ def cmd_hardcases(args) -> int:
     for name, v in (("--spp", args.spp), ("--ref-spp", args.ref_spp), ("--res", args.res)):
         if v < 2:
             raise ValueError(f"{name} must be at least 2, got {v}")
-
-    def log(msg):
-        print(msg, file=sys.stderr, flush=True)
 
     out = Path(args.out)
     t0 = time.perf_counter()

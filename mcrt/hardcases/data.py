@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 from dataclasses import asdict
 from pathlib import Path
 from typing import Any
@@ -10,7 +9,7 @@ from typing import Any
 from mcrt.hardcases.cases import ALPHA, SEEDS, TILE, CaseResult
 from mcrt.hardcases.convergence import ConvergenceRow
 from mcrt.hardcases.sweep import SweepRow, sweep_limits
-from mcrt.report.data import clean
+from mcrt.util.jsonsafe import json_safe, write_json
 
 #: Schema number of data.json (2: the run's provenance under ``provenance``, :func:`mcrt.provenance.provenance`).
 SCHEMA = 2
@@ -19,7 +18,7 @@ SCHEMA = 2
 def report_data(results: list[CaseResult], *, command: str, prov: dict[str, Any], settings: dict[str, Any],
                 sweep: list[SweepRow] | None = None, conv: list[ConvergenceRow] | None = None) -> dict[str, Any]:
     """Everything the run measured, JSON-ready (non-finite numbers as null)."""
-    return clean({
+    return json_safe({
         "schema": SCHEMA, "command": command, "provenance": prov, "settings": settings, "seeds": SEEDS,
         "alpha": ALPHA, "tile": TILE, "correction": "holm",
         "cases": [asdict(r) | {"passed": r.passed, "problems": r.problems} for r in results],
@@ -30,6 +29,4 @@ def report_data(results: list[CaseResult], *, command: str, prov: dict[str, Any]
 
 
 def write(path: Path, data: dict[str, Any]) -> Path:
-    path = Path(path)
-    path.write_text(json.dumps(data, indent=2, allow_nan=False) + "\n", encoding="utf-8")
-    return path
+    return write_json(path, data, indent=2)

@@ -6,8 +6,6 @@ import contextlib
 import datetime as _dt
 import os
 import platform
-import secrets
-import sys
 import time
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from dataclasses import dataclass, field, replace
@@ -23,20 +21,17 @@ from mcrt.reference.spec import (CHUNK_DIR_NAME, DEFAULT_BASE_SEED, DEFAULT_SPP,
                                  size_of)
 from mcrt.render import render
 from mcrt.scene import Scene
+from mcrt.util import atomic
+from mcrt.util.progress import log
 
 
 def machine_info() -> dict[str, Any]:
-    """Where this process runs: host, OS, CPU model, core count, Python."""
-    from mcrt.provenance import cpu_name
+    """Where this process runs: host, and :func:`mcrt.provenance.machine` (OS, CPU model, core count), Python."""
+    from mcrt.provenance import machine
 
-    cpu = cpu_name()
-    return {
-        "host": platform.node(),
-        "platform": platform.platform(),
-        "cpu": cpu,
-        "cores": os.cpu_count(),
-        "python": platform.python_version(),
-    }
+    m = machine()
+    return {"host": platform.node(), "platform": m["platform"], "cpu": m["cpu"], "cores": m["cores"],
+            "python": platform.python_version()}
 
 
 
@@ -104,12 +99,6 @@ def installed_versions(backend: str) -> dict[str, str]:
 
 def _chunk_path(folder: Path, index: int) -> Path:
     return folder / f"chunk_{index:04d}.exr"
-
-
-def _log(msg: str, enabled: bool = True) -> None:
-    if enabled:
-        print(msg, file=sys.stderr, flush=True)
-
 
 
 @dataclass
@@ -224,10 +213,10 @@ def build_reference(
             if problem is None:
                 chunks[t.index] = r
                 continue
-            _log(f"reference {key}: chunk {t.index} not reusable ({problem}); rendering it again", progress)
+            log(f"reference {key}: chunk {t.index} not reusable ({problem}); rendering it again", progress)
         todo.append(t)
     reused = sorted(chunks)
-    _log(f"reference {key}: {spp} spp in {len(tasks)} chunks of {chunk_spp} spp; "
+    log(f"reference {key}: {spp} spp in {len(tasks)} chunks of {chunk_spp} spp; "
          f"{len(reused)} done, {len(todo)} to render", progress)
 
     # -- render the rest ---------------------------------------------------
@@ -268,7 +257,7 @@ def build_reference(
     )
     path = directory / f"{key}.exr"
     # Written under a temporary name; commit_reference renames it into place together with the manifest.
-    staged = directory / f".{path.name}.{os.getpid()}.{secrets.token_hex(4)}.tmp"
+    staged = atomic.temporary_path(path)
     write_exr(staged, merged)
     wall = time.perf_counter() - t_start
 
@@ -315,7 +304,7 @@ def build_reference(
                 _chunk_path(folder, t.index).unlink()
         with contextlib.suppress(OSError):
             folder.rmdir()
-    _log(f"reference {key}: wrote {display_path(path)} ({merged.spp} spp, {entry['bytes'] / 1024:.0f} KiB, "
+    log(f"reference {key}: wrote {display_path(path)} ({merged.spp} spp, {entry['bytes'] / 1024:.0f} KiB, "
          f"rendered {len(rendered)} chunks in {wall:.1f} s)", progress)
     return BuildResult(key, path, entry, merged, sorted(rendered), reused, wall)
 

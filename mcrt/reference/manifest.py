@@ -18,11 +18,11 @@ import contextlib
 import hashlib
 import json
 import os
-import secrets
 from pathlib import Path
 from typing import Any, Iterator
 
 from mcrt.reference.errors import CorruptReference
+from mcrt.util import atomic
 from mcrt.reference.spec import CHUNK_DIR_NAME, MANIFEST_NAME, REFERENCE_DIR, SCHEMA, display_path
 
 
@@ -33,21 +33,6 @@ def sha256_file(path: str | os.PathLike) -> str:
         for block in iter(lambda: f.read(1 << 20), b""):
             h.update(block)
     return h.hexdigest()
-
-
-def _atomic_write_text(path: Path, text: str) -> None:
-    """Write ``text`` to a temporary file beside ``path``, fsync it, move it over ``path``."""
-    tmp = path.parent / f".{path.name}.{os.getpid()}.{secrets.token_hex(4)}.tmp"
-    try:
-        with open(tmp, "w", encoding="utf-8") as f:
-            f.write(text)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        with contextlib.suppress(OSError):
-            tmp.unlink()
-        raise
 
 
 @contextlib.contextmanager
@@ -91,7 +76,7 @@ def read_manifest(directory: str | os.PathLike = REFERENCE_DIR) -> dict[str, Any
 
 def write_manifest(directory: Path, data: dict[str, Any]) -> None:
     data = {"schema": SCHEMA, "references": dict(sorted(data["references"].items()))}
-    _atomic_write_text(directory / MANIFEST_NAME, json.dumps(data, indent=2) + "\n")
+    atomic.write_text(directory / MANIFEST_NAME, json.dumps(data, indent=2) + "\n")
 
 
 #: The journal of a commit in progress (see the module docstring).
@@ -153,7 +138,7 @@ def commit_reference(directory: Path, staged: Path, key: str, entry: dict[str, A
         data["references"][key] = entry
         journal = {"schema": SCHEMA, "references": dict(sorted(data["references"].items())),
                    "pending": {"key": key, "file": entry["file"], "sha256": entry["sha256"]}}
-        _atomic_write_text(directory / PENDING_NAME, json.dumps(journal, indent=2) + "\n")
+        atomic.write_text(directory / PENDING_NAME, json.dumps(journal, indent=2) + "\n")
         try:
             _replace_file(staged, target)
         except BaseException:

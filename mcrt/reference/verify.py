@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import os
-import sys
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -15,11 +14,7 @@ from mcrt.reference.manifest import read_manifest, sha256_file
 from mcrt.reference.spec import (MANIFEST_NAME, REFERENCE_DIR, VERIFY_BASE_SEED, VERIFY_MIN_SPP, VERIFY_PATHS,
                                  chunk_seed, data_path, display_path, rebuild_command)
 from mcrt.scene import Scene, load_scene
-
-
-def _log(msg: str, enabled: bool = True) -> None:
-    if enabled:
-        print(msg, file=sys.stderr, flush=True)
+from mcrt.util.progress import log
 
 
 def entry_scene(entry: dict[str, Any]) -> Scene:
@@ -174,7 +169,7 @@ def verify_references(
         from mcrt.render import render as render_image
         from mcrt.stats import compare
 
-        _log(f"verify {key}: rendering {w}x{h} at {n} spp (seed {fresh_seed})", progress)
+        log(f"verify {key}: rendering {w}x{h} at {n} spp (seed {fresh_seed})", progress)
         try:
             scene = entry_scene(entry)
             s = scene.settings(camera=entry["camera"], width=w, height=h, spp=n, max_depth=entry["max_depth"],

@@ -30,7 +30,8 @@ class ReportOutput:
 def write_report(data, out: str | Path, *, clean: bool = True) -> ReportOutput:
     """Write every file of a report for measured ``data`` into ``out``."""
     from mcrt.report.content import build_document
-    from mcrt.report.data import data_dict, write_csv, write_json
+    from mcrt.report.data import data_dict, write_csv
+    from mcrt.util.jsonsafe import write_json
     from mcrt.report.html import write as write_html
     from mcrt.report.images import write_strips
     from mcrt.report.markdown import write as write_markdown

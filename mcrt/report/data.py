@@ -3,16 +3,14 @@
 from __future__ import annotations
 
 import csv
-import json
-import math
 from dataclasses import asdict, fields
 from pathlib import Path
 from typing import Any
 
 from mcrt import metrics
 from mcrt.report.run import Measurement, ReportData
-from mcrt.report.slopes import SlopeFit
 from mcrt.report.summary import Summary
+from mcrt.util.jsonsafe import json_safe
 
 #: Schema tag of data.json; bump the number when a field changes meaning or goes away.
 SCHEMA = "mcrt.report/1"
@@ -34,26 +32,9 @@ TOP_KEYS = ("schema", "name", "config", "scene", "provenance", "reference", "con
 MEASUREMENT_KEYS = tuple(f.name for f in fields(Measurement))
 
 
-def clean(x: Any) -> Any:
-    """JSON-safe: NaN and infinities become None, tuples lists, paths strings, fits dicts."""
-    if isinstance(x, SlopeFit):
-        return clean(x.to_dict())
-    if isinstance(x, dict):
-        return {str(k): clean(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [clean(v) for v in x]
-    if isinstance(x, float):
-        return x if math.isfinite(x) else None
-    if isinstance(x, Path):
-        return str(x)
-    if hasattr(x, "item") and callable(x.item):  # numpy scalars
-        return clean(x.item())
-    return x
-
-
 def data_dict(data: ReportData, s: Summary, files: list[str]) -> dict[str, Any]:
     cfg = data.config
-    return clean({
+    return json_safe({
         "schema": SCHEMA,
         "name": cfg.name,
         "config": cfg.to_dict(),
@@ -73,11 +54,6 @@ def data_dict(data: ReportData, s: Summary, files: list[str]) -> dict[str, Any]:
         "runtime_s": data.runtime,
         "files": sorted(files),
     })
-
-
-def write_json(path: Path, d: dict) -> Path:
-    Path(path).write_text(json.dumps(d, indent=1, allow_nan=False) + "\n", encoding="utf-8")
-    return Path(path)
 
 
 def write_csv(path: Path, data: ReportData) -> Path:

@@ -7,12 +7,12 @@ from dataclasses import asdict
 from pathlib import Path
 
 from mcrt.report.content import fmt
-from mcrt.report.data import clean, write_json
 from mcrt.report.markdown import write as write_markdown
 from mcrt.tricks import plots
 from mcrt.tricks.study import StudyData, measurement_dicts, rung_dicts
 from mcrt.tricks.variants import PLAIN, TRICKS
 from mcrt.tricks.verdicts import TRICK_NAMES, WORTH, denoiser_numbers, rungs_of, variant_row, verdicts
+from mcrt.util.jsonsafe import json_safe, write_json
 
 #: Schema tag of data.json.
 SCHEMA = "mcrt.tricks/1"
@@ -196,7 +196,7 @@ def write_report(data: StudyData, out: Path, *, command: str, svg: bool = False)
     prov = provenance(command=command, packages=("pyoidn",))
     write_markdown(out / "index.md", document(data, command, prov, lines, files))
     names = sorted([*files.values(), "index.md", "data.json"])
-    write_json(out / "data.json", clean({
+    write_json(out / "data.json", json_safe({
         "schema": SCHEMA, "command": command, "provenance": prov, "config": asdict(data.config),
         "scene": {"name": data.scene.name, "path": _scene_path(data), "hash": data.scene.content_hash()},
         "reference": {"key": data.reference_key, "spp": data.reference_spp, "floor": data.floor},

@@ -6,14 +6,12 @@ import json
 from pathlib import Path
 from typing import Any
 
-from mcrt.report.data import clean
+from mcrt.util.jsonsafe import write_json
 
 
 def write(path: Path, study: dict[str, Any], meta: dict[str, Any]) -> Path:
     """Write one study with its provenance as strict JSON (non-finite numbers become null)."""
-    path = Path(path)
-    path.write_text(json.dumps(clean({"meta": meta, **study}), indent=1, allow_nan=False) + "\n", encoding="utf-8")
-    return path
+    return write_json(path, {"meta": meta, **study})
 
 
 def read(path: Path) -> dict[str, Any] | None:

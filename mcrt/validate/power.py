@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-import sys
 import time
 from collections.abc import Sequence
 from dataclasses import asdict, replace
@@ -15,6 +14,7 @@ from mcrt.film import Progress
 from mcrt.mutants import MUTANTS
 from mcrt.scene import Scene
 from mcrt.stats import compare, compare_images
+from mcrt.util.progress import log
 from mcrt.validate.budget import (DEFAULT_EFFECT_SPP, DEFAULT_EXTRA_TILES, DEFAULT_FOLLOWUPS, EFFECT_SEEDS, ESCALATION_SPP,
                                   LEVEL, POWER_GOAL, POWER_SEED_BASE, SCHEMA, SUBTLE, Budget, seed_list)
 from mcrt.validate.opponent import Opponent, render_tested
@@ -22,11 +22,6 @@ from mcrt.validate.rates import median_t, rate_row, trial
 
 #: Row name of the correct renderer (the control) in the power tables.
 CONTROL = "(none: correct renderer)"
-
-
-def _log(msg: str, enabled: bool) -> None:
-    if enabled:
-        print(msg, file=sys.stderr, flush=True)
 
 
 def cfg_label(cfg: dict[str, Any]) -> str:
@@ -174,7 +169,7 @@ def power_study(
     follow_out = []
     for cfg in followups if below else ():
         fb = replace(b, **cfg)
-        _log(f"follow-up {cfg}: {', '.join(below)}", progress)
+        log(f"follow-up {cfg}: {', '.join(below)}", progress)
         rows = _power_rows(scene, fb, [*below, None], pseeds, opp, tiles, f"follow-up {cfg_label(cfg)}", backend, progress)
         follow_out.append({"config": dict(cfg), "label": cfg_label(cfg), "budget": asdict(fb), "against": opp.describe(fb),
                            "rows": rows})
@@ -188,7 +183,7 @@ def power_study(
         if n_spp <= b.spp:
             continue
         eb = replace(b, spp=int(n_spp))
-        _log(f"escalation to {n_spp} spp: {', '.join(pending)}", progress)
+        log(f"escalation to {n_spp} spp: {', '.join(pending)}", progress)
         rows = _power_rows(scene, eb, [*pending, None], pseeds, opp, tiles, f"escalation {n_spp} spp", backend, progress)
         escalation.append({"spp": int(n_spp), "budget": asdict(eb), "against": opp.describe(eb), "rows": rows})
         for n in list(pending):
@@ -209,7 +204,7 @@ def power_study(
     if effect_spp and below:
         cache: dict = {}
         for n in below:
-            _log(f"effect size of {n} at {effect_spp} spp", progress)
+            log(f"effect size of {n} at {effect_spp} spp", progress)
             effects[n] = _effect(scene, b, n, int(effect_spp), tiles, backend, cache)
 
     non_subtle_ok = all(main[n]["rate"] >= POWER_GOAL for n in names if n not in subtle)

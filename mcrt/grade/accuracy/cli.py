@@ -3,10 +3,10 @@
 from __future__ import annotations
 
 import datetime
-import sys
 import time
 
 from mcrt.exitcodes import EXIT_OK
+from mcrt.util import progress
 
 DEFAULT_OUT = "reports/grading_accuracy"
 DEFAULT_ASSIGNMENT = "course2023"
@@ -48,8 +48,7 @@ def cmd_grade_accuracy(args) -> int:
     from mcrt.grade.expected import default_cache_dir, prepare_context
 
     def log(line: str) -> None:
-        if not args.quiet:
-            print(f"mcrt grade-accuracy: {line}", file=sys.stderr, flush=True)
+        progress.log(f"mcrt grade-accuracy: {line}", not args.quiet)
 
     t0 = time.perf_counter()
     a = load_assignment(resolve_assignment(args.assignment))
