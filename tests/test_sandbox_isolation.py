@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import os
 import shutil
+import socket
 import subprocess
 import sys
 import textwrap
@@ -21,6 +22,7 @@ import time
 import uuid
 from pathlib import Path
 
+import numpy as np
 import pytest
 from test_sandbox import _find_comm  # tests/ is on sys.path (pytest's default import mode)
 
@@ -100,11 +102,16 @@ def test_etc_shadow_setuid_files_xattrs_and_the_hostname_are_refused(path, tmp_p
             out.append(float(libc.sethostname(b"owned", 5)))
             return np.array(out)
         """)
-    _, out = _run(mod)
+    before = socket.gethostname()
+    try:
+        _, out = _run(mod)
+    finally:
+        if socket.gethostname() != before:  # a sandbox that let it through renamed this machine: undo, then fail
+            subprocess.run(["hostname", before], check=False)
+            pytest.fail(f"the student's module renamed the host to {socket.gethostname()!r}")
     assert out[0] == 0.0, "/etc/shadow was opened"
     assert out[1] == 0.0, "a setuid-root file was made"
     assert out[2:] == [-1.0] * 4, f"fchown, setxattr or sethostname succeeded: {out[2:]}"
-    assert not Path("/etc/hostname").exists() or "owned" not in Path("/etc/hostname").read_text()
 
 
 def test_a_double_fork_and_setsid_does_not_outlive_the_call(path, tmp_path):
@@ -285,3 +292,23 @@ def test_grade_refuses_code_mode_without_isolation_and_says_how_to_override(tmp_
     helptext = subprocess.run([*MCRT, "grade", "--help"], capture_output=True, text=True,
                               timeout=60, cwd=tmp_path).stdout
     assert "--allow-unisolated-code" in helptext and "default: off" in " ".join(helptext.split())
+
+
+# --------------------------------------------------------------------------
+# Whose fault: a student's odd result is the student's
+# --------------------------------------------------------------------------
+
+
+def test_an_empty_render_is_the_students_error_not_the_graders():
+    from mcrt.grade.assignment import assignment_from_dict
+
+    a = assignment_from_dict({"name": "sbx", "title": "sandbox", "scene": {"camera": "near", "width": 32, "height": 32, "spp": 64},
+                              "code": {"timeout": 20, "memory_mb": 1024, "checks": {"render": {"points": 10}}}})
+    params = a.code.checks[0].params
+
+    def run(function, calls, arrays, first_of_tuple=False):
+        return codemode.CallResult(True, [np.zeros((0, 0, 3)) for _ in calls], [None for _ in calls])
+
+    out, sr = codemode.check_render(run, params, a, None, {})
+    assert out.fraction == 0.0 and sr is None
+    assert "render returned shape (0, 0, 3), expected (32, 32, 3)" in out.message

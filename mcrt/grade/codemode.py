@@ -1082,8 +1082,8 @@ def check_render(run, params: dict, a: Assignment, ctx, scene_dict: dict) -> tup
     imgs = [o for o in res.outputs if o is not None]
     if not imgs:
         return CheckOutcome(0.0, _failure_text(res)), None
-    bad = [i for i in imgs if i.ndim != 3 or i.shape[2] not in (3, 4) or i.shape[:2] != imgs[0].shape[:2]]
-    if bad:
+    bad = [i for i in imgs if i.ndim != 3 or i.shape[2] not in (3, 4) or i.shape[:2] != imgs[0].shape[:2] or 0 in i.shape]
+    if bad:  # the module's doing, said as such (an empty image would otherwise fail inside the image grader)
         return CheckOutcome(0.0, f"render returned shape {bad[0].shape}, expected ({h}, {w}, 3)"), None
     imgs = [i[..., :3] for i in imgs]
     notes = []
