@@ -44,35 +44,53 @@ Checks (:data:`CHECKS`), each worth its points, all or nothing except
   against the assignment's reference; the check scores its points times the
   image rubric's share.
 
-Every call runs in a fresh process (``python -I -B mcrt/grade/_sandbox.py``)
-inside bubblewrap (``bwrap``, Debian's package ``bubblewrap``): new PID,
-network, IPC and UTS namespaces (and a user namespace when the grader is not
-root), so a process the student forks dies with the call and nothing leaves
-the sandbox's own loopback; an unprivileged uid, one per call, even when the
-grader runs as root (there bubblewrap runs privileged and the runner, given
-only CAP_SETUID and CAP_SETGID, switches to it first thing); read-only binds
-of only what the module may read (the Python installation and its packages
-without mcrt itself, /usr and the loader's files, the call's inputs: never the
-references, the grader, other students' folders or /etc); a tmpfs of
-:data:`DISK_LIMIT` bytes as its only writable folder (the disk quota);
-``--die-with-parent`` and ``--new-session``. The runner then sets its
-resource limits (:func:`_limits`: CPU time, address space, file size,
-processes, open files, no core files), installs a seccomp filter (no exec, no
-new namespaces) and an audit hook, before NumPy or the student's code loads;
-a wall-clock timeout kills the whole process group. The grader never opens a
-path the student could have made: the student's output goes to files it
-opened itself and unlinked (a link or a FIFO planted in the work folder
-changes nothing), results are capped at :data:`OUTPUT_LIMIT` before they are
-decoded, and a submission folder is copied without following links (a link
-is skipped with a message) and capped in size.
+Every call runs in a fresh process (``python -I -B mcrt/grade/_sandbox.py``,
+see that file for the order in which it locks itself down), and student code
+never runs as root, on any path: as root the grader hands the runner a
+fresh unprivileged uid (one per call, no such user on the system) and the
+runner switches to it by setgroups/setresgid/setresuid before anything of
+the student's loads, whatever the file modes of the installation; it
+refuses to go on if the switch did not take.
 
-Where bubblewrap is missing or namespaces are forbidden (a container that
-refuses them: probed by running ``bwrap`` once), the grader says so on
-stderr and in the class summary and falls back to the best it has: the same
-rlimits, seccomp filter and audit hook, Landlock (read-only system, writable
-work folder, unreadable grader files) and, as root, ``nobody`` when the
-Python installation is readable by others. ``MCRT_SANDBOX=bwrap`` makes a
-missing bubblewrap an error, ``MCRT_SANDBOX=fallback`` forces the fallback.
+With bubblewrap (``bwrap``, Debian's package ``bubblewrap``): new PID,
+network, IPC and UTS namespaces (and a user namespace when the grader is not
+root), so nothing leaves the sandbox's own loopback; read-only binds of only
+what the module may read (the Python installation, its virtual environment
+and site-packages, /usr and the loader's files, the call's inputs), with
+mcrt, Mitsuba and Dr.Jit hidden under empty unreadable folders wherever they
+are installed (never the references, the grader, other students' folders or
+/etc); a tmpfs of :data:`DISK_LIMIT` bytes and :data:`INODE_LIMIT` files as
+its only writable folder; ``--die-with-parent`` and ``--new-session``; its
+options passed through a pipe (``--args``), so that /proc/1/cmdline in the
+sandbox does not show them.
+
+Without bubblewrap, or where namespaces are forbidden (probed by running
+``bwrap`` once), the grader says so on stderr and in the class summary and
+falls back to Landlock (read-only file system, nothing made even in the
+work folder, readable only the Python installation without mcrt, Mitsuba
+and Dr.Jit and system folders), the same seccomp filter, rlimits, the
+unprivileged uid and a new session; the call's folders then go where that
+uid can reach them. Where neither is possible code mode is refused
+(:class:`SandboxError`) unless the instructor passes
+``--allow-unisolated-code`` (:func:`allow_unisolated`). ``MCRT_SANDBOX``:
+``bwrap`` makes a missing bubblewrap an error, ``fallback`` forces the
+fallback, ``none`` acts as if neither were possible (tests).
+
+On both paths a submission is one process (seccomp refuses fork and memfd;
+threads share one address-space limit), so the limits of :func:`_limits`
+bound all of it and a wall-clock timeout kills it, whatever it does. Before
+anyone is graded a correct module runs through the sandbox
+(:func:`_self_test`): a sandbox that cannot import NumPy stops the batch
+with the grader's problem named, instead of giving every student 0. The
+runner reports each refused operation at once on a pipe the grader reads
+(:class:`_Monitor`), and a runner that fails before the student's code is
+reported as the grader's fault (``CallResult.grader_fault``). The grader
+never opens a path the student could have made: the student's output goes
+to files it opened itself and unlinked (a link or a FIFO planted in the work
+folder changes nothing), results are capped at :data:`OUTPUT_LIMIT` before
+they are decoded, and a submission folder is copied without following links
+(a link is skipped with a message) and capped in size.
+
 A crash, a hang, a memory blow-up or a refused operation is a graded failure
 of that check, with the student's traceback.
 """
