@@ -162,6 +162,31 @@ def test_memory_is_bounded_over_the_whole_submission(path, tmp_path):
     assert out[1] == -1.0 and out[2] == -1.0, f"fork {out[1]:g}, memfd_create {out[2]:g}"
 
 
+def test_the_wall_clock_limit_stops_every_thread_of_the_submission(path, tmp_path):
+    token = "mcrt" + uuid.uuid4().hex[:10]
+    mod = _module(tmp_path / "eve", f"""
+        import threading
+        def spin():
+            libc.prctl(15, {token.encode()!r}, 0, 0, 0)
+            while True:
+                libc.sleep(1)
+        def f(x):
+            threading.Thread(target=spin, daemon=False).start()
+            libc.setsid()
+            spin()
+        """)
+    t0 = time.monotonic()
+    try:
+        res = codemode.run_student(mod, mod.name, "f", [{"args": [1.0]}], {}, timeout=3, memory_mb=1024)
+        assert time.monotonic() - t0 < 15
+        assert "time limit" in res.message and not res.grader_fault, res
+        time.sleep(0.5)
+        assert _find_comm(token) == [], "a thread of the student's process outlived the time limit"
+    finally:
+        for pid in _find_comm(token):
+            os.kill(pid, 9)
+
+
 def test_the_work_folder_bounds_the_number_of_files(path, tmp_path):
     mod = _module(tmp_path / "eve", """
         def f(x):
