@@ -337,3 +337,27 @@ def test_an_empty_render_is_the_students_error_not_the_graders():
     out, sr = codemode.check_render(run, params, a, None, {})
     assert out.fraction == 0.0 and sr is None
     assert "render returned shape (0, 0, 3), expected (32, 32, 3)" in out.message
+
+
+def test_a_module_every_student_fails_to_import_is_reported_as_the_graders_problem(tmp_path, monkeypatch, capsys):
+    """SciPy hidden from the sandbox (as a broken installation would): two students importing it both fail."""
+    import scipy
+
+    from mcrt.grade.assignment import assignment_from_dict
+
+    _need(shutil.which("bwrap") is not None, "bubblewrap is not installed (apt-get install bubblewrap)")
+    monkeypatch.setenv(codemode.SANDBOX_ENV, "bwrap")
+    monkeypatch.setattr(codemode, "_ISOLATION", None)
+    hidden = codemode._hidden_paths
+    scipy_dir = str(Path(scipy.__file__).resolve().parent)
+    monkeypatch.setattr(codemode, "_hidden_paths", lambda roots: sorted({*hidden(roots), scipy_dir}))
+    cls = tmp_path / "class"
+    cls.mkdir()
+    for sid in ("ann", "bob"):
+        (cls / f"{sid}.py").write_text("from scipy import stats\n\ndef sample_cosine_hemisphere(u1, u2):\n    return None\n")
+    a = assignment_from_dict({"name": "sbx", "title": "sandbox", "scene": {"camera": "near", "width": 32, "height": 32, "spp": 64},
+                              "code": {"timeout": 20, "memory_mb": 1024, "checks": {"sample_cosine_hemisphere": {"points": 10}}}})
+    codemode.grade_code_class(cls, a, tmp_path / "out", jobs=1)
+    err = capsys.readouterr().err
+    assert "every student's module failed to import scipy" in err and "grader's installation" in err, err
+    assert "failed to import scipy" in (tmp_path / "out" / "summary.md").read_text()

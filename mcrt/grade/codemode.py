@@ -1241,6 +1241,29 @@ def _grade_code_checks(student, a, root, mod, problem, ctx, to, mem, tests, deta
     return res
 
 
+def shared_import_failure(results) -> str | None:
+    """A module that every student's code (two or more) failed to import though the grader can: the grader's problem.
+
+    mcrt, Mitsuba and Dr.Jit do not count: graded code is meant not to have them.
+    """
+    import importlib.util
+    import re
+
+    if len(results) < 2:
+        return None
+    common: set | None = None
+    for r in results:
+        text = " ".join(str(t.output) for t in r.tests)
+        # Missing, or an empty shell of it (a folder Python cannot read is an empty namespace package).
+        found = re.findall(r"No module named '([\w.]+)'|cannot import name '\w+' from '([\w.]+)' \(unknown location\)", text)
+        names = {(a or b).partition(".")[0] for a, b in found}
+        common = names if common is None else common & names
+        if not common:
+            return None
+    found = sorted(n for n in common if n not in HIDDEN_PACKAGES and importlib.util.find_spec(n) is not None)
+    return found[0] if found else None
+
+
 def discover_code(path, *, single: bool = False, student: str | None = None) -> list[tuple[str, Path]]:
     from mcrt.grade.submissions import _unique, safe_id
 
@@ -1302,5 +1325,12 @@ def grade_code_class(submissions, a: Assignment, out, *, jobs: int = 1, timeout:
     with ThreadPoolExecutor(max_workers=max(1, jobs)) as ex:
         results = list(ex.map(one, subs))
     elapsed = time.perf_counter() - t0
-    summary = write_class(results, a, out, elapsed=elapsed, criteria=crit, context_note=f"Sandbox: {iso.detail}.")
+    note = f"Sandbox: {iso.detail}."
+    shared = shared_import_failure(results)
+    if shared:
+        warning = (f"WARNING: every student's module failed to import {shared}, which the grader itself has: the sandbox "
+                   "does not show it to graded code, a problem of the grader's installation, not the students'")
+        print(f"mcrt grade: {warning}", file=sys.stderr, flush=True)
+        note = f"{warning}. {note}"
+    summary = write_class(results, a, out, elapsed=elapsed, criteria=crit, context_note=note)
     return ClassResult(results, summary, out, elapsed, ctx)
