@@ -44,14 +44,15 @@ Before the student's code runs, in this order:
   grader's rules (the Python installation without mcrt, Mitsuba and Dr.Jit,
   system folders, INDIR, WORKDIR); TCP bind/connect are denied (ABI >= 4)
   and signals to processes outside the sandbox too (ABI >= 6). Written by
-  hand with ctypes: no Python binding of Landlock is packaged on PyPI or in
-  Debian, and the three system calls need no more;
+  hand with ctypes: no well-kept Python binding of Landlock was found in
+  Debian or on PyPI, and three system calls need no more;
 * a seccomp filter (x86_64, aarch64): no exec, no fork (threads only: one
   process, so the address-space limit bounds the whole submission), no
   memfd, no new namespaces, no mount, ptrace, bpf, io_uring, keyrings, and
   sockets of the Unix family only. A hand-built BPF program: libseccomp's
   Python binding is Debian's python3-seccomp, tied to the system Python and
-  absent from virtual environments and PyPI;
+  not importable from the grader's virtual environment, and none was found
+  on PyPI;
 * an audit hook (PEP 578) refuses subprocesses, exec, fork, sockets, signals
   and writes outside WORKDIR with a clear message, and an import hook
   refuses mcrt, Mitsuba and Dr.Jit (their files are hidden as well); each
