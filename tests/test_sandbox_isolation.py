@@ -139,7 +139,7 @@ def test_a_double_fork_and_setsid_does_not_outlive_the_call(path, tmp_path):
 
 
 def test_memory_is_bounded_over_the_whole_submission(path, tmp_path):
-    """Threads share one address-space limit; fork and memfd (pages outside every rlimit) are refused."""
+    """Threads share one address-space limit; fork, memfd and System V shared memory (outside every rlimit) are refused."""
     mod = _module(tmp_path / "eve", """
         import threading
         kept = []
@@ -155,11 +155,14 @@ def test_memory_is_bounded_over_the_whole_submission(path, tmp_path):
             for t in ts:
                 t.join()
             memfd = libc.syscall(319 if os.uname().machine == "x86_64" else 279, b"x", 0)
-            return np.array([len(kept) * 200.0, float(libc.fork()), float(memfd)])
+            shm = libc.shmget(0, 64 << 20, 0o1600)  # IPC_PRIVATE, IPC_CREAT | 0600: would outlive the call
+            if shm >= 0:
+                libc.shmctl(shm, 0, None)  # IPC_RMID: leave nothing behind even when the test fails
+            return np.array([len(kept) * 200.0, float(libc.fork()), float(memfd), float(shm)])
         """)
     _, out = _run(mod, memory_mb=512)
     assert out[0] < 512, f"{out[0]:g} MiB held under a 512 MiB limit"
-    assert out[1] == -1.0 and out[2] == -1.0, f"fork {out[1]:g}, memfd_create {out[2]:g}"
+    assert out[1:] == [-1.0] * 3, f"fork {out[1]:g}, memfd_create {out[2]:g}, shmget {out[3]:g}"
 
 
 def test_the_wall_clock_limit_stops_every_thread_of_the_submission(path, tmp_path):

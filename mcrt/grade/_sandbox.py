@@ -48,7 +48,8 @@ Before the student's code runs, in this order:
   Debian or on PyPI, and three system calls need no more;
 * a seccomp filter (x86_64, aarch64): no exec, no fork (threads only: one
   process, so the address-space limit bounds the whole submission), no
-  memfd, no new namespaces, no mount, ptrace, bpf, io_uring, keyrings, and
+  memfd or System V/POSIX IPC object (memory outside that limit, or outliving
+  the call), no new namespaces, no mount, ptrace, bpf, io_uring, keyrings, and
   sockets of the Unix family only. A hand-built BPF program: libseccomp's
   Python binding is Debian's python3-seccomp, tied to the system Python and
   not importable from the grader's virtual environment, and none was found
@@ -171,6 +172,8 @@ _DENIED = {
     "fsmount": (432, 432), "fspick": (433, 433), "mount_setattr": (442, 442),
     # memory outside the address-space limit: an unmapped memfd's pages count against no rlimit
     "memfd_create": (319, 279), "memfd_secret": (447, 447),
+    # System V and POSIX IPC objects outlive the process (without bubblewrap, in the grader's IPC namespace)
+    "shmget": (29, 194), "semget": (64, 190), "msgget": (68, 186), "mq_open": (240, 180),
 }
 _DENIED_X86 = {"fork": 57, "vfork": 58}  # aarch64 has only clone
 _CLONE, _CLONE3, _SOCKET = (56, 220), (435, 435), (41, 198)
@@ -240,7 +243,7 @@ def _seccomp() -> str:
         return f"unavailable (no_new_privs: errno {ctypes.get_errno()})"
     if libc.prctl(22, 2, ctypes.byref(fprog), 0, 0) != 0:  # PR_SET_SECCOMP, SECCOMP_MODE_FILTER
         return f"unavailable (errno {ctypes.get_errno()})"
-    return "on (no exec, fork, memfd, namespaces, mount, ptrace, bpf, io_uring; Unix sockets only)"
+    return "on (no exec, fork, memfd, IPC objects, namespaces, mount, ptrace, bpf, io_uring; Unix sockets only)"
 
 
 def _drop_to(uid: int) -> str:
