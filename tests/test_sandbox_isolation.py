@@ -12,6 +12,7 @@ under CI (``CI`` set), where that is a failure.
 
 from __future__ import annotations
 
+import json
 import os
 import shutil
 import socket
@@ -307,18 +308,49 @@ def test_no_isolation_refuses_code_mode_unless_allowed(tmp_path, monkeypatch):
     assert out[0] != 0.0 or os.geteuid() != 0
 
 
-def test_grade_refuses_code_mode_without_isolation_and_says_how_to_override(tmp_path):
+SMALL = """format = 1
+name = "sbx"
+title = "sandbox"
+[scene]
+camera = "near"
+width = 32
+height = 32
+spp = 64
+[code]
+timeout = 20
+memory_mb = 1024
+[code.checks.sample_cosine_hemisphere]
+points = 10
+"""
+
+NOT_AS_ROOT = """import os
+import numpy as np
+
+def sample_cosine_hemisphere(u1, u2):
+    if os.getuid() == 0 or os.geteuid() == 0:
+        raise RuntimeError("running as root")
+    r, phi = np.sqrt(u1), 2 * np.pi * u2
+    return np.stack([r * np.cos(phi), r * np.sin(phi), np.sqrt(np.maximum(0.0, 1 - u1))], axis=1)
+"""
+
+
+def test_grade_refuses_code_mode_without_isolation_unless_the_flag_allows_it(tmp_path):
     (tmp_path / "class").mkdir()
-    (tmp_path / "class" / "good.py").write_text("def sample_cosine_hemisphere(u1, u2):\n    return None\n")
+    (tmp_path / "class" / "good.py").write_text(NOT_AS_ROOT)
+    (tmp_path / "small.toml").write_text(SMALL)
     env = {**os.environ, codemode.SANDBOX_ENV: "none"}
-    cmd = [*MCRT, "grade", str(tmp_path / "class"), "-a", str(REPO / "reference" / "assignments" /
-           "course2023_code.toml"), "--mode", "code", "-o", str(tmp_path / "out"), "-q"]
+    cmd = [*MCRT, "grade", str(tmp_path / "class"), "-a", str(tmp_path / "small.toml"), "--mode", "code",
+           "-o", str(tmp_path / "out"), "-q"]
     p = subprocess.run(cmd, capture_output=True, text=True, timeout=120, env=env, cwd=tmp_path)
     assert p.returncode == 2, p.stderr
     assert "code mode refused" in p.stderr and "--allow-unisolated-code" in p.stderr
     assert not (tmp_path / "out" / "good" / "results.json").exists()
-    helptext = subprocess.run([*MCRT, "grade", "--help"], capture_output=True, text=True,
-                              timeout=60, cwd=tmp_path).stdout
+    p = subprocess.run([*cmd, "--allow-unisolated-code"], capture_output=True, text=True, timeout=120, env=env, cwd=tmp_path)
+    assert p.returncode == 0, p.stderr
+    assert "NOT isolated" in p.stderr
+    res = json.loads((tmp_path / "out" / "good" / "results.json").read_text())
+    assert res["score"] == 10, res  # its check raises if it runs as root
+    helptext = subprocess.run([*MCRT, "grade", "--help"], capture_output=True, text=True, timeout=60, cwd=tmp_path).stdout
     assert "--allow-unisolated-code" in helptext and "default: off" in " ".join(helptext.split())
 
 
