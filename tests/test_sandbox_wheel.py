@@ -72,13 +72,37 @@ def wheel_venv(tmp_path_factory):
     return py
 
 
-def test_a_wheel_in_a_venv_grades_a_correct_module_to_full_marks(wheel_venv, tmp_path):
+PEEK = """
+import glob, os, sys
+
+def _readable(path):
+    try:
+        return bool(open(path, "rb").read(1))
+    except OSError:
+        return False
+
+def sample_cosine_hemisphere(u1, u2):
+    for site in {p for p in sys.path if p.endswith("site-packages")} | set(glob.glob(sys.prefix + "/lib/python3*/site-packages")):
+        for name in ("mcrt/__init__.py", "mcrt/grade/codemode.py", "mitsuba/__init__.py", "drjit/__init__.py"):
+            if _readable(os.path.join(site, name)):
+                raise RuntimeError(f"read {site}/{name}")
+    return _cosine(u1, u2)
+"""
+
+
+@pytest.mark.parametrize("sandbox", ["bwrap", "fallback"])
+def test_a_wheel_in_a_venv_grades_a_correct_module_to_full_marks(wheel_venv, tmp_path, sandbox):
+    """... and the installed mcrt's files (now bound with its site-packages), Mitsuba's and Dr.Jit's stay unreadable."""
     (tmp_path / "class").mkdir()
     (tmp_path / "class" / "good.py").write_text(textwrap.dedent(COSINE))
+    (tmp_path / "class" / "peek.py").write_text(textwrap.dedent(COSINE).replace("def sample_cosine_hemisphere", "def _cosine")
+                                                + textwrap.dedent(PEEK))
     env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "MCRT_SANDBOX")}
+    env["MCRT_SANDBOX"] = sandbox
     p = subprocess.run([str(wheel_venv), "-c", GRADE, str(tmp_path / "class"), str(tmp_path / "out")], cwd=tmp_path,
                        capture_output=True, text=True, timeout=300, env=env)
     assert p.returncode == 0, p.stderr[-3000:]
     assert f"mcrt from {wheel_venv.parent.parent}" in p.stdout, p.stdout  # the installed package, not the checkout
-    res = json.loads((tmp_path / "out" / "good" / "results.json").read_text())
-    assert res["score"] == 10, json.dumps(res)[:3000]
+    for sid in ("good", "peek"):
+        res = json.loads((tmp_path / "out" / sid / "results.json").read_text())
+        assert res["score"] == 10, json.dumps(res)[:3000]

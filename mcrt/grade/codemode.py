@@ -380,6 +380,11 @@ def _probe_fallback(why: str) -> Isolation:
         return Isolation("none", f"{why}; {'; '.join(missing)}")
     who = "an unprivileged uid (switched to by the runner: the grader is root)" if os.geteuid() == 0 else \
         f"the grader's own uid {os.geteuid()}"
+    private = [r for r in _python_roots() if not _world_traversable(r)]
+    if os.geteuid() == 0 and private:
+        who += (f"; {private[0]} is out of that user's reach (a parent folder without o+x), so graded code imports "
+                "only NumPy and the common standard modules loaded before the switch (chmod o+rx its folders, or "
+                "use bubblewrap, to give it the rest)")
     return Isolation("fallback", f"WARNING: student code is NOT isolated by namespaces: {why}. Falling back to Landlock "
                                  f"(read-only system without mcrt, Mitsuba or Dr.Jit), seccomp (one process, no fork, exec or "
                                  f"memfd), rlimits and a new session, running as {who}; no file can be written (no quota could bound it), and "
