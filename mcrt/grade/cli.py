@@ -39,6 +39,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--student", default=None, help="student id with --single (default: the folder's name)")
     p.add_argument("--prepare", action="store_true", help="only render and cache the references and the bug catalogue, then "
                    "exit, for an autograder image's setup (default: off)")
+    p.add_argument("--allow-unisolated-code", action="store_true", help="in code mode, run student code even where "
+                   "neither bubblewrap nor Landlock and seccomp can isolate it (still as an unprivileged user, with "
+                   "resource limits; default: off, code mode is then refused)")
     p.add_argument("--quiet", "-q", action="store_true", help="no progress lines (default: off)")
 
 
@@ -192,7 +195,8 @@ def run(args) -> int:
                 print(f"mcrt grade: {a.path}: no [code] table, so --mode code has nothing to check", file=sys.stderr)
                 return EXIT_UNUSABLE
             res = grade_code_class(args.submissions, a, args.out, jobs=max(args.jobs, 1), timeout=args.timeout,
-                                   memory_mb=args.memory, cache_dir=args.cache, single=args.single, student=args.student, log=log)
+                                   memory_mb=args.memory, cache_dir=args.cache, single=args.single, student=args.student, log=log,
+                                   allow_unisolated_code=args.allow_unisolated_code)
         else:
             from mcrt.grade.batch import DEFAULT_MEMORY_MB, grade_class
 

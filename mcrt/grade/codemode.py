@@ -44,35 +44,53 @@ Checks (:data:`CHECKS`), each worth its points, all or nothing except
   against the assignment's reference; the check scores its points times the
   image rubric's share.
 
-Every call runs in a fresh process (``python -I -B mcrt/grade/_sandbox.py``)
-inside bubblewrap (``bwrap``, Debian's package ``bubblewrap``): new PID,
-network, IPC and UTS namespaces (and a user namespace when the grader is not
-root), so a process the student forks dies with the call and nothing leaves
-the sandbox's own loopback; an unprivileged uid, one per call, even when the
-grader runs as root (there bubblewrap runs privileged and the runner, given
-only CAP_SETUID and CAP_SETGID, switches to it first thing); read-only binds
-of only what the module may read (the Python installation and its packages
-without mcrt itself, /usr and the loader's files, the call's inputs: never the
-references, the grader, other students' folders or /etc); a tmpfs of
-:data:`DISK_LIMIT` bytes as its only writable folder (the disk quota);
-``--die-with-parent`` and ``--new-session``. The runner then sets its
-resource limits (:func:`_limits`: CPU time, address space, file size,
-processes, open files, no core files), installs a seccomp filter (no exec, no
-new namespaces) and an audit hook, before NumPy or the student's code loads;
-a wall-clock timeout kills the whole process group. The grader never opens a
-path the student could have made: the student's output goes to files it
-opened itself and unlinked (a link or a FIFO planted in the work folder
-changes nothing), results are capped at :data:`OUTPUT_LIMIT` before they are
-decoded, and a submission folder is copied without following links (a link
-is skipped with a message) and capped in size.
+Every call runs in a fresh process (``python -I -B mcrt/grade/_sandbox.py``,
+see that file for the order in which it locks itself down), and student code
+never runs as root, on any path: as root the grader hands the runner a
+fresh unprivileged uid (one per call, no such user on the system) and the
+runner switches to it by setgroups/setresgid/setresuid before anything of
+the student's loads, whatever the file modes of the installation; it
+refuses to go on if the switch did not take.
 
-Where bubblewrap is missing or namespaces are forbidden (a container that
-refuses them: probed by running ``bwrap`` once), the grader says so on
-stderr and in the class summary and falls back to the best it has: the same
-rlimits, seccomp filter and audit hook, Landlock (read-only system, writable
-work folder, unreadable grader files) and, as root, ``nobody`` when the
-Python installation is readable by others. ``MCRT_SANDBOX=bwrap`` makes a
-missing bubblewrap an error, ``MCRT_SANDBOX=fallback`` forces the fallback.
+With bubblewrap (``bwrap``, Debian's package ``bubblewrap``): new PID,
+network, IPC and UTS namespaces (and a user namespace when the grader is not
+root), so nothing leaves the sandbox's own loopback; read-only binds of only
+what the module may read (the Python installation, its virtual environment
+and site-packages, /usr and the loader's files, the call's inputs), with
+mcrt, Mitsuba and Dr.Jit hidden under empty unreadable folders wherever they
+are installed (never the references, the grader, other students' folders or
+/etc); a tmpfs of :data:`DISK_LIMIT` bytes and :data:`INODE_LIMIT` files as
+its only writable folder; ``--die-with-parent`` and ``--new-session``; its
+options passed through a pipe (``--args``), so that /proc/1/cmdline in the
+sandbox does not show them.
+
+Without bubblewrap, or where namespaces are forbidden (probed by running
+``bwrap`` once), the grader says so on stderr and in the class summary and
+falls back to Landlock (read-only file system, nothing made even in the
+work folder, readable only the Python installation without mcrt, Mitsuba
+and Dr.Jit and system folders), the same seccomp filter, rlimits, the
+unprivileged uid and a new session; the call's folders then go where that
+uid can reach them. Where neither is possible code mode is refused
+(:class:`SandboxError`) unless the instructor passes
+``--allow-unisolated-code`` (:func:`allow_unisolated`). ``MCRT_SANDBOX``:
+``bwrap`` makes a missing bubblewrap an error, ``fallback`` forces the
+fallback, ``none`` acts as if neither were possible (tests).
+
+On both paths a submission is one process (seccomp refuses fork and memfd;
+threads share one address-space limit), so the limits of :func:`_limits`
+bound all of it and a wall-clock timeout kills it, whatever it does. Before
+anyone is graded a correct module runs through the sandbox
+(:func:`_self_test`): a sandbox that cannot import NumPy stops the batch
+with the grader's problem named, instead of giving every student 0. The
+runner reports each refused operation at once on a pipe the grader reads
+(:class:`_Monitor`), and a runner that fails before the student's code is
+reported as the grader's fault (``CallResult.grader_fault``). The grader
+never opens a path the student could have made: the student's output goes
+to files it opened itself and unlinked (a link or a FIFO planted in the work
+folder changes nothing), results are capped at :data:`OUTPUT_LIMIT` before
+they are decoded, and a submission folder is copied without following links
+(a link is skipped with a message) and capped in size.
+
 A crash, a hang, a memory blow-up or a refused operation is a graded failure
 of that check, with the student's traceback.
 """
@@ -105,8 +123,9 @@ from mcrt.util.fmt import short
 RUNNER = Path(__file__).with_name("_sandbox.py")
 FSIZE_LIMIT = 128 << 20  # any one file the student's process writes (its stdout included)
 DISK_LIMIT = 256 << 20  # the sandbox's tmpfs: all it may write together
+INODE_LIMIT = 4096  # files and folders on that tmpfs (each costs kernel memory, outside every other bound)
 OUTPUT_LIMIT = 64 << 20  # the results of one check's calls together, as the grader reads them
-TRAILER_LIMIT = 4 << 20  # their JSON description (tracebacks, violations)
+TRAILER_LIMIT = 4 << 20  # their JSON description (tracebacks, what the sandbox enforced)
 NPROC_LIMIT = 16  # processes and threads of the sandbox's uid
 NOFILE_LIMIT = 256
 SUBMISSION_LIMIT = 32 << 20  # bytes of a submission folder copied into the sandbox
@@ -140,6 +159,7 @@ class CallResult:
     seconds: float = 0.0
     stdout: str = ""
     notes: list = field(default_factory=list)  # what of the submission was not copied, and why
+    grader_fault: bool = False  # the sandbox failed before the student's code ran: not the student's doing
 
 
 def _read_roots() -> list[str]:
@@ -149,8 +169,8 @@ def _read_roots() -> list[str]:
     holding it; inside the project only the virtual environment. Of /proc
     only cpuinfo and meminfo here; the runner adds its own /proc/<pid> (never
     the grader's, whose environment would be readable there). Used by the
-    fallback (Landlock); bubblewrap binds :func:`_python_roots` and system
-    folders instead.
+    fallback (Landlock, :func:`_landlock_rules`); bubblewrap binds
+    :func:`_python_roots` and system folders instead.
     """
     return sorted(set(_python_roots()) | _existing({"/usr", "/lib", "/lib64", "/lib32", "/bin", "/sbin", "/etc", "/sys",
                                                     "/opt", "/proc/cpuinfo", "/proc/meminfo", "/dev/urandom", "/dev/zero"}))
@@ -160,22 +180,86 @@ def _existing(cands) -> set[str]:
     return {os.path.realpath(c) for c in cands if os.path.exists(c)}
 
 
+def _project_root() -> Path | None:
+    """The source checkout mcrt runs from, or None for an installed package (a wheel in site-packages)."""
+    home = Path(__file__).resolve().parent.parent.parent
+    return home if (home / "pyproject.toml").is_file() else None
+
+
 def _python_roots() -> list[str]:
-    """The Python installation, the virtual environment and the folders of sys.path, never the project."""
-    repo = Path(__file__).resolve().parent.parent.parent
+    """The Python installation, the virtual environment and the folders of sys.path, never a source checkout.
+
+    An installed mcrt lies in site-packages with NumPy: that folder is bound
+    like any other, and :func:`_hidden_paths` hides mcrt's own folder in it.
+    """
+    repo = _project_root()
     venv = Path(sys.prefix).resolve()
     cands = {sys.prefix, sys.base_prefix, sys.exec_prefix, sys.base_exec_prefix, os.path.dirname(os.path.realpath(sys.executable))}
-    cands |= {p for p in sys.path if p and os.path.isdir(p)}
+    prefixes = [Path(p).resolve() for p in (sys.prefix, sys.base_prefix, sys.exec_prefix, sys.base_exec_prefix)]
+    # Of sys.path only library folders: never the folder of the grader's script or the current folder (which
+    # `python -m` puts first), where the instructor's solutions or the other students' files may be.
+    cands |= {p for p in sys.path if p and os.path.isdir(p) and (
+        Path(p).name in ("site-packages", "dist-packages") or any(Path(p).resolve().is_relative_to(x) for x in prefixes))}
     out = set()
     for c in _existing(cands):
         r = Path(c)
-        if r == Path("/") or r == repo or repo.is_relative_to(r):
-            continue  # an ancestor of the project would expose it
-        if r.is_relative_to(repo) and not r.is_relative_to(venv):
+        if r == Path("/"):
             continue
+        if repo is not None:
+            if r == repo or repo.is_relative_to(r):
+                continue  # an ancestor of the checkout would expose it
+            if r.is_relative_to(repo) and not r.is_relative_to(venv):
+                continue
         out.add(str(r))
     # The outermost folders only (a bind covers what is under it).
     return sorted(r for r in out if not any(r != o and Path(r).is_relative_to(o) for o in out))
+
+
+HIDDEN_PACKAGES = ("mcrt", "mitsuba", "drjit")  # the grader (its references) and the reference renderers
+
+
+def _hidden_paths(roots) -> list[str]:
+    """What must stay unreadable under ``roots``: mcrt, Mitsuba and Dr.Jit wherever Python could import them from."""
+    out = {str(Path(__file__).resolve().parent.parent)}
+    dirs = {os.path.realpath(p) for p in sys.path if p and os.path.isdir(p)} | set(roots)
+    for d in dirs:
+        for name in HIDDEN_PACKAGES:
+            for cand in (os.path.join(d, name), os.path.join(d, name + ".libs")):
+                if os.path.isdir(cand):
+                    out.add(os.path.realpath(cand))
+    repo = _project_root()
+    if repo is not None:
+        out.add(str(repo))
+    return sorted(h for h in out if any(Path(h).is_relative_to(r) for r in roots))
+
+
+def _landlock_rules(roots, hidden) -> list[list[str]]:
+    """Landlock's allow-list: every root readable except the hidden folders, which stay listable only.
+
+    Landlock only grants, so a root holding a hidden folder is split: the
+    folders on the way to it may be listed, and each of their other entries
+    is granted whole.
+    """
+    rules: list[list[str]] = []
+
+    def grant(path: str) -> None:
+        inner = [h for h in hidden if Path(h).is_relative_to(path)]
+        if not inner:
+            rules.append([path, "read"])
+            return
+        if path in inner or not os.path.isdir(path):
+            return
+        rules.append([path, "list"])
+        try:
+            names = sorted(os.listdir(path))
+        except OSError:
+            return
+        for n in names:
+            grant(os.path.join(path, n))
+
+    for r in roots:
+        grant(r)
+    return rules
 
 
 def _world_traversable(path: str) -> bool:
@@ -189,18 +273,15 @@ def _world_traversable(path: str) -> bool:
     return True
 
 
-def _other_readable(path: str) -> bool:
-    try:
-        m = os.stat(path).st_mode
-    except OSError:
-        return False
-    return bool(m & stat.S_IROTH) and (not stat.S_ISDIR(m) or bool(m & stat.S_IXOTH))
-
-
-def _can_drop_privileges() -> bool:
-    if os.geteuid() != 0:
-        return False
-    return all(_world_traversable(x) for x in (sys.executable, sys.base_prefix, str(RUNNER)))
+def _scratch_base(iso: "Isolation") -> str | None:
+    """Where a call's folders go: the usual temporary folder, except that without bubblewrap the unprivileged
+    uid must be able to reach them (a folder under a private parent such as /root would be out of its reach)."""
+    if iso.kind == "bubblewrap":
+        return None
+    for cand in (tempfile.gettempdir(), "/tmp", "/var/tmp", "/dev/shm"):
+        if os.path.isdir(cand) and os.access(cand, os.W_OK) and _world_traversable(cand):
+            return cand
+    return None
 
 
 def _limits(cpu_s: float, memory_mb: int) -> dict:
@@ -217,15 +298,30 @@ def _limits(cpu_s: float, memory_mb: int) -> dict:
 
 @dataclass
 class Isolation:
-    kind: str  # "bubblewrap" or "fallback"
+    kind: str  # "bubblewrap", "fallback" (Landlock + seccomp) or "none" (refused unless the instructor allows it)
     detail: str  # one line for stderr and the class summary
     bwrap: str | None = None
     options: frozenset = frozenset()  # optional bwrap options this version has
 
 
+class SandboxError(RuntimeError):
+    """Code mode cannot run here: no isolation, or the sandbox fails on a correct module (the grader's problem)."""
+
+
 _ISOLATION: Isolation | None = None
 _ISOLATION_LOCK = threading.Lock()
+_ALLOW_UNISOLATED = False
 _NS_FLAGS = ["--unshare-pid", "--unshare-net", "--unshare-ipc", "--unshare-uts", "--unshare-cgroup-try"]
+SANDBOX_ENV = "MCRT_SANDBOX"  # auto (default), bwrap, fallback, none (as if neither were possible: tests)
+REFUSAL = ("code mode refused: student code would run without isolation ({why}). Install bubblewrap "
+           "(apt-get install bubblewrap) or use a Linux with Landlock (5.13 or later) and seccomp; "
+           "--allow-unisolated-code runs it anyway, as an unprivileged user with resource limits only")
+
+
+def allow_unisolated(flag: bool = True) -> None:
+    """The instructor's choice (``mcrt grade --allow-unisolated-code``) to run student code where nothing isolates it."""
+    global _ALLOW_UNISOLATED
+    _ALLOW_UNISOLATED = bool(flag)
 
 
 def _probe_bwrap() -> Isolation:
@@ -236,10 +332,10 @@ def _probe_bwrap() -> Isolation:
         helptext = subprocess.run([exe, "--help"], capture_output=True, text=True, timeout=10).stdout
     except (OSError, subprocess.SubprocessError) as e:
         return Isolation("fallback", f"bwrap does not run ({e})")
-    opts = frozenset(o for o in ("--size", "--perms", "--disable-userns", "--die-with-parent", "--new-session")
+    opts = frozenset(o for o in ("--size", "--perms", "--disable-userns", "--die-with-parent", "--new-session", "--args")
                      if o in helptext)
-    if not {"--perms", "--die-with-parent", "--new-session"} <= opts:
-        return Isolation("fallback", f"{exe} is too old (no --perms, --die-with-parent or --new-session; 0.5 or later needed)")
+    if not {"--perms", "--die-with-parent", "--new-session", "--args"} <= opts:
+        return Isolation("fallback", f"{exe} is too old (no --perms, --die-with-parent, --new-session or --args; 0.5 or later needed)")
     # What the calls use: as root a privileged bwrap without a user namespace, else --unshare-all.
     ns = _NS_FLAGS if os.geteuid() == 0 else ["--unshare-all"]
     argv = [exe, *ns, "--die-with-parent", "--new-session", "--ro-bind", "/", "/", "--proc", "/proc", "--dev", "/dev", "true"]
@@ -251,34 +347,112 @@ def _probe_bwrap() -> Isolation:
         why = (p.stderr.strip().splitlines() or [f"exit code {p.returncode}"])[-1]
         return Isolation("fallback", f"bwrap cannot create namespaces here ({why})")
     ver = subprocess.run([exe, "--version"], capture_output=True, text=True, timeout=10).stdout.strip() or "bubblewrap"
-    quota = "" if "--size" in opts else "; this bwrap has no --size: no disk quota beyond the file-size limit"
-    who = "an unprivileged uid"
-    if os.geteuid() == 0 and not all(_other_readable(r) for r in _python_roots()):
-        who = "uid 0 without capabilities (the Python installation is not readable by others, so no other uid can run it)"
-    return Isolation("bubblewrap", f"{ver}: PID, network, IPC and UTS namespaces, {who}, read-only "
-                                   f"system, a {DISK_LIMIT >> 20} MiB tmpfs as the only writable folder{quota}", exe, opts)
+    if os.geteuid() == 0:
+        disk = f"a tmpfs of {DISK_LIMIT >> 20} MiB and {INODE_LIMIT} files as the only writable folder"
+    else:
+        disk = (f"a {DISK_LIMIT >> 20} MiB tmpfs as the only writable folder (no file-count bound: the grader is not root)"
+                if "--size" in opts else "a tmpfs without a size bound (this bwrap has no --size) as the only writable folder")
+    return Isolation("bubblewrap", f"{ver}: PID, network, IPC and UTS namespaces, an unprivileged uid, one process "
+                                   f"(no fork), read-only system without mcrt, Mitsuba or Dr.Jit, {disk}", exe, opts)
+
+
+def _landlock_abi() -> int:
+    import ctypes
+
+    try:
+        libc = ctypes.CDLL(None, use_errno=True)
+        libc.syscall.restype = ctypes.c_long
+        return int(libc.syscall(444, None, ctypes.c_size_t(0), ctypes.c_uint32(1)))  # landlock_create_ruleset, VERSION
+    except (OSError, AttributeError):
+        return -1
+
+
+def _probe_fallback(why: str) -> Isolation:
+    import platform
+
+    missing = []
+    if _landlock_abi() < 1:
+        missing.append("no Landlock (Linux 5.13 or later with the landlock LSM)")
+    if platform.machine() not in ("x86_64", "aarch64"):
+        missing.append(f"no seccomp filter for {platform.machine()}")
+    if _scratch_base(Isolation("fallback", "")) is None:
+        missing.append("no temporary folder that an unprivileged user can reach")
+    if missing:
+        return Isolation("none", f"{why}; {'; '.join(missing)}")
+    who = "an unprivileged uid (switched to by the runner: the grader is root)" if os.geteuid() == 0 else \
+        f"the grader's own uid {os.geteuid()}"
+    private = [r for r in _python_roots() if not _world_traversable(r)]
+    if os.geteuid() == 0 and private:
+        who += (f"; {private[0]} is out of that user's reach (a parent folder without o+x), so graded code imports "
+                "only NumPy and the common standard modules loaded before the switch (chmod o+rx its folders, or "
+                "use bubblewrap, to give it the rest)")
+    return Isolation("fallback", f"WARNING: student code is NOT isolated by namespaces: {why}. Falling back to Landlock "
+                                 f"(read-only system without mcrt, Mitsuba or Dr.Jit), seccomp (one process, no fork, exec or "
+                                 f"memfd), rlimits and a new session, running as {who}; no file can be written (no quota could bound it), and "
+                                 "its network traffic is not contained by namespaces (TCP is refused by Landlock ABI 4 or later)")
+
+
+CANARY = """import numpy as np
+import os
+def f(x):
+    return np.array([float(os.getuid()), float(os.getgid()), float(np.linalg.norm(np.random.default_rng(0).random(3)) > 0)])
+"""
+
+
+def _self_test(iso: Isolation) -> None:
+    """Run a correct module through the sandbox once; raise :class:`SandboxError` naming the problem if it fails.
+
+    A batch in which every student's import of NumPy fails is the grader's
+    installation failing, not the students: it stops here, before anyone is
+    graded.
+    """
+    tmp = Path(tempfile.mkdtemp(prefix="mcrt-canary-"))
+    try:
+        (tmp / "canary.py").write_text(CANARY)
+        res = _run_student(iso, tmp / "canary.py", "canary.py", "f", [{"args": [1.0]}], {}, timeout=60, memory_mb=1024)
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+    out = res.outputs[0] if res.outputs else None
+    if out is None or out.shape != (3,):
+        why = res.message or "no result"
+        err = next((e for e in res.errors if e), "") or res.stdout
+        last = [ln for ln in str(err).strip().splitlines() if ln.strip()]
+        raise SandboxError(f"the sandbox ({iso.kind}) fails on a correct module, so every student would fail: {why}"
+                           f"{': ' + last[-1].strip() if last else ''} (a problem of the grader's installation, not the students')")
+    if os.geteuid() == 0 and (out[0] == 0 or out[1] == 0):
+        raise SandboxError(f"the sandbox ({iso.kind}) ran a module as root (uid {out[0]:g}, gid {out[1]:g}); refusing code mode")
 
 
 def isolation() -> Isolation:
-    """How student code is isolated here (probed once; ``MCRT_SANDBOX``: auto, bwrap, fallback)."""
+    """How student code is isolated here (probed and self-tested once; ``MCRT_SANDBOX``: auto, bwrap, fallback, none).
+
+    Raises :class:`SandboxError` when no isolation is possible (unless
+    :func:`allow_unisolated`) or when the sandbox fails on a correct module.
+    """
     global _ISOLATION
     with _ISOLATION_LOCK:
         if _ISOLATION is None:
-            want = os.environ.get("MCRT_SANDBOX", "auto").strip().lower() or "auto"
-            if want in ("fallback", "none", "off"):
-                iso = Isolation("fallback", f"MCRT_SANDBOX={want} asks for no bubblewrap")
+            want = os.environ.get(SANDBOX_ENV, "auto").strip().lower() or "auto"
+            if want not in ("auto", "bwrap", "fallback", "none"):
+                raise SandboxError(f"{SANDBOX_ENV}={want}: expected auto, bwrap, fallback or none")
+            if want == "none":
+                iso = Isolation("none", f"{SANDBOX_ENV}=none: neither bubblewrap nor Landlock and seccomp")
+            elif want == "fallback":
+                iso = _probe_fallback(f"{SANDBOX_ENV}=fallback asks for no bubblewrap")
             else:
                 iso = _probe_bwrap()
-                if want == "bwrap" and iso.kind != "bubblewrap":
-                    raise RuntimeError(f"MCRT_SANDBOX=bwrap, but {iso.detail}")
-            if iso.kind == "fallback":
-                who = ("a separate uid (nobody)" if _can_drop_privileges() else
-                       "root: the Python installation is not readable by others" if os.geteuid() == 0 else
-                       f"the grader's own uid {os.geteuid()}")
-                iso.detail = (f"WARNING: student code is NOT isolated by namespaces: {iso.detail}. Falling back to "
-                              f"rlimits, seccomp, Landlock and an audit hook, running as {who}; no disk quota, and "
-                              "processes it forks and its network traffic are not contained by namespaces")
+                if iso.kind != "bubblewrap":
+                    if want == "bwrap":
+                        raise SandboxError(f"{SANDBOX_ENV}=bwrap, but {iso.detail}")
+                    iso = _probe_fallback(iso.detail)
+            if iso.kind == "none":
+                if not _ALLOW_UNISOLATED:
+                    raise SandboxError(REFUSAL.format(why=iso.detail))
+                iso.detail = (f"WARNING: student code is NOT isolated ({iso.detail}); the instructor allowed it "
+                              "(--allow-unisolated-code): an unprivileged uid, rlimits and a new session only")
+            if iso.kind != "bubblewrap":
                 print(f"mcrt grade: {iso.detail}", file=sys.stderr, flush=True)
+            _self_test(iso)
             _ISOLATION = iso
         return _ISOLATION
 
@@ -287,13 +461,13 @@ def _sandbox_uid() -> int:
     return UID_BASE + (os.getpid() % 4096) * 4096 + next(_uids) % 4096
 
 
-def _bwrap_argv(iso: Isolation, indir: Path, result_fd: int, uid: int | None) -> list[str]:
+def _bwrap_argv(iso: Isolation, indir: Path, result_fd: int, monitor_fd: int, uid: int | None) -> list[str]:
     """bwrap's command line: what the module sees is exactly what is bound here."""
     root = os.geteuid() == 0
     argv = [iso.bwrap, *_NS_FLAGS, "--die-with-parent", "--new-session", "--hostname", "sandbox"]
     if root:
-        if uid is not None:
-            argv += ["--cap-add", "CAP_SETUID", "--cap-add", "CAP_SETGID"]
+        # The runner mounts its work folder (inode budget), then switches to uid, which clears these.
+        argv += ["--cap-add", "CAP_SETUID", "--cap-add", "CAP_SETGID", "--cap-add", "CAP_SYS_ADMIN"]
     else:
         argv += ["--unshare-user", "--uid", str(NOBODY), "--gid", str(NOBODY)]
         if "--disable-userns" in iso.options:
@@ -320,25 +494,22 @@ def _bwrap_argv(iso: Isolation, indir: Path, result_fd: int, uid: int | None) ->
         if os.path.isfile(f):
             parents(f)
             argv += ["--ro-bind", f, f]
-    masks = []
-    for r in _python_roots():
+    roots = _python_roots()
+    for r in roots:
         if not any(Path(r).is_relative_to(b) for b in bound):
             parents(r)
             argv += ["--ro-bind", r, r]
             bound.add(r)
-        for p in sys.path:
-            if p and Path(p).is_relative_to(r) and os.path.isdir(os.path.join(p, "mcrt")):
-                masks.append(os.path.join(p, "mcrt"))  # the grader's package (its references) stays unreadable
-    for m in sorted(set(masks)):
+    for m in _hidden_paths(sorted(bound)):  # an empty folder no one may read in place of each
         argv += ["--size", "4096"] if "--size" in iso.options else []
-        argv += ["--tmpfs", m, "--remount-ro", m]
+        argv += ["--perms", "0000", "--tmpfs", m, "--remount-ro", m]
     parents("/sandbox/x")
     argv += ["--ro-bind", str(RUNNER), "/sandbox/runner.py", "--ro-bind", str(indir), "/sandbox/in"]
     if "--size" in iso.options:
         argv += ["--size", str(DISK_LIMIT)]
     argv += ["--perms", "1777", "--tmpfs", "/sandbox/work",
              "--proc", "/proc", "--dev", "/dev", "--chdir", "/sandbox/work", "--",
-             sys.executable, "-I", "-B", "/sandbox/runner.py", "/sandbox/in", "/sandbox/work", str(result_fd)]
+             sys.executable, "-I", "-B", "/sandbox/runner.py", "/sandbox/in", "/sandbox/work", str(result_fd), str(monitor_fd)]
     return argv
 
 
@@ -491,24 +662,75 @@ def run_student(module_src: Path, module_name: str, function: str, calls: list[d
 
     ``module_src`` is the student's file or folder (copied, without following
     links, into a fresh temporary folder); ``arrays`` are saved there as
-    ``.npy`` files that ``calls`` refer to with ``{"npy": name}``.
+    ``.npy`` files that ``calls`` refer to with ``{"npy": name}``. Raises
+    :class:`SandboxError` where code mode is refused (see :func:`isolation`).
     """
+    return _run_student(isolation(), module_src, module_name, function, calls, arrays, timeout=timeout,
+                        memory_mb=memory_mb, first_of_tuple=first_of_tuple)
+
+
+class _Monitor:
+    """The grader's end of the runner's monitor pipe, read as it comes (see mcrt.grade._sandbox).
+
+    Refused operations are recorded here, outside the student's process: what
+    the runner wrote cannot be taken back by the student's code.
+    """
+
+    def __init__(self):
+        self.read_fd, self.write_fd = os.pipe()
+        self.violations: list[str] = []
+        self.reached = False
+        self._thread = threading.Thread(target=self._drain, daemon=True)
+
+    def start(self) -> None:
+        os.close(self.write_fd)  # the child holds the only write end now: EOF when it (and its sandbox) is gone
+        self._thread.start()
+
+    def _drain(self) -> None:
+        buf, kept = b"", 0
+        with os.fdopen(self.read_fd, "rb", buffering=0) as f:
+            while chunk := f.read(65536):
+                if kept > 64 << 10:
+                    continue  # drained, not kept: the pipe never fills up and blocks the runner
+                buf += chunk
+                kept += len(chunk)
+                *lines, buf = buf.split(b"\n")
+                for ln in lines:
+                    text = ln.decode("utf-8", "replace")
+                    if text == "R":
+                        self.reached = True
+                    elif text.startswith("V ") and len(self.violations) < 20:
+                        self.violations.append(text[2:302])
+
+    def join(self) -> None:
+        self._thread.join(timeout=5)
+
+
+def _run_student(iso: Isolation, module_src: Path, module_name: str, function: str, calls: list[dict],
+                 arrays: dict[str, np.ndarray], *, timeout: float, memory_mb: int, first_of_tuple: bool = False) -> CallResult:
     t0 = time.monotonic()
-    iso = isolation()
-    tmp = Path(tempfile.mkdtemp(prefix="mcrt-code-"))
+    if iso.kind == "none" and not _ALLOW_UNISOLATED:
+        raise SandboxError(REFUSAL.format(why=iso.detail))
+    bwrap = iso.kind == "bubblewrap"
+    root = os.geteuid() == 0
+    uid = _sandbox_uid() if root else None  # never root, on any path: the runner refuses to go on as root
+    tmp = Path(tempfile.mkdtemp(prefix="mcrt-code-", dir=_scratch_base(iso)))
     try:
+        os.chmod(tmp, 0o711)
         indir = tmp / "in"
         indir.mkdir(mode=0o755)
         notes = copy_submission(Path(module_src), indir / "student")
         for name, arr in arrays.items():
             np.save(indir / name, np.ascontiguousarray(arr), allow_pickle=False)
-        bwrap = iso.kind == "bubblewrap"
-        uid = None
-        if os.geteuid() == 0 and bwrap and all(_other_readable(r) for r in _python_roots()):
-            uid = _sandbox_uid()
+        landlock = None
+        if iso.kind == "fallback":
+            roots = _read_roots()
+            landlock = _landlock_rules(roots, _hidden_paths(roots))
         task = {"module": f"student/{module_name}", "function": function, "calls": calls, "first_of_tuple": first_of_tuple,
-                "read_roots": [] if bwrap else _read_roots(), "limits": _limits(timeout, memory_mb), "uid": uid,
-                "landlock": not bwrap, "output_limit": OUTPUT_LIMIT}
+                "limits": _limits(timeout, memory_mb), "uid": uid, "landlock": landlock,
+                "mount_work": {"size": DISK_LIMIT, "nr_inodes": INODE_LIMIT} if bwrap and root else None,
+                "require": ["landlock", "seccomp"] if iso.kind == "fallback" else ["seccomp"] if bwrap else [],
+                "output_limit": OUTPUT_LIMIT}
         (indir / "input.json").write_text(json.dumps(task))
         for dirpath, dirs, files in os.walk(indir):
             os.chmod(dirpath, 0o755)
@@ -517,26 +739,48 @@ def run_student(module_src: Path, module_name: str, function: str, calls: list[d
         env = {"PATH": "/usr/bin:/bin", "LANG": "C.UTF-8",
                "PYTHONDONTWRITEBYTECODE": "1", "PYTHONHASHSEED": "0", "OMP_NUM_THREADS": "1",
                "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1", "NUMEXPR_NUM_THREADS": "1"}
-        ids: dict = {}
+        mon = _Monitor()
+        args_r = None
         with tempfile.TemporaryFile(dir=tmp) as out, tempfile.TemporaryFile(dir=tmp) as resf:
+            fds = [resf.fileno(), mon.write_fd]
             if bwrap:
                 env.update({"HOME": "/sandbox/work", "TMPDIR": "/sandbox/work"})
-                argv, cwd = _bwrap_argv(iso, indir, resf.fileno(), uid), tmp
+                # The options through a pipe (--args): the sandbox's /proc/1/cmdline shows "bwrap --args N -- python
+                # ... runner.py", not what is bound from where. (bwrap takes the command itself only from its argv.)
+                full = _bwrap_argv(iso, indir, resf.fileno(), mon.write_fd, uid)
+                cut = full.index("--")
+                packed = b"".join(os.fsencode(x) + b"\0" for x in full[1:cut])
+                args_r, args_w = os.pipe()
+                if len(packed) > 60000:  # a pipe holds 64 KiB: bwrap reads it only once started
+                    os.close(args_r)
+                    os.close(args_w)
+                    raise SandboxError(f"bwrap's command line is {len(packed)} bytes; at most 60000 fit its --args pipe")
+                os.write(args_w, packed)
+                os.close(args_w)
+                fds.append(args_r)
+                argv, cwd = [full[0], "--args", str(args_r), *full[cut:]], tmp
             else:
                 work = tmp / "work"
-                work.mkdir()
-                if _can_drop_privileges():
-                    os.chmod(tmp, 0o711)
-                    os.chown(work, NOBODY, NOBODY)
-                    ids = {"user": NOBODY, "group": NOBODY, "extra_groups": []}
+                work.mkdir(mode=0o700)
+                if uid is not None:
+                    os.chown(work, uid, uid)
                 env.update({"HOME": str(work), "TMPDIR": str(work)})
-                argv = [sys.executable, "-I", "-B", str(RUNNER), str(indir), str(work), str(resf.fileno())]
+                argv = [sys.executable, "-I", "-B", str(RUNNER), str(indir), str(work), str(resf.fileno()), str(mon.write_fd)]
                 cwd = work
             # No preexec_fn (unsafe with the threads that grade students in parallel): a new session for
-            # killing the whole group, and the user switch, are done by Popen itself; the runner sets its
-            # own resource limits before anything else.
-            proc = subprocess.Popen(argv, cwd=cwd, env=env, stdin=subprocess.DEVNULL, stdout=out, stderr=subprocess.STDOUT,
-                                    start_new_session=True, close_fds=True, pass_fds=(resf.fileno(),), **ids)
+            # killing the whole group is done by Popen itself; the runner sets its own resource limits,
+            # then switches to uid, before anything of the student's loads.
+            try:
+                proc = subprocess.Popen(argv, cwd=cwd, env=env, stdin=subprocess.DEVNULL, stdout=out, stderr=subprocess.STDOUT,
+                                        start_new_session=True, close_fds=True, pass_fds=tuple(fds))
+            except BaseException:
+                os.close(mon.write_fd)
+                os.close(mon.read_fd)
+                raise
+            finally:
+                if args_r is not None:
+                    os.close(args_r)
+            mon.start()
             try:
                 code = proc.wait(timeout=timeout)
                 timed_out = False
@@ -549,23 +793,28 @@ def run_student(module_src: Path, module_name: str, function: str, calls: list[d
                 except (ProcessLookupError, PermissionError):
                     pass
                 proc.wait()
+            mon.join()
             stdout = _tail_fd(out)
             raw = None if timed_out else _read_capped(resf, OUTPUT_LIMIT + TRAILER_LIMIT + 8)
             too_big = not timed_out and raw is None and os.fstat(resf.fileno()).st_size > 0
         seconds = time.monotonic() - t0
+        common = dict(seconds=seconds, stdout=stdout, notes=notes, violations=mon.violations)
+        if not mon.reached:
+            last = [ln for ln in stdout.strip().splitlines() if ln.strip()]
+            why = "timed out" if timed_out else _exit_reason(code, memory_mb)
+            return CallResult(False, [], [], f"the sandbox failed before the module ran ({why}"
+                              f"{': ' + last[-1].strip()[:300] if last else ''}): a problem of the grader, not the module",
+                              grader_fault=True, **common)
         if timed_out:
             return CallResult(False, [], [], f"stopped after {timeout:g} s (time limit): an infinite loop, or far too slow",
-                              seconds=seconds, stdout=stdout, notes=notes)
+                              **common)
         data = _parse_results(raw)
         if data is None:
             why = (f"its results exceed {OUTPUT_LIMIT >> 20} MiB" if too_big else _exit_reason(code, memory_mb))
-            return CallResult(False, [], [], f"the module's process ended without returning results ({why})",
-                              seconds=seconds, stdout=stdout, notes=notes)
+            return CallResult(False, [], [], f"the module's process ended without returning results ({why})", **common)
         blobs = data.pop("_blobs")
-        viol = data.get("violations", [])
-        res = CallResult(True, [], [], violations=[str(v)[:300] for v in (viol if isinstance(viol, list) else [])][:20],
-                         sandbox=data.get("sandbox", {}) if isinstance(data.get("sandbox"), dict) else {},
-                         seconds=seconds, stdout=stdout, notes=notes)
+        res = CallResult(True, [], [], sandbox=data.get("sandbox", {}) if isinstance(data.get("sandbox"), dict) else {},
+                         **common)
         res.sandbox["isolation"] = iso.kind
         if "import_error" in data:
             res.ok = False
@@ -857,8 +1106,8 @@ def check_render(run, params: dict, a: Assignment, ctx, scene_dict: dict) -> tup
     imgs = [o for o in res.outputs if o is not None]
     if not imgs:
         return CheckOutcome(0.0, _failure_text(res)), None
-    bad = [i for i in imgs if i.ndim != 3 or i.shape[2] not in (3, 4) or i.shape[:2] != imgs[0].shape[:2]]
-    if bad:
+    bad = [i for i in imgs if i.ndim != 3 or i.shape[2] not in (3, 4) or i.shape[:2] != imgs[0].shape[:2] or 0 in i.shape]
+    if bad:  # the module's doing, said as such (an empty image would otherwise fail inside the image grader)
         return CheckOutcome(0.0, f"render returned shape {bad[0].shape}, expected ({h}, {w}, 3)"), None
     imgs = [i[..., :3] for i in imgs]
     notes = []
@@ -998,6 +1247,29 @@ def _grade_code_checks(student, a, root, mod, problem, ctx, to, mem, tests, deta
     return res
 
 
+def shared_import_failure(results) -> str | None:
+    """A module that every student's code (two or more) failed to import though the grader can: the grader's problem.
+
+    mcrt, Mitsuba and Dr.Jit do not count: graded code is meant not to have them.
+    """
+    import importlib.util
+    import re
+
+    if len(results) < 2:
+        return None
+    common: set | None = None
+    for r in results:
+        text = " ".join(str(t.output) for t in r.tests)
+        # Missing, or an empty shell of it (a folder Python cannot read is an empty namespace package).
+        found = re.findall(r"No module named '([\w.]+)'|cannot import name '\w+' from '([\w.]+)' \(unknown location\)", text)
+        names = {(a or b).partition(".")[0] for a, b in found}
+        common = names if common is None else common & names
+        if not common:
+            return None
+    found = sorted(n for n in common if n not in HIDDEN_PACKAGES and importlib.util.find_spec(n) is not None)
+    return found[0] if found else None
+
+
 def discover_code(path, *, single: bool = False, student: str | None = None) -> list[tuple[str, Path]]:
     from mcrt.grade.submissions import _unique, safe_id
 
@@ -1013,11 +1285,15 @@ def discover_code(path, *, single: bool = False, student: str | None = None) -> 
 
 
 def grade_code_class(submissions, a: Assignment, out, *, jobs: int = 1, timeout: float | None = None, memory_mb: int | None = None,
-                     cache_dir=None, single: bool = False, student: str | None = None, context=None, log=None):
+                     cache_dir=None, single: bool = False, student: str | None = None, context=None, log=None,
+                     allow_unisolated_code: bool = False):
     """Grade every student's module; writes the same files as image mode.
 
     ``jobs`` students at a time (each check is its own sandboxed process);
     ``context`` reuses a prepared image-mode context for the ``render`` check.
+    Raises :class:`SandboxError` before grading anyone where student code
+    cannot be isolated (unless ``allow_unisolated_code``) or the sandbox
+    fails on a correct module.
     """
     from mcrt.grade.batch import ClassResult
     from mcrt.grade.grader import error_result
@@ -1028,7 +1304,9 @@ def grade_code_class(submissions, a: Assignment, out, *, jobs: int = 1, timeout:
     out = Path(out)
     subs = discover_code(submissions, single=single, student=student)
     log(f"mcrt grade (code): {len(subs)} submission(s)")
-    iso = isolation()  # a fallback is announced on stderr there
+    if allow_unisolated_code:
+        allow_unisolated(True)
+    iso = isolation()  # a fallback is announced on stderr there; a refusal or a failed self-test raises
     log(f"sandbox: {iso.detail}")
     ctx = context
     if ctx is None and any(c.name == "render" for c in a.code.checks):
@@ -1053,5 +1331,12 @@ def grade_code_class(submissions, a: Assignment, out, *, jobs: int = 1, timeout:
     with ThreadPoolExecutor(max_workers=max(1, jobs)) as ex:
         results = list(ex.map(one, subs))
     elapsed = time.perf_counter() - t0
-    summary = write_class(results, a, out, elapsed=elapsed, criteria=crit, context_note=f"Sandbox: {iso.detail}.")
+    note = f"Sandbox: {iso.detail}."
+    shared = shared_import_failure(results)
+    if shared:
+        warning = (f"WARNING: every student's module failed to import {shared}, which the grader itself has: the sandbox "
+                   "does not show it to graded code, a problem of the grader's installation, not the students'")
+        print(f"mcrt grade: {warning}", file=sys.stderr, flush=True)
+        note = f"{warning}. {note}"
+    summary = write_class(results, a, out, elapsed=elapsed, criteria=crit, context_note=note)
     return ClassResult(results, summary, out, elapsed, ctx)
