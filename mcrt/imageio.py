@@ -93,6 +93,8 @@ def _read_bytes(path: PathLike, size: int = -1) -> bytes:
 
 def _check_pixels(path: PathLike, width: int, height: int) -> None:
     """Refuse an image whose header declares more than :data:`MAX_PIXELS` pixels, before anything is decoded."""
+    if width <= 0 or height <= 0:
+        raise ImageError(f"{os.fspath(path)}: the image has no pixels ({width}x{height})")
     if width * height > MAX_PIXELS:
         raise ImageError(f"{os.fspath(path)}: {width}x{height} pixels is more than the {MAX_PIXELS:,} pixels an image "
                          "may have here")
