@@ -176,3 +176,27 @@ def test_exposure_must_be_finite(value, tmp_path):
     assert r.returncode == 2
     assert f"argument --exposure: must be a finite number, got '{value}'" in r.stderr
     assert not (tmp_path / "o.exr").exists()
+
+
+# -- code mode: what comes back, what goes in ---------------------------------
+
+
+def test_a_result_nested_200000_deep_is_malformed_not_a_grader_crash():
+    from mcrt.grade.codemode import _parse_results
+
+    body = b"[" * 200_000 + b"]" * 200_000
+    assert _parse_results(body + struct.pack("<Q", len(body))) is None
+
+
+def test_the_graded_module_is_copied_before_the_file_budget_runs_out(tmp_path):
+    from mcrt.grade.codemode import copy_submission
+
+    src = tmp_path / "student"
+    src.mkdir()
+    for k in range(20):
+        (src / f"a{k:02d}.txt").write_text("filler")
+    (src / "tracer.py").write_text("def render(): pass\n")
+    notes = copy_submission(src, tmp_path / "copy", max_files=5, first="tracer.py")
+    assert (tmp_path / "copy" / "tracer.py").read_text() == "def render(): pass\n"
+    assert len(list((tmp_path / "copy").iterdir())) == 5
+    assert any("more than 5 files" in n for n in notes)
