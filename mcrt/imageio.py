@@ -794,6 +794,8 @@ def _pillow_rgb8(path: str, data: bytes, kind: str, modes: tuple[str, ...]) -> n
             return np.asarray(rgb, dtype=np.uint8)
     except ImageError:
         raise
+    except Image.DecompressionBombError as e:  # past Pillow's own cap, before ours is asked
+        raise ImageError(f"{path}: more than the {MAX_PIXELS:,} pixels an image may have here ({_one_line(e, 120)})") from None
     except Exception as e:
         raise ImageError(f"{path}: truncated or corrupt {kind} file ({_one_line(e, 160)})") from None
 
@@ -867,6 +869,8 @@ def read_netpbm(path: PathLike, linear: bool = False) -> tuple[np.ndarray, int]:
                 return _display_to_linear(codes, 255, linear), 8
     except ImageError:
         raise
+    except Image.DecompressionBombError as e:  # past Pillow's own cap, before ours is asked
+        raise ImageError(f"{path}: more than the {MAX_PIXELS:,} pixels an image may have here ({_one_line(e, 120)})") from None
     except Exception as e:
         what = "not a netpbm (PPM/PGM) file" if data[:1] != b"P" else "truncated or corrupt netpbm file"
         raise ImageError(f"{path}: {what} ({_one_line(e, 160)})") from None

@@ -84,13 +84,14 @@ def test_pfm_hdr_ppm_declaring_too_many_pixels_are_refused_before_reading_the_ra
             read_image(_header_only(tmp_path / name, data))
 
 
-def test_bmp_and_tga_declaring_too_many_pixels_are_refused(tmp_path):
-    w, h = 5000, 4000
+@pytest.mark.parametrize("w, h", [(5000, 4000), (20000, 20000)])  # the second is past Pillow's own limit too
+def test_bmp_tga_ppm_declaring_too_many_pixels_are_refused(tmp_path, w, h):
     bmp = (b"BM" + struct.pack("<IHHI", 54 + 16, 0, 0, 54) + struct.pack("<IiiHHIIiiII", 40, w, h, 1, 24, 0, 0, 2835, 2835, 0, 0)
            + bytes(16))
     tga = struct.pack("<BBBHHBHHHHBB", 0, 0, 2, 0, 0, 0, 0, 0, w, h, 24, 0) + bytes(16)
-    for name, data in (("c.bmp", bmp), ("c.tga", tga)):
-        with pytest.raises(ImageError, match=rf"{name}: {w}x{h} pixels is more than"):
+    ppm = f"P6\n{w} {h}\n255\n".encode() + bytes(16)
+    for name, data in (("c.bmp", bmp), ("c.tga", tga), ("c.ppm", ppm)):
+        with pytest.raises(ImageError, match=rf"{name}: (more than the 16,777,216|{w}x{h}) pixels"):
             read_image(_header_only(tmp_path / name, data))
 
 
