@@ -175,6 +175,19 @@ def test_only_changed_submissions_are_graded_again_and_fresh_grades_all(workdir,
         (klass / "s5.toml").write_text("spp = 64\n")
 
 
+def test_students_not_graded_are_tried_again(workdir, klass, context):
+    """A timeout may come from a busy machine: a later run grades those students again, whatever their key."""
+    out = workdir / "timeouts"
+    cmd = grade_cmd(workdir, klass, out, "-j", "1", "-q", "--timeout", "0.001")
+    assert subprocess.run(cmd, capture_output=True, timeout=900).returncode == 1
+    first = read_run(out)
+    assert {rec["status"] for rec in first["students"].values()} == {"timeout"}
+    assert subprocess.run(cmd, capture_output=True, timeout=900).returncode == 1
+    second = read_run(out)
+    assert {rec["run"] for rec in second["students"].values()} == {second["run"]} != {first["run"]}
+    assert_consistent(out)
+
+
 def test_a_results_json_not_as_recorded_is_graded_again(workdir, klass, context):
     """A run killed between moving a student's files and recording them leaves a results.json run.json does not
     vouch for: that student is graded again."""

@@ -20,8 +20,8 @@ Each student's files are written to ``DIR/.staging/`` and moved into ``DIR/<stud
 hash of the submission's files, the assignment, the grader's sources and the limits), and grades.csv and the
 summary are rewritten: every row of grades.csv always agrees with that student's results.json, and until the
 batch ends ``run.json`` and the summary say it is incomplete. A later ``mcrt grade`` into the same folder
-keeps every result whose key still matches and grades only the students missing or changed (``fresh=True``:
-all of them). One ``mcrt grade`` at a time writes into a folder (a lock on ``DIR/.lock``).
+keeps every result whose key still matches and grades only the students missing, changed or not graded
+(a timeout, a crash; ``fresh=True``: all of them). One ``mcrt grade`` at a time writes into a folder (a lock on ``DIR/.lock``).
 
 Workers run with an address-space limit (``memory_mb``) and one BLAS/OpenMP
 thread each, importing ``mcrt`` from where this process did (an installed

@@ -41,7 +41,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    "exit, for an autograder image's setup (default: off)")
     p.add_argument("--fresh", action="store_true", help="grade every student again; by default (image mode) a run into "
                    "an --out folder that holds an earlier or killed run of the same assignment keeps the results of "
-                   "unchanged submissions (DIR/run.json) and grades only the missing or changed ones (default: off)")
+                   "unchanged submissions (DIR/run.json) and grades only the missing, changed or not graded ones (default: off)")
     p.add_argument("--quiet", "-q", action="store_true", help="no progress lines (default: off)")
 
 

@@ -13,7 +13,8 @@ never opened), the assignment (its parsed form, scene included), the grader
 the reference's source and the time and memory limits. A result is kept by a
 later run only when its key matches and ``results.json`` still has the bytes
 recorded (a run killed between moving a student's files and recording them
-leaves that student to be graded again). ``row`` holds what grades.csv and
+leaves that student to be graded again), and only when it graded the student (a timeout or a crash is tried
+again). ``row`` holds what grades.csv and
 the summary need, so a resumed run rewrites them without re-reading every
 results.json.
 """
@@ -75,16 +76,13 @@ def submission_key(sub: Submission, digest: dict) -> str:
     h = hashlib.sha256(json.dumps(digest, sort_keys=True).encode())
     src = Path(sub.source)
     h.update(f"\0{sub.student}\0{sub.problem}\0{sub.special}\0".encode("utf-8", "surrogateescape"))
-    kind = file_kind(src)
-    if kind is None and src.is_dir():
+    if sub.special:  # a link or special file where the hand-in should be: what it is, never its contents
+        named = [(Path(src.name), None, sub.special)]
+    elif file_kind(src) is None and src.is_dir():
         files, special, _ = _walk(src)
         named = [(p.relative_to(src), p, None) for p in files] + [(p.relative_to(src), None, k) for p, k in special]
-    elif kind is None:
-        named = [(Path(src.name), src, None)]
-        if sub.manifest_path:
-            named.append((Path(Path(sub.manifest_path).name), Path(sub.manifest_path), None))
-    else:
-        named = [(Path(src.name), None, kind)]
+    else:  # one file (the instructor's SUBMISSIONS may be a link to it: sub.images holds its target) and its manifest
+        named = [(Path(Path(f).name), Path(f), None) for f in [*sub.images, sub.manifest_path] if f]
     for rel, path, what in sorted(named, key=lambda t: str(t[0])):
         h.update(b"\0file\0" + str(rel).encode("utf-8", "surrogateescape") + b"\0")
         if path is None:
@@ -170,8 +168,9 @@ def start(out: Path, assignment: str, digest: dict, keys: dict[str, str], *, fre
     run = Run(out, assignment, digest)
     kept = {}
     for sid, rec in ({} if fresh else previous(out, assignment)).items():
-        if (sid in keys and isinstance(rec, dict) and rec.get("key") == keys[sid] and isinstance(rec.get("row"), dict)
-                and rec.get("results_sha256") == file_sha256(out / sid / "results.json")):
+        # Only results that graded the student: a timeout or a crash may not happen again (a busy machine).
+        if (sid in keys and isinstance(rec, dict) and rec.get("key") == keys[sid] and rec.get("status") == "graded"
+                and isinstance(rec.get("row"), dict) and rec.get("results_sha256") == file_sha256(out / sid / "results.json")):
             kept[sid] = rec
     run.students = dict(kept)
     run.pending = [s for s in keys if s not in kept]
