@@ -21,7 +21,8 @@ hash of the submission's files, the assignment, the grader's sources and the lim
 summary are rewritten: every row of grades.csv always agrees with that student's results.json, and until the
 batch ends ``run.json`` and the summary say it is incomplete. A later ``mcrt grade`` into the same folder
 keeps every result whose key still matches and grades only the students missing, changed or not graded
-(a timeout, a crash; ``fresh=True``: all of them). One ``mcrt grade`` at a time writes into a folder (a lock on ``DIR/.lock``).
+(a timeout, a crash; ``fresh=True``: all of them). One ``mcrt grade`` at a time writes into a folder (a
+lock on ``DIR/.lock``).
 
 Workers run with an address-space limit (``memory_mb``) and one BLAS/OpenMP
 thread each, importing ``mcrt`` from where this process did (an installed
@@ -41,8 +42,8 @@ from dataclasses import dataclass, field
 from multiprocessing.connection import wait
 from pathlib import Path
 
-from mcrt.grade._worker import grade_and_write, read_message, write_message
 from mcrt.grade import run as run_record
+from mcrt.grade._worker import grade_and_write, read_message, write_message
 from mcrt.grade.assignment import Assignment
 from mcrt.grade.expected import Context, prepare_context
 from mcrt.grade.grader import STATUS_ERROR, STATUS_TIMEOUT, StudentResult, error_result
