@@ -4,8 +4,8 @@
 survive it, the output folder must say it is incomplete (run.json, summary.json, summary.md), every row of
 grades.csv must agree with that student's results.json, and a second ``mcrt grade`` must grade only the
 students the first did not finish. A changed submission is graded again, an unchanged one is not, and
-``--fresh`` grades everyone. Images are 32 x 32 PFMs of a correct-looking constant: the grading itself is
-not what is tested here.
+``fresh`` grades everyone, a timeout is tried again. Images are 32 x 32 PFMs of the reference scaled and
+with noise added: the grading itself is not what is tested here.
 """
 
 from __future__ import annotations
@@ -13,6 +13,7 @@ from __future__ import annotations
 import csv
 import json
 import os
+import shutil
 import signal
 import struct
 import subprocess
@@ -25,6 +26,7 @@ import psutil
 import pytest
 
 from mcrt.grade.assignment import load_assignment
+from mcrt.grade.batch import grade_class
 from mcrt.grade.expected import prepare_context
 from mcrt.grade.report import md_text, results_json, write_class
 from mcrt.grade.grader import StudentResult, grade_image
@@ -149,57 +151,65 @@ def test_a_killed_batch_stops_its_workers_says_it_is_incomplete_and_resumes(work
     assert not (out / ".staging").exists()
 
 
-def test_only_changed_submissions_are_graded_again_and_fresh_grades_all(workdir, klass, context):
-    out = workdir / "changed"
-    cmd = grade_cmd(workdir, klass, out, "-j", "0", "-q")
-    assert subprocess.run(cmd, capture_output=True, timeout=900).returncode == 0
-    first = read_run(out)
-    # s3's render changes; s5's manifest changes: both are graded again, nobody else is.
-    img = (klass / "s3.pfm").read_bytes()
-    (klass / "s3.pfm").write_bytes(img[:-4] + struct.pack("<f", 0.5))
-    (klass / "s5.toml").write_text("spp = 32\n")
-    try:
-        assert subprocess.run(cmd, capture_output=True, timeout=900).returncode == 0
-        second = read_run(out)
-        again = {s for s, rec in second["students"].items() if rec["run"] == second["run"]}
-        assert again == {"s3", "s5"}
-        assert second["students"]["s0"]["run"] == first["run"]
-        assert_consistent(out)
-        # --fresh: everyone.
-        assert subprocess.run(cmd + ["--fresh"], capture_output=True, timeout=900).returncode == 0
-        third = read_run(out)
-        assert {rec["run"] for rec in third["students"].values()} == {third["run"]}
-        assert_consistent(out)
-    finally:
-        (klass / "s3.pfm").write_bytes(img)
-        (klass / "s5.toml").write_text("spp = 64\n")
+@pytest.fixture
+def small(klass, tmp_path):
+    """Three of the students, in a folder of the test's own (in-process runs below: no start-up to wait for)."""
+    d = tmp_path / "small"
+    d.mkdir()
+    for k in range(3):
+        for ext in (".pfm", ".toml"):
+            shutil.copy2(klass / f"s{k}{ext}", d / f"s{k}{ext}")
+    return d
 
 
-def test_students_not_graded_are_tried_again(workdir, klass, context):
-    """A timeout may come from a busy machine: a later run grades those students again, whatever their key."""
-    out = workdir / "timeouts"
-    cmd = grade_cmd(workdir, klass, out, "-j", "1", "-q", "--timeout", "0.001")
-    assert subprocess.run(cmd, capture_output=True, timeout=900).returncode == 1
+def graded_by(run: dict) -> set[str]:
+    """The students the run of ``run`` graded itself (not kept from an earlier one)."""
+    return {s for s, rec in run["students"].items() if rec["run"] == run["run"]}
+
+
+def test_only_changed_submissions_are_graded_again_and_fresh_grades_all(small, context, tmp_path):
+    out = tmp_path / "out"
+    grade_class(small, context.assignment, out, jobs=0, context=context, log=None)
     first = read_run(out)
-    assert {rec["status"] for rec in first["students"].values()} == {"timeout"}
-    assert subprocess.run(cmd, capture_output=True, timeout=900).returncode == 1
+    # s1's render changes; s2's manifest changes: both are graded again, s0 is not.
+    img = (small / "s1.pfm").read_bytes()
+    (small / "s1.pfm").write_bytes(img[:-4] + struct.pack("<f", 0.5))
+    (small / "s2.toml").write_text("spp = 32\n")
+    grade_class(small, context.assignment, out, jobs=0, context=context, log=None)
     second = read_run(out)
-    assert {rec["run"] for rec in second["students"].values()} == {second["run"]} != {first["run"]}
+    assert graded_by(second) == {"s1", "s2"}
+    assert second["students"]["s0"]["run"] == first["run"]
+    assert_consistent(out)
+    # fresh (--fresh): everyone.
+    grade_class(small, context.assignment, out, jobs=0, context=context, log=None, fresh=True)
+    assert graded_by(read_run(out)) == {"s0", "s1", "s2"}
     assert_consistent(out)
 
 
-def test_a_results_json_not_as_recorded_is_graded_again(workdir, klass, context):
+def test_students_not_graded_are_tried_again(small, context, tmp_path):
+    """A timeout may come from a busy machine: a later run grades those students again, whatever their key."""
+    out = tmp_path / "out"
+    for f in [*small.glob("s1.*"), *small.glob("s2.*")]:  # one student: each timeout costs a worker's start-up
+        f.unlink()
+    for _ in range(2):
+        res = grade_class(small, context.assignment, out, jobs=1, timeout=0.001, context=context, log=None)
+        assert [r.status for r in res.results] == ["timeout"]
+        run = read_run(out)
+        assert graded_by(run) == {"s0"} and run["complete"]
+        assert_consistent(out)
+
+
+def test_a_results_json_not_as_recorded_is_graded_again(small, context, tmp_path):
     """A run killed between moving a student's files and recording them leaves a results.json run.json does not
     vouch for: that student is graded again."""
-    out = workdir / "tampered"
-    cmd = grade_cmd(workdir, klass, out, "-j", "0", "-q")
-    assert subprocess.run(cmd, capture_output=True, timeout=900).returncode == 0
+    out = tmp_path / "out"
+    grade_class(small, context.assignment, out, jobs=0, context=context, log=None)
     first = read_run(out)
     p = out / "s2" / "results.json"
     p.write_text(p.read_text().replace('"score"', '"score" ', 1))
-    assert subprocess.run(cmd, capture_output=True, timeout=900).returncode == 0
+    grade_class(small, context.assignment, out, jobs=0, context=context, log=None)
     second = read_run(out)
-    assert {s for s, rec in second["students"].items() if rec["run"] == second["run"]} == {"s2"}
+    assert graded_by(second) == {"s2"}
     assert second["students"]["s1"]["run"] == first["run"]
     assert_consistent(out)
 
