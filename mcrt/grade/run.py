@@ -34,6 +34,7 @@ from pathlib import Path
 from mcrt.grade.grader import StudentResult, TestResult
 from mcrt.grade.report import write_json_atomic
 from mcrt.grade.submissions import Submission, _walk, file_kind
+from mcrt.reference.manifest import sha256_file
 
 SCHEMA = "mcrt.grade.run/1"
 RUN_FILE = "run.json"
@@ -93,13 +94,11 @@ def submission_key(sub: Submission, digest: dict) -> str:
 
 
 def file_sha256(path: Path) -> str | None:
-    with contextlib.suppress(OSError):
-        h = hashlib.sha256()
-        with open(path, "rb") as f:
-            for block in iter(lambda: f.read(_BLOCK), b""):
-                h.update(block)
-        return h.hexdigest()
-    return None
+    """SHA-256 of a file's bytes, None when there is no such file."""
+    try:
+        return sha256_file(path)
+    except OSError:
+        return None
 
 
 def result_row(res: StudentResult) -> dict:
