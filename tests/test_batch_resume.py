@@ -85,6 +85,13 @@ def read_run(out: Path) -> dict:
         return {}
 
 
+def running(pid: int) -> bool:
+    try:
+        return psutil.Process(pid).status() != psutil.STATUS_ZOMBIE
+    except psutil.NoSuchProcess:
+        return False
+
+
 def assert_consistent(out: Path) -> list[dict]:
     """Every row of grades.csv agrees with that student's results.json and with run.json; returns the rows."""
     with open(out / "grades.csv", newline="") as f:
@@ -123,7 +130,7 @@ def test_a_killed_batch_stops_its_workers_says_it_is_incomplete_and_resumes(work
     t = time.monotonic()
     alive = workers
     while alive and time.monotonic() - t < 10:
-        alive = {p for p in alive if psutil.pid_exists(p) and psutil.Process(p).status() != psutil.STATUS_ZOMBIE}
+        alive = {p for p in alive if running(p)}
         time.sleep(0.05)
     assert not alive, f"workers still running after the batch was killed: {alive}"
 
