@@ -174,6 +174,37 @@ def graded_by(run: dict) -> set[str]:
     return {s for s, rec in run["students"].items() if rec["run"] == run["run"]}
 
 
+_PARENT = """\
+import subprocess, sys, time
+from mcrt.grade.batch import worker_command, worker_env
+w = subprocess.Popen(worker_command(), stdin=int(sys.argv[1]), stdout=subprocess.DEVNULL, env=worker_env())
+print(w.pid, flush=True)
+time.sleep(600)
+"""
+
+
+def test_a_worker_dies_with_its_parent_even_with_its_input_open():
+    """Its input pipe's other end is held here, so only the kernel's parent-death signal can end the worker."""
+    r, w = os.pipe()
+    parent = subprocess.Popen([sys.executable, "-c", _PARENT, str(r)], pass_fds=(r,), stdout=subprocess.PIPE)
+    os.close(r)
+    worker = None
+    try:
+        worker = int(parent.stdout.readline())
+        assert running(worker)
+        parent.kill()
+        parent.wait(30)
+        t = time.monotonic()
+        while running(worker) and time.monotonic() - t < 10:
+            time.sleep(0.05)
+        assert not running(worker), "the worker outlived its parent"
+    finally:
+        os.close(w)
+        parent.kill()
+        if worker is not None and running(worker):
+            os.kill(worker, signal.SIGKILL)
+
+
 def test_only_changed_submissions_are_graded_again_and_fresh_grades_all(small, context, tmp_path):
     out = tmp_path / "out"
     grade_class(small, context.assignment, out, jobs=0, context=context, log=None)
