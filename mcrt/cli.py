@@ -7,10 +7,22 @@ Exit codes: 0 ok (or images consistent), 1 a check failed (images differ),
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 from pathlib import Path
 
 from mcrt.exitcodes import EXIT_FAILED, EXIT_OK, EXIT_UNUSABLE
+
+
+def _finite_float(text: str) -> float:
+    """A float argument that must be finite (``nan`` and ``inf`` parse as floats, but no option means them)."""
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not math.isfinite(v):
+        raise argparse.ArgumentTypeError(f"must be a finite number, got {text!r}")
+    return v
 
 
 def _add_render_options(p: argparse.ArgumentParser) -> None:
@@ -207,7 +219,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--mutant", action="append", metavar="NAME", help="switch on a catalogued bug (mcrt, plugin; repeatable; see `mcrt mutants`; default: none)")
     p.add_argument("--intersector", choices=("convex", "triangles"), default="convex", help="mcrt's intersection code (triangles: brute-force cross-check; default: convex)")
     _add_trick_flags(p)
-    p.add_argument("--exposure", type=float, default=0.0, help="PNG preview exposure in stops (default: 0)")
+    p.add_argument("--exposure", type=_finite_float, default=0.0, help="PNG preview exposure in stops (default: 0)")
     p.add_argument("-o", "--output", default="out.exr", help="output EXR; the PNG preview goes beside it (default: out.exr)")
     # Any Mitsuba scene (mcrt.mitsuba.render_with_variance); --res/--width/--height, --spp, --seed, --max-depth apply.
     mitsuba_help = {

@@ -61,6 +61,10 @@ _INT32 = (-(2**31), 2**31 - 1)
 
 MAGENTA = (255, 0, 255)
 
+#: The most pixels any reader decodes (4096 x 4096): every reader checks the header's size first, so a small file
+#: that declares a huge image (a 280 KB PNG of 12000 x 12000) is refused before it takes gigabytes to decode.
+MAX_PIXELS = 1 << 24
+
 
 class ImageError(ValueError):
     """A file that cannot be read or written; the one-line message names it."""
@@ -86,6 +90,15 @@ def _read_bytes(path: PathLike, size: int = -1) -> bytes:
         raise ImageError(f"{os.fspath(path)}: is a directory, not an image") from None
     except OSError as e:
         raise ImageError(f"{os.fspath(path)}: cannot read ({_one_line(e.strerror or e)})") from None
+
+
+def _check_pixels(path: PathLike, width: int, height: int) -> None:
+    """Refuse an image whose header declares more than :data:`MAX_PIXELS` pixels, before anything is decoded."""
+    if width <= 0 or height <= 0:
+        raise ImageError(f"{os.fspath(path)}: the image has no pixels ({width}x{height})")
+    if width * height > MAX_PIXELS:
+        raise ImageError(f"{os.fspath(path)}: {width}x{height} pixels is more than the {MAX_PIXELS:,} pixels an image "
+                         "may have here")
 
 
 def _atomic_write(path: PathLike, write: Callable[[str], None]) -> None:
@@ -252,12 +265,17 @@ def read_exr(path: PathLike, *, spp: int | None = None) -> RenderResult:
     log = {"text": ""}
     try:
         with _captured_library_output() as log:
+            head_only = OpenEXR.File(path, header_only=True)
+            if len(head_only.parts):
+                _check_pixels(path, *_exr_shape(path, dict(head_only.header(0)))[::-1])
             f = OpenEXR.File(path, separate_channels=True)
             parts = len(f.parts)
             if parts:
                 header = dict(f.header(0))
                 channels = dict(f.channels(0))
             log["ok"] = parts > 0
+    except ImageError:
+        raise
     except Exception as e:
         detail = _library_detail(log["text"], path) or _one_line(e, 160)
         raise ImageError(f"{path}: truncated or corrupt OpenEXR file ({detail})") from None
@@ -442,6 +460,7 @@ def read_pfm(path: PathLike) -> np.ndarray:
         raise ImageError(f"{path}: PFM scale {m.group(4).decode()!r} is not a number") from None
     if w == 0 or h == 0 or scale == 0 or not math.isfinite(scale):
         raise ImageError(f"{path}: PFM header gives {w}x{h} pixels and scale {scale}")
+    _check_pixels(path, w, h)
     c = 3 if colour else 1
     n = w * h * c * 4
     body = data[m.end(): m.end() + n]
@@ -512,6 +531,7 @@ def read_hdr(path: PathLike) -> np.ndarray:
     n1, n2 = int(m.group(3)), int(m.group(6))
     if n1 == 0 or n2 == 0:
         raise ImageError(f"{path}: Radiance picture has no pixels ({n1}x{n2})")
+    _check_pixels(path, n2, n1)
     if n1 * n2 > 64 * len(data) + (1 << 20):  # more than run-length coding can pack in
         raise ImageError(f"{path}: truncated or corrupt Radiance HDR file ({n1}x{n2} pixels in {len(data)} bytes)")
     rgbe = _hdr_scanlines(path, data, nl + 1, n1, n2)  # (n1, n2, 4): rows along the first axis
@@ -693,6 +713,7 @@ def _png_codes(path: str) -> tuple[np.ndarray, int]:
         raise ImageError(f"{path}: not a PNG file (bad signature)")
     if len(data) < 33 or data[12:16] != b"IHDR":
         raise ImageError(f"{path}: truncated or corrupt PNG file (no IHDR chunk)")
+    _check_pixels(path, int.from_bytes(data[16:20], "big"), int.from_bytes(data[20:24], "big"))
     if data[24] == 16:
         return _png16_decode(path, data), 65535
     return _pillow_rgb8(path, data, "PNG", ("1", "L", "LA", "P", "PA", "RGB", "RGBA")), 255
@@ -702,6 +723,7 @@ def _pillow_rgb8(path: str, data: bytes, kind: str, modes: tuple[str, ...]) -> n
     """Decode an 8-bit image with Pillow to (H, W, 3) uint8 (grey replicated, palette expanded, alpha dropped)."""
     try:
         with Image.open(io.BytesIO(data), formats=[kind]) as im:
+            _check_pixels(path, *im.size)
             im.load()
             if im.mode not in modes:
                 raise ImageError(f"{path}: unsupported {kind} pixel mode {im.mode}")
@@ -709,6 +731,8 @@ def _pillow_rgb8(path: str, data: bytes, kind: str, modes: tuple[str, ...]) -> n
             return np.asarray(rgb, dtype=np.uint8)
     except ImageError:
         raise
+    except Image.DecompressionBombError as e:  # past Pillow's own cap, before ours is asked
+        raise ImageError(f"{path}: more than the {MAX_PIXELS:,} pixels an image may have here ({_one_line(e, 120)})") from None
     except Exception as e:
         raise ImageError(f"{path}: truncated or corrupt {kind} file ({_one_line(e, 160)})") from None
 
@@ -771,6 +795,7 @@ def read_netpbm(path: PathLike, linear: bool = False) -> tuple[np.ndarray, int]:
         with Image.open(io.BytesIO(data), formats=["PPM"]) as im:
             tile = im.tile[0] if im.tile else None
             mode, (w, h) = im.mode, im.size
+            _check_pixels(path, w, h)
             args = tile.args if tile is not None else None
             maxval = int(args[1]) if isinstance(args, tuple) and len(args) > 1 else (65535 if mode == "I" else 255)
             if maxval <= 255:
@@ -781,6 +806,8 @@ def read_netpbm(path: PathLike, linear: bool = False) -> tuple[np.ndarray, int]:
                 return _display_to_linear(codes, 255, linear), 8
     except ImageError:
         raise
+    except Image.DecompressionBombError as e:  # past Pillow's own cap, before ours is asked
+        raise ImageError(f"{path}: more than the {MAX_PIXELS:,} pixels an image may have here ({_one_line(e, 120)})") from None
     except Exception as e:
         what = "not a netpbm (PPM/PGM) file" if data[:1] != b"P" else "truncated or corrupt netpbm file"
         raise ImageError(f"{path}: {what} ({_one_line(e, 160)})") from None

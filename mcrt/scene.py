@@ -16,6 +16,8 @@ import difflib
 import hashlib
 import json
 import math
+import os
+import stat
 import tomllib
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -514,13 +516,36 @@ def _check_settings(s: RenderSettings, where: str) -> None:
         raise r.fail(f"{field_where}.max_depth", f"must be -1 (unbounded) or an integer >= 1, got {s.max_depth!r}")
 
 
+#: The largest scene file read (a scene is a few KiB; this stops ``--scene /dev/zero`` from reading without end).
+MAX_SCENE_BYTES = 1 << 20
+
+
+def read_capped(path: Path, limit: int, error: type[Exception], what: str = "scene file") -> bytes:
+    """The bytes of the regular file ``path``, at most ``limit`` of them; else ``error`` naming the file and why.
+
+    A FIFO, device or folder is refused without reading it (``/dev/zero`` would never end); the file is opened
+    non-blocking so that a FIFO cannot hang the open.
+    """
+    try:
+        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
+    except OSError as e:
+        raise error(f"{path}: cannot read: {e.strerror or e}") from None
+    with os.fdopen(fd, "rb") as f:
+        if not stat.S_ISREG(os.fstat(fd).st_mode):
+            raise error(f"{path}: not a regular file (a {what} must be one)")
+        try:
+            raw = f.read(limit + 1)
+        except OSError as e:
+            raise error(f"{path}: cannot read: {e.strerror or e}") from None
+    if len(raw) > limit:
+        raise error(f"{path}: larger than {limit // 1024} KiB, too large for a {what}")
+    return raw
+
+
 def load_scene(path: str | Path = CANONICAL) -> Scene:
     """Load and validate a scene file; raise :class:`SceneError` naming file and field."""
     path = Path(path)
-    try:
-        raw = path.read_bytes()
-    except OSError as e:
-        raise SceneError(f"{path}: cannot read: {e.strerror or e}") from None
+    raw = read_capped(path, MAX_SCENE_BYTES, SceneError)
     try:
         text = raw.decode("utf-8")
     except UnicodeDecodeError as e:
@@ -650,6 +675,11 @@ def _object(r: _Reader, d: Any, where: str, room: Room) -> Object:
             edge = max(np.linalg.norm(tri[i] - tri[j]) for i, j in ((0, 1), (1, 2), (2, 0)))
             if area <= 1e-7 * edge * edge:
                 raise r.fail(f"{where}.vertices", f"degenerate triangle: face {k} has zero area (collinear or coincident vertices)")
+        # Four coplanar vertices make four fine triangles but no solid: its faces have no outside to point to.
+        e = np.array(verts[1:]) - np.array(verts[0])
+        longest = max(np.linalg.norm(np.subtract(a, b)) for a in verts for b in verts)
+        if abs(np.linalg.det(e)) <= 1e-6 * longest**3:
+            raise r.fail(f"{where}.vertices", "flat tetrahedron: the four vertices lie in one plane (zero volume)")
         for i, p in enumerate(verts):
             if not room.contains(p, -tol):
                 raise r.fail(f"{where}.vertices[{i}]", f"object outside the room: {p}")

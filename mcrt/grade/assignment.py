@@ -38,7 +38,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from mcrt.scene import SCENE_DIR, Scene, SceneError, load_scene
+from mcrt.scene import SCENE_DIR, Scene, SceneError, load_scene, read_capped
+
+#: The largest assignment file read (one is a few KiB).
+MAX_ASSIGNMENT_BYTES = 1 << 20
 
 VISIBILITIES = ("visible", "hidden", "after_due_date", "after_published")
 REFERENCE_SOURCES = ("auto", "mitsuba", "mcrt")
@@ -280,11 +283,11 @@ def load_assignment(path: str | os.PathLike) -> Assignment:
     """Read and validate an assignment file (see the module docstring)."""
     path = Path(path)
     shown = str(path)
+    if not os.path.lexists(path):
+        raise AssignmentError(f"{shown}: no such file")
     try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise AssignmentError(f"{shown}: no such file") from None
-    except (OSError, UnicodeDecodeError) as e:
+        text = read_capped(path, MAX_ASSIGNMENT_BYTES, AssignmentError, "assignment file").decode("utf-8")
+    except UnicodeDecodeError as e:
         raise AssignmentError(f"{shown}: cannot read ({e})") from None
     try:
         data = tomllib.loads(text)

@@ -13,6 +13,17 @@ same way. One bad submission never stops the batch. ``concurrent.futures``
 is not used because it can neither cancel a running task nor survive a dead
 worker (``BrokenProcessPool`` takes every pending student with it).
 
+A batch survives its own death. Workers die with the parent (``PR_SET_PDEATHSIG`` on Linux, set by each worker
+before it imports anything; elsewhere they stop at the end of their student, when their input pipe closes).
+Each student's files are written to ``DIR/.staging/`` and moved into ``DIR/<student>/`` only once complete; then
+``DIR/run.json`` (:mod:`mcrt.grade.run`) records the student, their result and the key of what was graded (a
+hash of the submission's files, the assignment, the grader's sources and the limits), and grades.csv and the
+summary are rewritten: every row of grades.csv always agrees with that student's results.json, and until the
+batch ends ``run.json`` and the summary say it is incomplete. A later ``mcrt grade`` into the same folder
+keeps every result whose key still matches and grades only the students missing, changed or not graded
+(a timeout, a crash; ``fresh=True``: all of them). One ``mcrt grade`` at a time writes into a folder (a
+lock on ``DIR/.lock``).
+
 Workers run with an address-space limit (``memory_mb``) and one BLAS/OpenMP
 thread each, importing ``mcrt`` from where this process did (an installed
 package or a checkout; never a folder named ``mcrt`` in the working folder,
@@ -23,6 +34,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import shutil
 import subprocess
 import sys
 import time
@@ -30,6 +42,7 @@ from dataclasses import dataclass, field
 from multiprocessing.connection import wait
 from pathlib import Path
 
+from mcrt.grade import run as run_record
 from mcrt.grade._worker import grade_and_write, read_message, write_message
 from mcrt.grade.assignment import Assignment
 from mcrt.grade.expected import Context, prepare_context
@@ -59,35 +72,66 @@ class ClassResult:
 
 def grade_class(submissions: str | os.PathLike, assignment: Assignment, out: str | os.PathLike, *, jobs: int = 1,
                 timeout: float | None = None, cache_dir=None, single: bool = False, student: str | None = None,
-                context: Context | None = None, memory_mb: int = DEFAULT_MEMORY_MB, log=log) -> ClassResult:
+                context: Context | None = None, memory_mb: int = DEFAULT_MEMORY_MB, fresh: bool = False,
+                log=log) -> ClassResult:
     """Grade every submission under ``submissions`` into ``out`` (see the module docstring).
 
     ``jobs`` worker processes (0: grade in this process, without timeouts);
     ``timeout`` seconds per student (default: the assignment's); ``context``
-    reuses a prepared :class:`~mcrt.grade.expected.Context`.
+    reuses a prepared :class:`~mcrt.grade.expected.Context`; ``fresh``
+    grades everyone again instead of keeping the unchanged results of an
+    earlier run into ``out``.
     """
     t0 = time.perf_counter()
     out = Path(out)
-    subs = discover(submissions, single=single, student=student)
     log = log or (lambda s: None)
-    log(f"mcrt grade: {len(subs)} submission(s) in {submissions}")
-    ctx = context or prepare_context(assignment, cache_dir, log=log)
-    src = ctx.references[assignment.camera].source
-    log(f"reference: {src}; catalogue of {len(ctx.mutants)} bugs ready ({ctx.prepare_time:.1f} s)")
-    results = run_pool(subs, ctx, out, jobs=jobs, timeout=timeout or assignment.timeout, memory_mb=memory_mb, log=log)
-    elapsed = time.perf_counter() - t0
-    note = f"Reference: {src}."
-    odd = [f"{s.student} ({s.special})" for s in subs if getattr(s, "special", None)]
-    if odd:  # links, FIFOs, devices where a hand-in should be: never opened, graded 0, and said here
-        note += " Not regular files, never followed or opened (graded 0): " + ", ".join(odd) + "."
-    from mcrt.grade.diagnose import catalogue_power
+    with run_record.locked(out):
+        subs = discover(submissions, single=single, student=student)
+        log(f"mcrt grade: {len(subs)} submission(s) in {submissions}")
+        ctx = context or prepare_context(assignment, cache_dir, log=log)
+        src = ctx.references[assignment.camera].source
+        log(f"reference: {src}; catalogue of {len(ctx.mutants)} bugs ready ({ctx.prepare_time:.1f} s)")
+        timeout = timeout or assignment.timeout
+        digest = run_record.grader_digest(assignment, reference_source=src, timeout=timeout, memory_mb=memory_mb)
+        keys = {s.student: run_record.submission_key(s, digest) for s in subs}
+        run, kept = run_record.start(out, assignment.name, digest, keys, fresh=fresh)
+        note = f"Reference: {src}."
+        odd = [f"{s.student} ({s.special})" for s in subs if getattr(s, "special", None)]
+        if odd:  # links, FIFOs, devices where a hand-in should be: never opened, graded 0, and said here
+            note += " Not regular files, never followed or opened (graded 0): " + ", ".join(odd) + "."
+        if kept:
+            log(f"kept {len(kept)} result(s) of an earlier run of {assignment.name} in {out} (unchanged submissions; "
+                f"--fresh grades them again); grading the other {len(subs) - len(kept)}")
 
-    try:
-        power = catalogue_power(ctx)
-    except Exception:  # noqa: BLE001 - a courtesy table; never stop the batch for it
-        power = None
-    summary = write_class(results, assignment, out, elapsed=elapsed, context_note=note, power=power)
-    return ClassResult(results, summary, out, elapsed, ctx)
+        def summarise(*, final: bool = False, power=None) -> dict:
+            return write_class(run.results(), assignment, out, elapsed=time.perf_counter() - t0, context_note=note,
+                               power=power, pending=[] if final else sorted(run.pending) or None)
+
+        summarise()
+
+        def done(res: StudentResult) -> None:  # the student's files are complete in the staging folder
+            run_record.commit(staging, out, res.student)
+            run.record(res, keys[res.student])
+            summarise()
+
+        staging = out / run_record.STAGING
+        shutil.rmtree(staging, ignore_errors=True)  # what a killed run left half-written
+        todo = [s for s in subs if s.student not in kept]
+        graded = run_pool(todo, ctx, staging, jobs=jobs, timeout=timeout, memory_mb=memory_mb, log=log, on_done=done,
+                          log_dir=out, already=len(kept), total=len(subs))
+        shutil.rmtree(staging, ignore_errors=True)
+        from mcrt.grade.diagnose import catalogue_power
+
+        try:
+            power = catalogue_power(ctx)
+        except Exception:  # noqa: BLE001 - a courtesy table; never stop the batch for it
+            power = None
+        summary = summarise(final=True, power=power)
+        run.finished = run_record.utc_now()  # last: a run killed before this line is resumed (with nothing left to do)
+        run.save()
+    by_id = {r.student: r for r in run.results()}  # the kept ones: what grades.csv holds of them
+    by_id.update((r.student, r) for r in graded)  # this run's: everything
+    return ClassResult([by_id[s.student] for s in subs], summary, out, time.perf_counter() - t0, ctx)
 
 
 # --------------------------------------------------------------------------
@@ -95,10 +139,25 @@ def grade_class(submissions: str | os.PathLike, assignment: Assignment, out: str
 # --------------------------------------------------------------------------
 
 
+#: What a worker runs first, before any import of mcrt: ask the kernel to kill it when this process dies
+#: (``prctl(PR_SET_PDEATHSIG, SIGKILL)``; Linux only), and stop at once if that has already happened.
+_WORKER_BOOT = """\
+import os, sys
+if sys.platform.startswith("linux"):
+    import ctypes, signal
+    ctypes.CDLL(None, use_errno=True).prctl(1, int(signal.SIGKILL), 0, 0, 0)  # 1: PR_SET_PDEATHSIG
+if os.getppid() != int(sys.argv[1]):
+    os._exit(1)
+import runpy
+runpy.run_module("mcrt.grade._worker", run_name="__main__", alter_sys=True)
+"""
+
+
 def worker_command() -> list[str]:
-    """The worker's command line: this interpreter (with ``-S`` if this one has it), and ``-P`` so that the
-    working folder (which may hold a folder named ``mcrt``) never shadows the package."""
-    return [sys.executable, *(["-S"] if sys.flags.no_site else []), "-P", "-m", "mcrt.grade._worker"]
+    """The worker's command line: this interpreter (with ``-S`` if this one has it), ``-P`` so that the working
+    folder (which may hold a folder named ``mcrt``) never shadows the package, and :data:`_WORKER_BOOT`, which
+    ties the worker's life to this process before it runs ``mcrt.grade._worker``."""
+    return [sys.executable, *(["-S"] if sys.flags.no_site else []), "-P", "-c", _WORKER_BOOT, str(os.getpid())]
 
 
 def worker_env() -> dict[str, str]:
@@ -124,7 +183,7 @@ class _Worker:
         # Wait for the worker's imports, so that they do not count against the first student's time.
         if not wait([self.proc.stdout], timeout=STARTUP_TIMEOUT) or self.receive() != "ready":
             self.kill()
-            raise RuntimeError(f"a grading worker did not start within {STARTUP_TIMEOUT:g} s (see {out / 'grading.log'})")
+            raise RuntimeError(f"a grading worker did not start within {STARTUP_TIMEOUT:g} s (see grading.log)")
 
     def give(self, idx: int, sub: Submission) -> None:
         self.task = (idx, sub)
@@ -156,17 +215,29 @@ class _Worker:
 
 
 def run_pool(subs: list[Submission], ctx: Context, out: Path, *, jobs: int, timeout: float, memory_mb: int = DEFAULT_MEMORY_MB,
-             log=log) -> list[StudentResult]:
-    """Grade ``subs`` with ``jobs`` supervised workers; every student gets a result and a results.json."""
+             log=log, on_done=None, log_dir: Path | None = None, already: int = 0,
+             total: int | None = None) -> list[StudentResult]:
+    """Grade ``subs`` with ``jobs`` supervised workers; every student gets a result and a results.json in ``out``.
+
+    ``on_done(result)`` is called in this process as each student's files are complete; ``grading.log`` goes to
+    ``log_dir`` (default: ``out``); ``already`` of ``total`` students were graded before (for the progress lines).
+    """
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     a = ctx.assignment
     n = len(subs)
+    total = n + already if total is None else total
     results: dict[int, StudentResult] = {}
+    t_start = time.monotonic()
 
     def done(idx: int, res: StudentResult) -> None:
         results[idx] = res
-        log(f"  [{len(results)}/{n}] {res.student}: {res.score:g}/{res.max_score:g} ({res.status}, {res.elapsed:.1f} s)")
+        if on_done is not None:
+            on_done(res)
+        k = len(results)
+        left = (time.monotonic() - t_start) / k * (n - k)
+        log(f"  [{k + already}/{total}] {res.student}: {res.score:g}/{res.max_score:g} ({res.status}, {res.elapsed:.1f} s)"
+            + (f"; about {left:.0f} s left" if k < n else ""))
 
     if jobs <= 0:
         for i, s in enumerate(subs):
@@ -174,7 +245,7 @@ def run_pool(subs: list[Submission], ctx: Context, out: Path, *, jobs: int, time
         return [results[i] for i in range(n)]
 
     pending = list(enumerate(subs))[::-1]
-    log_file = open(out / "grading.log", "ab")  # noqa: SIM115 - closed in the finally below
+    log_file = open(Path(log_dir or out) / "grading.log", "ab")  # noqa: SIM115 - closed in the finally below
     workers: list[_Worker] = []
 
     def fail(w: _Worker, status: str, message: str) -> None:

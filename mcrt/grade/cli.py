@@ -1,7 +1,7 @@
 """``mcrt grade`` and ``mcrt check``: the command line of the grading harness.
 
     mcrt grade SUBMISSIONS --assignment assignment.toml --out DIR [--jobs N] [--timeout S]
-               [--mode image|code] [--cache DIR] [--single [--student ID]] [--prepare]
+               [--mode image|code] [--cache DIR] [--single [--student ID]] [--prepare] [--fresh]
     mcrt check RENDER [--assignment NAME_OR_FILE] [--out DIR] [--cache DIR]
 
 Exit codes (those of every mcrt command, mcrt.exitcodes): 0 every student
@@ -42,6 +42,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--allow-unisolated-code", action="store_true", help="in code mode, run student code even where "
                    "neither bubblewrap nor Landlock and seccomp can isolate it (still as an unprivileged user, with "
                    "resource limits; default: off, code mode is then refused)")
+    p.add_argument("--fresh", action="store_true", help="grade every student again; by default (image mode) a run into "
+                   "an --out folder that holds an earlier or killed run of the same assignment keeps the results of "
+                   "unchanged submissions (DIR/run.json) and grades only the missing, changed or not graded ones (default: off)")
     p.add_argument("--quiet", "-q", action="store_true", help="no progress lines (default: off)")
 
 
@@ -201,7 +204,8 @@ def run(args) -> int:
             from mcrt.grade.batch import DEFAULT_MEMORY_MB, grade_class
 
             res = grade_class(args.submissions, a, args.out, jobs=args.jobs, timeout=args.timeout, cache_dir=args.cache,
-                              single=args.single, student=args.student, memory_mb=args.memory or DEFAULT_MEMORY_MB, log=log)
+                              single=args.single, student=args.student, memory_mb=args.memory or DEFAULT_MEMORY_MB,
+                              fresh=args.fresh, log=log)
     except (OSError, RuntimeError, ValueError) as e:
         print(f"mcrt grade: {e}", file=sys.stderr)
         return EXIT_UNUSABLE

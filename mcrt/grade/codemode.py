@@ -518,13 +518,16 @@ def _bwrap_argv(iso: Isolation, indir: Path, result_fd: int, monitor_fd: int, ui
 # --------------------------------------------------------------------------
 
 
-def copy_submission(src: Path, dest: Path, *, limit: int = SUBMISSION_LIMIT, max_files: int = SUBMISSION_FILES) -> list[str]:
+def copy_submission(src: Path, dest: Path, *, limit: int = SUBMISSION_LIMIT, max_files: int = SUBMISSION_FILES,
+                    first: str | None = None) -> list[str]:
     """Copy a student's file or folder into ``dest`` (a new folder) without following links.
 
     Regular files and folders only: a symbolic link, a FIFO, a socket or a
     device is skipped, and so is what exceeds ``limit`` bytes or
     ``max_files`` files in all; returns one message per thing skipped.
     Names starting with a dot and ``__pycache__`` are left out silently.
+    ``first`` (a name at the top of a folder: the graded module) is copied before anything else, so that many other
+    files cannot push it out of the budget.
     """
     notes: list[str] = []
     budget = {"bytes": limit, "files": max_files}
@@ -564,7 +567,7 @@ def copy_submission(src: Path, dest: Path, *, limit: int = SUBMISSION_LIMIT, max
 
     def walk(folder: Path, rel: str, out: Path, depth: int) -> None:
         try:
-            entries = sorted(os.scandir(folder), key=lambda e: e.name)
+            entries = sorted(os.scandir(folder), key=lambda e: (not (depth == 0 and e.name == first), e.name))
         except OSError as e:
             return skip(rel or ".", f"unreadable ({e.strerror})")
         for e in entries:
@@ -648,7 +651,7 @@ def _parse_results(raw: bytes | None) -> dict | None:
         return None
     try:
         data = json.loads(raw[len(raw) - 8 - n:len(raw) - 8])
-    except ValueError:
+    except (ValueError, RecursionError):  # a result nested thousands deep is the student's, like malformed JSON
         return None
     if not isinstance(data, dict):
         return None
@@ -1181,7 +1184,7 @@ def grade_code(student: str, src: Path, a: Assignment, *, ctx=None, timeout: flo
     if root is not None:
         # Copied once, without following links: every call then copies this copy, never the student's folder.
         stage = Path(tempfile.mkdtemp(prefix="mcrt-sub-"))
-        skipped = copy_submission(root, stage / "s")
+        skipped = copy_submission(root, stage / "s", first=mod)
         notes += [f"submission: {n}" for n in skipped]
         root = stage / "s" / root.name if root.is_file() else stage / "s"
     try:

@@ -179,6 +179,13 @@ def grade_image(student: str, ctx: Context, images: list[np.ndarray], *, spp: in
     t0 = time.perf_counter()
     g = _Grader(ctx, student)
     g.notes += list(notes or [])
+    empty = next((np.shape(i) for i in images[:2] if np.ndim(i) != 3 or np.shape(i)[2] != 3 or 0 in np.shape(i)), None)
+    if empty is not None:  # the hand-in's problem, said as such (not a crash of the grader)
+        g.rubric.failed("readable", f"the render has shape {empty}; an image is (height, width, 3) with at least one pixel")
+        g.rubric.block("no image to grade")
+        res = g.result()
+        res.elapsed = time.perf_counter() - t0
+        return res
     loaded = ck.Loaded([np.asarray(i, np.float64) for i in images[:2]], [f"render {k + 1}" for k in range(len(images[:2]))], fmt)
     g.rubric.passed("readable", f"{len(loaded.images)} render(s) returned in memory")
     g.run_loaded(loaded, spp, None)

@@ -27,6 +27,7 @@ import html
 import io
 import json
 import math
+import re
 import statistics
 from collections import Counter
 from pathlib import Path
@@ -144,14 +145,16 @@ ADVICE = {
     "unbiased/undiagnosed": "Look at the part of the image the map shows and at the estimator terms that light it.",
 }
 
-_MD_SPECIAL = str.maketrans({c: "\\" + c for c in "\\`*_[]<>#|~"})
+_MD_SPECIAL = str.maketrans({c: "\\" + c for c in "\\`*_[]<>#|~!&"})
 
 
 def md_text(text: str) -> str:
-    """``text`` as Markdown: one line escaped; several lines (a traceback, a table) in a fenced block."""
-    text = str(text)
+    """``text`` as Markdown, whatever it holds: one line escaped; several lines (a traceback, a table) in a fenced
+    block whose fence is longer than any run of backticks in the text, so that no line of it can close the block
+    (a tilde line cannot close a backtick fence at all; CommonMark, "Fenced code blocks")."""
+    text = str(text).replace("\r\n", "\n").replace("\r", "\n")
     if "\n" in text.strip():
-        fence = "~~~~" if "```" in text else "```"
+        fence = "`" * max(3, 1 + max(map(len, re.findall(r"`+", text)), default=0))
         return f"{fence}text\n{text.strip()}\n{fence}"
     return text.translate(_MD_SPECIAL)
 
@@ -340,10 +343,12 @@ an honest noisy image is not penalised. {e(res.details.get("reference_source", "
 
 
 def write_class(results: list, assignment, out_dir: Path, *, elapsed: float = 0.0, context_note: str = "",
-                criteria: list[tuple[str, float, str]] | None = None, power: list[dict] | None = None) -> dict:
-    """Write grades.csv, summary.md and summary.json; return the summary dict.
+                criteria: list[tuple[str, float, str]] | None = None, power: list[dict] | None = None,
+                pending: list[str] | None = None) -> dict:
+    """Write grades.csv, summary.md and summary.json (each by an atomic rename); return the summary dict.
 
-    ``criteria`` (name, points, title) defaults to the image rubric (code mode passes its checks).
+    ``criteria`` (name, points, title) defaults to the image rubric (code mode passes its checks); ``pending``
+    names the students of an unfinished run not graded yet: the summary then says the run is incomplete.
     """
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
@@ -371,6 +376,7 @@ def write_class(results: list, assignment, out_dir: Path, *, elapsed: float = 0.
         "min": min(scores) if scores else None, "max": max(scores) if scores else None,
         "full_marks": sum(abs(s - maxs) < 1e-9 for s in scores),
         "criteria": {}, "diagnoses": {}, "seconds": elapsed, "context": context_note,
+        "complete": not pending, "pending": list(pending or []),
     }
     for name, points, _ in criteria:
         lost = [r for r in results for t in r.tests if t.name == name and t.score < t.max_score - 1e-9]
@@ -383,8 +389,12 @@ def write_class(results: list, assignment, out_dir: Path, *, elapsed: float = 0.
         summ["catalogue_power"] = power
     write_json_atomic(out / "summary.json", summ)
 
-    lines = [f"# {assignment.title}: class summary", "",
-             f"{len(results)} students, {summ['graded']} graded; scores out of {maxs:g}."]
+    lines = [f"# {assignment.title}: class summary", ""]
+    if pending:
+        lines += [f"**Incomplete:** {len(pending)} more student(s) to grade ({', '.join(md_text(p) for p in pending[:20])}"
+                  f"{', ...' if len(pending) > 20 else ''}). The run was stopped or is still running (run.json); "
+                  "`mcrt grade` with the same output folder grades only those.", ""]
+    lines += [f"{len(results)} students, {summ['graded']} graded; scores out of {maxs:g}."]
     if scores:
         lines.append(f"Mean {summ['mean']:.1f}, median {summ['median']:.1f}, min {summ['min']:g}, max {summ['max']:g}; "
                      f"{summ['full_marks']} with full marks.")
@@ -412,7 +422,8 @@ def write_class(results: list, assignment, out_dir: Path, *, elapsed: float = 0.
             lines.append(f"| {p['mutant']} | {p['z_max']:.1f} | {'yes' if p['detectable'] else 'no'} | {need} |")
     if summ["not_graded"]:
         lines += ["", "## Not graded (score 0, results.json written)", ""]
-        lines += [f"- {d['student']} ({d['status']}): {d['reason']}" for d in summ["not_graded"]]
+        lines += [f"- {md_text(d['student'])} ({d['status']}): {md_text(' '.join(str(d['reason']).split()))}"
+                  for d in summ["not_graded"]]
     lines += ["", f"Grading took {elapsed:.1f} s. {context_note}".rstrip(), ""]
-    (out / "summary.md").write_text("\n".join(lines))
+    atomic.write_text(out / "summary.md", "\n".join(lines), fsync=False)
     return summ

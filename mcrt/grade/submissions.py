@@ -76,7 +76,7 @@ class Submission:
 
 
 #: Names the class-level outputs use in DIR; a student id never takes one.
-RESERVED = {"grades.csv", "summary.md", "summary.json", "grading.log"}
+RESERVED = {"grades.csv", "summary.md", "summary.json", "grading.log", "run.json"}
 
 
 def shown(name: str) -> str:
