@@ -250,6 +250,7 @@ def test_student_code_runs_unprivileged_in_the_clean_image(image):
     imgs = {s: base64.b64encode(_render(64, 600 + s).mean.astype("<f4").tobytes()).decode() for s in (1, 2)}
     module = GOOD.replace("def sample_cosine_hemisphere(u1, u2):", PROBE) + f"\nIMAGES = {imgs!r}\n"
     data = _grade(image, {"tracer.py": module.encode()}, "code")
+    assert data["tests"], data["output"] + data["_stdout"][-3000:]  # graded, not refused
     probe = next(t for t in data["tests"] if t["tags"] == ["sample_cosine_hemisphere"])
     assert "PROBE uid=" in probe["output"], probe["output"]
     uid = int(probe["output"].split("PROBE uid=")[1].split()[0])
