@@ -7,8 +7,9 @@ tarball and unpacked afresh for every run. ``mcrt gradescope-zip --mode code``
 builds the zip; its files go to the root's /autograder/source and setup.sh runs
 there as Gradescope runs it, as root, with apt-get and pip from the network
 (nothing of this machine's Python or packages is visible in the root). Then
-run_autograder grades, in the same image, each in a memory cgroup of 768 MiB
-(Gradescope's default; cgroup v2 memory.max, else v1 memory.limit_in_bytes):
+run_autograder grades, in the same image, each under Gradescope's default limits,
+768 MiB of memory over all its processes and half a CPU (cgroup v2 memory.max and
+cpu.max, else v1 memory.limit_in_bytes and cpu.cfs_quota_us):
 
 * a code-mode hand-in whose functions are correct but whose
   ``sample_cosine_hemisphere`` reports who runs it (uid, euid) and whether
@@ -91,68 +92,80 @@ def clean_root_tarball() -> Path:
     return tar
 
 
-class MemoryCgroup:
-    """A memory cgroup of ``limit`` bytes beside this process's own (v2 memory.max, else v1 memory.limit_in_bytes)."""
+class Limits:
+    """Gradescope's limits as cgroups beside this process's own: ``memory`` bytes over all of a hand-in's processes
+    and half a CPU (cgroup v2 memory.max and cpu.max, else v1 memory.limit_in_bytes and cpu.cfs_quota_us)."""
 
-    def __init__(self, limit: int):
-        self.path = self.version = None
-        for version, mount, own in self._candidates():
-            d = Path(mount) / own.lstrip("/") / f"mcrt-image-test-{os.getpid()}"
-            try:
-                d.mkdir()
-            except OSError:
-                continue
-            try:
-                if version == 2:
-                    (d / "memory.max").write_text(str(limit))
-                    (d / "memory.swap.max").exists() and (d / "memory.swap.max").write_text("0")
-                else:
-                    (d / "memory.limit_in_bytes").write_text(str(limit))
-                self.path, self.version = d, version
-                return
-            except OSError:
-                d.rmdir()
-
-    @staticmethod
-    def _candidates():
+    def __init__(self, memory: int, cpu: float = 0.5):
+        self.version, self.groups = None, {}
         lines = Path("/proc/self/cgroup").read_text().splitlines()
         own = {c: p for _, cs, p in (ln.split(":", 2) for ln in lines) for c in cs.split(",")}
+        name = f"mcrt-image-test-{os.getpid()}"
+        period = 100_000
         for mount in ("/sys/fs/cgroup", "/sys/fs/cgroup/unified"):
             ctl = Path(mount) / "cgroup.controllers"
-            if "" in own and ctl.exists() and "memory" in ctl.read_text().split():
-                yield 2, mount, own[""]
-        if "memory" in own and Path("/sys/fs/cgroup/memory/memory.limit_in_bytes").exists():
-            yield 1, "/sys/fs/cgroup/memory", own["memory"]
+            if "" in own and ctl.exists() and {"memory", "cpu"} <= set(ctl.read_text().split()):
+                d = self._make(Path(mount) / own[""].lstrip("/") / name, {"memory.max": memory, "memory.swap.max": 0,
+                                                                          "cpu.max": f"{int(cpu * period)} {period}"})
+                if d is not None:
+                    self.version, self.groups = 2, {"memory": d}
+                    return
+        if "memory" in own and "cpu" in own:
+            mem = self._make(Path("/sys/fs/cgroup/memory") / own["memory"].lstrip("/") / name,
+                             {"memory.limit_in_bytes": memory})
+            cpu_dir = next((p for p in (Path("/sys/fs/cgroup/cpu"), Path("/sys/fs/cgroup/cpu,cpuacct")) if p.exists()), None)
+            cpu_g = self._make(cpu_dir / own["cpu"].lstrip("/") / name, {
+                "cpu.cfs_period_us": period, "cpu.cfs_quota_us": int(cpu * period)}) if cpu_dir else None
+            if mem is not None and cpu_g is not None:
+                self.version, self.groups = 1, {"memory": mem, "cpu": cpu_g}
+            else:
+                for d in (mem, cpu_g):
+                    d and d.rmdir()
+
+    @staticmethod
+    def _make(d: Path, settings: dict) -> Path | None:
+        try:
+            d.mkdir()
+        except OSError:
+            return None
+        try:
+            for k, v in settings.items():
+                if k == "memory.swap.max" and not (d / k).exists():
+                    continue  # no swap accounting: nothing to switch off
+                (d / k).write_text(str(v))
+            return d
+        except OSError:
+            d.rmdir()
+            return None
 
     def enter(self) -> None:
-        """For preexec_fn: move the calling (child) process into the group."""
-        (self.path / "cgroup.procs").write_text(str(os.getpid()))
+        """For preexec_fn: move the calling (child) process into the groups."""
+        for d in self.groups.values():
+            (d / "cgroup.procs").write_text(str(os.getpid()))
 
     def peak(self) -> int | None:
-        f = self.path / ("memory.peak" if self.version == 2 else "memory.max_usage_in_bytes")
+        f = self.groups["memory"] / ("memory.peak" if self.version == 2 else "memory.max_usage_in_bytes")
         return int(f.read_text()) if f.exists() else None
 
-    def ooms(self) -> int:
-        if self.version == 2:
-            ev = dict(ln.split() for ln in (self.path / "memory.events").read_text().splitlines())
-            return int(ev.get("oom_kill", 0))
-        return int((self.path / "memory.failcnt").read_text())
+    def oom_kills(self) -> int:
+        m = self.groups["memory"]
+        text = (m / ("memory.events" if self.version == 2 else "memory.oom_control")).read_text()
+        return int(dict(ln.split() for ln in text.splitlines()).get("oom_kill", 0))
 
     def reset(self) -> None:
         if self.version == 1:
-            (self.path / "memory.max_usage_in_bytes").write_text("0")
-            (self.path / "memory.failcnt").write_text("0")
+            (self.groups["memory"] / "memory.max_usage_in_bytes").write_text("0")
 
     def remove(self) -> None:
-        if self.path is not None:
-            self.path.rmdir()
+        for d in self.groups.values():
+            d.rmdir()
 
 
 def _du(path: Path) -> int:
     return int(subprocess.run(["du", "-sxb", str(path)], capture_output=True, text=True, check=True).stdout.split()[0])
 
 
-def _in_root(root: Path, script: str, timeout: float, cgroup: MemoryCgroup | None = None) -> subprocess.CompletedProcess:
+def _in_root(root: Path, script: str, timeout: float, cgroup: Limits | None = None) -> subprocess.CompletedProcess:
     """Run a bash script as root inside the clean root, a mount namespace's root (bubblewrap, all capabilities)."""
     env = {"PATH": PATH, "HOME": "/root", "LANG": "C.UTF-8", "PIP_CERT": "/etc/ssl/certs/host-ca.crt",
            "PIP_DEFAULT_TIMEOUT": "120"}
@@ -175,7 +188,7 @@ def image(tmp_path_factory):
     figures["root_build_s"] = time.perf_counter() - t0
     # Not under pytest's tmp folder: a root of 2 GB should go when the test ends, not linger three runs.
     root = Path(tempfile.mkdtemp(prefix="mcrt-clean-root-"))
-    cgroup = MemoryCgroup(MEMORY)
+    cgroup = Limits(MEMORY)
     try:
         subprocess.run(["tar", "-xf", str(tar), "-C", str(root)], check=True)
         figures["base_bytes"] = _du(root)
@@ -222,13 +235,13 @@ def _grade(image, files: dict[str, bytes], mode: str) -> dict:
     for name, content in files.items():
         (sub / name).write_bytes(content)
     (root / "autograder" / "source" / "mode").write_text(mode + "\n")
-    _need("a memory cgroup (cgroup v2 memory.max or v1 memory.limit_in_bytes)", cgroup.path is not None)
+    _need("memory and cpu cgroups (v2 memory.max and cpu.max, or v1)", cgroup.version is not None)
     cgroup.reset()
     t0 = time.perf_counter()
     r = _in_root(root, "/autograder/run_autograder", timeout=900, cgroup=cgroup)
     took = time.perf_counter() - t0
     assert r.returncode == 0, r.stdout[-3000:] + r.stderr[-3000:]
-    assert cgroup.ooms() == 0, f"the hand-in hit the {MEMORY >> 20} MiB limit"
+    assert cgroup.oom_kills() == 0, f"a process of the hand-in was killed at the {MEMORY >> 20} MiB limit"
     data = check_results(res / "results.json")
     data["_stdout"], data["_seconds"], data["_peak"] = r.stdout, took, cgroup.peak()
     print(f"clean image: graded {sorted(files) or 'nothing'} ({mode}) in {took:.1f} s, peak "
@@ -257,6 +270,7 @@ def test_student_code_runs_unprivileged_in_the_clean_image(image):
     euid = int(probe["output"].split("euid=")[1].split()[0])
     assert uid != 0 and euid != 0, f"student code ran as root: {probe['output'][:400]}"
     assert "shadow=unreadable" in probe["output"], probe["output"][:400]
+    print(f"clean image: student code ran as uid {uid}, euid {euid}; /etc/shadow unreadable", file=sys.stderr)
     others = [t for t in data["tests"] if t["tags"] != ["sample_cosine_hemisphere"]]
     assert others and all(t["score"] == t["max_score"] for t in others), [(t["name"], t["output"][:300]) for t in others]
 
