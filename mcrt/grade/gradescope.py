@@ -59,42 +59,29 @@ class ZipError(RuntimeError):
     """The zip cannot be built; the message says why."""
 
 
-def _canon(name: str) -> str:
-    return re.sub(r"[-_.]+", "-", name).lower()
-
-
-def _requirement_name(req: str) -> tuple[str, str]:
-    """(canonical name, marker or '') of a Requires-Dist line, extras dropped."""
-    head, _, marker = req.partition(";")
-    name = re.match(r"\s*([A-Za-z0-9][A-Za-z0-9._-]*)", head).group(1)
-    return _canon(name), marker.strip()
-
-
-def _marker_applies(marker: str) -> bool:
-    """Whether a Requires-Dist marker holds here, for the dependencies of the base install (no extras)."""
-    if not marker:
-        return True
-    if "extra" in marker:
-        return False
-    from packaging.markers import Marker  # a dependency of scikit-image, so in every mcrt environment
-
-    return Marker(marker).evaluate()
-
-
 def grading_requirements() -> dict[str, str]:
-    """{distribution name: installed version} of mcrt's dependencies and theirs, less :data:`LEFT_OUT`."""
+    """{distribution name: installed version} of mcrt's dependencies and theirs (with the extras asked for), less
+    :data:`LEFT_OUT`; markers are evaluated for this interpreter and platform."""
+    from packaging.requirements import Requirement  # a dependency of scikit-image, so in every mcrt environment
+    from packaging.utils import canonicalize_name
+
     found: dict[str, str] = {}
-    todo = [r for r in metadata.requires("mcrt") or []]
+    seen: set[tuple[str, str]] = set()
+    todo = [(r, "") for r in metadata.requires("mcrt") or []]  # (Requires-Dist line, extra of the distribution naming it)
     while todo:
-        name, marker = _requirement_name(todo.pop())
-        if name in LEFT_OUT or name in found or not _marker_applies(marker):
+        line, extra = todo.pop()
+        req = Requirement(line)
+        name = canonicalize_name(req.name)
+        if name in LEFT_OUT or (req.marker is not None and not req.marker.evaluate({"extra": extra})):
             continue
         try:
             dist = metadata.distribution(name)
         except metadata.PackageNotFoundError:
             raise ZipError(f"{name}, a dependency of mcrt, is not installed here, so it cannot be pinned") from None
         found[name] = dist.version
-        todo += dist.requires or []
+        for e in {"", *req.extras} - {x for n, x in seen if n == name}:
+            seen.add((name, e))
+            todo += [(r, e) for r in dist.requires or []]
     return {dist_name(n): v for n, v in sorted(found.items())}
 
 
