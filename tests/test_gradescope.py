@@ -1,7 +1,7 @@
 """Gradescope end to end, and a normal install grading from a folder outside the checkout.
 
-``reference/assignments/gradescope/make_zip.sh`` builds autograder.zip from
-this checkout (a wheel, the two scripts, a small 16x16 assignment); the zip
+``mcrt gradescope-zip`` builds autograder.zip from this checkout (a wheel,
+the two scripts, the lock, a small 16x16 assignment); the zip
 is unpacked into a simulated ``/autograder`` in a temporary folder
 (``AUTOGRADER_ROOT``), ``setup.sh`` runs there in its explicit test mode
 (``MCRT_SETUP_DEPS``: the dependencies come from this environment's
@@ -61,6 +61,9 @@ TOP_KEYS = {"score", "execution_time", "output", "output_format", "test_output_f
             "stdout_visibility", "extra_data", "tests", "leaderboard"} | {"max_score"}  # max_score: ours, kept for grades
 TEST_KEYS = {"score", "max_score", "status", "name", "name_format", "number", "output", "output_format", "tags",
              "visibility", "extra_data"}
+# Where this environment's packages are: its site-packages and those its .pth files add (a worktree's venv takes
+# its dependencies from another venv's), for venvs that borrow them.
+DEPS = [p for p in sys.path if p.endswith("site-packages") and Path(p).is_dir()]
 TRAP = "raise ImportError('a folder named mcrt shadowed the installed package')\n"
 
 
@@ -115,7 +118,7 @@ def tmp(tmp_path_factory):
 
 def _env(root: Path) -> dict:
     env = dict(os.environ, AUTOGRADER_ROOT=str(root), MCRT_SETUP_PYTHON=sys.executable,
-               MCRT_SETUP_DEPS=site.getsitepackages()[0])
+               MCRT_SETUP_DEPS=os.pathsep.join(DEPS))
     # This environment's libLLVM (karellen-llvm-core puts it under sys.prefix, not under the new venv's prefix).
     env["DRJIT_LIBLLVM_PATH"] = find_llvm() or ""
     env.pop("PYTHONPATH", None)
@@ -123,10 +126,10 @@ def _env(root: Path) -> dict:
 
 
 def _build(tmp: Path, mode: str) -> tuple[Path, Path]:
-    """make_zip.sh, then Gradescope's image build in a simulated /autograder; returns (zip, root)."""
+    """mcrt gradescope-zip, then Gradescope's image build in a simulated /autograder; returns (zip, root)."""
     zpath = tmp / f"autograder_{mode}.zip"
-    r = subprocess.run(["bash", str(GRADESCOPE / "make_zip.sh"), "--mode", mode, "--out", str(zpath), str(tmp / "gs16.toml")],
-                       capture_output=True, text=True, timeout=600)
+    r = subprocess.run([sys.executable, "-m", "mcrt.cli", "gradescope-zip", "--mode", mode, "--out", str(zpath),
+                        str(tmp / "gs16.toml")], capture_output=True, text=True, timeout=600, cwd=tmp)
     assert r.returncode == 0, r.stdout + r.stderr
     root = tmp / f"autograder_{mode}"
     (root / "source").mkdir(parents=True)
@@ -174,7 +177,7 @@ def test_the_zip_holds_a_wheel_and_executable_scripts(image_autograder):
     zpath, root = image_autograder
     with zipfile.ZipFile(zpath) as z:
         names = set(z.namelist())
-        assert {"setup.sh", "run_autograder", "assignment.toml", "mode"} <= names
+        assert {"setup.sh", "run_autograder", "assignment.toml", "mode", "requirements.lock"} <= names
         assert any(n.startswith("mcrt-") and n.endswith(".whl") for n in names)
         assert not any(n.startswith("mcrt/") for n in names)  # no repository copy to shadow the package
         for n in ("setup.sh", "run_autograder"):
@@ -265,7 +268,7 @@ def test_the_installed_wheel_grades_a_class_outside_the_checkout(image_autograde
     work = tmp / "elsewhere"
     (work / "mcrt").mkdir(parents=True)
     (work / "mcrt" / "__init__.py").write_text(TRAP)
-    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(target), *site.getsitepackages()]))
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(target), *DEPS]))
     # -S: not this environment's .pth files (the editable checkout); -P: not the trap in the working folder.
     cmd = [sys.executable, "-S", "-P", "-m", "mcrt.cli", "grade", "../class", "-a", "../class/gs16.toml", "-o", "graded",
            "--cache", str(tmp / "cache_installed"), "--jobs", "2", "--quiet"]
@@ -281,3 +284,113 @@ def test_the_installed_wheel_grades_a_class_outside_the_checkout(image_autograde
                        cwd=work, env=env, capture_output=True, text=True, timeout=300)
     assert r.returncode == 0, r.stderr
     assert all(str(target) in part for part in r.stdout.split()), r.stdout  # nothing from the checkout
+
+
+# --------------------------------------------------------------------------
+# mcrt gradescope-zip and assignment names from a normal install
+# --------------------------------------------------------------------------
+
+
+def test_the_lock_pins_every_grading_dependency_at_a_version_mcrt_accepts():
+    from packaging.requirements import Requirement
+
+    from mcrt.grade.gradescope import LEFT_OUT, LOCK, grading_requirements
+
+    assert LOCK == GRADESCOPE / "requirements.lock" or LOCK.resolve() == (GRADESCOPE / "requirements.lock").resolve()
+    pins = dict(ln.split("==") for ln in LOCK.read_text().splitlines() if ln and not ln.startswith("#"))
+    canon = {n.lower().replace("_", "-"): v for n, v in pins.items()}
+    assert set(canon) == {n.lower().replace("_", "-") for n in grading_requirements()}, "regenerate: mcrt gradescope-zip --write-lock"
+    assert not set(canon) & LEFT_OUT and {"drjit", "mitsuba", "numpy", "scipy", "scikit-image"} <= set(canon)
+    from importlib import metadata
+
+    for req in map(Requirement, metadata.requires("mcrt")):
+        if not req.marker or req.marker.evaluate({"extra": ""}):
+            name = req.name.lower().replace("_", "-")
+            if name not in LEFT_OUT:
+                assert req.specifier.contains(canon[name]), (name, canon[name], str(req.specifier))
+
+
+def _mcrt(args, cwd, python=sys.executable, env=None):
+    return subprocess.run([python, "-m", "mcrt.cli", *args], cwd=cwd, capture_output=True, text=True, timeout=600, env=env)
+
+
+def test_assignment_names_work_in_mcrt_grade(tmp_path):
+    r = _mcrt(["grade", "no_such_class", "--assignment", "course2023", "--out", "out"], tmp_path)
+    assert r.returncode == 2 and "no_such_class: no such file or folder" in r.stderr, r.stderr  # the name was found
+    r = _mcrt(["grade", "no_such_class", "--assignment", "course2024", "--out", "out"], tmp_path)
+    assert r.returncode == 2 and "course2024: no such file (nor an assignment of the package: course2023," in r.stderr, r.stderr
+
+
+@pytest.mark.parametrize("command", [["grade"], ["check"], ["gradescope-zip"], ["grade-accuracy"]])
+def test_grading_help_fits_an_installed_package(command, tmp_path):
+    r = _mcrt([*command, "--help"], tmp_path)
+    assert r.returncode == 0
+    assert "reference/" not in r.stdout and "make_zip" not in r.stdout, r.stdout
+
+
+@pytest.fixture(scope="module")
+def wheel_venv(tmp):
+    """A fresh venv with mcrt installed from a wheel (pip install, not editable; dependencies from this environment)."""
+    r = subprocess.run([sys.executable, "-m", "pip", "wheel", "-q", "--no-deps", "-w", str(tmp / "wheel"), str(ROOT)],
+                       capture_output=True, text=True, timeout=600)
+    assert r.returncode == 0, r.stderr
+    venv = tmp / "wheel_venv"
+    subprocess.run([sys.executable, "-m", "venv", str(venv)], check=True, timeout=300)
+    py = venv / "bin" / "python"
+    site_dir = subprocess.run([py, "-c", "import sysconfig; print(sysconfig.get_paths()['purelib'])"], capture_output=True,
+                              text=True, check=True).stdout.strip()
+    Path(site_dir, "deps.pth").write_text("".join(p + "\n" for p in DEPS))  # a path line: its .pth files are not read
+    r = subprocess.run([py, "-m", "pip", "install", "-q", "--no-deps", "--no-index", next((tmp / "wheel").glob("*.whl"))],
+                       capture_output=True, text=True, timeout=600)
+    assert r.returncode == 0, r.stderr
+    return venv, Path(site_dir)
+
+
+def test_gradescope_zip_from_a_wheel_install_in_another_folder(wheel_venv, tmp):
+    venv, site_dir = wheel_venv
+    work = tmp / "instructor"
+    work.mkdir()
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
+    r = subprocess.run([venv / "bin" / "mcrt", "gradescope-zip", "--mode", "code"], cwd=work, capture_output=True, text=True,
+                       timeout=600, env=env)
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert "from the installed files" in r.stderr and str(ROOT) not in r.stdout + r.stderr
+    with zipfile.ZipFile(work / "autograder.zip") as z:
+        names = set(z.namelist())
+        assert {"setup.sh", "run_autograder", "requirements.lock", "assignment.toml", "mode"} <= names
+        assert z.read("mode") == b"code\n" and b"[code]" in z.read("assignment.toml")
+        wheel = next(n for n in names if n.endswith(".whl"))
+        z.extract(wheel, work)
+    with zipfile.ZipFile(work / wheel) as packed, zipfile.ZipFile(next((tmp / "wheel").glob("*.whl"))) as built:
+        assert set(packed.namelist()) == set(built.namelist())  # the installed files are the wheel's, no more, no less
+        for n in built.namelist():
+            if not n.endswith("RECORD"):
+                assert packed.read(n) == built.read(n), n
+    # The repacked wheel installs, and what it installs grades: the package's own assignment loads with its scene.
+    venv2 = tmp / "repacked_venv"
+    subprocess.run([sys.executable, "-m", "venv", str(venv2)], check=True, timeout=300)
+    py2 = venv2 / "bin" / "python"
+    site2 = subprocess.run([py2, "-c", "import sysconfig; print(sysconfig.get_paths()['purelib'])"], capture_output=True,
+                           text=True, check=True).stdout.strip()
+    Path(site2, "deps.pth").write_text("".join(p + "\n" for p in DEPS))
+    r = subprocess.run([py2, "-m", "pip", "install", "-q", "--no-deps", "--no-index", work / wheel], capture_output=True,
+                       text=True, timeout=600)
+    assert r.returncode == 0, r.stderr
+    r = subprocess.run([py2, "-P", "-c", "import mcrt; from mcrt.grade.assignment import load_assignment; "
+                        "a = load_assignment('course2023_code'); a.load_scene(); print(mcrt.__file__, a.path)"],
+                       cwd=work, capture_output=True, text=True, timeout=300, env=env)
+    assert r.returncode == 0 and r.stdout.count(site2) == 2, r.stdout + r.stderr
+
+
+def test_gradescope_zip_refuses_a_changed_installation(wheel_venv, tmp):
+    venv, site_dir = wheel_venv
+    target = site_dir / "mcrt" / "grade" / "score.py"
+    saved = target.read_bytes()
+    try:
+        target.write_bytes(saved + b"\n# edited in place\n")
+        r = subprocess.run([venv / "bin" / "mcrt", "gradescope-zip", "--out", str(tmp / "changed.zip")], cwd=tmp,
+                           capture_output=True, text=True, timeout=600)
+    finally:
+        target.write_bytes(saved)
+    assert r.returncode == 2 and "score.py: changed since mcrt was installed" in r.stderr, r.stderr
+    assert not (tmp / "changed.zip").exists()

@@ -279,12 +279,33 @@ def _scene_path(value: str, base: Path) -> str:
     return str(p)
 
 
+#: The assignments of the package (reference/assignments/ of a checkout, mcrt.data.assignments when installed).
+ASSIGNMENT_DIR = SCENE_DIR.parent / "assignments"
+
+
+def packaged_assignments() -> list[str]:
+    """The names :func:`resolve_assignment` accepts, e.g. ``course2023``."""
+    return sorted(p.stem for p in ASSIGNMENT_DIR.glob("*.toml"))
+
+
+def resolve_assignment(value: str | os.PathLike) -> Path:
+    """An assignment file: a path as given when it exists, else a name of the package's assignments
+    (``course2023`` or ``course2023.toml``), else the path as given (so that its error names it)."""
+    p = Path(value)
+    if p.exists() or len(p.parts) != 1:
+        return p
+    packaged = ASSIGNMENT_DIR / (p.name if p.suffix == ".toml" else p.name + ".toml")
+    return packaged if packaged.exists() else p
+
+
 def load_assignment(path: str | os.PathLike) -> Assignment:
-    """Read and validate an assignment file (see the module docstring)."""
-    path = Path(path)
+    """Read and validate an assignment file, or one of the package's by name (see :func:`resolve_assignment`)."""
+    given = path
+    path = resolve_assignment(path)
     shown = str(path)
     if not os.path.lexists(path):
-        raise AssignmentError(f"{shown}: no such file")
+        raise AssignmentError(f"{given}: no such file (nor an assignment of the package: "
+                              f"{', '.join(packaged_assignments())})")
     try:
         text = read_capped(path, MAX_ASSIGNMENT_BYTES, AssignmentError, "assignment file").decode("utf-8")
     except UnicodeDecodeError as e:

@@ -17,12 +17,14 @@ import sys
 from pathlib import Path
 
 from mcrt.exitcodes import EXIT_FAILED, EXIT_OK, EXIT_UNUSABLE
+from mcrt.grade.assignment import resolve_assignment  # noqa: F401  (mcrt check's name lookup; tests import it here)  # noqa: F401 (re-exported)
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("submissions", nargs="?", help="one student's file, a folder of students (a file or sub-folder each), "
                    "or with --single one student's folder")
-    p.add_argument("--assignment", "-a", required=True, help="assignment file (see reference/assignments/course2023.toml; required, no default)")
+    p.add_argument("--assignment", "-a", required=True, help="assignment: a name of the package's assignments (course2023: 64 x 64 renders; course2023_800; "
+                   "course2023_code: code mode) or an assignment file (required, no default)")
     p.add_argument("--out", "-o", default=None, help="output folder: DIR/<student>/results.json, feedback.html, DIR/grades.csv, "
                    "DIR/summary.md (default: none; required unless --prepare)")
     p.add_argument("--mode", choices=("image", "code"), default="image", help="grade images or Python modules (default: image)")
@@ -61,6 +63,9 @@ def register(subparsers) -> argparse.ArgumentParser:
     from mcrt.grade.false_alarms import register as register_false_alarms
 
     register_false_alarms(subparsers)
+    from mcrt.grade.gradescope import register as register_gradescope_zip
+
+    register_gradescope_zip(subparsers)
     return p
 
 
@@ -103,24 +108,13 @@ def add_check_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--quiet", "-q", action="store_true", help="no progress lines on stderr (default: off)")
 
 
-def resolve_assignment(value: str) -> Path:
-    """An assignment file: a path as given, else a name in the package's assignments (mcrt.data.assignments)."""
-    from mcrt.scene import DATA_DIR
-
-    p = Path(value)
-    if p.exists() or p.suffix == ".toml" and (p.is_absolute() or len(p.parts) > 1):
-        return p
-    packaged = DATA_DIR / "assignments" / (value if value.endswith(".toml") else value + ".toml")
-    return packaged if packaged.exists() else p
-
-
 def run_check(args) -> int:
     from mcrt.grade.assignment import AssignmentError, load_assignment
     from mcrt.grade.submissions import discover, shown
 
     log = (lambda s: None) if args.quiet else (lambda s: print(s, file=sys.stderr, flush=True))
     try:
-        a = load_assignment(resolve_assignment(args.assignment))
+        a = load_assignment(args.assignment)
     except AssignmentError as e:
         print(f"mcrt check: {e}", file=sys.stderr)
         return EXIT_UNUSABLE

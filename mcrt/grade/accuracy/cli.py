@@ -18,7 +18,7 @@ def register(sub) -> None:
                        description=__doc__)
     p.add_argument("--out", default=DEFAULT_OUT, help=f"report folder (default: {DEFAULT_OUT})")
     p.add_argument("--assignment", default=DEFAULT_ASSIGNMENT,
-                   help=f"assignment name in reference/assignments/ or a file (default: {DEFAULT_ASSIGNMENT})")
+                   help=f"assignment: a name of the package's assignments or a file (default: {DEFAULT_ASSIGNMENT})")
     p.add_argument("--cache", default=None, help="grading cache folder (default: $MCRT_CACHE/grade or ~/.cache/mcrt/grade)")
     p.add_argument("--only", action="append", default=[], metavar="CASE",
                    help="grade only this case (repeatable; default: the whole class)")
@@ -44,14 +44,13 @@ def cmd_grade_accuracy(args) -> int:
     from mcrt.grade.accuracy.markdown import write_report
     from mcrt.grade.accuracy.run import grade_cases, gradescope_figures
     from mcrt.grade.assignment import load_assignment
-    from mcrt.grade.cli import resolve_assignment
     from mcrt.grade.expected import default_cache_dir, prepare_context
 
     def log(line: str) -> None:
         progress.log(f"mcrt grade-accuracy: {line}", not args.quiet)
 
     t0 = time.perf_counter()
-    a = load_assignment(resolve_assignment(args.assignment))
+    a = load_assignment(args.assignment)
     cache = args.cache or default_cache_dir()
     log(f"preparing {a.name} (cache {cache})")
     ctx = prepare_context(a, cache, log=log)
