@@ -393,7 +393,7 @@ def _code_spec(r: _Reader, c: Any) -> CodeSpec:
     if module is not None and (Path(module).name != module or not module.endswith(".py")):
         raise r.fail("code.module", f"must be a file name ending in .py, got {module!r}")
     timeout = r.number(c.get("timeout", 60.0), "code.timeout", 0.0, 86400.0, open_lo=True)
-    memory_mb = r.integer(c.get("memory_mb", 2048), "code.memory_mb", 64)
+    memory_mb = r.integer(c.get("memory_mb", 384), "code.memory_mb", 64)
     ch = r.table(c["checks"], "code.checks", set(CODE_CHECKS))
     checks = []
     for name, t in ch.items():

@@ -17,7 +17,7 @@ import sys
 from pathlib import Path
 
 from mcrt.exitcodes import EXIT_FAILED, EXIT_OK, EXIT_UNUSABLE
-from mcrt.grade.assignment import resolve_assignment  # noqa: F401  (mcrt check's name lookup; tests import it here)  # noqa: F401 (re-exported)
+from mcrt.grade.assignment import resolve_assignment  # noqa: F401  (mcrt check's name lookup; tests import it here)
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -33,7 +33,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--timeout", type=float, default=None, help="seconds per student (default: the assignment's grading.timeout; "
                    "in code mode, per check: code.timeout)")
     p.add_argument("--memory", type=int, default=None, help="memory limit per worker or student process in MiB (default: 4096 in image mode; in code "
-                   "mode the assignment's code.memory_mb, else 2048)")
+                   "mode the assignment's code.memory_mb, else 384)")
     p.add_argument("--cache", default=None, help="folder for the cached expected images (default: $MCRT_CACHE/grade or "
                    "~/.cache/mcrt/grade)")
     p.add_argument("--single", action="store_true", help="SUBMISSIONS is one student's folder (Gradescope's /autograder/submission) "

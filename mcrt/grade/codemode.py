@@ -122,7 +122,7 @@ from mcrt.util.fmt import short
 
 RUNNER = Path(__file__).with_name("_sandbox.py")
 FSIZE_LIMIT = 128 << 20  # any one file the student's process writes (its stdout included)
-DISK_LIMIT = 256 << 20  # the sandbox's tmpfs: all it may write together
+DISK_LIMIT = 128 << 20  # the sandbox's tmpfs: all it may write together (its pages count against the container too)
 INODE_LIMIT = 4096  # files and folders on that tmpfs (each costs kernel memory, outside every other bound)
 OUTPUT_LIMIT = 64 << 20  # the results of one check's calls together, as the grader reads them
 TRAILER_LIMIT = 4 << 20  # their JSON description (tracebacks, what the sandbox enforced)
