@@ -450,3 +450,19 @@ def test_every_python_root_is_bound_whatever_folders_share_a_parent(monkeypatch,
     argv = codemode._bwrap_argv(codemode.Isolation("bubblewrap", "", "bwrap"), tmp_path, 3, 4, None)
     binds = {argv[i + 1] for i, a in enumerate(argv) if a == "--ro-bind"}
     assert {str(first), str(second)} <= binds
+
+
+def test_landlock_never_grants_a_link_to_a_folder_holding_a_hidden_package(tmp_path):
+    """A venv's ``lib64 -> lib``: Landlock grants the inode a link resolves to, so granting the link would grant
+    all of ``lib``, Dr.Jit included (seen in a checkout's own .venv, where student code imported drjit)."""
+    venv = tmp_path / "venv"
+    site = venv / "lib" / "python3.11" / "site-packages"
+    (site / "drjit").mkdir(parents=True)
+    (site / "numpy").mkdir()
+    (venv / "lib64").symlink_to("lib")
+    (site / "alias").symlink_to(site / "drjit")
+    hidden = [str(site / "drjit")]
+    rules = codemode._landlock_rules([str(venv)], hidden)
+    granted = [os.path.realpath(p) for p, kind in rules if kind == "read"]
+    assert str(site / "numpy") in granted
+    assert not [g for g in granted if any(Path(h).is_relative_to(g) or Path(g).is_relative_to(h) for h in hidden)], rules

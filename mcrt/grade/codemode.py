@@ -238,11 +238,17 @@ def _landlock_rules(roots, hidden) -> list[list[str]]:
 
     Landlock only grants, so a root holding a hidden folder is split: the
     folders on the way to it may be listed, and each of their other entries
-    is granted whole.
+    is granted whole. A symbolic link among those entries is never granted:
+    Landlock grants the inode the link resolves to, so a venv's ``lib64 ->
+    lib`` granted whole would grant all of ``lib``, hidden folders included.
+    A link's target inside a root has rules of its own; one outside every
+    root stays unreadable, as it is unbound under bubblewrap.
     """
     rules: list[list[str]] = []
 
     def grant(path: str) -> None:
+        if os.path.islink(path):
+            return
         inner = [h for h in hidden if Path(h).is_relative_to(path)]
         if not inner:
             rules.append([path, "read"])
