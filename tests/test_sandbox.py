@@ -450,3 +450,35 @@ def test_every_python_root_is_bound_whatever_folders_share_a_parent(monkeypatch,
     argv = codemode._bwrap_argv(codemode.Isolation("bubblewrap", "", "bwrap"), tmp_path, 3, 4, None)
     binds = {argv[i + 1] for i, a in enumerate(argv) if a == "--ro-bind"}
     assert {str(first), str(second)} <= binds
+
+
+def test_landlock_never_grants_a_link_to_a_folder_holding_a_hidden_package(tmp_path):
+    """A venv's ``lib64 -> lib``: Landlock grants the inode a link resolves to, so granting the link would grant
+    all of ``lib``, Dr.Jit included (seen in a checkout's own .venv, where student code imported drjit)."""
+    venv = tmp_path / "venv"
+    site = venv / "lib" / "python3.11" / "site-packages"
+    (site / "drjit").mkdir(parents=True)
+    (site / "numpy").mkdir()
+    (venv / "lib64").symlink_to("lib")
+    (site / "alias").symlink_to(site / "drjit")
+    hidden = [str(site / "drjit")]
+    rules = codemode._landlock_rules([str(venv)], hidden)
+    granted = [os.path.realpath(p) for p, kind in rules if kind == "read"]
+    assert str(site / "numpy") in granted
+    assert not [g for g in granted if any(Path(h).is_relative_to(g) or Path(g).is_relative_to(h) for h in hidden)], rules
+
+
+def test_packages_in_a_site_packages_off_sys_path_are_hidden_too(tmp_path):
+    """Mitsuba in the base installation of the grader's venv (not on its sys.path): graded code could put that
+    folder on its own sys.path, so it is hidden like the grader's own."""
+    base = tmp_path / "base"
+    site = base / "lib" / "python3.11" / "site-packages"
+    (site / "mitsuba").mkdir(parents=True)
+    (site / "numpy").mkdir()
+    system = tmp_path / "usr" / "local" / "lib" / "python3.11" / "dist-packages" / "drjit"
+    system.mkdir(parents=True)
+    roots = [str(base), str(tmp_path / "usr")]
+    hidden = codemode._hidden_paths(roots)
+    assert {str(site / "mitsuba"), str(system)} <= set(hidden), hidden
+    granted = [p for p, kind in codemode._landlock_rules(roots, hidden) if kind == "read"]
+    assert str(site / "numpy") in granted and not [g for g in granted if "mitsuba" in g or "drjit" in g], granted

@@ -216,9 +216,41 @@ def test_the_work_folder_bounds_the_number_of_files(path, tmp_path):
 
 
 def test_mitsuba_drjit_and_mcrt_cannot_be_imported(path, tmp_path):
-    mod = _module(tmp_path / "eve", """
+    """Not imported, even with the import hook removed, and no file of theirs readable by any path to it.
+
+    The paths include those through links (a venv's ``lib64 -> lib``, which
+    once granted all of ``lib`` to Landlock) from wherever the grader's
+    packages are: the checkout's .venv, a venv elsewhere, site-packages.
+    """
+    import drjit
+    import mitsuba
+
+    import mcrt
+
+    homes = sorted({str(Path(m.__file__).parent.parent) for m in (mcrt, drjit, mitsuba)} | {sys.prefix}
+                   | {p for p in sys.path if p.endswith(("site-packages", "dist-packages"))})
+    mod = _module(tmp_path / "eve", f"""
+        import glob
+        HOMES = {homes!r}
+
+        def readable():
+            found = []
+            for home in HOMES + [sys.prefix]:
+                for depth in range(4):  # home/drjit ... home/lib64/python3.11/site-packages/drjit, through links
+                    for name in ("mitsuba", "drjit", "mcrt"):
+                        for p in glob.glob(os.path.join(home, *["*"] * depth, name, "__init__.py")):
+                            try:
+                                with open(p, "rb") as fh:
+                                    fh.read(1)
+                                found.append(p)
+                            except OSError:
+                                pass
+            return found
+
         def f(x):
-            out = []
+            out = [float(len(readable()))]
+            if out[0]:
+                print("readable:", readable())
             for name in ("mitsuba", "drjit", "mcrt"):
                 try:
                     __import__(name)
@@ -234,7 +266,7 @@ def test_mitsuba_drjit_and_mcrt_cannot_be_imported(path, tmp_path):
             return np.array(out)
         """)
     res, out = _run(mod)
-    assert out == [0.0] * 6, out
+    assert out == [0.0] * 7, (out, res.stdout)
     assert any("mitsuba" in v for v in res.violations), res.violations
 
 

@@ -2,10 +2,15 @@
 
 Before, the sandbox took that environment's site-packages for the project
 and bound neither it nor the environment, so every student got 0 ("No
-module named 'numpy'") while the command exited 0. NumPy is copied into the
-new environment beside mcrt, as pip would install it; mcrt's other
+module named 'numpy'") while the command exited 0. NumPy, Dr.Jit and
+Mitsuba are copied into the new environment beside mcrt, as pip would
+install them (hard links where the file system allows); mcrt's other
 dependencies come from this interpreter's site-packages through a .pth file
-(no download). Slow: it builds the wheel (pip wheel --no-deps).
+(no download). The environment lies where any user may reach it, as an
+installation does (not under pytest's private folder): there only the
+sandbox, not the file modes, keeps mcrt, Dr.Jit and Mitsuba out of reach of
+the fallback's unprivileged uid. Slow: it builds the wheel (pip wheel
+--no-deps).
 """
 
 from __future__ import annotations
@@ -15,11 +20,17 @@ import os
 import shutil
 import subprocess
 import sys
+import tempfile
 import textwrap
 from pathlib import Path
 
 import numpy
 import pytest
+
+import mcrt  # noqa: F401 - before Dr.Jit (it finds a usable libLLVM)
+import drjit
+import mitsuba
+from mcrt.grade import codemode
 
 REPO = Path(__file__).resolve().parent.parent
 
@@ -44,11 +55,23 @@ def sample_cosine_hemisphere(u1, u2):
 """
 
 
+def _link_or_copy(src, dst):
+    try:
+        os.link(src, dst)
+    except OSError:
+        shutil.copy2(src, dst)
+
+
 @pytest.fixture(scope="module")
-def wheel_venv(tmp_path_factory):
+def wheel_venv(request):
     if shutil.which("bwrap") is None and not os.environ.get("CI"):
         pytest.skip("bubblewrap is not installed (apt-get install bubblewrap)")
-    tmp = tmp_path_factory.mktemp("wheel")
+    # World-reachable (mode 0755 up to /), not pytest's 0700 folder: see the module's docstring.
+    base = codemode._scratch_base(codemode.Isolation("fallback", ""))
+    assert base is not None, "no temporary folder that any user can reach"
+    tmp = Path(tempfile.mkdtemp(prefix="mcrt-wheel-", dir=base))
+    os.chmod(tmp, 0o755)
+    request.addfinalizer(lambda: shutil.rmtree(tmp, ignore_errors=True))
     p = subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", "-q", str(REPO), "-w", str(tmp / "dist")],
                        capture_output=True, text=True, timeout=600)
     assert p.returncode == 0, p.stderr[-3000:]
@@ -62,11 +85,12 @@ def wheel_venv(tmp_path_factory):
     site = Path(subprocess.run([str(py), "-c", "import sysconfig; print(sysconfig.get_paths()['purelib'])"],
                                capture_output=True, text=True, check=True).stdout.strip())
     assert (site / "mcrt" / "grade" / "_sandbox.py").is_file()
-    # NumPy beside mcrt, as `pip install mcrt-*.whl` would put it; the rest from here.
-    src = Path(numpy.__file__).resolve().parent
-    for item in [src, src.with_name("numpy.libs"), *src.parent.glob("numpy-*.dist-info")]:
-        if item.exists():
-            shutil.copytree(item, site / item.name)
+    # NumPy, Dr.Jit and Mitsuba beside mcrt, as `pip install mcrt-*.whl` would put them; the rest from here.
+    for mod in (numpy, drjit, mitsuba):
+        src = Path(mod.__file__).resolve().parent
+        for item in [src, src.with_name(src.name + ".libs"), *src.parent.glob(f"{src.name}-*.dist-info")]:
+            if item.exists():
+                shutil.copytree(item, site / item.name, copy_function=_link_or_copy)
     deps = [p for p in sys.path if p.endswith(("site-packages", "dist-packages")) and os.path.isdir(p)]
     (site / "zz_deps.pth").write_text("\n".join(deps) + "\n")
     return py
@@ -82,10 +106,19 @@ def _readable(path):
         return False
 
 def sample_cosine_hemisphere(u1, u2):
-    for site in {p for p in sys.path if p.endswith("site-packages")} | set(glob.glob(sys.prefix + "/lib/python3*/site-packages")):
+    # lib* takes in a venv's lib64 -> lib: a path to the same files through a link.
+    for site in {p for p in sys.path if p.endswith("site-packages")} | set(glob.glob(sys.prefix + "/lib*/python3*/site-packages")):
         for name in ("mcrt/__init__.py", "mcrt/grade/codemode.py", "mitsuba/__init__.py", "drjit/__init__.py"):
             if _readable(os.path.join(site, name)):
                 raise RuntimeError(f"read {site}/{name}")
+    sys.meta_path[:] = [m for m in sys.meta_path if getattr(m, "__name__", "") != "_Hidden"]
+    for name, attr in (("mitsuba", "set_variant"), ("drjit", "llvm"), ("mcrt", "render")):
+        try:
+            mod = __import__(name)
+        except Exception:
+            continue
+        if hasattr(mod, attr):
+            raise RuntimeError(f"imported {name} from {getattr(mod, '__file__', None)}")
     return _cosine(u1, u2)
 """
 

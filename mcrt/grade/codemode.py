@@ -97,6 +97,7 @@ of that check, with the student's traceback.
 
 from __future__ import annotations
 
+import glob
 import io
 import itertools
 import json
@@ -216,12 +217,25 @@ def _python_roots() -> list[str]:
 
 
 HIDDEN_PACKAGES = ("mcrt", "mitsuba", "drjit")  # the grader (its references) and the reference renderers
+# Where Pythons install packages, under a root such as /usr, /opt, an installation or a venv.
+_SITE_PATTERNS = [f"{pre}lib*/python3*/{kind}-packages" for pre in ("", "local/", "*/") for kind in ("site", "dist")]
 
 
 def _hidden_paths(roots) -> list[str]:
-    """What must stay unreadable under ``roots``: mcrt, Mitsuba and Dr.Jit wherever Python could import them from."""
+    """What must stay unreadable under ``roots``: mcrt, Mitsuba and Dr.Jit wherever Python could import them from.
+
+    That is the grader's sys.path, and also every site-packages under a root
+    (another Python's, the base installation's of a venv): graded code may
+    put any readable folder on its own sys.path.
+    """
     out = {str(Path(__file__).resolve().parent.parent)}
     dirs = {os.path.realpath(p) for p in sys.path if p and os.path.isdir(p)} | set(roots)
+    for r in roots:
+        if any(Path(r).is_relative_to(o) for o in ("/sys", "/etc", "/proc", "/dev")) or \
+                any(r != o and Path(r).is_relative_to(o) for o in roots):
+            continue  # no Python there (/sys alone is thousands of folders), or looked through from a root above
+        for pattern in _SITE_PATTERNS:
+            dirs |= {os.path.realpath(p) for p in glob.glob(os.path.join(glob.escape(r), pattern)) if os.path.isdir(p)}
     for d in dirs:
         for name in HIDDEN_PACKAGES:
             for cand in (os.path.join(d, name), os.path.join(d, name + ".libs")):
@@ -238,11 +252,17 @@ def _landlock_rules(roots, hidden) -> list[list[str]]:
 
     Landlock only grants, so a root holding a hidden folder is split: the
     folders on the way to it may be listed, and each of their other entries
-    is granted whole.
+    is granted whole. A symbolic link among those entries is never granted:
+    Landlock grants the inode the link resolves to, so a venv's ``lib64 ->
+    lib`` granted whole would grant all of ``lib``, hidden folders included.
+    A link's target inside a root has rules of its own; one outside every
+    root stays unreadable, as it is unbound under bubblewrap.
     """
     rules: list[list[str]] = []
 
     def grant(path: str) -> None:
+        if os.path.islink(path):
+            return
         inner = [h for h in hidden if Path(h).is_relative_to(path)]
         if not inner:
             rules.append([path, "read"])
