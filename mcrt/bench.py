@@ -474,7 +474,7 @@ def command_line(parser, args) -> str:
 
 def register(sub) -> None:
     p = sub.add_parser("bench", help="paths per second of mcrt and Mitsuba on the same scene, in one run")
-    p.add_argument("--scene", default=None, help="scene file (default: reference/scenes/canonical.toml)")
+    p.add_argument("--scene", default=None, help="scene file (default: the canonical room shipped with mcrt, canonical.toml)")
     p.add_argument("--camera", action="append", help="camera(s), repeatable (default: near and far)")
     p.add_argument("--res", type=int, action="append", help="square resolution(s), repeatable (default 256)")
     p.add_argument("--spp", type=int, action="append", help="samples per pixel of one render, repeatable (default 16)")

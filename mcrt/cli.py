@@ -26,7 +26,7 @@ def _finite_float(text: str) -> float:
 
 
 def _add_render_options(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--scene", default=None, help="scene file (default: reference/scenes/canonical.toml)")
+    p.add_argument("--scene", default=None, help="scene file (default: the canonical room shipped with mcrt, canonical.toml)")
     p.add_argument("--camera", default=None, help="camera name from the scene file, e.g. near or far (default: the file's)")
     p.add_argument("--res", type=int, default=None, help="square resolution N (N x N) (default: the scene file's)")
     p.add_argument("--width", type=int, default=None, help="image width, overrides --res (default: the scene file's)")
@@ -258,7 +258,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_compare)
 
     p = sub.add_parser("main", help="the main job: the convergence report of the canonical scene, and mcrt beside Mitsuba")
-    p.add_argument("--scene", default=None, help="scene file of the side-by-side renders (default: reference/scenes/canonical.toml)")
+    p.add_argument("--scene", default=None, help="scene file of the side-by-side renders (default: the canonical room shipped with mcrt, canonical.toml)")
     p.add_argument("--camera", default="near", help="camera of the side-by-side renders (default: near)")
     p.add_argument("--res", type=int, default=128, help="their square resolution (default: 128)")
     p.add_argument("--spp", type=int, default=256, help="their samples per pixel (default: 256)")
@@ -269,7 +269,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_main)
 
     p = sub.add_parser("scene", help="validate a scene file and print its hash")
-    p.add_argument("scene", nargs="?", default=None, help="scene file (default: reference/scenes/canonical.toml)")
+    p.add_argument("scene", nargs="?", default=None, help="scene file (default: the canonical room shipped with mcrt, canonical.toml)")
     p.set_defaults(func=cmd_scene)
 
     p = sub.add_parser("mutants", help="list the bug catalogue")

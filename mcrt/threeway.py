@@ -62,7 +62,7 @@ def three_way(scene, settings, *, mutants=(), backend="llvm", alpha=0.01, tile=8
 
 def register(sub) -> None:
     p = sub.add_parser("threeway", help="render with mcrt, the plugin and Mitsuba; say whether a disagreement is geometry or estimator")
-    p.add_argument("--scene", default=None, help="scene file (default: reference/scenes/canonical.toml)")
+    p.add_argument("--scene", default=None, help="scene file (default: the canonical room shipped with mcrt, canonical.toml)")
     p.add_argument("--camera", default=None, help="camera name (default: the scene file's)")
     p.add_argument("--res", type=int, default=64, help="square resolution (default: 64)")
     p.add_argument("--spp", type=int, default=1024, help="samples per pixel of each render (default: 1024)")

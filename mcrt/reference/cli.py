@@ -46,7 +46,7 @@ def register(subparsers) -> None:
                     "Finished chunks are kept in reference/chunks/, so an interrupted build continues where it stopped. "
                     "Every combination of --camera, --res and --max-depth is built.",
     )
-    b.add_argument("--scene", default=None, help="scene file (default: reference/scenes/canonical.toml)")
+    b.add_argument("--scene", default=None, help="scene file (default: the canonical room shipped with mcrt, canonical.toml)")
     b.add_argument("--camera", nargs="+", default=None, help="camera name(s) from the scene file (default: near)")
     b.add_argument("--res", nargs="+", type=int, default=None, help="square resolution(s) N (N x N) (default: 64)")
     b.add_argument("--width", type=int, default=None, help="width, for a non-square reference (with --height) (default: none, square sizes from --res)")

@@ -42,7 +42,7 @@ def _ladder(text: str) -> tuple[int, ...]:
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--preset", default="canonical", choices=sorted(PRESETS),
                    help="named settings to start from (default canonical): " + "; ".join(f"{k}: {v}" for k, v in PRESET_HELP.items()))
-    p.add_argument("--scene", default=None, help="scene file (default: reference/scenes/canonical.toml)")
+    p.add_argument("--scene", default=None, help="scene file (default: the canonical room shipped with mcrt, canonical.toml)")
     p.add_argument("--camera", default=None, help="camera name from the scene file, near or far (default: the preset's; canonical: near)")
     p.add_argument("--res", type=_positive, default=None, help="square resolution N (N x N) (default: the preset's; canonical: 64)")
     p.add_argument("--spp-ladder", type=_ladder, default=None, metavar="LIST",

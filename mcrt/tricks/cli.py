@@ -39,7 +39,7 @@ def _tiles(text: str) -> tuple[int, ...]:
 def register(sub) -> None:
     p = sub.add_parser("tricks", help="the lecture's efficiency tricks measured for speed against error (reports/tricks)",
                        description=DESCRIPTION)
-    p.add_argument("--scene", default=None, help="scene file with a committed reference (default: reference/scenes/canonical.toml)")
+    p.add_argument("--scene", default=None, help="scene file with a committed reference (default: the canonical room shipped with mcrt, canonical.toml)")
     p.add_argument("--camera", default="near", help="camera (default: near)")
     p.add_argument("--res", type=int, default=64, help="square resolution; a committed reference must exist (default: 64)")
     p.add_argument("--max-depth", type=int, default=8, help="longest path in segments (default: 8)")

@@ -98,7 +98,7 @@ def register(subparsers) -> None:
         ),
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
-    p.add_argument("--scene", default=None, help="scene file (default: reference/scenes/canonical.toml)")
+    p.add_argument("--scene", default=None, help="scene file (default: the canonical room shipped with mcrt, canonical.toml)")
     p.add_argument("--seeds", type=int, default=200, help="false-alarm trials (independent seeds of correct renders) (default: %(default)s)")
     p.add_argument("--power-seeds", type=int, default=20, help="seeds per mutant in the power study (default: %(default)s)")
     p.add_argument("--spp", type=int, default=1024, help="samples per pixel per side, the default suite's budget (default: %(default)s)")
