@@ -21,17 +21,16 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Protocol
+from typing import Protocol
 
 import numpy as np
-
-if TYPE_CHECKING:
-    from mcrt.grade.explain.basis import Basis
-    from mcrt.grade.explain.fit import Fit
 
 #: Floor of the relative error no two renderers share: every chi^2 that compares a model image with a hand-in
 #: adds (FLOOR * R)^2 to each term's variance.
 FLOOR = 0.002
+#: Two candidates whose shares differ by less than this are tied: a catalogued bug within TIE of the best is
+#: named first (it names a known bug), another family within TIE of the claimed one is mentioned beside it.
+TIE = 0.02
 
 #: What a claim rule may conclude (:attr:`Explanation.verdict`).
 CLAIMED = "claimed"  # the best candidate is the cause: "It looks like ..."
@@ -92,7 +91,7 @@ class Inputs:
     has no noise model (then no remainder can be tested).
     """
 
-    basis: Basis  # mcrt renders of the scene's variations (mcrt.grade.explain.basis.prepare_basis)
+    basis: object  # mcrt.grade.explain.basis.Basis: mcrt renders of the scene's variations (mcrt.grade.explain.basis.prepare_basis)
     mutants: dict = field(default_factory=dict)  # catalogue name -> mcrt.grade.expected.Expected
     baseline: object = None  # the catalogue's bug-free Expected image (same seed as the mutants)
     texts: dict[str, str] = field(default_factory=dict)  # catalogue name -> its description
@@ -116,7 +115,7 @@ class Family(Protocol):
 
     name: str
 
-    def __call__(self, fit: Fit, inputs: Inputs) -> list[Candidate]: ...
+    def __call__(self, fit, inputs: Inputs) -> list[Candidate]: ...
 
 
 @dataclass
@@ -159,4 +158,4 @@ class ClaimRule(Protocol):
     """Decides what the feedback may claim: sets ``e.verdict`` (one of VERDICTS) and, for PARTIAL,
     ``e.remainder_where``. ``fit`` is the engine's :class:`~mcrt.grade.explain.fit.Fit`."""
 
-    def __call__(self, e: Explanation, fit: Fit, inputs: Inputs) -> None: ...
+    def __call__(self, e: Explanation, fit, inputs: Inputs) -> None: ...
