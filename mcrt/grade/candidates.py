@@ -109,8 +109,10 @@ class Family(Protocol):
     weights; ``fit.delta(change)`` is the chi^2 a predicted change leaves.
     Return the family's best fit (or one candidate per sub-family); each
     candidate's ``chi2`` is ``fit.delta(change)`` at its fitted parameters.
-    ``prepare`` (optional) renders what the family needs once per machine;
-    its result is kept in ``Basis.extra[name]``.
+    An optional attribute ``prepare(a, scene, render)`` renders what the
+    family needs, once per machine (``render`` is the grading cache's,
+    see :func:`mcrt.grade.explain.families.prepare`); its result is kept
+    in ``Basis.extra[name]`` (``inputs.basis.extra[name]`` at grade time).
     """
 
     name: str
