@@ -1,9 +1,5 @@
 r"""The bug catalogue as candidates: fitted among the families, and ranked by tiles, pixels or noise.
 
-Among the families (:func:`catalogue`), each catalogued bug m of :data:`mcrt.mutants.MUTANTS` predicts the change
-:math:`E_m - E_0` (its expected image less the bug-free baseline, same seed) and is scored like any family.
-The rankings below compare the same signatures by other statistics, for the stages that have no model-image fit:
-
 Each mutant m of :data:`mcrt.mutants.MUTANTS` has an expected image E_m,
 rendered once by mcrt with the same seed as the bug-free baseline E_0 (see
 :mod:`mcrt.grade.expected`), so the bug's signature
@@ -22,11 +18,13 @@ for what no render reproduces exactly. Mutants are ranked by
 amplitude :math:`\hat a \in [0, 4]` is reported too ("the same pattern at
 half the strength" points to a variant of the bug). The share of the
 excess chi-square a mutant removes, :math:`1 - \chi^2_m(1)/\chi^2_0`, is
-reported as how much of the difference it explains.
+reported as how much of the difference it explains (:func:`rank_mutants`: by
+tiles, or by single pixels for deviations that cancel within tiles).
 
-Regions are described by the surfaces the camera sees there (the walls by
-their colour, the floor, the ceiling, the sphere...) and by the share of
-direct light, so that the words match what a student sees in the image.
+Among the families of the engine (:func:`catalogue`), each bug predicts the
+change :math:`\Delta_m` at full resolution and is scored like any family.
+Bugs that mostly add variance are ranked by their noise instead: its
+pattern (:func:`rank_noise`) or its amount (:func:`rank_noise_level`).
 """
 
 from __future__ import annotations
