@@ -120,7 +120,7 @@ def grade_class(submissions: str | os.PathLike, assignment: Assignment, out: str
         graded = run_pool(todo, ctx, staging, jobs=jobs, timeout=timeout, memory_mb=memory_mb, log=log, on_done=done,
                           log_dir=out, already=len(kept), total=len(subs))
         shutil.rmtree(staging, ignore_errors=True)
-        from mcrt.grade.diagnose import catalogue_power
+        from mcrt.grade.explain.catalogue import catalogue_power
 
         try:
             power = catalogue_power(ctx)
