@@ -374,7 +374,8 @@ def render_bidirectional(scene: Scene, settings: RenderSettings, *, backend: str
                          spp_per_pass: int | None = None, mutants=(), intersector: str = "convex",
                          mis: bool | None = None, precision_guard: bool = True, mirror_caustics: str = "all",
                          light_paths: float = LIGHT_PATHS, weights: str = "balance", part: str = "both",
-                         importance_cos_power: int = 3, **tricks) -> RenderResult:
+                         importance_cos_power: int = 3, pixel_sampler: str = "independent",
+                         replicates: int | None = None, **tricks) -> RenderResult:
     """Render ``scene`` with the path tracer and, for the paths eye D ... D S+ L (class C), light tracing.
 
     Renderer ``mcrt`` with ``bidirectional=True`` (:mod:`mcrt.tricks.render`)
@@ -394,7 +395,11 @@ def render_bidirectional(scene: Scene, settings: RenderSettings, *, backend: str
     the light tracer's, 'caustics' both strategies' shares of class C alone
     (to compare with plain mcrt's ``mirror_caustics='only'``);
     ``importance_cos_power`` as in :func:`pinhole_importance`.
+    ``pixel_sampler`` and ``replicates`` are the path tracer's
+    (:mod:`mcrt.samplers`); with replicates the result's variance has
+    min(R, light batches) - 1 degrees of freedom, and says so.
     """
+    from mcrt.samplers import PixelSampler
     from mcrt.tracer import _tracer, render_tracer
     from mcrt.tricks.options import trick_options
 
@@ -408,13 +413,16 @@ def render_bidirectional(scene: Scene, settings: RenderSettings, *, backend: str
     if light_paths <= 0:
         raise ValueError(f"light_paths must be > 0, got {light_paths}")
     s = settings
+    sampler = PixelSampler.of(pixel_sampler, replicates)
+    n_rep = None if sampler.default else sampler.samples_per_replicate(s.spp)
     # N / n of the balance heuristic: light subpaths per camera sample of a pixel (nominal; any constant is unbiased).
     ratio = light_paths * s.width * s.height if weights == "balance" else 0.0
     caustics = "only" if part == "caustics" else ("mis" if ratio else "skip")
     options = (("mirror_caustics", caustics),) + ((("caustic_light_paths", ratio),) if ratio else ())
     common = dict(backend=backend, intersector=intersector, mis=mis, precision_guard=precision_guard)
     tracer = _tracer(scene, s.camera, s.width, s.height, s.max_depth, s.light_samples, s.rr_depth, backend,
-                     intersector, frozenset(), precision_guard, mis, tuple(sorted((*tricks, *options))))
+                     intersector, frozenset(), precision_guard, mis, tuple(sorted((*tricks, *options))),
+                     *((sampler, n_rep) if n_rep else ()))  # render_tracer's key: it finds caustic_pdfs set
     if ratio:
         tracer.estimator.caustic_pdfs = _light_tracer(tracer, 3)  # before the path kernel is first recorded
     shape = (s.height, s.width, 3)
@@ -423,7 +431,8 @@ def render_bidirectional(scene: Scene, settings: RenderSettings, *, backend: str
     extra = {}
     if part == "path" or part == "both" or (part == "caustics" and ratio):  # binary: the light tracer's class alone
         pt = render_tracer(scene, s, progress=progress, spp_per_pass=spp_per_pass, mirror_caustics=caustics,
-                           caustic_light_paths=ratio, **common, **dict(tricks))
+                           caustic_light_paths=ratio, pixel_sampler=pixel_sampler, replicates=replicates, **common,
+                           **dict(tricks))
         mean += pt.mean
         var_of_mean += pt.variance.astype(np.float64) / pt.spp
         wall, compile_time, extra = pt.wall_time, pt.compile_time or 0.0, dict(pt.extra)
@@ -435,6 +444,8 @@ def render_bidirectional(scene: Scene, settings: RenderSettings, *, backend: str
         var_of_mean += totals.variance.astype(np.float64) / batches
         wall, compile_time = wall + totals.wall_time, compile_time + totals.compile_time
         extra.update(mis=str(tracer.options.mis).lower(), light_paths=str(paths), light_batches=str(batches))
+        if n_rep:  # the fewer independent estimates of the two bound the sum's degrees of freedom
+            extra["variance_method"] = f"replicates:{min(sampler.replicates, batches)}"
     return RenderResult(
         mean=mean.astype(np.float32),
         variance=(var_of_mean * s.spp).astype(np.float32),

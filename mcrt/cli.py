@@ -106,6 +106,8 @@ def cmd_render(args) -> int:
     options.update(_trick_flags(args))
     if getattr(args, "bidirectional", False):
         options["bidirectional"] = True
+    if args.pixel_sampler != "independent" or args.replicates is not None:
+        options.update(pixel_sampler=args.pixel_sampler, replicates=args.replicates)
     result = render(scene, s, renderer=args.renderer, backend=args.backend, **options)
     exr, png = render_to_files(result, Path(args.output), args.exposure)
     compile_note = f", of which JIT compilation {result.compile_time:.2f} s" if result.compile_time else ""
@@ -207,6 +209,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--mutant", action="append", metavar="NAME", help="switch on a catalogued bug (mcrt, plugin; repeatable; see `mcrt mutants`; default: none)")
     p.add_argument("--intersector", choices=("convex", "triangles"), default="convex", help="mcrt's intersection code (triangles: brute-force cross-check; default: convex)")
     _add_trick_flags(p)
+    p.add_argument("--pixel-sampler", choices=("independent", "sobol"), default="independent",
+                   help="where samples land in their pixel (renderer mcrt): independent jitter, or Owen-scrambled "
+                        "Sobol points in --replicates independent replicates whose spread is the variance "
+                        "(mcrt.samplers; default: independent)")
+    p.add_argument("--replicates", type=int, default=None, metavar="R",
+                   help="replicates of --pixel-sampler sobol; spp must be a multiple (default: 8)")
     p.add_argument("--exposure", type=float, default=0.0, help="PNG preview exposure in stops (default: 0)")
     p.add_argument("-o", "--output", default="out.exr", help="output EXR; the PNG preview goes beside it (default: out.exr)")
     # Any Mitsuba scene (mcrt.mitsuba.render_with_variance); --res/--width/--height, --spp, --seed, --max-depth apply.

@@ -34,6 +34,7 @@ from mcrt.llvm import require_llvm
 from mcrt.mutants import camera_jitter, check_mutants, estimator_overrides, mutate_scene, output_encoding
 from mcrt.precision import check_precision
 from mcrt.rng import SampleStreams
+from mcrt.samplers import PixelSampler, jitter_function, replicate_launch, replicate_pass_size, replicate_variance_scale
 from mcrt.scene import RenderSettings, Scene
 from mcrt.tricks.options import trick_options
 
@@ -89,6 +90,8 @@ class Tracer:
     precision_guard: bool = True
     mis: bool | None = None  # None: where the scene needs it (mcrt.light.needs_mis)
     tricks: tuple = ()  # sorted (name, value) pairs of EstimatorOptions' efficiency tricks (mcrt.tricks.options)
+    pixel_sampler: PixelSampler = PixelSampler()  # where samples land in their pixel (mcrt.samplers)
+    samples_per_replicate: int | None = None  # N of a 'sobol' pixel sampler (a kernel constant)
 
     def __post_init__(self):
         import drjit as dr
@@ -109,6 +112,7 @@ class Tracer:
         )
         self.estimator = PathEstimator(McrtHost(self.geometry), self.options)
         self.camera_model = Pinhole(scene.camera(self.camera), self.width, self.height, jitter=camera_jitter(self.mutants))
+        self.jitter = jitter_function(self.pixel_sampler, self.samples_per_replicate)
         self._frozen_launch = dr.freeze(self._launch_kernel, limit=8, warn_after=64)  # one recording per layout, a few kept
 
     def layout(self, spp: int, spp_per_pass: int | None = None) -> tuple[int, int, int]:
@@ -243,9 +247,9 @@ class Tracer:
         def new_path(ended, streams):
             restart = ended & (streams.sample + 1 < stop)
             streams.restart(restart)
-            return restart, *camera_ray(streams.next_1d(), streams.next_1d())
+            return restart, *camera_ray(*self.jitter(streams))
 
-        o, d = camera_ray(rng.next_1d(), rng.next_1d())
+        o, d = camera_ray(*self.jitter(rng))
         # Lanes past n (paths 0) pad the launch to whole lanes of b: inactive, their sums stay 0.
         sum_x, sum_x2, _ = self.estimator.path_sums(o, d, rng, active=paths > 0, new_path=new_path)
         sums = [m.Float64(v[c]) for v in (sum_x, sum_x2) for c in range(3)]
@@ -321,7 +325,8 @@ def _tracer(scene: Scene, *args, scene_hash: str | None = None) -> Tracer:
 def render_tracer(scene: Scene, settings: RenderSettings, *, backend: str = "llvm", progress: bool = True,
                   spp_per_pass: int | None = None, mutants=(), intersector: str = "convex", mis: bool | None = None,
                   precision_guard: bool = True, mirror_caustics: str = "all", caustic_light_paths: float = 0.0,
-                  tile_pixels: int | None = None, rows: list[tuple[int, int]] | None = None, **tricks) -> RenderResult:
+                  tile_pixels: int | None = None, rows: list[tuple[int, int]] | None = None,
+                  pixel_sampler: str = "independent", replicates: int | None = None, **tricks) -> RenderResult:
     """Render ``scene`` at ``settings`` with the standalone tracer: mean and per-sample variance.
 
     Called through :func:`mcrt.render.render` (renderer ``mcrt``). ``mis``
@@ -339,19 +344,25 @@ def render_tracer(scene: Scene, settings: RenderSettings, *, backend: str = "llv
     never changes the image. ``rows`` ((first row, count) bands) renders
     those rows alone, stacked in order as the image, like a crop
     (benchmarks: a part of a long render; ``extra['paths']`` counts the
-    paths traced).
+    paths traced). ``pixel_sampler`` and ``replicates`` choose where samples
+    land in their pixel and how the variance is estimated
+    (:mod:`mcrt.samplers`; 'sobol' needs spp a multiple of the replicates).
     """
     import drjit as dr
 
     s = settings
+    sampler = PixelSampler.of(pixel_sampler, replicates)
+    n_rep = None if sampler.default else sampler.samples_per_replicate(s.spp)
     caustics = (("mirror_caustics", mirror_caustics),) if mirror_caustics != "all" else ()
     if caustic_light_paths:  # mirror_caustics 'mis' (mcrt.bidir)
         caustics += (("caustic_light_paths", caustic_light_paths),)
     scene_hash = scene.content_hash()
     tracer = _tracer(scene, s.camera, s.width, s.height, s.max_depth, s.light_samples, s.rr_depth, backend, intersector,
                      frozenset(mutants), precision_guard, mis, tuple(sorted(trick_options(tricks) + caustics)),
-                     scene_hash=scene_hash)
-    k, b, per_pass = tracer.layout(s.spp, spp_per_pass)
+                     *((sampler, n_rep) if n_rep else ()), scene_hash=scene_hash)
+    k, b, per_pass = tracer.layout(n_rep or s.spp, spp_per_pass)
+    if n_rep:
+        per_pass = replicate_pass_size(per_pass, n_rep)
     tile = tile_pixels or max(1, TILE_LANES // k)
     ranges = [(first * s.width, count * s.width) for first, count in rows] if rows else [(0, s.width * s.height)]
     total = sum(-(-count // tile) for _, count in ranges) * -(-s.spp // per_pass)
@@ -359,9 +370,12 @@ def render_tracer(scene: Scene, settings: RenderSettings, *, backend: str = "llv
     def launch(acc, p0, count, first, n):
         return tracer.launch(s.seed, acc, range(p0, p0 + count), first, n, k, b)
 
+    if n_rep:
+        launch = replicate_launch(launch, n_rep)
     totals = run_tiles(launch, width=s.width, height=s.height, spp=s.spp, tile_pixels=tile, spp_per_pass=per_pass,
                        progress=Progress(total, label="mcrt", unit="passes", enabled=progress), pixel_ranges=ranges)
-    mean, var = encode_output(totals.mean, totals.variance, output_encoding(tracer.mutants))
+    var = totals.variance * replicate_variance_scale(s.spp, sampler.replicates) if n_rep else totals.variance
+    mean, var = encode_output(totals.mean, var, output_encoding(tracer.mutants))
     return RenderResult(
         mean=mean,
         variance=var,
@@ -381,6 +395,7 @@ def render_tracer(scene: Scene, settings: RenderSettings, *, backend: str = "llv
             "rr_depth": str(s.rr_depth),
             "mutants": ",".join(sorted(tracer.mutants)),
             **({"tricks": ",".join(f"{k}={v}" for k, v in tracer.tricks)} if tracer.tricks else {}),
+            **({} if sampler.default else {"pixel_sampler": sampler.name, "variance_method": sampler.variance_method}),
             "paths": str(totals.paths),
             "drjit_version": dr.__version__,
             "mcrt_version": mcrt.__version__,

@@ -45,7 +45,7 @@ def render_mcrt(scene: Scene, settings: RenderSettings, *, adaptive: str | None 
 
 #: The estimator's options an adaptive render keeps at their defaults (it renders with the default estimator).
 ADAPTIVE_FIXED = {**TRICK_OPTIONS, "mutants": (), "intersector": "convex", "mis": None, "bidirectional": False,
-                  "mirror_caustics": "all"}
+                  "mirror_caustics": "all", "pixel_sampler": "independent", "replicates": None}
 
 
 def _adaptive(scene: Scene, settings: RenderSettings, scheme: str, options: dict) -> RenderResult:
