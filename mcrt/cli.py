@@ -286,6 +286,9 @@ def build_parser() -> argparse.ArgumentParser:
     from mcrt.tricks.cli import register as register_tricks
 
     register_tricks(sub)
+    from mcrt.sampler_study import register as register_samplers
+
+    register_samplers(sub)
     from mcrt.grade.accuracy.cli import register as register_accuracy
 
     register_accuracy(sub)
