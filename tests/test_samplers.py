@@ -234,3 +234,13 @@ def test_refusals(scene):
         render(scene, _settings(scene), progress=False, pixel_sampler="halton")
     with pytest.raises(ValueError, match="pixel_sampler"):
         render(scene, _settings(scene), progress=False, pixel_sampler="sobol", adaptive="naive")
+
+
+def test_validate_renders_the_image_under_test_with_the_sampler(scene):
+    """mcrt validate --pixel-sampler: the study's image under test carries the sampler and its variance method."""
+    from mcrt.validate.budget import Budget
+    from mcrt.validate.opponent import render_tested
+
+    r = render_tested(scene, Budget(res=16, spp=32, pixel_sampler="sobol"), seed=1)
+    assert r.extra["variance_method"] == "replicates:8"
+    assert "variance_method" not in render_tested(scene, Budget(res=16, spp=32), seed=1).extra
