@@ -244,3 +244,21 @@ def test_validate_renders_the_image_under_test_with_the_sampler(scene):
     r = render_tested(scene, Budget(res=16, spp=32, pixel_sampler="sobol"), seed=1)
     assert r.extra["variance_method"] == "replicates:8"
     assert "variance_method" not in render_tested(scene, Budget(res=16, spp=32), seed=1).extra
+
+
+def test_merging_replicate_renders_pools_their_variance_and_df(scene):
+    """Two sobol renders (8 replicates each) merge into one with 14 df whose variance / spp is the merged mean's.
+
+    The merged variance of the mean is (v1 + v2) / 4 for two equal renders; per-sample merging would add the
+    spread between the two means as if the samples were independent. Mixing with a per-sample render is refused.
+    """
+    from mcrt.film import merge
+
+    a = render(scene, _settings(scene, seed=1), progress=False, pixel_sampler="sobol")
+    b = render(scene, _settings(scene, seed=2), progress=False, pixel_sampler="sobol")
+    m = merge([a, b])
+    assert m.spp == 128 and variance_dof(m) == 14
+    assert np.allclose(m.variance / m.spp, (a.variance / a.spp + b.variance / b.spp) / 4, rtol=1e-5)
+    assert np.allclose(m.mean, (a.mean + b.mean) / 2, rtol=1e-6)
+    with pytest.raises(ValueError, match="replicates"):
+        merge([a, render(scene, _settings(scene), progress=False)])
