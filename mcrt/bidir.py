@@ -370,10 +370,59 @@ def light_batches(light: LightTracer, *, seed: int, paths: int, progress: bool =
     return totals, per_batch * batches, batches
 
 
+#: light_paths 'auto': the pilot renders 1 / PILOT_SHARE of the samples (at least 16 per pixel), from other streams.
+PILOT_SHARE = 16
+PILOT_SEED = 0x51A7E
+#: The budgets 'auto' chooses among: powers of two times LIGHT_PATHS (a few path kernels, compiled once each).
+AUTO_LIGHT_PATHS = tuple(LIGHT_PATHS * 2.0**k for k in range(-3, 5))
+
+
+def choose_light_paths(scene: Scene, settings: RenderSettings, *, pixel_sampler: str = "independent",
+                       replicates: int | None = None, **common) -> tuple[float, dict]:
+    r"""The light-path budget by the caustic paths' share of the variance, from a pilot render: (budget, pilot facts).
+
+    With a light subpaths per camera sample, the render's relMSE-weighted
+    variance and its time per camera sample are about
+
+    .. math::  V(\lambda) = \frac{a + b / \lambda}{n}, \qquad T(\lambda) = n (t_p + \lambda t_l),
+
+    a the path tracer's variance per camera sample (everything but the light
+    tracer's share), b the light tracer's at one subpath per camera sample,
+    t_p and t_l the times of one camera sample and one light subpath. Their
+    product, the inverse efficiency, is least at
+    :math:`\lambda^* = \sqrt{b\, t_p / (a\, t_l)}`: the more of the
+    variance the caustic class holds, the more light subpaths pay. The pilot
+    (both parts at LIGHT_PATHS, 1 / PILOT_SHARE of the samples, seeds apart
+    from the render's) measures a, b, t_p and t_l; the budget is the entry
+    of AUTO_LIGHT_PATHS nearest lambda* on a log scale. The pilot's samples
+    are not reused: the render stays unbiased whatever it chooses.
+    """
+    from dataclasses import replace
+
+    from mcrt import metrics as M
+    from mcrt.samplers import PixelSampler
+
+    reps = PixelSampler.of(pixel_sampler, replicates).replicates
+    n = max(16, settings.spp // PILOT_SHARE)
+    n = -(-n // reps) * reps
+    pilot = replace(settings, spp=n, seed=settings.seed ^ PILOT_SEED)
+    kw = dict(common, progress=False, light_paths=LIGHT_PATHS, pixel_sampler=pixel_sampler, replicates=replicates)
+    path = render_bidirectional(scene, pilot, part="path", **kw)
+    light = render_bidirectional(scene, pilot, part="light", **kw)
+    w = 1.0 / (np.square(path.mean.astype(np.float64) + light.mean) + M.RELMSE_EPS)
+    a = float((w * path.variance).mean())  # per camera sample
+    b = float((w * light.variance).mean()) * LIGHT_PATHS  # light.variance / n is its Var(mean) at LIGHT_PATHS
+    seconds = [r.wall_time - (r.compile_time or 0.0) for r in (path, light)]
+    t_p, t_l = seconds[0] / n, seconds[1] / (n * LIGHT_PATHS)
+    best = math.sqrt(b * t_p / (a * t_l)) if a > 0 and b > 0 and t_l > 0 else LIGHT_PATHS
+    chosen = min(AUTO_LIGHT_PATHS, key=lambda x: abs(math.log(x / best)))
+    return chosen, {"a": a, "b": b, "t_p": t_p, "t_l": t_l, "optimum": best, "seconds": sum(seconds), "spp": n}
+
+
 def render_bidirectional(scene: Scene, settings: RenderSettings, *, backend: str = "llvm", progress: bool = True,
                          spp_per_pass: int | None = None, mutants=(), intersector: str = "convex",
                          mis: bool | None = None, precision_guard: bool = True, mirror_caustics: str = "all",
-                         light_paths: float = LIGHT_PATHS, weights: str = "balance", part: str = "both",
+                         light_paths: float | str = LIGHT_PATHS, weights: str = "balance", part: str = "both",
                          importance_cos_power: int = 3, pixel_sampler: str = "independent",
                          replicates: int | None = None, **tricks) -> RenderResult:
     """Render ``scene`` with the path tracer and, for the paths eye D ... D S+ L (class C), light tracing.
@@ -398,6 +447,8 @@ def render_bidirectional(scene: Scene, settings: RenderSettings, *, backend: str
     ``pixel_sampler`` and ``replicates`` are the path tracer's
     (:mod:`mcrt.samplers`); with replicates the result's variance has
     min(R, light batches) - 1 degrees of freedom, and says so.
+    ``light_paths='auto'`` chooses the budget from a pilot render
+    (:func:`choose_light_paths`), whose time the result's wall time includes.
     """
     from mcrt.samplers import PixelSampler
     from mcrt.tracer import _tracer, render_tracer
@@ -410,8 +461,13 @@ def render_bidirectional(scene: Scene, settings: RenderSettings, *, backend: str
         raise ValueError(f"part must be one of {', '.join(PARTS)}, got {part!r}")
     if weights not in WEIGHTS:
         raise ValueError(f"weights must be one of {', '.join(WEIGHTS)}, got {weights!r}")
-    if light_paths <= 0:
-        raise ValueError(f"light_paths must be > 0, got {light_paths}")
+    pilot = None
+    if light_paths == "auto":
+        light_paths, pilot = choose_light_paths(scene, settings, pixel_sampler=pixel_sampler, replicates=replicates,
+                                                backend=backend, intersector=intersector, mis=mis,
+                                                precision_guard=precision_guard, weights=weights, **dict(tricks))
+    if isinstance(light_paths, str) or light_paths <= 0:
+        raise ValueError(f"light_paths must be > 0 or 'auto', got {light_paths!r}")
     s = settings
     sampler = PixelSampler.of(pixel_sampler, replicates)
     n_rep = None if sampler.default else sampler.samples_per_replicate(s.spp)
@@ -444,6 +500,9 @@ def render_bidirectional(scene: Scene, settings: RenderSettings, *, backend: str
         var_of_mean += totals.variance.astype(np.float64) / batches
         wall, compile_time = wall + totals.wall_time, compile_time + totals.compile_time
         extra.update(mis=str(tracer.options.mis).lower(), light_paths=str(paths), light_batches=str(batches))
+        if pilot is not None:
+            wall += pilot["seconds"]
+            extra["light_paths_pilot"] = ",".join(f"{k}={v:.4g}" for k, v in pilot.items())
         if n_rep:  # the fewer independent estimates of the two bound the sum's degrees of freedom
             extra["variance_method"] = f"replicates:{min(sampler.replicates, batches)}"
     return RenderResult(

@@ -106,6 +106,8 @@ def cmd_render(args) -> int:
     options.update(_trick_flags(args))
     if getattr(args, "bidirectional", False):
         options["bidirectional"] = True
+    if args.light_paths is not None:
+        options["light_paths"] = args.light_paths
     if args.pixel_sampler != "independent" or args.replicates is not None:
         options.update(pixel_sampler=args.pixel_sampler, replicates=args.replicates)
     result = render(scene, s, renderer=args.renderer, backend=args.backend, **options)
@@ -116,6 +118,19 @@ def cmd_render(args) -> int:
           f"{result.wall_time:.2f} s{compile_note}; {paths / max(result.wall_time, 1e-9) / 1e6:.2f} M paths/s")
     print(f"wrote {exr} and {png}")
     return EXIT_OK
+
+
+def _light_paths(text: str):
+    """--light-paths: a positive number, or 'auto'."""
+    if text == "auto":
+        return text
+    try:
+        value = float(text)
+    except ValueError:
+        value = 0.0
+    if not value > 0:
+        raise argparse.ArgumentTypeError(f"expected a positive number or 'auto', got {text!r}")
+    return value
 
 
 def _trick_flags(args) -> dict:
@@ -215,6 +230,9 @@ def build_parser() -> argparse.ArgumentParser:
                         "(mcrt.samplers; default: independent)")
     p.add_argument("--replicates", type=int, default=None, metavar="R",
                    help="replicates of --pixel-sampler sobol; spp must be a multiple (default: 8)")
+    p.add_argument("--light-paths", type=_light_paths, default=None, metavar="N|auto",
+                   help="with --bidirectional: light subpaths per camera sample, or 'auto' to choose them from a pilot "
+                        "render by the caustic paths' share of the variance (mcrt.bidir.choose_light_paths; default: 0.05)")
     p.add_argument("--exposure", type=float, default=0.0, help="PNG preview exposure in stops (default: 0)")
     p.add_argument("-o", "--output", default="out.exr", help="output EXR; the PNG preview goes beside it (default: out.exr)")
     # Any Mitsuba scene (mcrt.mitsuba.render_with_variance); --res/--width/--height, --spp, --seed, --max-depth apply.

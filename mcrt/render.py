@@ -79,7 +79,7 @@ RENDERERS: dict[str, Renderer] = {
         Renderer("mcrt", "the standalone Dr.Jit tracer", "mcrt", "mcrt",
                  {"mutants": (), "intersector": "convex", "mis": None, "precision_guard": True, **TRICK_OPTIONS,
                   "bidirectional": False, "mirror_caustics": "all", **RENDER_TRICKS,
-                  "pixel_sampler": "independent", "replicates": None}, _tracer),
+                  "pixel_sampler": "independent", "replicates": None, "light_paths": None}, _tracer),
         Renderer("plugin", "mcrt's estimator as the Mitsuba integrator 'mcrt'", "mitsuba", "mcrt",
                  {"mutants": (), "mis": None}, _plugin),
         Renderer("mitsuba", "Mitsuba 3's path integrator", "mitsuba", "mitsuba", {"integrator": "path"}, _mitsuba),

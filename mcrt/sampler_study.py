@@ -57,12 +57,14 @@ class _Recorded(Variant):
 
 
 def variants() -> list[_Recorded]:
-    """Plain mcrt, the sobol pixel sampler (8 replicates), bidirectional, and the two together."""
+    """Plain mcrt, the sobol pixel sampler (8 replicates), bidirectional, the two together, and with the pilot's light budget."""
     return [
         _Recorded(PLAIN, "plain", "unbiased"),
         _Recorded("sobol pixels (8 replicates)", "samplers", "unbiased", {"pixel_sampler": "sobol"}),
         _Recorded("bidirectional", "samplers", "unbiased", {"bidirectional": True}),
         _Recorded("bidirectional + sobol pixels", "samplers", "unbiased", {"bidirectional": True, "pixel_sampler": "sobol"}),
+        _Recorded("bidirectional + sobol, light budget from a pilot", "samplers", "unbiased",
+                  {"bidirectional": True, "pixel_sampler": "sobol", "light_paths": "auto"}),
     ]
 
 

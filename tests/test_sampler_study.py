@@ -55,7 +55,7 @@ def test_small_run_writes_the_report(tmp_path):
     assert "Goal 3x by MSE" in text and "light's edge" in text
     rows = json.loads((tmp_path / "data.json").read_text())["results"]["64"]["rows"]
     assert {r["label"] for r in rows} == {"mcrt", "sobol pixels (8 replicates)", "bidirectional",
-                                          "bidirectional + sobol pixels"}
+                                          "bidirectional + sobol pixels", "bidirectional + sobol, light budget from a pilot"}
     plain = next(r for r in rows if r["label"] == "mcrt")
     assert plain["eff_mse_own"] == pytest.approx(1.0) and plain["regions"]["edge"]["pixels"] > 0
     assert (tmp_path / "error_64.png").exists() and (tmp_path / "error_map_64.png").exists()

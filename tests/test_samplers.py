@@ -262,3 +262,27 @@ def test_merging_replicate_renders_pools_their_variance_and_df(scene):
     assert np.allclose(m.mean, (a.mean + b.mean) / 2, rtol=1e-6)
     with pytest.raises(ValueError, match="replicates"):
         merge([a, render(scene, _settings(scene), progress=False)])
+
+
+def test_light_budget_from_the_pilot(scene):
+    """light_paths='auto' (64x64, 256 spp, seed 5): a budget among AUTO_LIGHT_PATHS, the pilot's facts in the header,
+    its time in the wall time; the image agrees with Mitsuba's committed reference (policy reference-floor, ALPHA).
+
+    The recorded optimum is lambda* = sqrt(b t_p / (a t_l)) of the recorded pilot facts; without bidirectional the
+    budget is refused.
+    """
+    from mcrt.bidir import AUTO_LIGHT_PATHS
+    from mcrt.reference import load_reference
+    from mcrt.stats import compare
+
+    r = render(scene, _settings(scene, spp=256, res=64, seed=5), progress=False, bidirectional=True, light_paths="auto",
+               pixel_sampler="sobol")
+    pilot = dict(kv.split("=") for kv in r.extra["light_paths_pilot"].split(","))
+    assert float(pilot["seconds"]) < r.wall_time and int(pilot["spp"]) == 16
+    chosen = int(r.extra["light_paths"]) / (256 * 64 * 64)
+    assert min(abs(chosen / x - 1) for x in AUTO_LIGHT_PATHS) < 0.01
+    a, b, t_p, t_l = (float(pilot[k]) for k in ("a", "b", "t_p", "t_l"))
+    assert float(pilot["optimum"]) == pytest.approx((b * t_p / (a * t_l)) ** 0.5, rel=1e-3)
+    assert compare(r, load_reference(scene, "near", 64, 8), policy="reference-floor", alpha=ALPHA).passed
+    with pytest.raises(ValueError, match="needs bidirectional"):
+        render(scene, _settings(scene), progress=False, light_paths="auto")

@@ -24,6 +24,11 @@ def render_mcrt(scene: Scene, settings: RenderSettings, *, adaptive: str | None 
 
         require_denoiser()  # before the render, not after it
     bidirectional = options.pop("bidirectional", False)
+    light_paths = options.pop("light_paths", None)  # the bidirectional estimator's budget (a number or 'auto')
+    if light_paths is not None and not bidirectional:
+        raise ValueError("light_paths is the bidirectional estimator's budget: it needs bidirectional=True")
+    if light_paths is not None:
+        options["light_paths"] = light_paths
     if adaptive is None and bidirectional:
         from mcrt.bidir import render_bidirectional
 
@@ -45,7 +50,8 @@ def render_mcrt(scene: Scene, settings: RenderSettings, *, adaptive: str | None 
 
 #: The estimator's options an adaptive render keeps at their defaults (it renders with the default estimator).
 ADAPTIVE_FIXED = {**TRICK_OPTIONS, "mutants": (), "intersector": "convex", "mis": None, "bidirectional": False,
-                  "mirror_caustics": "all", "pixel_sampler": "independent", "replicates": None}
+                  "mirror_caustics": "all", "pixel_sampler": "independent", "replicates": None,
+                 "light_paths": None}
 
 
 def _adaptive(scene: Scene, settings: RenderSettings, scheme: str, options: dict) -> RenderResult:
