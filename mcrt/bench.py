@@ -83,16 +83,17 @@ def _renderers(names, scene, backend, intersector, max_paths: int):
     from mcrt.render import render
     from mcrt.tracer import render_tracer
 
-    def mcrt_time(c, seed):
+    def mcrt_time(c, seed, **sampler):
         s = scene.settings(camera=c.camera, width=c.width, height=c.height, spp=c.spp, max_depth=c.max_depth,
                            light_samples=c.light_samples)
         rows = bounded_rows(c, max_paths)
         if rows is None:
             t0 = time.perf_counter()
-            r = render(scene, s, seed=seed, backend=backend, intersector=intersector, progress=False)
+            r = render(scene, s, seed=seed, backend=backend, intersector=intersector, progress=False, **sampler)
             return time.perf_counter() - t0, None, r.mean, c.width * c.height * c.spp
         t0 = time.perf_counter()
-        r = render_tracer(scene, replace(s, seed=seed), backend=backend, intersector=intersector, progress=False, rows=rows)
+        r = render_tracer(scene, replace(s, seed=seed), backend=backend, intersector=intersector, progress=False, rows=rows,
+                          **sampler)
         return time.perf_counter() - t0, None, None, int(r.extra["paths"])
 
     loaded = {}
@@ -119,10 +120,12 @@ def _renderers(names, scene, backend, intersector, max_paths: int):
         image = np.asarray(img)[..., :3] if rows == [(0, c.height)] else None
         return elapsed, compile_s, image, c.width * sum(n for _, n in rows) * c.spp
 
-    table = {"mcrt": mcrt_time, "mitsuba": mitsuba_time}
+    # mcrt-sobol: mcrt with the sobol pixel sampler (mcrt.samplers), to state its cost in the same run.
+    table = {"mcrt": mcrt_time, "mcrt-sobol": lambda c, seed: mcrt_time(c, seed, pixel_sampler="sobol"),
+             "mitsuba": mitsuba_time}
     unknown = set(names) - set(table)
     if unknown:
-        raise ValueError(f"unknown renderer(s) {', '.join(sorted(unknown))} (mcrt, mitsuba)")
+        raise ValueError(f"unknown renderer(s) {', '.join(sorted(unknown))} ({', '.join(table)})")
     return {n: table[n] for n in names}
 
 
@@ -508,7 +511,7 @@ def register(sub) -> None:
     p.add_argument("--mse-renders", type=int, default=MSE_RENDERS,
                    help="renders of distinct seeds whose MSE against a committed reference is averaged, the timed ones "
                         f"included (default {MSE_RENDERS})")
-    p.add_argument("--renderers", default="mcrt,mitsuba", help="comma-separated renderers (default: mcrt,mitsuba)")
+    p.add_argument("--renderers", default="mcrt,mitsuba", help="comma-separated renderers: mcrt, mcrt-sobol (the sobol pixel sampler), mitsuba (default: mcrt,mitsuba)")
     p.add_argument("--intersector", choices=("convex", "triangles"), default="convex", help="mcrt's intersector (default: convex)")
     p.add_argument("--backend", choices=("llvm", "cuda"), default="llvm", help="Dr.Jit backend (default: llvm)")
     p.add_argument("--json", default=None, metavar="FILE",

@@ -112,6 +112,7 @@ from mcrt.minmax import fmax, fmin, sqrt0
 from mcrt.mutants import check_mutants
 from mcrt.options import Caustics, trick_options
 from mcrt.rng import WeylRng
+from mcrt.samplers import PixelSampler
 from mcrt.sampling import coordinate_frame, cosine_about_normal, to_world
 from mcrt.scene import Mirror, RenderSettings, Scene, Sphere
 from mcrt.tracer import Tracer, backend_module, stream_keys
@@ -364,16 +365,17 @@ KEPT = 8
 
 
 def _path_tracer(scene: Scene, s: RenderSettings, *, caustics: Caustics, backend: str, intersector: str, mis: bool | None,
-                 precision_guard: bool, mutants: frozenset = frozenset(), tricks: tuple = ()):
+                 precision_guard: bool, mutants: frozenset = frozenset(), tricks: tuple = (),
+                 pixel_sampler: PixelSampler = PixelSampler()):
     """(Tracer, CausticDensities, light tracers by importance power) for a render of ``scene`` at ``s`` with ``caustics``."""
     key = (scene.content_hash(), scene.path, s.camera, s.width, s.height, s.max_depth, s.light_samples, s.rr_depth,
-           backend, intersector, mis, precision_guard, mutants, tricks, caustics)
+           backend, intersector, mis, precision_guard, mutants, tricks, pixel_sampler, caustics)
     entry = _KEPT.get(key)
     if entry is None:
         densities = CausticDensities(scene, Pinhole(scene.camera(s.camera), s.width, s.height), backend_module(backend),
                                      light_paths=caustics.caustic_light_paths)
         tracer = Tracer(scene, s.camera, s.width, s.height, s.max_depth, s.light_samples, s.rr_depth, backend, intersector,
-                        mutants, precision_guard, mis, tricks, caustics=caustics,
+                        mutants, precision_guard, mis, tricks, pixel_sampler, caustics=caustics,
                         caustic_pdfs=densities if caustics.caustic_light_paths else None)
         if len(_KEPT) >= KEPT:
             _KEPT.pop(next(iter(_KEPT)))
@@ -392,17 +394,20 @@ def _light_tracer(entry, cos_power: int) -> LightTracer:
 
 def render_caustic_split(scene: Scene, settings: RenderSettings, *, mirror_caustics: str, backend: str = "llvm",
                          progress: bool = True, spp_per_pass: int | None = None, mutants=(), intersector: str = "convex",
-                         mis: bool | None = None, precision_guard: bool = True, **tricks) -> RenderResult:
+                         mis: bool | None = None, precision_guard: bool = True, pixel_sampler: str = "independent",
+                         replicates: int | None = None, **tricks) -> RenderResult:
     """The path tracer alone with ``mirror_caustics`` 'skip' or 'only' (:class:`mcrt.options.Caustics`): renderer ``mcrt``'s option.
 
     'only' renders the paths eye D ... D S+ L alone, to check the light
-    tracer against; 'skip' everything else.
+    tracer against; 'skip' everything else. ``pixel_sampler`` and
+    ``replicates`` as in :func:`mcrt.tracer.render_tracer`.
     """
     if mirror_caustics not in ("skip", "only"):
         raise ValueError(f"mirror_caustics must be 'skip' or 'only' without a light tracer, got {mirror_caustics!r}")
     s = settings
     tracer = _path_tracer(scene, s, caustics=Caustics(mirror_caustics), backend=backend, intersector=intersector, mis=mis,
-                          precision_guard=precision_guard, mutants=check_mutants(mutants), tricks=trick_options(tricks))[0]
+                          precision_guard=precision_guard, mutants=check_mutants(mutants), tricks=trick_options(tricks),
+                          pixel_sampler=PixelSampler.of(pixel_sampler, replicates))[0]
     return tracer.render(seed=s.seed, spp=s.spp, progress=progress, spp_per_pass=spp_per_pass)
 
 
@@ -425,11 +430,60 @@ def light_batches(light: LightTracer, *, seed: int, paths: int, progress: bool =
     return totals, per_batch * batches, batches
 
 
+#: light_paths 'auto': the pilot renders 1 / PILOT_SHARE of the samples (at least 16 per pixel), from other streams.
+PILOT_SHARE = 16
+PILOT_SEED = 0x51A7E
+#: The budgets 'auto' chooses among: powers of two times LIGHT_PATHS (a few path kernels, compiled once each).
+AUTO_LIGHT_PATHS = tuple(LIGHT_PATHS * 2.0**k for k in range(-3, 5))
+
+
+def choose_light_paths(scene: Scene, settings: RenderSettings, *, pixel_sampler: str = "independent",
+                       replicates: int | None = None, **common) -> tuple[float, dict]:
+    r"""The light-path budget by the caustic paths' share of the variance, from a pilot render: (budget, pilot facts).
+
+    With a light subpaths per camera sample, the render's relMSE-weighted
+    variance and its time per camera sample are about
+
+    .. math::  V(\lambda) = \frac{a + b / \lambda}{n}, \qquad T(\lambda) = n (t_p + \lambda t_l),
+
+    a the path tracer's variance per camera sample (everything but the light
+    tracer's share), b the light tracer's at one subpath per camera sample,
+    t_p and t_l the times of one camera sample and one light subpath. Their
+    product, the inverse efficiency, is least at
+    :math:`\lambda^* = \sqrt{b\, t_p / (a\, t_l)}`: the more of the
+    variance the caustic class holds, the more light subpaths pay. The pilot
+    (both parts at LIGHT_PATHS, 1 / PILOT_SHARE of the samples, seeds apart
+    from the render's) measures a, b, t_p and t_l; the budget is the entry
+    of AUTO_LIGHT_PATHS nearest lambda* on a log scale. The pilot's samples
+    are not reused: the render stays unbiased whatever it chooses.
+    """
+    from dataclasses import replace
+
+    from mcrt import metrics as M
+
+    reps = PixelSampler.of(pixel_sampler, replicates).replicates
+    n = max(16, settings.spp // PILOT_SHARE)
+    n = -(-n // reps) * reps
+    pilot = replace(settings, spp=n, seed=settings.seed ^ PILOT_SEED)
+    kw = dict(common, progress=False, light_paths=LIGHT_PATHS, pixel_sampler=pixel_sampler, replicates=replicates)
+    path = render_bidirectional(scene, pilot, part="path", **kw)
+    light = render_bidirectional(scene, pilot, part="light", **kw)
+    w = 1.0 / (np.square(path.mean.astype(np.float64) + light.mean) + M.RELMSE_EPS)
+    a = float((w * path.variance).mean())  # per camera sample
+    b = float((w * light.variance).mean()) * LIGHT_PATHS  # light.variance / n is its Var(mean) at LIGHT_PATHS
+    seconds = [r.wall_time - (r.compile_time or 0.0) for r in (path, light)]
+    t_p, t_l = seconds[0] / n, seconds[1] / (n * LIGHT_PATHS)
+    best = math.sqrt(b * t_p / (a * t_l)) if a > 0 and b > 0 and t_l > 0 else LIGHT_PATHS
+    chosen = min(AUTO_LIGHT_PATHS, key=lambda x: abs(math.log(x / best)))
+    return chosen, {"a": a, "b": b, "t_p": t_p, "t_l": t_l, "optimum": best, "seconds": sum(seconds), "spp": n}
+
+
 def render_bidirectional(scene: Scene, settings: RenderSettings, *, backend: str = "llvm", progress: bool = True,
                          spp_per_pass: int | None = None, mutants=(), intersector: str = "convex",
                          mis: bool | None = None, precision_guard: bool = True, mirror_caustics: str = "all",
-                         light_paths: float = LIGHT_PATHS, weights: str = "balance", part: str = "both",
-                         importance_cos_power: int = 3, **tricks) -> RenderResult:
+                         light_paths: float | str = LIGHT_PATHS, weights: str = "balance", part: str = "both",
+                         importance_cos_power: int = 3, pixel_sampler: str = "independent",
+                         replicates: int | None = None, **tricks) -> RenderResult:
     """Render ``scene`` with the path tracer and, for the paths eye D ... D S+ L (class C), light tracing.
 
     Renderer ``mcrt`` with ``bidirectional=True`` (:func:`mcrt.render.render`)
@@ -449,6 +503,11 @@ def render_bidirectional(scene: Scene, settings: RenderSettings, *, backend: str
     the light tracer's, 'caustics' both strategies' shares of class C alone
     (to compare with plain mcrt's ``mirror_caustics='only'``);
     ``importance_cos_power`` as in :func:`pinhole_importance`.
+    ``pixel_sampler`` and ``replicates`` are the path tracer's
+    (:mod:`mcrt.samplers`); with replicates the result's variance has
+    min(R, light batches) - 1 degrees of freedom, and says so.
+    ``light_paths='auto'`` chooses the budget from a pilot render
+    (:func:`choose_light_paths`), whose time the result's wall time includes.
     """
     if mutants or mirror_caustics != "all":
         raise ValueError("bidirectional rendering takes no mutants and no mirror_caustics (it sets them itself)")
@@ -457,14 +516,20 @@ def render_bidirectional(scene: Scene, settings: RenderSettings, *, backend: str
         raise ValueError(f"part must be one of {', '.join(PARTS)}, got {part!r}")
     if weights not in WEIGHTS:
         raise ValueError(f"weights must be one of {', '.join(WEIGHTS)}, got {weights!r}")
-    if light_paths <= 0:
-        raise ValueError(f"light_paths must be > 0, got {light_paths}")
+    pilot = None
+    if light_paths == "auto":
+        light_paths, pilot = choose_light_paths(scene, settings, pixel_sampler=pixel_sampler, replicates=replicates,
+                                                backend=backend, intersector=intersector, mis=mis,
+                                                precision_guard=precision_guard, weights=weights, **dict(tricks))
+    if isinstance(light_paths, str) or light_paths <= 0:
+        raise ValueError(f"light_paths must be > 0 or 'auto', got {light_paths!r}")
     s = settings
+    sampler = PixelSampler.of(pixel_sampler, replicates)
     # N / n of the balance heuristic: light subpaths per camera sample of a pixel (nominal; any constant is unbiased).
     ratio = light_paths * s.width * s.height if weights == "balance" else 0.0
     caustics = "only" if part == "caustics" else ("mis" if ratio else "skip")
     entry = _path_tracer(scene, s, caustics=Caustics(caustics, ratio), backend=backend, intersector=intersector, mis=mis,
-                         precision_guard=precision_guard, tricks=tricks)
+                         precision_guard=precision_guard, tricks=tricks, pixel_sampler=sampler)
     tracer = entry[0]
     shape = (s.height, s.width, 3)
     mean, var_of_mean = np.zeros(shape, np.float64), np.zeros(shape, np.float64)
@@ -483,6 +548,11 @@ def render_bidirectional(scene: Scene, settings: RenderSettings, *, backend: str
         var_of_mean += totals.variance.astype(np.float64) / batches
         wall, compile_time = wall + totals.wall_time, compile_time + totals.compile_time
         extra.update(mis=str(tracer.options.settings.mis).lower(), light_paths=str(paths), light_batches=str(batches))
+        if pilot is not None:
+            wall += pilot["seconds"]
+            extra["light_paths_pilot"] = ",".join(f"{k}={v:.4g}" for k, v in pilot.items())
+        if not sampler.default:  # the fewer independent estimates of the two bound the sum's degrees of freedom
+            extra["variance_method"] = f"replicates:{min(sampler.replicates, batches)}"
     return RenderResult(
         mean=mean.astype(np.float32),
         variance=(var_of_mean * s.spp).astype(np.float32),

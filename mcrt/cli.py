@@ -118,6 +118,10 @@ def cmd_render(args) -> int:
     options.update(_trick_flags(args))
     if getattr(args, "bidirectional", False):
         options["bidirectional"] = True
+    if args.light_paths is not None:
+        options["light_paths"] = args.light_paths
+    if args.pixel_sampler != "independent" or args.replicates is not None:
+        options.update(pixel_sampler=args.pixel_sampler, replicates=args.replicates)
     result = render(scene, s, renderer=args.renderer, backend=args.backend, **options)
     exr, png = render_to_files(result, Path(args.output), args.exposure)
     compile_note = f", of which JIT compilation {result.compile_time:.2f} s" if result.compile_time else ""
@@ -126,6 +130,19 @@ def cmd_render(args) -> int:
           f"{result.wall_time:.2f} s{compile_note}; {paths / max(result.wall_time, 1e-9) / 1e6:.2f} M paths/s")
     print(f"wrote {exr} and {png}")
     return EXIT_OK
+
+
+def _light_paths(text: str):
+    """--light-paths: a positive number, or 'auto'."""
+    if text == "auto":
+        return text
+    try:
+        value = float(text)
+    except ValueError:
+        value = 0.0
+    if not value > 0:
+        raise argparse.ArgumentTypeError(f"expected a positive number or 'auto', got {text!r}")
+    return value
 
 
 def _trick_flags(args) -> dict:
@@ -219,6 +236,15 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--mutant", action="append", metavar="NAME", help="switch on a catalogued bug (mcrt, plugin; repeatable; see `mcrt mutants`; default: none)")
     p.add_argument("--intersector", choices=("convex", "triangles"), default="convex", help="mcrt's intersection code (triangles: brute-force cross-check; default: convex)")
     _add_trick_flags(p)
+    p.add_argument("--pixel-sampler", choices=("independent", "sobol"), default="independent",
+                   help="where samples land in their pixel (renderer mcrt): independent jitter, or Owen-scrambled "
+                        "Sobol points in --replicates independent replicates whose spread is the variance "
+                        "(mcrt.samplers; default: independent)")
+    p.add_argument("--replicates", type=int, default=None, metavar="R",
+                   help="replicates of --pixel-sampler sobol; spp must be a multiple (default: 8)")
+    p.add_argument("--light-paths", type=_light_paths, default=None, metavar="N|auto",
+                   help="with --bidirectional: light subpaths per camera sample, or 'auto' to choose them from a pilot "
+                        "render by the caustic paths' share of the variance (mcrt.bidir.choose_light_paths; default: 0.05)")
     p.add_argument("--exposure", type=_finite_float, default=0.0, help="PNG preview exposure in stops (default: 0)")
     p.add_argument("-o", "--output", default="out.exr", help="output EXR; the PNG preview goes beside it (default: out.exr)")
     # Any Mitsuba scene (mcrt.mitsuba.render_with_variance); --res/--width/--height, --spp, --seed, --max-depth apply.
@@ -290,6 +316,9 @@ def build_parser() -> argparse.ArgumentParser:
     from mcrt.tricks.cli import register as register_tricks
 
     register_tricks(sub)
+    from mcrt.sampler_study import register as register_samplers
+
+    register_samplers(sub)
     from mcrt.grade.accuracy.cli import register as register_accuracy
 
     register_accuracy(sub)

@@ -41,7 +41,7 @@ import numpy as np
 
 from mcrt.exitcodes import EXIT_FAILED, EXIT_OK, EXIT_UNUSABLE
 from mcrt.film import RenderResult
-from mcrt.stats import POLICIES, Comparison, StatsError, compare
+from mcrt.stats import POLICIES, Comparison, StatsError, compare, variance_dof
 
 __all__ = ["report_lines", "heatmap_rgb", "write_heatmap", "write_json", "image", "as_result", "check_headers",
            "HEADER_FIELDS", "HeaderMismatch", "compare_files"]
@@ -127,7 +127,8 @@ def write_json(c: Comparison, path) -> Path:
 
 def _describe(r: RenderResult, path) -> str:
     h, w = r.mean.shape[:2]
-    var = "variance" if r.variance is not None else "NO variance"
+    var = "NO variance" if r.variance is None else "variance" if variance_dof(r) == r.spp - 1 else \
+        f"variance of {variance_dof(r) + 1} replicates, {variance_dof(r)} df"  # mcrt.variance_method
     spp = f"{r.spp} spp" if r.spp else "spp unknown"
     who = f", {r.renderer}" if r.renderer else ""
     cam = f", camera {r.camera}" if r.camera else ""
@@ -285,6 +286,11 @@ def compare_files(
     :meth:`Comparison.to_dict` report (JSON, ``json_path``). ``options``
     (``alpha``, ``tile``, ``channels``, ``correction``) and ``min_spp`` are
     those of :func:`mcrt.stats.compare`.
+
+    Variance: an mcrt EXR records how its variance was estimated
+    (``mcrt.variance_method``: per sample, or 'replicates:R' for a
+    stratified render, :mod:`mcrt.samplers`); the test gives each side the
+    degrees of freedom it has (:func:`mcrt.stats.variance_dof`).
 
     Headers: inputs whose recorded resolution, camera, scene hash or max
     depth differ are refused (exit 2, one line naming both and the field,

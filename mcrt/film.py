@@ -93,6 +93,9 @@ def merge(results: list[RenderResult]) -> RenderResult:
     """
     if not results:
         raise ValueError("nothing to merge")
+    methods = {r.extra.get("variance_method", "samples") for r in results}
+    if methods != {"samples"}:
+        return _merge_replicates(results)
     m = Moments.zeros(*results[0].shape)
     for r in results:
         mean = r.mean.astype(np.float64)
@@ -110,6 +113,33 @@ def merge(results: list[RenderResult]) -> RenderResult:
         camera=first.camera,
         wall_time=sum(r.wall_time for r in results),
         extra=dict(first.extra, merged_seeds=",".join(str(r.seed) for r in results)),
+    )
+
+
+def _merge_replicates(results: list[RenderResult]) -> RenderResult:
+    """Merge renders whose variance comes from replicates (mcrt.samplers), each with spp / R samples per replicate.
+
+    The mean is spp-weighted; each render's variance of its mean, var_i /
+    spp_i, is pooled as that of the weighted mean, and reported times the
+    total spp as usual: var = sum spp_i var_i / sum spp_i. Its degrees of
+    freedom add up: sum (R_i - 1), recorded as 'replicates:(that + 1)'.
+    """
+    dofs = []
+    for r in results:
+        kind, _, count = r.extra.get("variance_method", "samples").partition(":")
+        if kind != "replicates" or not count.isdigit() or r.variance is None:
+            raise ValueError("cannot merge renders whose variance comes from replicates with renders whose does not")
+        dofs.append(int(count) - 1)
+    n = sum(r.spp for r in results)
+    mean = sum(r.spp * r.mean.astype(np.float64) for r in results) / n
+    var = sum(r.spp * r.variance.astype(np.float64) for r in results) / n
+    first = results[0]
+    return RenderResult(
+        mean=mean.astype(np.float32), variance=var.astype(np.float32), spp=n, seed=first.seed,
+        max_depth=first.max_depth, renderer=first.renderer, scene_hash=first.scene_hash, camera=first.camera,
+        wall_time=sum(r.wall_time for r in results),
+        extra=dict(first.extra, merged_seeds=",".join(str(r.seed) for r in results),
+                   variance_method=f"replicates:{sum(dofs) + 1}"),
     )
 
 

@@ -69,12 +69,18 @@ class Renderer:
 
 
 def render_mcrt(scene: Scene, settings: RenderSettings, *, adaptive: str | None = None, denoise: str | None = None,
-                bidirectional: bool = False, mirror_caustics: str = "all", **options) -> RenderResult:
+                bidirectional: bool = False, mirror_caustics: str = "all", light_paths: float | str | None = None,
+                **options) -> RenderResult:
     """Renderer ``mcrt``: the standalone tracer, or a bidirectional, caustic-split or adaptive render, then denoised where asked.
 
     At its defaults it is :func:`mcrt.tracer.render_tracer` itself.
+    ``light_paths`` is the bidirectional estimator's budget (a number or
+    'auto'; None: :func:`mcrt.bidir.render_bidirectional`'s default).
     """
     from mcrt.tracer import render_tracer
+
+    if light_paths is not None and not bidirectional:
+        raise ValueError("light_paths is the bidirectional estimator's budget: it needs bidirectional=True")
 
     if denoise is not None:
         if denoise not in DENOISE_GUIDES:
@@ -84,11 +90,12 @@ def render_mcrt(scene: Scene, settings: RenderSettings, *, adaptive: str | None 
         require_denoiser()  # before the render, not after it
     if adaptive is not None:
         result = _adaptive(scene, settings, adaptive, {**options, "bidirectional": bidirectional,
-                                                      "mirror_caustics": mirror_caustics})
+                                                      "mirror_caustics": mirror_caustics, "light_paths": light_paths})
     elif bidirectional:
         from mcrt.bidir import render_bidirectional
 
-        result = render_bidirectional(scene, settings, mirror_caustics=mirror_caustics, **options)
+        budget = {} if light_paths is None else {"light_paths": light_paths}
+        result = render_bidirectional(scene, settings, mirror_caustics=mirror_caustics, **budget, **options)
     elif mirror_caustics != "all":
         from mcrt.bidir import render_caustic_split
 
@@ -108,7 +115,7 @@ def render_mcrt(scene: Scene, settings: RenderSettings, *, adaptive: str | None 
 
 #: The estimator's options an adaptive render keeps at their defaults (it renders with the default estimator).
 ADAPTIVE_FIXED = {**TRICK_OPTIONS, "mutants": (), "intersector": "convex", "mis": None, "bidirectional": False,
-                  "mirror_caustics": "all"}
+                  "mirror_caustics": "all", "pixel_sampler": "independent", "replicates": None, "light_paths": None}
 
 
 def _adaptive(scene: Scene, settings: RenderSettings, scheme: str, options: dict) -> RenderResult:
@@ -141,7 +148,8 @@ RENDERERS: dict[str, Renderer] = {
     for r in (
         Renderer("mcrt", "the standalone Dr.Jit tracer", "mcrt", "mcrt",
                  {"mutants": (), "intersector": "convex", "mis": None, "precision_guard": True, **TRICK_OPTIONS,
-                  "bidirectional": False, "mirror_caustics": "all", **RENDER_TRICKS}, _mcrt),
+                  "bidirectional": False, "mirror_caustics": "all", **RENDER_TRICKS,
+                  "pixel_sampler": "independent", "replicates": None, "light_paths": None}, _mcrt),
         Renderer("plugin", "mcrt's estimator as the Mitsuba integrator 'mcrt'", "mitsuba", "mcrt",
                  {"mutants": (), "mis": None}, _plugin),
         Renderer("mitsuba", "Mitsuba 3's path integrator", "mitsuba", "mitsuba", {"integrator": "path"}, _mitsuba),

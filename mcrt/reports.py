@@ -63,6 +63,22 @@ REPORTS: tuple[Report, ...] = (
     Report("tricks", "tricks --camera near --res 64 --max-depth 8 --ladder 16,64,256,1024,4096 --seeds 4 --alpha 0.01 "
            "--tiles 8,32 --light-receiver-samples 1048576 --confirm-spp 65536 --out reports/tricks",
            "the lecture's efficiency tricks beside plain mcrt: error against time and spp, bias, a verdict per trick"),
+    Report("samplers", "samplers --resolutions '64:16,64,256,1024,4096;256:16,64,256,1024' --seeds 4 --camera near "
+           "--max-depth 8 --out reports/samplers",
+           "plain against stratified (sobol) pixel samples, with and without bidirectional: efficiency by MSE and "
+           "relMSE, the error at the light's edge"),
+    Report("samplers/validation_false_alarms", "validate --seeds 200 --power-seeds 20 --spp 1024 --res 32 --camera near "
+           "--max-depth 8 --alpha 0.01 --tile 8 --against mitsuba --pixel-sampler sobol --only false-alarms "
+           "--extra-tiles 16 --escalate-spp none --followup none --effect-spp 0 "
+           "--out reports/samplers/validation_false_alarms",
+           "false-alarm rate of the comparison with the sobol sampler's replicate variance against fresh Mitsuba renders"),
+    Report("samplers/validation_power", "validate --seeds 200 --power-seeds 20 --spp 1024 --res 64 --camera near "
+           "--max-depth 8 --alpha 0.01 --tile 8 --against mitsuba --pixel-sampler sobol --only power --extra-tiles none "
+           "--escalate-spp none --followup none --effect-spp 0 --out reports/samplers/validation_power",
+           "power on the bug catalogue with the sobol sampler at the suite's budget"),
+    Report("samplers/bench", "bench --camera near --res 64 --res 256 --spp 64 --spp 1024 --repeats 3 --mse-renders 4 "
+           "--renderers mcrt,mcrt-sobol,mitsuba --report reports/samplers/bench --tried none",
+           "paths per second of mcrt with and without the sobol pixel sampler against Mitsuba, in one run"),
     Report("grading_accuracy", "grade-accuracy --out reports/grading_accuracy",
            "grading on a class of realistic mistakes made by Mitsuba scene edits and correct renders: scores, "
            "detection, naming and false-alarm rates, one student's CPU time and memory"),

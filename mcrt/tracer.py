@@ -33,6 +33,7 @@ from mcrt.mutants import camera_jitter, check_mutants, mutate_scene, mutation_va
 from mcrt.options import Caustics, EstimatorOptions, trick_options
 from mcrt.precision import check_precision
 from mcrt.rng import SampleStreams
+from mcrt.samplers import PixelSampler, replicate_launch, replicate_pass_size, replicate_variance_scale, scrambled_jitter
 from mcrt.scene import RenderSettings, Scene
 from mcrt.srgb import encode_output
 
@@ -71,13 +72,22 @@ def stream_keys(seed: int, pass_index: int = 0) -> tuple[int, int]:
     return key & 0xFFFFFFFF, key >> 32
 
 
-def pixel_jitter(streams):
-    """(u, v) in [0, 1)^2: where in its pixel a camera sample passes (the next two numbers of its stream).
+def pixel_jitter(streams, sampler: PixelSampler = PixelSampler(), samples_per_replicate: int | None = None):
+    """(u, v) in [0, 1)^2: where in its pixel a camera sample passes, as the pixel sampler places it.
 
     The one place the tracer draws a camera sample's position in its pixel;
-    :meth:`mcrt.camera.Pinhole.ray` maps it to the ray.
+    :meth:`mcrt.camera.Pinhole.ray` maps it to the ray. ``independent``: the
+    next two numbers of the sample's stream. ``sobol``: the sample's
+    Owen-scrambled Sobol point (:func:`mcrt.samplers.scrambled_jitter`),
+    keyed by the stream's pixel key ``h1`` at its sample, with
+    ``samples_per_replicate`` (N, a trace-time constant) points per
+    replicate.
     """
-    return streams.next_1d(), streams.next_1d()
+    if sampler.default:
+        return streams.next_1d(), streams.next_1d()
+    if samples_per_replicate is None:
+        raise ValueError("pixel sampler 'sobol' needs its samples per replicate")
+    return scrambled_jitter(streams.h1, streams.sample, samples_per_replicate)
 
 
 @dataclass
@@ -87,6 +97,9 @@ class Tracer:
     ``caustics`` and ``caustic_pdfs`` are the estimator's split of the paths
     eye D ... D S+ L with a light tracer (:class:`mcrt.options.Caustics`;
     :mod:`mcrt.bidir` builds them): plain path tracing by default.
+    ``pixel_sampler`` places the camera samples in their pixels and decides
+    how the variance is estimated (:mod:`mcrt.samplers`): a render setting,
+    like the depth and the light samples.
     """
 
     scene: Scene
@@ -102,6 +115,7 @@ class Tracer:
     precision_guard: bool = True
     mis: bool | None = None  # None: where the scene needs it (mcrt.light.needs_mis)
     tricks: tuple = ()  # sorted (name, value) pairs of the renderer's tricks (mcrt.options.TRICK_OPTIONS)
+    pixel_sampler: PixelSampler = PixelSampler()  # where samples land in their pixel (mcrt.samplers)
     caustics: Caustics = field(default_factory=Caustics)
     caustic_pdfs: object = None  # the light tracer's densities, with caustics.caustic_light_paths > 0
 
@@ -142,21 +156,31 @@ class Tracer:
         the image. ``rows`` ((first row, count) bands) renders those rows
         alone, stacked in order as the image, like a crop (benchmarks: a
         part of a long render; ``extra['paths']`` counts the paths traced).
+        With the ``sobol`` pixel sampler, spp must be a multiple of its
+        replicates; no pass straddles two replicates, and the variance is
+        the replicates' spread (:mod:`mcrt.samplers`).
         """
         import drjit as dr
 
-        k, b, per_pass = self.layout(spp, spp_per_pass)
+        sampler = self.pixel_sampler
+        n_rep = None if sampler.default else sampler.samples_per_replicate(spp)
+        k, b, per_pass = self.layout(n_rep or spp, spp_per_pass)
+        if n_rep:
+            per_pass = replicate_pass_size(per_pass, n_rep)
         tile = tile_pixels or max(1, TILE_LANES // k)
         W, H = self.width, self.height
         ranges = [(first * W, count * W) for first, count in rows] if rows else [(0, W * H)]
         total = sum(-(-count // tile) for _, count in ranges) * -(-spp // per_pass)
 
         def launch(acc, p0, count, first, n):
-            return self.launch(seed, acc, range(p0, p0 + count), first, n, k, b)
+            return self.launch(seed, acc, range(p0, p0 + count), first, n, k, b, samples_per_replicate=n_rep)
 
+        if n_rep:
+            launch = replicate_launch(launch, n_rep)
         totals = run_tiles(launch, width=W, height=H, spp=spp, tile_pixels=tile, spp_per_pass=per_pass,
                            progress=Progress(total, label="mcrt", unit="passes", enabled=progress), pixel_ranges=ranges)
-        mean, var = encode_output(totals.mean, totals.variance, output_encoding(self.mutants))
+        var = totals.variance * replicate_variance_scale(spp, sampler.replicates) if n_rep else totals.variance
+        mean, var = encode_output(totals.mean, var, output_encoding(self.mutants))
         c = self.caustics  # recorded with the tricks, where not plain path tracing
         named = sorted((*self.tricks, *((("mirror_caustics", c.mirror_caustics),) if c.mirror_caustics != "all" else ()),
                         *((("caustic_light_paths", c.caustic_light_paths),) if c.caustic_light_paths else ())))
@@ -179,6 +203,7 @@ class Tracer:
                 "rr_depth": str(self.rr_depth),
                 "mutants": ",".join(sorted(self.mutants)),
                 **({"tricks": ",".join(f"{k}={v}" for k, v in named)} if named else {}),
+                **({} if sampler.default else {"pixel_sampler": sampler.name, "variance_method": sampler.variance_method}),
                 "paths": str(totals.paths),
                 "drjit_version": dr.__version__,
                 "mcrt_version": mcrt.__version__,
@@ -249,7 +274,8 @@ class Tracer:
         dr.eval(out)
         return out
 
-    def launch(self, seed: int, acc, pixels, first_sample: int, n: int, k: int, b: int):
+    def launch(self, seed: int, acc, pixels, first_sample: int, n: int, k: int, b: int, *,
+               samples_per_replicate: int | None = None):
         """``acc`` plus the sums of x and x^2 over samples first_sample .. first_sample + n - 1 of ``pixels``.
 
         ``pixels``: a UInt32 array of pixel indices, or a ``range`` of them
@@ -261,7 +287,8 @@ class Tracer:
         Dr.Jit traces the path kernel in Python once per layout and array
         size, and replays the recorded kernels for every later launch. The
         seed's keys and the sample range enter as opaque arrays, so they
-        replay the same recording.
+        replay the same recording. ``samples_per_replicate``: N of the
+        ``sobol`` pixel sampler (a kernel constant; None for ``independent``).
         """
         import drjit as dr
 
@@ -273,12 +300,13 @@ class Tracer:
         # One small array for the per-launch values: one copy to the device instead of several.
         params = m.UInt32([*stream_keys(seed), first_sample, n, pixels.start if tile else 0])
         # acc None and a range are recorded apart from arrays; the width keys the recording too.
-        return self._frozen_launch(acc, None if tile else pixels, params, k, b, count)
+        return self._frozen_launch(acc, None if tile else pixels, params, k, b, count, samples_per_replicate)
 
-    def _launch_kernel(self, acc, pixels, params, k: int, b: int, count: int):
+    def _launch_kernel(self, acc, pixels, params, k: int, b: int, count: int, spr: int | None = None):
         """:meth:`launch` with its per-launch values in ``params`` (UInt32 [key0, key1, first, n, first pixel]).
 
         ``pixels`` None: the ``count`` pixels from params' first pixel on.
+        ``spr``: the pixel sampler's samples per replicate (:func:`pixel_jitter`).
 
         Lane i k + j (j < k) traces samples first + j b .. of pixel i, at most
         b and none from first + n on (mcrt.estimator.PathEstimator.path_sums;
@@ -306,9 +334,9 @@ class Tracer:
         def new_path(ended, streams):
             restart = ended & (streams.sample + 1 < stop)
             streams.restart(restart)
-            return restart, *camera.ray(col, row, *pixel_jitter(streams))
+            return restart, *camera.ray(col, row, *pixel_jitter(streams, self.pixel_sampler, spr))
 
-        o, d = camera.ray(col, row, *pixel_jitter(rng))
+        o, d = camera.ray(col, row, *pixel_jitter(rng, self.pixel_sampler, spr))
         # Lanes past n (paths 0) pad the launch to whole lanes of b: inactive, their sums stay 0.
         sum_x, sum_x2, _ = self.estimator.path_sums(o, d, rng, active=paths > 0, new_path=new_path)
         sums = [m.Float64(v[c]) for v in (sum_x, sum_x2) for c in range(3)]
@@ -384,7 +412,7 @@ def _tracer(scene: Scene, *args, scene_hash: str | None = None) -> Tracer:
 def render_tracer(scene: Scene, settings: RenderSettings, *, backend: str = "llvm", progress: bool = True,
                   spp_per_pass: int | None = None, mutants=(), intersector: str = "convex", mis: bool | None = None,
                   precision_guard: bool = True, tile_pixels: int | None = None, rows: list[tuple[int, int]] | None = None,
-                  **tricks) -> RenderResult:
+                  pixel_sampler: str = "independent", replicates: int | None = None, **tricks) -> RenderResult:
     """Render ``scene`` at ``settings`` with the standalone tracer: mean and per-sample variance.
 
     Called through :func:`mcrt.render.render` (renderer ``mcrt``). ``mis``
@@ -392,13 +420,17 @@ def render_tracer(scene: Scene, settings: RenderSettings, *, backend: str = "llv
     needs it). ``precision_guard=False`` renders scenes that
     :func:`mcrt.precision.check_precision` would refuse (only to measure
     where float32 breaks). ``tricks`` are the estimator's efficiency tricks
-    (:data:`mcrt.options.TRICK_OPTIONS`, off at their defaults). The other
-    options are :meth:`Tracer.render`'s. Tracers are kept for reuse across
+    (:data:`mcrt.options.TRICK_OPTIONS`, off at their defaults).
+    ``pixel_sampler`` and ``replicates`` choose where samples land in their
+    pixel and how the variance is estimated (:mod:`mcrt.samplers`; 'sobol'
+    needs spp a multiple of the replicates). The other options are
+    :meth:`Tracer.render`'s. Tracers are kept for reuse across
     renders of the same scene content (their kernels are recorded once).
     """
     s = settings
     scene_hash = scene.content_hash()
     tracer = _tracer(scene, s.camera, s.width, s.height, s.max_depth, s.light_samples, s.rr_depth, backend, intersector,
-                     frozenset(mutants), precision_guard, mis, trick_options(tricks), scene_hash=scene_hash)
+                     frozenset(mutants), precision_guard, mis, trick_options(tricks),
+                     PixelSampler.of(pixel_sampler, replicates), scene_hash=scene_hash)
     return tracer.render(seed=s.seed, spp=s.spp, progress=progress, spp_per_pass=spp_per_pass, tile_pixels=tile_pixels,
                          rows=rows, scene_hash=scene_hash)

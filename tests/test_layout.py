@@ -93,14 +93,14 @@ LAYERS = (
     ("foundation", 0, ("mcrt.llvm", "mcrt.exitcodes", "mcrt.minmax", "mcrt.srgb", "mcrt.util")),
     ("renderer core", 1, ("mcrt", "mcrt.scene", "mcrt.camera", "mcrt.geometry", "mcrt.bsdf", "mcrt.light",
                           "mcrt.sampling", "mcrt.rng", "mcrt.options", "mcrt.estimator", "mcrt.film", "mcrt.tracer",
-                          "mcrt.host", "mcrt.mutants", "mcrt.precision")),
+                          "mcrt.host", "mcrt.mutants", "mcrt.precision", "mcrt.samplers")),
     ("renderers", 2, ("mcrt.render", "mcrt.bidir", "mcrt.plugins", "mcrt.mitsuba", "mcrt.tricks.adaptive",
                       "mcrt.tricks.aov", "mcrt.tricks.denoise", "mcrt.closed_form")),
     ("statistics and I/O", 2, ("mcrt.stats", "mcrt.imageio", "mcrt.metrics", "mcrt.compare", "mcrt.reference",
                                "mcrt.provenance")),
     ("studies and reports", 3, ("mcrt.report", "mcrt.validate", "mcrt.hardcases", "mcrt.tricks", "mcrt.bench",
                                 "mcrt.bench_limits", "mcrt.bench_report", "mcrt.threeway", "mcrt.validate_integrator",
-                                "mcrt.reports", "mcrt.pytest_plugin")),
+                                "mcrt.reports", "mcrt.pytest_plugin", "mcrt.sampler_study")),
     ("grading and command line", 4, ("mcrt.grade", "mcrt.cli")),
 )
 

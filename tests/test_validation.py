@@ -179,7 +179,7 @@ def test_validate_writes_both_reports_with_their_provenance(tmp_path, capsys):
         assert cmd.startswith("mcrt validate --seeds 3 --power-seeds 2 --spp 64 --res 16") and f"`{cmd}`" in md
         assert {"mcrt", "mitsuba", "drjit"} <= set(data["meta"]["versions"]) and data["meta"]["date"]
         assert data["budget"] == {"camera": "near", "res": 16, "spp": 64, "max_depth": 8, "alpha": 0.01, "tile": 8,
-                                  "correction": "holm", "channels": "rgb"}
+                                  "correction": "holm", "channels": "rgb", "pixel_sampler": "independent"}
     fa = json.loads((tmp_path / "false_alarms.json").read_text())
     assert fa["primary"]["n"] == 3 and len(fa["trials"]) == 3 and fa["seeds"]["opponent"] == [500_000, 500_001, 500_002]
     assert sum(fa["primary"]["p_values"]["counts"]) == fa["primary"]["p_values"]["n"] == 3 * 12

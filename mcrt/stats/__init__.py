@@ -5,7 +5,9 @@ One job per module:
 * :mod:`mcrt.stats.tiles`: sums and means of an image over tiles (every
   pooled statistic goes through them);
 * :mod:`mcrt.stats.twosample`: the two-sample Welch test of tile means,
-  :func:`compare_images`, and its result :class:`Comparison`;
+  :func:`compare_images`, and its result :class:`Comparison`; the degrees
+  of freedom of a render's variance, :func:`variance_dof` (spp - 1, or R - 1
+  for R replicates);
 * :mod:`mcrt.stats.onesample`: the one-sample multi-scale tile test of an
   image against a reference's expected value under a noise model,
   :func:`~mcrt.stats.onesample.multiscale_test` (grading's bias test);
@@ -31,7 +33,7 @@ from mcrt.stats.interval import binomial_interval
 from mcrt.stats.multiple import CORRECTIONS, adjust_p_values, adjust_p_values_weighted, reject
 from mcrt.stats.policy import POLICIES, compare, floor_variance
 from mcrt.stats.tiles import tile_box, tile_counts, tile_means, tile_sums
-from mcrt.stats.twosample import LUMINANCE_WEIGHTS, Comparison, TileResult, compare_images
+from mcrt.stats.twosample import LUMINANCE_WEIGHTS, Comparison, TileResult, compare_images, variance_dof
 
 __all__ = [
     "StatsError",
@@ -40,6 +42,7 @@ __all__ = [
     "TileResult",
     "Comparison",
     "compare_images",
+    "variance_dof",
     "POLICIES",
     "compare",
     "floor_variance",

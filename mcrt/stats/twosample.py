@@ -36,7 +36,7 @@ from mcrt.stats.errors import StatsError
 from mcrt.stats.multiple import CORRECTIONS, adjust_p_values, check_correction
 from mcrt.stats.tiles import tile_box, tile_counts, tile_means, tile_sums
 
-__all__ = ["LUMINANCE_WEIGHTS", "SCHEMA", "TileResult", "Comparison", "compare_images"]
+__all__ = ["LUMINANCE_WEIGHTS", "SCHEMA", "TileResult", "Comparison", "compare_images", "variance_dof"]
 
 #: Rec. 709 / sRGB luminance weights for linear RGB.
 LUMINANCE_WEIGHTS = (0.2126, 0.7152, 0.0722)
@@ -292,13 +292,31 @@ def _to_channels(mean: np.ndarray, var: np.ndarray, channels: str) -> tuple[np.n
     return (mean @ w)[:, :, None], (sd_y * sd_y)[:, :, None]
 
 
-def _side_stats(mean: np.ndarray, var: np.ndarray, spp: int, tile: int, channels: str) -> _Side:
+def variance_dof(r: RenderResult) -> int:
+    """Degrees of freedom of each pixel's variance estimate in ``r``: spp - 1, or R - 1 for R replicates.
+
+    ``r.extra['variance_method']`` (the EXR attribute ``mcrt.variance_method``,
+    :mod:`mcrt.samplers`) says how the variance was estimated: 'samples' (or
+    absent) from independent samples, 'replicates:R' from the spread of R
+    independent replicate means (randomised quasi-Monte Carlo). Raises
+    :class:`StatsError` for a value it does not know.
+    """
+    method = (r.extra or {}).get("variance_method", "samples")
+    if method in ("", "samples"):
+        return int(r.spp) - 1
+    kind, _, count = str(method).partition(":")
+    if kind != "replicates" or not count.isdigit() or int(count) < 2:
+        raise StatsError(f"unknown variance_method {method!r} (expected 'samples' or 'replicates:R' with R >= 2)")
+    return int(count) - 1
+
+
+def _side_stats(mean: np.ndarray, var: np.ndarray, spp: int, tile: int, channels: str, dof: int) -> _Side:
     mean, var = _to_channels(mean, var, channels)
     npix = tile_counts(*mean.shape[:2], tile)[:, :, None]
     det_pixel = np.sqrt(var) <= _ZERO_SD_RTOL * np.abs(mean)
     s = var / spp  # variance of each pixel's mean
     tvar = tile_sums(s, tile) / npix**2
-    dof_term = tile_sums(s * s, tile) / npix**4 / (spp - 1)
+    dof_term = tile_sums(s * s, tile) / npix**4 / dof
     det = tile_sums((~det_pixel).astype(np.float64), tile) == 0
     return _Side(tile_means(mean, tile), tvar, dof_term, det, tile_means(mean, 0)[0, 0])
 
@@ -358,12 +376,14 @@ def compare_images(
 
     and the statistic is :math:`t = (m_A - m_B) / \sqrt{v_A + v_B}`. Its
     degrees of freedom follow Welch-Satterthwaite over every pixel's variance
-    estimate on both sides (each with n_X - 1 degrees of freedom):
+    estimate on both sides (each with f_X = n_X - 1 degrees of freedom, or
+    R_X - 1 where side X's variance comes from R_X replicates,
+    :func:`variance_dof`):
 
     .. math::
 
         \nu = \frac{(v_A + v_B)^2}
-                   {\sum_{X}\sum_{i \in T} \frac{(var_i / (n_X\, npix^2))^2}{n_X - 1}},
+                   {\sum_{X}\sum_{i \in T} \frac{(var_i / (n_X\, npix^2))^2}{f_X}},
 
     and the two-sided p-value is ``2 * t_nu.sf(|t|)`` (scipy.stats.t; for
     large spp this is the normal tail). The family of tests (all tiles times
@@ -432,8 +452,8 @@ def compare_images(
     _check_side(a, "A", min_spp)
     _check_side(b, "B", min_spp)
 
-    sa = _side_stats(a.mean, a.variance, a.spp, tile, channels)
-    sb = _side_stats(b.mean, b.variance, b.spp, tile, channels)
+    sa = _side_stats(a.mean, a.variance, a.spp, tile, channels, variance_dof(a))
+    sb = _side_stats(b.mean, b.variance, b.spp, tile, channels, variance_dof(b))
     names = ("R", "G", "B") if channels == "rgb" else ("Y",)
 
     diff = sa.mean - sb.mean

@@ -57,6 +57,7 @@ class Budget:
     tile: int = 8
     correction: str = "holm"
     channels: str = "rgb"
+    pixel_sampler: str = "independent"  # of the image under test (mcrt.samplers; 'sobol': its default replicates)
 
     def n_tests(self, tile: int | None = None) -> int:
         t = tile or self.tile

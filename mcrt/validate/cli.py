@@ -63,6 +63,8 @@ def _command_line(args) -> str:
     parts += ["--seeds", str(args.seeds), "--power-seeds", str(args.power_seeds), "--spp", str(args.spp), "--res", str(args.res),
               "--camera", args.camera, "--max-depth", str(args.max_depth), "--alpha", f"{args.alpha:g}", "--tile", str(args.tile),
               "--against", args.against]
+    if args.pixel_sampler != "independent":
+        parts += ["--pixel-sampler", args.pixel_sampler]
     if args.only:
         parts += ["--only", args.only]
     for m in args.mutant or ():
@@ -107,6 +109,9 @@ def register(subparsers) -> None:
     p.add_argument("--max-depth", type=int, default=8, help="longest path in segments (default: %(default)s)")
     p.add_argument("--alpha", type=float, default=0.01, help="family-wise error rate of one comparison (Holm) (default: %(default)s)")
     p.add_argument("--tile", type=int, default=8, help="tile size in pixels of the test under study (default: %(default)s)")
+    p.add_argument("--pixel-sampler", choices=("independent", "sobol"), default="independent",
+                   help="pixel sampler of the image under test (mcrt.samplers; sobol: 8 replicates, their variance with 7 df) "
+                        "(default: %(default)s)")
     p.add_argument("--against", choices=Opponent.KINDS, default="mitsuba",
                    help="opponent: a fresh independent Mitsuba render per trial, the committed reference, or the committed "
                         "reference with the tested render's variance floored at the reference's (as `mcrt reference verify` tests) (default: %(default)s)")
@@ -179,7 +184,8 @@ def cmd_validate(args) -> int:
             print(f"mcrt validate: unknown mutant {m!r}; known: {', '.join(MUTANTS)}", file=sys.stderr)
             return EXIT_UNUSABLE
     command = _command_line(args)
-    budget = Budget(camera=args.camera, res=args.res, spp=args.spp, max_depth=args.max_depth, alpha=args.alpha, tile=args.tile)
+    budget = Budget(camera=args.camera, res=args.res, spp=args.spp, max_depth=args.max_depth, alpha=args.alpha, tile=args.tile,
+                    pixel_sampler=args.pixel_sampler)
     common = {"budget": budget, "extra_tiles": args.extra_tiles, "backend": args.backend, "progress": progress}
     opp = Opponent(scene, args.against, backend=args.backend)
     meta = report_meta(scene, command)

@@ -41,7 +41,9 @@ def _header(title: str, meta: dict[str, Any], study: dict[str, Any]) -> list[str
         f"- Machine: {meta['machine']['cpu']} ({meta['machine']['cores']} cores), {meta['machine']['platform']}",
         *([f"- Commit: {meta['git_commit']}"] if meta.get("git_commit") else []),
         f"- Scene: `{meta['scene']['path']}` (hash {meta['scene']['hash']})",
-        f"- Budget: {b['camera']} camera, {b['res']}x{b['res']} pixels, {b['spp']} spp per side, max depth {b['max_depth']}",
+        f"- Budget: {b['camera']} camera, {b['res']}x{b['res']} pixels, {b['spp']} spp per side, max depth {b['max_depth']}"
+        + (f", the image under test with pixel sampler {b['pixel_sampler']} (variance from its replicates)"
+           if b.get("pixel_sampler", "independent") != "independent" else ""),
         (f"- Test: `mcrt.stats.compare_images`: two-sample Welch test of {b['tile']}x{b['tile']} tile means "
         f"({b['channels']}), {b['correction'].title()} correction at family-wise alpha = {b['alpha']:g}"),
         f"- Image under test: mcrt (`mcrt.render.render`, renderer `mcrt`), seeds {_seed_range(study['seeds']['mcrt'])}",

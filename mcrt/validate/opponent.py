@@ -13,7 +13,9 @@ from mcrt.validate.budget import MITSUBA_SEED_BASE, Budget
 
 def render_tested(scene: Scene, b: Budget, seed: int, mutants: Sequence[str] = (), backend: str = "llvm") -> RenderResult:
     """The image under test: mcrt at budget ``b`` with ``seed``, with the catalogued bugs ``mutants`` switched on."""
-    return render(scene, b.settings(scene), renderer="mcrt", seed=seed, backend=backend, progress=False, mutants=tuple(mutants))
+    sampler = {} if b.pixel_sampler == "independent" else {"pixel_sampler": b.pixel_sampler}
+    return render(scene, b.settings(scene), renderer="mcrt", seed=seed, backend=backend, progress=False, mutants=tuple(mutants),
+                  **sampler)
 
 
 class Opponent:
