@@ -150,7 +150,9 @@ def cmd_compare(args) -> int:
 
     return compare_files(args.a, args.b, policy=args.policy, alpha=args.alpha, tile=args.tile, heatmap=args.heatmap,
                          json_path=args.json, assume_variance_from_other=args.assume_variance_from == "other",
-                         spp_a=args.spp_a, spp_b=args.spp_b, allow_mismatch=tuple(args.allow_mismatch))
+                         spp_a=args.spp_a, spp_b=args.spp_b, allow_mismatch=tuple(args.allow_mismatch),
+                         variance_a=args.variance_a, variance_b=args.variance_b, variance_kind=args.variance_kind,
+                         rtol=args.rtol)
 
 
 def cmd_scene(args) -> int:
@@ -239,6 +241,20 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--spp-a", type=int, default=None, help="spp of image A, where its file does not record it "
                                                            "(a Mitsuba 'moment' EXR needs it; default: the file's)")
     p.add_argument("--spp-b", type=int, default=None, help="spp of image B, as --spp-a (default: the file's)")
+    p.add_argument("--variance-a", default=None, metavar="FILE",
+                   help="EXR holding image A's per-sample variance, where A's own file has none (default: A's file)")
+    p.add_argument("--variance-b", default=None, metavar="FILE",
+                   help="EXR holding image B's per-sample variance, e.g. a Mitsuba reference's <name>_ref_rgb_var.exr "
+                        "(default: B's file)")
+    p.add_argument("--variance-kind", choices=("auto", "rgb", "mitsuba"), default="auto",
+                   help="how --variance-a/-b files are read: rgb, a per-sample RGB variance (negative entries refused); "
+                        "mitsuba, Mitsuba's reference variance (an XYZ variance written through the XYZ-to-RGB matrix: "
+                        "turned back into XYZ, rounding repaired, bounded in RGB); auto, mitsuba where the file says "
+                        "Mitsuba wrote it (default: auto)")
+    p.add_argument("--rtol", type=float, default=1e-5,
+                   help="relative difference accepted between noiseless tiles (zero variance on both sides), e.g. "
+                        "0.002 for a reference storing 1.0 as 1.00108; the verdict says when it accepted one "
+                        "(default: 1e-5, exact to float32 rounding)")
     p.add_argument("--allow-mismatch", action="append", default=[], metavar="FIELD",
                    choices=("camera", "scene_hash", "max_depth", "all"),
                    help="compare even though the files record a different camera, scene_hash or max_depth "

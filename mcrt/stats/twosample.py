@@ -44,6 +44,9 @@ LUMINANCE_WEIGHTS = (0.2126, 0.7152, 0.0722)
 #: Schema tag written by :meth:`Comparison.to_dict`.
 SCHEMA = "mcrt.stats.comparison/1"
 
+#: The default tolerance of the equality test of noiseless tiles: float32 rounding, "exact".
+EXACT_RTOL = 1e-5
+
 # A pixel counts as deterministic (zero variance) when its per-sample
 # standard deviation is at most this fraction of its mean. Moments kept in
 # float32 (Mitsuba's 'moment' integrator, var = m2 - m1^2) leave a constant
@@ -152,6 +155,23 @@ class Comparison:
     max_abs_t: TileResult | None = None
     min_p: float = 1.0
     policy: str = "independent"
+    rtol: float = 1e-5
+
+    def noiseless(self) -> dict:
+        """The tests decided by equality (both sides noiseless) apart from the others.
+
+        Returns ``{'tests', 'rejected', 'largest_rel_diff', 'accepted_by_rtol'}``:
+        how many noiseless tests there are and are rejected, the largest
+        |symmetric relative difference| among them, and how many differ by
+        more than float32 rounding (:data:`EXACT_RTOL`) but were accepted
+        because ``rtol`` is larger (a known offset the user accepted).
+        """
+        det = np.asarray(self.deterministic, bool)
+        rel = np.abs(np.where(det, self.rel_diff, 0.0))
+        accepted = det & ~self.rejected & (rel > EXACT_RTOL)
+        return {"tests": int(det.sum()), "rejected": int(np.count_nonzero(det & self.rejected)),
+                "largest_rel_diff": float(rel.max()) if det.any() else 0.0,
+                "accepted_by_rtol": int(accepted.sum())}
 
     def __repr__(self) -> str:
         return f"Comparison({self.summary()!r})"
@@ -285,7 +305,7 @@ def _to_channels(mean: np.ndarray, var: np.ndarray, channels: str) -> tuple[np.n
     """
     mean = mean.astype(np.float64)
     var = np.maximum(var.astype(np.float64), 0.0)
-    if channels == "rgb":
+    if channels in ("rgb", "xyz"):
         return mean, var
     w = np.asarray(LUMINANCE_WEIGHTS)
     sd_y = np.sqrt(var) @ w
@@ -342,7 +362,7 @@ def compare_images(
     channels: str = "rgb",
     correction: str = "holm",
     min_spp: int = 2,
-    rtol: float = 1e-5,
+    rtol: float = EXACT_RTOL,
 ) -> Comparison:
     r"""Two-sample Welch test of tile means, corrected for multiple testing.
 
@@ -401,7 +421,9 @@ def compare_images(
         (``'bh'``).
     tile : int
         Tile edge in pixels; ``tile=1`` gives per-pixel tests.
-    channels : {'rgb', 'luminance'}
+    channels : {'rgb', 'xyz', 'luminance'}
+        ``'xyz'``: the images hold CIE X, Y, Z (a Mitsuba reference read in
+        XYZ, whose per-channel variance is exact there), tested as they are.
     correction : {'holm', 'bonferroni', 'bh'}
     min_spp : int
         Smallest accepted sample count per side (>= 2).
@@ -423,8 +445,8 @@ def compare_images(
     if int(tile) != tile or tile < 1:
         raise ValueError(f"tile must be a positive integer, got {tile}")
     tile = int(tile)
-    if channels not in ("rgb", "luminance"):
-        raise ValueError(f"channels must be 'rgb' or 'luminance', got {channels!r}")
+    if channels not in ("rgb", "xyz", "luminance"):
+        raise ValueError(f"channels must be 'rgb', 'xyz' or 'luminance', got {channels!r}")
     check_correction(correction)
     min_spp = max(2, int(min_spp))
     if a.mean.shape != b.mean.shape:
@@ -434,7 +456,7 @@ def compare_images(
 
     sa = _side_stats(a.mean, a.variance, a.spp, tile, channels)
     sb = _side_stats(b.mean, b.variance, b.spp, tile, channels)
-    names = ("R", "G", "B") if channels == "rgb" else ("Y",)
+    names = {"rgb": ("R", "G", "B"), "xyz": ("X", "Y", "Z")}.get(channels, ("Y",))
 
     diff = sa.mean - sb.mean
     scale = np.maximum(np.abs(sa.mean), np.abs(sb.mean))
@@ -487,4 +509,5 @@ def compare_images(
         largest_effect=largest,
         max_abs_t=max_t,
         min_p=float(p.min()),
+        rtol=float(rtol),
     )
