@@ -65,7 +65,7 @@ def render_to_files(result, out: Path, exposure: float = 0.0) -> tuple[Path, Pat
 def _render_mitsuba_scene(args) -> int:
     """``mcrt render --mitsuba-scene FILE.xml``: any Mitsuba scene, any integrator, through render_with_variance."""
     from mcrt.mitsuba import render_with_variance
-    from mcrt.validate_integrator import load_scene_arg, parse_integrator
+    from mcrt.validate_integrator import load_scene_arg, parse_defines, parse_integrator
 
     refused = [o for o, v in (("--scene", args.scene), ("--camera", args.camera), ("--preset", args.preset),
                               ("--mutant", args.mutant), ("--light-samples", args.light_samples))
@@ -78,9 +78,12 @@ def _render_mitsuba_scene(args) -> int:
         spec = parse_integrator(args.integrator) if args.integrator else None
         result = render_with_variance(scene, integrator=spec, spp=args.spp, seed=args.seed or 0,
                                       width=args.width or args.res, height=args.height or args.res,
-                                      max_depth=args.max_depth, backend=args.backend, progress=True)
+                                      max_depth=args.max_depth, backend=args.backend, progress=True,
+                                      defaults=parse_defines(args.define))
     except (ValueError, RuntimeError) as e:
-        print(f"mcrt render: {args.mitsuba_scene}: {' '.join(str(e).split())}", file=sys.stderr)
+        msg = " ".join(str(e).split())
+        where = "" if msg.startswith(str(args.mitsuba_scene)) else f"{args.mitsuba_scene}: "
+        print(f"mcrt render: {where}{msg}", file=sys.stderr)
         return EXIT_UNUSABLE
     exr, png = render_to_files(result, Path(args.output), args.exposure)
     h, w = result.mean.shape[:2]
@@ -220,6 +223,9 @@ def build_parser() -> argparse.ArgumentParser:
     }
     for flag, (metavar, text) in mitsuba_help.items():
         p.add_argument(flag, default=None, metavar=metavar, help=text)
+    p.add_argument("-D", dest="define", action="append", default=[], metavar="KEY=VALUE",
+                   help="with --mitsuba-scene: set a <default> parameter of the XML scene, e.g. -D integrator=direct "
+                        "(repeatable; default: the file's values)")
     p.set_defaults(func=cmd_render)
 
     p = sub.add_parser("compare", help="two-sample test of two renders (exit 0 consistent, 1 different, 2 unusable)")

@@ -312,13 +312,32 @@ def _to_channels(mean: np.ndarray, var: np.ndarray, channels: str) -> tuple[np.n
     return (mean @ w)[:, :, None], (sd_y * sd_y)[:, :, None]
 
 
-def _side_stats(mean: np.ndarray, var: np.ndarray, spp: int, tile: int, channels: str) -> _Side:
+def side_variance_terms(r: RenderResult, tile: int) -> tuple[int, float]:
+    """The degrees of freedom of a render's variance estimate and the factor its tiles' variance takes.
+
+    A render whose variance comes from P independent batches records
+    ``extra['variance_dof']`` = P - 1 (else spp - 1); one whose pixels share
+    samples through a film filter records ``extra['tile_variance_factor']``
+    (:func:`mcrt.mitsuba.filter_area`), applied to tiles of more than one
+    pixel, whose pixels are then not independent.
+    """
+    dof = int(r.extra.get("variance_dof", r.spp - 1))
+    factor = float(r.extra.get("tile_variance_factor", 1.0)) if tile > 1 else 1.0
+    return max(1, dof), factor
+
+
+def _side_stats(mean: np.ndarray, var: np.ndarray, spp: int, tile: int, channels: str, dof: int | None = None,
+                factor: float = 1.0, rtol: float = EXACT_RTOL) -> _Side:
     mean, var = _to_channels(mean, var, channels)
     npix = tile_counts(*mean.shape[:2], tile)[:, :, None]
-    det_pixel = np.sqrt(var) <= _ZERO_SD_RTOL * np.abs(mean)
-    s = var / spp  # variance of each pixel's mean
+    # Noiseless: a per-sample sd at float32 rounding of the moments, and a mean whose sd is below what the
+    # equality test resolves, a tenth of rtol (else a low-noise pixel at high spp would be tested for equality and
+    # fail on its noise).
+    sd = np.sqrt(var)
+    det_pixel = (sd <= _ZERO_SD_RTOL * np.abs(mean)) & (sd / np.sqrt(spp) <= 0.1 * rtol * np.abs(mean))
+    s = factor * var / spp  # variance of each pixel's mean (times the tile factor of correlated pixels)
     tvar = tile_sums(s, tile) / npix**2
-    dof_term = tile_sums(s * s, tile) / npix**4 / (spp - 1)
+    dof_term = tile_sums(s * s, tile) / npix**4 / (spp - 1 if dof is None else dof)
     det = tile_sums((~det_pixel).astype(np.float64), tile) == 0
     return _Side(tile_means(mean, tile), tvar, dof_term, det, tile_means(mean, 0)[0, 0])
 
@@ -391,6 +410,12 @@ def compare_images(
     (see :func:`mcrt.stats.multiple.adjust_p_values`); the images are
     consistent when no test is rejected at ``alpha``.
 
+    A side rendered in independent batches (a particle tracer, a film
+    filter wider than a pixel) brings its degrees of freedom and a tile
+    variance factor in its ``extra`` (:func:`side_variance_terms`): each
+    pixel's term counts P - 1 degrees of freedom instead of n - 1, and a
+    tile's variance is multiplied by the filter's effective area.
+
     This is the ``'independent'`` comparison policy: each side's own variance
     as given. Against a high-spp reference of the same estimator use
     :func:`mcrt.stats.policy.compare` with ``policy='reference-floor'``.
@@ -398,7 +423,8 @@ def compare_images(
     Zero variance: a pixel is deterministic when its per-sample standard
     deviation is at most 1e-3 of its mean (moments stored in float32 leave
     constant pixels with a rounding-level sd after cancellation, not exactly
-    0). Where every pixel of a tile is deterministic on *both* sides (pixels
+    0) and the standard deviation of its mean at most a tenth of ``rtol``
+    of it (so that noise does not reach the equality test's tolerance). Where every pixel of a tile is deterministic on *both* sides (pixels
     that see only the light, or black ones), the tile means are compared for
     equality: ``|m_A - m_B| <= rtol * max(|m_A|, |m_B|)`` gives p = 1 and
     t = 0, otherwise p = 0 and t = +-inf. Zero variance on one side only goes
@@ -454,8 +480,8 @@ def compare_images(
     _check_side(a, "A", min_spp)
     _check_side(b, "B", min_spp)
 
-    sa = _side_stats(a.mean, a.variance, a.spp, tile, channels)
-    sb = _side_stats(b.mean, b.variance, b.spp, tile, channels)
+    sa = _side_stats(a.mean, a.variance, a.spp, tile, channels, *side_variance_terms(a, tile), rtol=rtol)
+    sb = _side_stats(b.mean, b.variance, b.spp, tile, channels, *side_variance_terms(b, tile), rtol=rtol)
     names = {"rgb": ("R", "G", "B"), "xyz": ("X", "Y", "Z")}.get(channels, ("Y",))
 
     diff = sa.mean - sb.mean
