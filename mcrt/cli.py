@@ -303,6 +303,9 @@ def build_parser() -> argparse.ArgumentParser:
     from mcrt.grade.accuracy.cli import register as register_accuracy
 
     register_accuracy(sub)
+    from mcrt.msuite import register as register_msuite
+
+    register_msuite(sub)
     return ap
 
 

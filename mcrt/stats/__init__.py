@@ -9,6 +9,8 @@ One job per module:
 * :mod:`mcrt.stats.policy`: the comparison policy, :func:`compare` with
   ``policy='independent'`` or ``'reference-floor'`` (the variance floor,
   :func:`floor_variance`, against a high-spp reference);
+* :mod:`mcrt.stats.multiscale`: the tile tests of several tile sizes in one
+  family-wise level (:func:`compare_multiscale`);
 * :mod:`mcrt.stats.multiple`: Holm, Bonferroni and Benjamini-Hochberg
   (:func:`adjust_p_values`, :func:`reject`), weighted Holm (:func:`adjust_p_values_weighted`);
 * :mod:`mcrt.stats.goodness`: chi-square goodness of fit with pooling
@@ -25,6 +27,7 @@ reports is :mod:`mcrt.compare`'s job; the pytest assertion is
 from mcrt.stats.errors import StatsError, ZeroPdfError
 from mcrt.stats.goodness import chi2_gof
 from mcrt.stats.interval import binomial_interval
+from mcrt.stats.multiscale import MultiScale, compare_multiscale, scales_for
 from mcrt.stats.multiple import CORRECTIONS, adjust_p_values, adjust_p_values_weighted, reject
 from mcrt.stats.policy import POLICIES, compare, floor_variance
 from mcrt.stats.tiles import tile_box, tile_counts, tile_means, tile_sums
@@ -37,6 +40,9 @@ __all__ = [
     "TileResult",
     "Comparison",
     "compare_images",
+    "MultiScale",
+    "compare_multiscale",
+    "scales_for",
     "POLICIES",
     "compare",
     "floor_variance",
