@@ -63,7 +63,7 @@ REPORTS: tuple[Report, ...] = (
     Report("tricks", "tricks --camera near --res 64 --max-depth 8 --ladder 16,64,256,1024,4096 --seeds 4 --alpha 0.01 "
            "--tiles 8,32 --light-receiver-samples 1048576 --confirm-spp 65536 --out reports/tricks",
            "the lecture's efficiency tricks beside plain mcrt: error against time and spp, bias, a verdict per trick"),
-    Report("mitsuba_suite", "mitsuba-suite ../shared/mitsuba-tests --seeds 5 --out reports/mitsuba_suite",
+    Report("mitsuba_suite", "mitsuba-suite ../shared/mitsuba-tests --seeds 5",
            "Mitsuba 3's own render-test scenes (the shared copy, beside the clone): mcrt's multi-scale test beside "
            "Mitsuba's z-rule on correct renders at Mitsuba's budget, false alarms, power on stated perturbations"),
     Report("grading_accuracy", "grade-accuracy --out reports/grading_accuracy",

@@ -220,3 +220,140 @@ def test_gaussian_filtered_renders_of_two_seeds_agree_and_a_brighter_one_does_no
         assert compare(a, b, tile=tile).passed, tile
     b.mean *= 1.02
     assert not compare(a, b, tile=8).passed
+
+
+# --------------------------------------------------------------------------
+# 3, 4. What kind of difference; more power at the same budget
+# --------------------------------------------------------------------------
+
+
+def _noisy_pair(seed: int, shape=(32, 32), spp: int = 256, sd: float = 0.5):
+    """Two renders of one image (mean 1) with Gaussian per-sample noise: their means and per-sample variances."""
+    g = np.random.default_rng(seed)
+    out = []
+    for _ in range(2):
+        m = 1.0 + g.normal(0.0, sd / np.sqrt(spp), (*shape, 3))
+        v = sd * sd * g.chisquare(spp - 1, (*shape, 3)) / (spp - 1)
+        out.append(RenderResult(mean=m.astype(np.float32), variance=v.astype(np.float32), spp=spp, seed=seed,
+                                max_depth=0, renderer="synthetic"))
+    return out
+
+
+def test_rtol_is_a_margin_for_a_known_offset_and_only_that():
+    """A 0.1 % offset over a low-noise image fails exactly, passes with --rtol 0.002, and 2 % still fails (seed 7)."""
+    from mcrt.stats import compare
+
+    a, b = _noisy_pair(7, spp=100000, sd=0.05)
+    b.mean *= 1.001
+    assert not compare(a, b).passed
+    c = compare(a, b, rtol=0.002)
+    assert c.passed and c.rtol == 0.002
+    b.mean *= 1.02
+    assert not compare(a, b, rtol=0.002).passed
+
+
+def test_multiscale_sees_a_few_pixels_that_8x8_tiles_average_out():
+    """A 2x2 patch 20 % brighter (a highlight moved): caught by the multi-scale family, not by 8x8 tiles (seed 3, FWER 0.01)."""
+    from mcrt.stats import compare, compare_multiscale
+
+    a, b = _noisy_pair(3)
+    assert compare_multiscale(a, b).passed
+    a.mean[10:12, 20:22] *= 1.2
+    assert compare(a, b, tile=8).passed
+    ms = compare_multiscale(a, b)
+    assert not ms.passed and "2x2" in ms.by_scale() and ms.noiseless_rejected == 0
+    assert ms.tiles == [2, 4, 8, 16, 0]  # 32 is the whole image: tested once
+
+
+def test_multiscale_false_alarms_on_null_pairs_stay_near_alpha():
+    """40 null pairs (seeds 100-139) at FWER 0.01: at most 2 rejected (P(>= 3) < 0.01 for a valid test)."""
+    from mcrt.stats import compare_multiscale
+
+    rejected = sum(not compare_multiscale(*_noisy_pair(s, shape=(24, 24))).passed for s in range(100, 140))
+    assert rejected <= 2
+
+
+def test_mitsuba_z_rule_as_mitsuba_applies_it():
+    """Sidak level per pixel, 99.75 % of pixel-channels must pass, the variance floored at 1e-4."""
+    from mcrt.msuite.zrule import z_rule
+
+    ref = np.full((20, 20, 3), 0.5)
+    var = np.full((20, 20, 3), 0.04)
+    mean = ref.copy()
+    assert z_rule(mean, ref, var, 100)["passed"] and z_rule(mean, ref, var, 100)["allowed"] == 3
+    mean[0, :2] += 0.5  # 6 pixel-channels far off: more than the 3 allowed
+    r = z_rule(mean, ref, var, 100)
+    assert not r["passed"] and r["failing"] == 6
+
+
+# --------------------------------------------------------------------------
+# 5. The suite command
+# --------------------------------------------------------------------------
+
+_SCENE = """<scene version="3.0.0">
+    <default name="spp" value="16"/>
+    <integrator type="moment"><integrator type="path"><integer name="max_depth" value="3"/></integrator></integrator>
+    <sensor type="perspective">
+        <float name="fov" value="40"/>
+        <transform name="to_world"><lookat origin="0, -3, 1.5" target="0, 0, 0" up="0, 0, 1"/></transform>
+        <sampler type="independent"><integer name="sample_count" value="$spp"/></sampler>
+        <film type="hdrfilm"><integer name="width" value="16"/><integer name="height" value="16"/>
+            <rfilter type="box"/></film>
+    </sensor>
+    <shape type="rectangle"><bsdf type="diffuse"><rgb name="reflectance" value="0.2, 0.5, 0.7"/></bsdf>
+        <transform name="to_world"><scale value="2"/></transform></shape>
+    <shape type="sphere"><point name="center" x="0" y="0" z="0.5"/><float name="radius" value="0.5"/>
+        <bsdf type="diffuse"><rgb name="reflectance" value="0.8"/></bsdf></shape>
+    <shape type="rectangle"><emitter type="area"><rgb name="radiance" value="4"/></emitter>
+        <transform name="to_world"><scale value="0.5"/><rotate x="1" angle="180"/><translate z="2.5"/></transform></shape>
+</scene>
+"""
+
+
+def _mitsuba_style_suite(root: Path, ref_spp: int) -> Path:
+    """A one-scene tests/scenes folder laid out as Mitsuba's, with a reference pair written as Mitsuba writes it."""
+    from mcrt.mitsuba import render_with_variance
+
+    group = root / "tests" / "scenes" / "made"
+    (group / "refs").mkdir(parents=True)
+    xml = group / "test_made_path.xml"
+    xml.write_text(_SCENE)
+    r = render_with_variance(xml, spp=ref_spp, seed=99, space="xyz")
+    rgb = r.mean.astype(np.float64) @ imageio.XYZ_TO_RGB.T
+    by = {"generatedBy": "Mitsuba version 3.9.1"}
+    _exr(group / "refs" / "test_made_ref_rgb.exr", {c: rgb[..., i] for i, c in enumerate("RGB")}, by)
+    _mitsuba_var_file(group / "refs" / "test_made_ref_rgb_var.exr", r.variance.astype(np.float64))
+    return root
+
+
+def test_suite_on_a_scene_mcrt_makes_consistent_and_perturbations_caught(tmp_path, capsys):
+    import json
+
+    root = _mitsuba_style_suite(tmp_path / "suite", ref_spp=16384)
+    out = tmp_path / "report"
+    rc = main(["mitsuba-suite", str(root), "--ref-spp", "16384", "--out", str(out)])
+    data = json.loads((out / "data.json").read_text())
+    case = data["cases"][0]
+    assert case["name"] == "made/test_made_path" and case["integrator"] == "path" and case["spp"] == 2_000_000 // 256
+    assert case["correct"][0]["mcrt"]["passed"] and case["correct"][0]["mitsuba"]["passed"]
+    p = case["perturbations"]
+    assert p["emitter x1.02"]["mcrt"]["caught"] and p["max depth - 1"]["change"] == "max_depth 3 -> 2"
+    assert p["BSDF x0.98"]["mcrt"]["caught"] and p["fov x1.005"] is not None
+    md = (out / "index.md").read_text()
+    assert "| made/test_made_path | 16x16, 7812 | path (per-sample) | consistent |" in md
+    assert "Held-out scenes" in md and data["command"].startswith("mcrt mitsuba-suite")
+    assert rc in (0, 1) and "[1/1] made/test_made_path: consistent" in capsys.readouterr().err
+    assert main(["mitsuba-suite", str(tmp_path / "nowhere")]) == 2
+
+
+def test_suite_on_a_shared_scene_names_the_references_offset(suite, tmp_path):
+    """The projector's reference (Mitsuba 3.0.1) differs in noiseless pixels only: accepted, stated, Mitsuba's rule beside."""
+    import json
+
+    out = tmp_path / "r"
+    main(["mitsuba-suite", str(suite), "--only", "projector/test_projector_constant_direct", "--no-perturbations",
+          "--out", str(out)])
+    case = json.loads((out / "data.json").read_text())["cases"][0]
+    assert case["integrator"] == "direct" and case["method"] == "batches"  # its film has Mitsuba's default gaussian
+    assert case["correct"][0]["mcrt"]["passed"] and 0 < case["reference_offset"] < 0.002
+    assert "reference's offset in noiseless pixels" in (out / "index.md").read_text()
