@@ -29,6 +29,9 @@ def register(sub) -> None:
     p.add_argument("--alpha", type=float, default=0.01, help="family-wise error rate of one comparison (default: %(default)s)")
     p.add_argument("--ref-spp", type=int, default=32000,
                    help="the references' spp, which they do not record (default: %(default)s, what Mitsuba's generator renders)")
+    p.add_argument("--version-rtol", type=float, default=0.0011,
+                   help="relative difference accepted against a reference another Mitsuba version wrote, whose colour "
+                        "conversion stores a constant 1.0 as 1.00108 or 0.99971 (default: %(default)s)")
     p.add_argument("--only", action="append", default=[], metavar="GROUP/NAME",
                    help="run this scene only, e.g. bsdf_spheres/test_constant_path (repeatable; default: all)")
     p.add_argument("--held-out", choices=("include", "exclude", "only"), default="include",
@@ -41,7 +44,7 @@ def register(sub) -> None:
 def _command(args) -> str:
     """The command line that reproduces this run (options at their defaults left out), for the report."""
     words = ["mcrt", "mitsuba-suite", args.folder]
-    defaults = {"spp_scale": 1.0, "seeds": 1, "alpha": 0.01, "ref_spp": 32000, "held_out": "include",
+    defaults = {"spp_scale": 1.0, "seeds": 1, "alpha": 0.01, "ref_spp": 32000, "version_rtol": 0.0011, "held_out": "include",
                 "backend": "llvm", "out": "reports/mitsuba_suite"}
     for key, default in defaults.items():
         value = getattr(args, key)
@@ -66,7 +69,7 @@ def cmd_mitsuba_suite(args) -> int:
         return EXIT_UNUSABLE
     tiles = [2, 4, 8, 16, 32, 0]
     options = {"spp_scale": args.spp_scale, "seeds": args.seeds, "alpha": args.alpha, "tiles": tiles,
-               "ref_spp": args.ref_spp, "backend": args.backend,
+               "ref_spp": args.ref_spp, "backend": args.backend, "version_rtol": args.version_rtol,
                "perturbations": () if args.no_perturbations else tuple(PERTURBATIONS)}
     t0 = time.perf_counter()
     try:

@@ -10,7 +10,9 @@ parameter gives ``None`` (not applicable, reported as such).
 * ``max depth - 1``: the integrator's ``max_depth`` one less (where it is
   bounded and at least 2);
 * ``BSDF x0.98``: the first reflectance-like BSDF parameter (in the order
-  the scene lists them) times 0.98.
+  the scene lists them) times 0.98;
+* ``emitter x1.005`` and ``BSDF x0.995``: the same, four times subtler (where
+  the two tests part).
 """
 
 from __future__ import annotations
@@ -26,7 +28,12 @@ PERTURBATIONS = {
     "fov x1.005": "the camera's field of view times 1.005",
     "max depth - 1": "the integrator's max_depth one less",
     "BSDF x0.98": "a BSDF's reflectance-like parameter (the first the scene lists) times 0.98",
+    "emitter x1.005": "every emitter's radiance times 1.005 (subtler than the issue's list)",
+    "BSDF x0.995": "the same BSDF parameter times 0.995 (subtler than the issue's list)",
 }
+
+#: What each perturbation multiplies its parameters by (the depth is lowered instead).
+FACTORS = {"emitter x1.02": 1.02, "fov x1.005": 1.005, "BSDF x0.98": 0.98, "emitter x1.005": 1.005, "BSDF x0.995": 0.995}
 
 
 def _short(key: str) -> str:
@@ -36,7 +43,7 @@ def _short(key: str) -> str:
 
 def _keys(params, name: str) -> list[str]:
     keys = list(params.keys())
-    if name == "emitter x1.02":
+    if name.startswith("emitter"):
         found = [k for k in keys if _EMITTER.search(k)]
         # An environment map has no radiance parameter: its scale (a texture's 'scale' has no 'data' beside it).
         found += [k for k in keys if k.endswith(".scale") and f"{k[:-6]}.data" in params
@@ -44,7 +51,7 @@ def _keys(params, name: str) -> list[str]:
         return found
     if name == "fov x1.005":
         return [k for k in keys if k.endswith("x_fov")]
-    if name == "BSDF x0.98":
+    if name.startswith("BSDF"):
         found = [k for k in keys if _BSDF.search(k) and not _EMITTER.search(k) and "emitter" not in k
                  and "opacity" not in k]
         found = found or [k for k in keys if k.endswith(("face_color", "vertex_color"))]
@@ -67,7 +74,7 @@ def perturbed(mi, scene, name: str, max_depth: int):
     if not keys:
         yield None
         return
-    factor = {"emitter x1.02": 1.02, "fov x1.005": 1.005, "BSDF x0.98": 0.98}[name]
+    factor = FACTORS[name]
     old = {k: params[k] for k in keys}
     try:
         for k in keys:

@@ -21,6 +21,9 @@ from mcrt.msuite.zrule import z_rule
 SAMPLE_BUDGET = 2_000_000
 #: The references do not record their spp; Mitsuba's reference generator renders 32000 by default.
 REFERENCE_SPP = 32000
+#: The largest noiseless difference the suite accepts as a reference's offset (rounding of an old colour
+#: conversion is 0.03 to 0.1 %); a larger one is a difference, reported as such.
+MAX_OFFSET = 0.005
 #: Seeds of the correct renders (base + k) and of the perturbed ones (base + index).
 CORRECT_SEED, PERTURBED_SEED = 1000, 2000
 
@@ -58,12 +61,17 @@ def _test(render, ref, ref_var_raw, *, alpha: float, tiles, rtol: float) -> dict
 
 
 def run_case(case: Case, *, spp_scale: float = 1.0, seeds: int = 1, alpha: float = 0.01, tiles=(2, 4, 8, 16, 32, 0),
-             ref_spp: int = REFERENCE_SPP, perturbations=tuple(PERTURBATIONS), backend: str = "llvm") -> dict:
+             ref_spp: int = REFERENCE_SPP, perturbations=tuple(PERTURBATIONS), backend: str = "llvm",
+             version_rtol: float = 0.0011) -> dict:
     """One scene: ``seeds`` correct renders and the perturbed ones, each tested both ways.
 
-    The reference offset: where the first correct render differs from the
+    A reference that another Mitsuba version wrote is compared within
+    ``version_rtol`` (a margin of every test: that version's colour
+    conversion stores a constant 1.0 as 1.00108 or 0.99971). The reference
+    offset: where the first correct render still differs from the
     reference in noiseless tiles (no noise there: a difference of the
-    reference, such as a constant 1.0 stored as 1.00108), that difference,
+    reference, such as a constant 1.0 stored as 1.00108) of at most
+    :data:`MAX_OFFSET`, that difference,
     rounded up, becomes the scene's ``rtol`` (a margin of every test,
     :func:`mcrt.stats.compare_images`), stated in the verdict, and every
     test of the scene uses it, as a user would with ``mcrt compare --rtol``.
@@ -92,15 +100,24 @@ def run_case(case: Case, *, spp_scale: float = 1.0, seeds: int = 1, alpha: float
             raise ValueError(f"{case.name}: renders {r.mean.shape[1]}x{r.mean.shape[0]}, its reference is {w}x{h}")
         return r
 
-    rtol = EXACT_RTOL
+    # A reference written by another Mitsuba version went through that version's colour conversion: a constant
+    # 1.0 comes back as 1.00108 or 0.99971 (up to 0.11 %), in every pixel, noisy or not.
+    written_by = ref.extra.get("exr.generatedBy", "")
+    other_version = written_by != f"Mitsuba version {mi.__version__}"
+    rtol = max(EXACT_RTOL, version_rtol) if other_version else EXACT_RTOL
+    out["written_by"], out["version_rtol"] = written_by, rtol
     for k in range(seeds):
         r = render(CORRECT_SEED + k)
         out["integrator"], out["method"] = r.renderer, r.extra.get("method")
         out["variance_method"] = r.extra.get("variance_method")
         res = _test(r, ref, ref_var_raw, alpha=alpha, tiles=tiles, rtol=rtol)
-        if k == 0 and res["mcrt"]["noiseless_rejected"]:
-            rtol = max(EXACT_RTOL, _round_up(res["mcrt"]["largest_noiseless_difference"]))
-            out["reference_offset"] = res["mcrt"]["largest_noiseless_difference"]
+        # A wider rtol makes more low-noise pixels noiseless (their noise must stay below it): repeat, a few times.
+        for _ in range(3):
+            offset = res["mcrt"]["largest_noiseless_difference"]
+            if k or not res["mcrt"]["noiseless_rejected"] or offset > MAX_OFFSET:
+                break
+            rtol = max(rtol, _round_up(offset))
+            out["reference_offset"] = offset
             res = _test(r, ref, ref_var_raw, alpha=alpha, tiles=tiles, rtol=rtol)
         res.update(seed=CORRECT_SEED + k, time=r.wall_time, spp=r.spp)
         if k == 0:
@@ -140,6 +157,8 @@ def verdict(case: dict) -> str:
     if "reference_offset" in case:
         return (f"consistent, with the reference's offset in noiseless pixels ({100 * case['reference_offset']:.3g} %) "
                 f"accepted (rtol {case['rtol']:g})")
+    if case.get("rtol", 0) > 1e-5:
+        return f"consistent (rtol {case['rtol']:g}: a reference of {case['written_by'] or 'another version'})"
     return "consistent"
 
 
