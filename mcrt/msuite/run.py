@@ -163,10 +163,17 @@ def verdict(case: dict) -> str:
 
 
 def summarize(cases: list[dict]) -> dict:
-    """Counts over ``cases``: false alarms over the correct renders and catches of the perturbations, both tests."""
+    """Counts over ``cases``: rejected correct renders (a reference's difference where every seed is rejected,
+    false alarms where only some are) and catches of the perturbations, both tests."""
     s = {"scenes": len(cases), "correct_renders": sum(len(c["correct"]) for c in cases)}
     for who in ("mcrt", "mitsuba"):
-        s[f"{who}_false_alarms"] = sum(not r[who]["passed"] for c in cases for r in c["correct"])
+        # A scene whose every correct render (independent seeds, more than one) is rejected shows a difference of
+        # its reference, not noise; rejections of only some seeds are false alarms.
+        rejected = [[not r[who]["passed"] for r in c["correct"]] for c in cases]
+        systematic = [all(x) and len(x) > 1 for x in rejected]
+        s[f"{who}_rejected_correct"] = sum(sum(x) for x in rejected)
+        s[f"{who}_reference_differences"] = sum(systematic)
+        s[f"{who}_false_alarms"] = sum(sum(x) for x, sy in zip(rejected, systematic) if not sy)
         applicable = [p for c in cases for p in c["perturbations"].values() if p is not None]
         s["perturbations"] = len(applicable)
         s[f"{who}_caught"] = sum(p[who]["caught"] for p in applicable)
