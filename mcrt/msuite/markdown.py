@@ -95,14 +95,16 @@ def markdown(data: dict) -> str:
     different = [c for c in data["cases"] if "error" not in c and not c["correct"][0]["mcrt"]["passed"]]
     if different:
         lines += ["", "## Differences mcrt finds in correct renders", "",
-                  "The rejected tests of the first correct render (at most 10), and on how many of the scene's correct "
-                  "renders (independent seeds) mcrt rejects: a difference that every seed shows is the reference's, "
-                  "not noise.", ""]
+                  "The rejected tests of the first correct render (at most 10: tile, relative difference, the tile "
+                  "means of render and reference), and on how many of the scene's correct renders (independent seeds) "
+                  "mcrt rejects: a difference that every seed shows is the reference's, not noise.", ""]
         for c in different:
             n_rej = sum(not r["mcrt"]["passed"] for r in c["correct"])
             lines.append(f"- {c['name']}: rejected on {n_rej} of {len(c['correct'])} seeds; "
                          + "; ".join(f"{f['tile']}x{f['tile'] if f['tile'] else 'whole'} rows {f['rows'][0]}-{f['rows'][1]} "
                                      f"cols {f['cols'][0]}-{f['cols'][1]} {f['channel']} {100 * f['rel_diff']:+.3g} %"
+                                     + (f" ({f['mean']:.3g} against {f['reference']:.3g}, the image's peak "
+                                        f"{c['correct'][0]['mcrt']['peak']:.3g})" if "mean" in f else "")
                                      + (" (noiseless)" if f["noiseless"] else "")
                                      for f in c["correct"][0]["mcrt"]["failing"]))
     offsets = [c for c in data["cases"] if "reference_offset" in c]

@@ -52,9 +52,10 @@ def _test(render, ref, ref_var_raw, *, alpha: float, tiles, rtol: float) -> dict
             y0, y1, x0, x1 = c.tile_box(int(ty), int(tx))
             failing.append({"tile": t, "rows": [y0, y1 - 1], "cols": [x0, x1 - 1], "channel": "XYZ"[ch],
                             "t": float(c.t[ty, tx, ch]) if np.isfinite(c.t[ty, tx, ch]) else None,
-                            "rel_diff": float(c.rel_diff[ty, tx, ch]), "noiseless": bool(c.deterministic[ty, tx, ch])})
+                            "rel_diff": float(c.rel_diff[ty, tx, ch]), "noiseless": bool(c.deterministic[ty, tx, ch]),
+                            "mean": float(c.mean_a[ty, tx, ch]), "reference": float(c.mean_b[ty, tx, ch])})
     masks = [r.copy() for r in ms.rejected]
-    return {"_masks": masks, "mcrt": {"failing": failing[:10], "passed": ms.passed, "rejected": ms.n_rejected, "noiseless_rejected": ms.noiseless_rejected,
+    return {"_masks": masks, "mcrt": {"failing": failing[:10], "peak": float(np.abs(ref.mean).max()), "passed": ms.passed, "rejected": ms.n_rejected, "noiseless_rejected": ms.noiseless_rejected,
                      "noisy_rejected": ms.noisy_rejected, "tests": ms.n_tests, "by_scale": ms.by_scale(),
                      "largest_noiseless_difference": ms.largest_noiseless_difference(), "headline": ms.headline()},
             "mitsuba": z}
