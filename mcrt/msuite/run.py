@@ -55,7 +55,7 @@ def _test(render, ref, ref_var_raw, *, alpha: float, tiles, rtol: float) -> dict
                             "rel_diff": float(c.rel_diff[ty, tx, ch]), "noiseless": bool(c.deterministic[ty, tx, ch]),
                             "mean": float(c.mean_a[ty, tx, ch]), "reference": float(c.mean_b[ty, tx, ch])})
     masks = [r.copy() for r in ms.rejected]
-    return {"_masks": masks, "mcrt": {"failing": failing[:10], "peak": float(np.abs(ref.mean).max()), "passed": ms.passed, "rejected": ms.n_rejected, "noiseless_rejected": ms.noiseless_rejected,
+    return {"_masks": masks, "_t": [np.nan_to_num(c.t, nan=0.0, posinf=50.0, neginf=-50.0) for c in ms.comparisons], "mcrt": {"failing": failing[:10], "peak": float(np.abs(ref.mean).max()), "passed": ms.passed, "rejected": ms.n_rejected, "noiseless_rejected": ms.noiseless_rejected,
                      "noisy_rejected": ms.noisy_rejected, "tests": ms.n_tests, "by_scale": ms.by_scale(),
                      "largest_noiseless_difference": ms.largest_noiseless_difference(), "headline": ms.headline()},
             "mitsuba": z}
@@ -107,6 +107,7 @@ def run_case(case: Case, *, spp_scale: float = 1.0, seeds: int = 1, alpha: float
     other_version = written_by != f"Mitsuba version {mi.__version__}"
     rtol = max(EXACT_RTOL, version_rtol) if other_version else EXACT_RTOL
     out["written_by"], out["version_rtol"] = written_by, rtol
+    masks, ts = [], []
     for k in range(seeds):
         r = render(CORRECT_SEED + k)
         out["integrator"], out["method"] = r.renderer, r.extra.get("method")
@@ -123,9 +124,11 @@ def run_case(case: Case, *, spp_scale: float = 1.0, seeds: int = 1, alpha: float
         res.update(seed=CORRECT_SEED + k, time=r.wall_time, spp=r.spp)
         if k == 0:
             base_masks = res["_masks"]
-        del res["_masks"]
+        masks.append(res.pop("_masks"))
+        ts.append(res.pop("_t"))
         out["correct"].append(res)
     out["rtol"] = rtol
+    confirm(out["correct"], masks, ts)
     first = out["correct"][0]
     for i, name in enumerate(perturbations):
         with perturbed(mi, scene, name, depth) as change:
@@ -147,6 +150,36 @@ def run_case(case: Case, *, spp_scale: float = 1.0, seeds: int = 1, alpha: float
         out["perturbations"][name] = res
     out["time"] = time.perf_counter() - t0
     return out
+
+
+def confirm(correct: list[dict], masks: list, ts: list, alpha: float = 0.01) -> None:
+    """Say of each rejected correct render whether the other seeds confirm its rejected tests (in place).
+
+    A rejected test (tile, channel, scale) of one seed is confirmed when the
+    same test on the other seeds' renders (independent of the seed that
+    picked it, so no selection bias) leans the same way: Stouffer's
+    :math:`z = \sum_j t_j / \sqrt{k}` over the k other seeds beyond the
+    one-sided normal quantile at ``alpha`` over that render's rejected tests
+    (Bonferroni). A confirmed rejection is a difference of the reference
+    too small to be rejected on every seed; an unconfirmed one is a false
+    alarm. Sets ``mcrt['confirmed']`` (None where not rejected or without
+    another seed) and ``mcrt['confirm_z']``.
+    """
+    from scipy import stats as sps
+
+    for i, res in enumerate(correct):
+        res["mcrt"]["confirmed"], res["mcrt"]["confirm_z"] = None, None
+        others = [j for j in range(len(correct)) if j != i]
+        if res["mcrt"]["passed"] or not others:
+            continue
+        tests = [(s, tuple(idx)) for s, m in enumerate(masks[i]) for idx in np.argwhere(m)]
+        crit = sps.norm.isf(alpha / len(tests))
+        best = 0.0
+        for s, idx in tests:
+            sign = np.sign(ts[i][s][idx])
+            z = sign * sum(ts[j][s][idx] for j in others) / np.sqrt(len(others))
+            best = max(best, float(z))
+        res["mcrt"]["confirmed"], res["mcrt"]["confirm_z"] = bool(best >= crit), best
 
 
 def verdict(case: dict) -> str:
@@ -171,10 +204,14 @@ def summarize(cases: list[dict]) -> dict:
         # A scene whose every correct render (independent seeds, more than one) is rejected shows a difference of
         # its reference, not noise; rejections of only some seeds are false alarms.
         rejected = [[not r[who]["passed"] for r in c["correct"]] for c in cases]
-        systematic = [all(x) and len(x) > 1 for x in rejected]
+        # mcrt's rejections confirmed by the other seeds (:func:`confirm`) are differences of the reference too.
+        confirmed = [[bool(r[who].get("confirmed")) for r in c["correct"]] for c in cases]
+        systematic = [(all(x) and len(x) > 1) or any(cf) for x, cf in zip(rejected, confirmed)]
         s[f"{who}_rejected_correct"] = sum(sum(x) for x in rejected)
         s[f"{who}_reference_differences"] = sum(systematic)
-        s[f"{who}_false_alarms"] = sum(sum(x) for x, sy in zip(rejected, systematic) if not sy)
+        everywhere = [all(x) and len(x) > 1 for x in rejected]
+        s[f"{who}_false_alarms"] = sum(int(xj and not ev and not cj) for x, ev, cf in zip(rejected, everywhere, confirmed)
+                                       for xj, cj in zip(x, cf))
         applicable = [p for c in cases for p in c["perturbations"].values() if p is not None]
         s["perturbations"] = len(applicable)
         s[f"{who}_caught"] = sum(p[who]["caught"] for p in applicable)
