@@ -142,6 +142,7 @@ def run_case(case: Case, *, spp_scale: float = 1.0, seeds: int = 1, alpha: float
         # Caught: the test rejects on evidence the correct render does not show. mcrt: a rejected test (tile,
         # channel, scale) that the first correct render does not have; Mitsuba's rule: failing where the correct
         # render passes, or more failing pixel-channels than the correct render's plus the rule's allowance.
+        res.pop("_t")
         new = sum(int(np.count_nonzero(m & ~b)) for m, b in zip(res.pop("_masks"), base_masks))
         res["mcrt"]["new_rejections"] = new
         res["mcrt"]["caught"] = new > 0
