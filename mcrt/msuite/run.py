@@ -154,7 +154,7 @@ def run_case(case: Case, *, spp_scale: float = 1.0, seeds: int = 1, alpha: float
 
 
 def confirm(correct: list[dict], masks: list, ts: list, alpha: float = 0.01) -> None:
-    """Say of each rejected correct render whether the other seeds confirm its rejected tests (in place).
+    r"""Say of each rejected correct render whether the other seeds confirm its rejected tests (in place).
 
     A rejected test (tile, channel, scale) of one seed is confirmed when the
     same test on the other seeds' renders (independent of the seed that
