@@ -364,3 +364,23 @@ def test_suite_on_a_shared_scene_names_the_references_offset(suite, tmp_path):
     case = json.loads((out / "data.json").read_text())["cases"][0]
     assert case["correct"][0]["mcrt"]["passed"] and 0 < case["reference_offset"] < 0.0011
     assert "reference's offset in noiseless pixels" in (out / "index.md").read_text()
+
+
+def test_a_rejection_the_other_seeds_confirm_is_a_difference_not_a_false_alarm():
+    """Stouffer's z of the other seeds' t on the rejected test decides; their own rejections are not needed."""
+    from mcrt.msuite.run import confirm, summarize
+
+    def seed_result(t_value, rejected):
+        t = np.zeros((4, 4, 3))
+        t[1, 2, 0] = t_value
+        m = np.zeros((4, 4, 3), bool)
+        m[1, 2, 0] = rejected
+        return {"mcrt": {"passed": not rejected}, "mitsuba": {"passed": True}}, [m], [t]
+
+    for others, expect in ((-2.5, True), (0.3, False)):
+        runs = [seed_result(-4.6, True)] + [seed_result(others, False) for _ in range(4)]
+        correct = [r[0] for r in runs]
+        confirm(correct, [r[1] for r in runs], [r[2] for r in runs])
+        assert correct[0]["mcrt"]["confirmed"] is expect and correct[1]["mcrt"]["confirmed"] is None
+        s = summarize([{"correct": correct, "perturbations": {}}])
+        assert s["mcrt_false_alarms"] == (0 if expect else 1) and s["mcrt_reference_differences"] == int(expect)
