@@ -18,8 +18,8 @@ def _summary_lines(title: str, s: dict) -> list[str]:
         return [f"- {title}: no scene."]
     ratio = f"{s['mcrt_caught'] / s['mitsuba_caught']:.2g}x" if s["mitsuba_caught"] else "no catch by Mitsuba's rule"
     return [f"- {title}: {s['scenes']} scenes, {s['correct_renders']} correct renders. Rejected: mcrt "
-            f"{s['mcrt_rejected_correct']} ({s['mcrt_reference_differences']} scenes rejected on every seed: a "
-            f"difference of the reference; false alarms {s['mcrt_false_alarms']}), Mitsuba's rule "
+            f"{s['mcrt_rejected_correct']} ({s['mcrt_reference_differences']} scenes with a difference of the reference: "
+            f"rejected on every seed, or confirmed by the other seeds; false alarms {s['mcrt_false_alarms']}), Mitsuba's rule "
             f"{s['mitsuba_rejected_correct']} (false alarms {s['mitsuba_false_alarms']}). Perturbations caught (of "
             f"{s['perturbations']} applicable): mcrt {s['mcrt_caught']}, Mitsuba's rule {s['mitsuba_caught']} ({ratio}). "
             f"Reference offsets accepted: {s['reference_offsets']}."]
@@ -31,8 +31,8 @@ def _goal_lines(data: dict) -> list[str]:
     done = [c for c in data["cases"] if "error" not in c]
     clean = sum(c["correct"][0]["mcrt"]["passed"] for c in done)
     out = [f"- Goals: correct renders consistent (a reference's stated offset accepted) on {clean} of {len(done)} scenes "
-           f"(first seed), {s['mcrt_reference_differences']} scenes with a reference difference every seed shows "
-           f"(named below); mcrt's false alarms: {s['mcrt_false_alarms']} of {s['correct_renders']} correct renders "
+           f"(first seed), {s['mcrt_reference_differences']} scenes with a difference of the reference that the seeds "
+           f"confirm (named below); mcrt's false alarms: {s['mcrt_false_alarms']} of {s['correct_renders']} correct renders "
            f"({'met' if s['mcrt_false_alarms'] == 0 else 'not met'}: no false alarm)."]
     ok = s["mcrt_caught"] >= 2 * s["mitsuba_caught"]
     why = ""
