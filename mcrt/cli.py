@@ -77,7 +77,7 @@ def render_to_files(result, out: Path, exposure: float = 0.0) -> tuple[Path, Pat
 def _render_mitsuba_scene(args) -> int:
     """``mcrt render --mitsuba-scene FILE.xml``: any Mitsuba scene, any integrator, through render_with_variance."""
     from mcrt.mitsuba import render_with_variance
-    from mcrt.validate_integrator import load_scene_arg, parse_integrator
+    from mcrt.validate_integrator import load_scene_arg, parse_defines, parse_integrator
 
     refused = [o for o, v in (("--scene", args.scene), ("--camera", args.camera), ("--preset", args.preset),
                               ("--mutant", args.mutant), ("--light-samples", args.light_samples))
@@ -90,9 +90,12 @@ def _render_mitsuba_scene(args) -> int:
         spec = parse_integrator(args.integrator) if args.integrator else None
         result = render_with_variance(scene, integrator=spec, spp=args.spp, seed=args.seed or 0,
                                       width=args.width or args.res, height=args.height or args.res,
-                                      max_depth=args.max_depth, backend=args.backend, progress=True)
+                                      max_depth=args.max_depth, backend=args.backend, progress=True,
+                                      defaults=parse_defines(args.define))
     except (ValueError, RuntimeError) as e:
-        print(f"mcrt render: {args.mitsuba_scene}: {' '.join(str(e).split())}", file=sys.stderr)
+        msg = " ".join(str(e).split())
+        where = "" if msg.startswith(str(args.mitsuba_scene)) else f"{args.mitsuba_scene}: "
+        print(f"mcrt render: {where}{msg}", file=sys.stderr)
         return EXIT_UNUSABLE
     exr, png = render_to_files(result, Path(args.output), args.exposure)
     h, w = result.mean.shape[:2]
@@ -179,7 +182,9 @@ def cmd_compare(args) -> int:
 
     return compare_files(args.a, args.b, policy=args.policy, alpha=args.alpha, tile=args.tile, heatmap=args.heatmap,
                          json_path=args.json, assume_variance_from_other=args.assume_variance_from == "other",
-                         spp_a=args.spp_a, spp_b=args.spp_b, allow_mismatch=tuple(args.allow_mismatch))
+                         spp_a=args.spp_a, spp_b=args.spp_b, allow_mismatch=tuple(args.allow_mismatch),
+                         variance_a=args.variance_a, variance_b=args.variance_b, variance_kind=args.variance_kind,
+                         rtol=args.rtol)
 
 
 def cmd_scene(args) -> int:
@@ -256,6 +261,9 @@ def build_parser() -> argparse.ArgumentParser:
     }
     for flag, (metavar, text) in mitsuba_help.items():
         p.add_argument(flag, default=None, metavar=metavar, help=text)
+    p.add_argument("-D", dest="define", action="append", default=[], metavar="KEY=VALUE",
+                   help="with --mitsuba-scene: set a <default> parameter of the XML scene, e.g. -D integrator=direct "
+                        "(repeatable; default: the file's values)")
     p.set_defaults(func=cmd_render)
 
     p = sub.add_parser("compare", help="two-sample test of two renders (exit 0 consistent, 1 different, 2 unusable)")
@@ -277,6 +285,20 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--spp-a", type=int, default=None, help="spp of image A, where its file does not record it "
                                                            "(a Mitsuba 'moment' EXR needs it; default: the file's)")
     p.add_argument("--spp-b", type=int, default=None, help="spp of image B, as --spp-a (default: the file's)")
+    p.add_argument("--variance-a", default=None, metavar="FILE",
+                   help="EXR holding image A's per-sample variance, where A's own file has none (default: A's file)")
+    p.add_argument("--variance-b", default=None, metavar="FILE",
+                   help="EXR holding image B's per-sample variance, e.g. a Mitsuba reference's <name>_ref_rgb_var.exr "
+                        "(default: B's file)")
+    p.add_argument("--variance-kind", choices=("auto", "rgb", "mitsuba"), default="auto",
+                   help="how --variance-a/-b files are read: rgb, a per-sample RGB variance (negative entries refused); "
+                        "mitsuba, Mitsuba's reference variance (an XYZ variance written through the XYZ-to-RGB matrix: "
+                        "turned back into XYZ, rounding repaired, bounded in RGB); auto, mitsuba where the file says "
+                        "Mitsuba wrote it (default: auto)")
+    p.add_argument("--rtol", type=float, default=1e-5,
+                   help="relative difference accepted between noiseless tiles (zero variance on both sides), e.g. "
+                        "0.002 for a reference storing 1.0 as 1.00108; the verdict says when it accepted one "
+                        "(default: 1e-5, exact to float32 rounding)")
     p.add_argument("--allow-mismatch", action="append", default=[], metavar="FIELD",
                    choices=("camera", "scene_hash", "max_depth", "all"),
                    help="compare even though the files record a different camera, scene_hash or max_depth "
@@ -322,6 +344,9 @@ def build_parser() -> argparse.ArgumentParser:
     from mcrt.grade.accuracy.cli import register as register_accuracy
 
     register_accuracy(sub)
+    from mcrt.msuite import register as register_msuite
+
+    register_msuite(sub)
     return ap
 
 

@@ -43,7 +43,7 @@ from mcrt.exitcodes import EXIT_FAILED, EXIT_OK, EXIT_UNUSABLE
 from mcrt.film import RenderResult
 from mcrt.stats import POLICIES, Comparison, StatsError, compare, variance_dof
 
-__all__ = ["report_lines", "heatmap_rgb", "write_heatmap", "write_json", "image", "as_result", "check_headers",
+__all__ = ["report_lines", "noiseless_lines", "heatmap_rgb", "write_heatmap", "write_json", "image", "as_result", "check_headers",
            "HEADER_FIELDS", "HeaderMismatch", "compare_files"]
 
 # Saturation of the heat map's colour scale, in units of t.
@@ -71,10 +71,43 @@ def report_lines(c: Comparison, limit: int = 20) -> list[str]:
     lines.append(f"largest |t|: {abs(m.t):.2f} at tile ({m.ty},{m.tx}) {m.channel}; min p-value: {c.min_p:.3g}")
     g = ", ".join(f"{ch} {100 * v:+.3f} %" for ch, v in zip(c.channel_names, c.global_rel_diff))
     lines.append(f"whole-image mean, symmetric relative difference (A-B)/mean(|A|,|B|): {g}")
-    n_det = int(np.count_nonzero(c.deterministic))
-    if n_det:
-        lines.append(f"{n_det} tests had zero variance on both sides and were compared for equality")
+    lines += noiseless_lines(c)
     return lines
+
+
+def noiseless_lines(c: Comparison) -> list[str]:
+    """What the tests of noiseless tiles (zero variance on both sides, compared for equality) found, apart.
+
+    A difference there is no Monte Carlo noise: an offset of the reference
+    (a constant 1.0 stored as 1.00108), a different background, a
+    different emitter seen directly. Says how many differ and by how much,
+    and when ``rtol`` accepted some.
+    """
+    n = c.noiseless()
+    if not n["tests"]:
+        return []
+    size = f"{100 * n['largest_rel_diff']:.3g} %"
+    lines = [f"noiseless tests (zero variance on both sides, compared for equality within rtol {c.rtol:g}): "
+             f"{n['tests']}, {n['rejected']} differ; largest difference {size} (symmetric)"]
+    if n["rejected"]:
+        noisy = c.n_rejected - n["rejected"]
+        lines.append(f"  {n['rejected']} of the {c.n_rejected} rejected tests are noiseless ({noisy} noisy): a difference "
+                     f"without noise, up to {size}; if it is a known offset, --rtol {_round_up(n['largest_rel_diff'])} "
+                     "accepts it")
+    if n["accepted_by_rtol"]:
+        lines.append(f"  note: --rtol {c.rtol:g} accepted {n['accepted_by_rtol']} noiseless tests that differ by more "
+                     f"than float32 rounding (up to {size})")
+    return lines
+
+
+def _round_up(x: float) -> str:
+    """A tolerance just above ``x`` with two significant digits (0.001084 -> '0.0011')."""
+    import math
+
+    if x <= 0:
+        return "0"
+    e = math.floor(math.log10(x)) - 1
+    return f"{math.ceil(x / 10**e) * 10**e:.2g}"
 
 
 def heatmap_rgb(c: Comparison, scale: int = 1) -> np.ndarray:
@@ -150,19 +183,35 @@ def image(mean, variance=None, spp: int = 0, *, seed: int = 0, max_depth: int = 
                         renderer=renderer, scene_hash=scene_hash, camera=camera, wall_time=float(wall_time))
 
 
-def as_result(x, *, name: str = "A", variance=None, spp: int | None = None) -> RenderResult:
+def as_result(x, *, name: str = "A", variance=None, spp: int | None = None, variance_kind: str = "auto") -> RenderResult:
     """One side of a comparison as a RenderResult: a file path, a RenderResult, or a NumPy mean.
 
     A path is read (``spp`` replaces a sample count the file lacks, and
     scales a ``moment`` file's variance, :func:`mcrt.imageio.read_exr`); a
     RenderResult is used as is (a copy with ``spp``/``variance`` replaced
     when given); an array is the mean and needs ``variance`` and ``spp``
-    alongside. Raises :class:`StatsError` naming the side and what is
-    missing, :class:`mcrt.imageio.ImageError` for an unreadable file.
+    alongside. ``variance`` may also be the path of a variance EXR, read by
+    :func:`mcrt.imageio.read_variance_exr` as ``variance_kind`` says
+    (Mitsuba's reference variance, an XYZ variance, by default where the
+    file says Mitsuba wrote it). Raises :class:`StatsError` naming the side
+    and what is missing, :class:`mcrt.imageio.ImageError` for an unreadable
+    file or a variance with negative or non-finite entries.
     """
     from dataclasses import replace
 
     imageio = importlib.import_module("mcrt.imageio")  # what sys.modules holds (tests stand in for it)
+    if isinstance(variance, (str, bytes)) or hasattr(variance, "__fspath__"):
+        r = as_result(x, name=name, spp=spp)
+        var, note = imageio.read_variance_exr(variance, mean=r.mean, kind=variance_kind)
+        r.variance = var
+        r.extra = {**r.extra, "variance": f"{variance}: {note}"}
+        return r
+    if variance is not None:
+        variance = np.asarray(variance, dtype=np.float32)
+        if variance.shape == np.shape(getattr(x, "mean", x)):
+            for what, bad in (("negative", variance < 0), ("non-finite", ~np.isfinite(variance))):
+                if bad.any():
+                    raise StatsError(f"image {name}: its given variance has {int(bad.sum())} {what} entries")
 
     if isinstance(x, RenderResult):
         changes = {k: v for k, v in (("spp", spp), ("variance", variance)) if v is not None}
@@ -269,6 +318,7 @@ def compare_files(
     spp_b: int | None = None,
     variance_a=None,
     variance_b=None,
+    variance_kind: str = "auto",
     allow_mismatch=(),
     out: IO[str] | None = None,
     err: IO[str] | None = None,
@@ -295,6 +345,16 @@ def compare_files(
     Headers: inputs whose recorded resolution, camera, scene hash or max
     depth differ are refused (exit 2, one line naming both and the field,
     :func:`check_headers`) unless the field is in ``allow_mismatch``.
+
+    Variance files: ``variance_a`` / ``variance_b`` may name an EXR
+    holding that side's per-sample variance (``--variance-a/-b FILE``),
+    read as ``variance_kind`` says (:data:`mcrt.imageio.VARIANCE_KINDS`):
+    Mitsuba's reference variance (an XYZ variance written through the
+    XYZ-to-RGB matrix, partly negative) is turned back into XYZ and bounded
+    in RGB; a plain variance with negative or non-finite entries is refused
+    (exit 2). ``rtol`` (an option of :func:`mcrt.stats.compare`) accepts a
+    relative difference between noiseless tiles; the report says when it
+    did (:func:`noiseless_lines`).
 
     Missing variance or sample count: the test needs each side's own
     per-sample variance and spp. ``spp_a`` / ``spp_b`` override the sample
@@ -328,8 +388,8 @@ def compare_files(
     label_a = _label(path_a, "A")
     label_b = _label(path_b, "B")
     try:
-        a = as_result(path_a, name="A", variance=variance_a, spp=spp_a)
-        b = as_result(path_b, name="B", variance=variance_b, spp=spp_b)
+        a = as_result(path_a, name="A", variance=variance_a, spp=spp_a, variance_kind=variance_kind)
+        b = as_result(path_b, name="B", variance=variance_b, spp=spp_b, variance_kind=variance_kind)
     except (imageio.ImageError, OSError, StatsError) as e:
         print(f"error: {e}", file=err)
         return EXIT_UNUSABLE
@@ -351,6 +411,9 @@ def compare_files(
 
     print(f"A: {_describe(a, label_a)}", file=out)
     print(f"B: {_describe(b, label_b)}", file=out)
+    for name, r in (("A", a), ("B", b)):
+        if "variance" in r.extra:
+            print(f"note: {name}'s variance: {r.extra['variance']}", file=out)
     for line in report_lines(c):
         print(line, file=out)
     if heatmap is not None:

@@ -291,19 +291,23 @@ def read_exr(path: PathLike, *, spp: int | None = None) -> RenderResult:
     var_names = ("variance.R", "variance.G", "variance.B")
     extra = {k[len(EXTRA_PREFIX):]: _attr_str(path, header, k, "") for k in header if k.startswith(EXTRA_PREFIX)}
     if moment is not None:  # Mitsuba's 'moment' integrator: mean and variance from the XYZ moments
-        mean, variance, note = moment
+        mean, variance, note, used = moment
         extra["exr.moment"] = note
-        var_names = (*var_names, *MOMENT_CHANNELS[0], *MOMENT_CHANNELS[1], "R", "G", "B")
+        var_names = (*var_names, *used, "R", "G", "B")
     else:
         mean = _exr_stack(path, channels, ("R", "G", "B"), shape)
         present = [n for n in var_names if n in channels]
         if present and len(present) < 3:
             raise ImageError(f"{path}: incomplete variance channels, found {', '.join(present)}")
         variance = _exr_stack(path, channels, var_names, shape) if present else None
+        if variance is not None:
+            check_variance(path, variance, "variance channels")
 
     ignored = [n for n in names if n not in ("R", "G", "B", "A") and n not in var_names]
     if ignored:
         extra["exr.ignored_channels"] = ",".join(ignored)
+    if "generatedBy" in header:  # which program wrote the file (Mitsuba's references: their variance's layout)
+        extra["exr.generatedBy"] = _attr_str(path, header, "generatedBy", "")
     compile_time = _attr_float(path, header, "compile_time", None)
     return RenderResult(
         mean=mean,
@@ -320,7 +324,9 @@ def read_exr(path: PathLike, *, spp: int | None = None) -> RenderResult:
     )
 
 
-#: The channels of Mitsuba's ``moment`` integrator around a nested integrator: first moments, second moments (XYZ).
+#: The channels of Mitsuba's ``moment`` integrator around a nested integrator given as ``nested`` (first
+#: moments, second moments, XYZ). Mitsuba 3.9.1 names the nested integrator of an XML scene ``_arg_0``
+#: (``_arg_0.X`` / ``m2__arg_0.X``); :func:`moment_prefix` finds any such name.
 MOMENT_CHANNELS = (("nested.X", "nested.Y", "nested.Z"), ("m2_nested.X", "m2_nested.Y", "m2_nested.Z"))
 
 #: CIE XYZ -> linear sRGB / Rec. 709 RGB (D65), the standard matrix (IEC 61966-2-1), as Mitsuba's xyz_to_srgb.
@@ -328,39 +334,201 @@ XYZ_TO_RGB = np.array([[3.240479, -1.537150, -0.498535],
                        [-0.969256, 1.875991, 0.041556],
                        [0.055648, -0.204043, 1.057311]])
 
+#: Linear sRGB -> CIE XYZ, the inverse of :data:`XYZ_TO_RGB` (its middle row is the Rec. 709 luminance).
+RGB_TO_XYZ = np.linalg.inv(XYZ_TO_RGB)
+
+#: A second moment kept in float32 loses about this fraction of m1^2 to rounding when m1^2 is taken from it
+#: (accumulated over thousands of samples): an XYZ variance down to -CANCELLATION * max(m1)^2 is a noiseless
+#: pixel's rounding, read as 0; one below it is refused. Mitsuba's committed references reach 2.0e-3.
+CANCELLATION = 4e-3
+
+
+def moment_prefix(path: str, names) -> str | None:
+    """The nested integrator's name in a ``moment`` EXR (``nested``, ``_arg_0``, ...), or None for other files.
+
+    A name p qualifies when the file has a second moment ``m2_p.X/Y/Z``,
+    or is ``nested`` (the dictionary's name) with any channel. Raises
+    :class:`ImageError` when the file holds more than one (which to use is
+    not knowable) or an incomplete set (the missing channels named).
+    """
+    names = set(names)
+    prefixes = {n[3:-2] for n in names if n.startswith("m2_") and n[-2:] in (".X", ".Y", ".Z")}
+    prefixes |= {"nested"} if any(n.startswith(("nested.", "m2_nested.")) for n in names) else set()
+    prefixes = sorted(prefixes)
+    if not prefixes:
+        return None
+    if len(prefixes) > 1:
+        raise ImageError(f"{path}: moments of several integrators ({', '.join(prefixes)}); expected one")
+    p = prefixes[0]
+    missing = [n for n in (*(f"{p}.{c}" for c in "XYZ"), *(f"m2_{p}.{c}" for c in "XYZ")) if n not in names]
+    if missing:
+        raise ImageError(f"{path}: incomplete moment channels, missing {', '.join(missing)}")
+    return p
+
+
+def repair_xyz_variance(path: str, var_xyz: np.ndarray, mean_xyz: np.ndarray, what: str, *,
+                        zero_small: bool = False) -> tuple[np.ndarray, int]:
+    r"""An XYZ per-sample variance with float32 cancellation removed; refuses what cannot be rounding.
+
+    Negative entries :math:`v \ge -c \max_j m_j^2` (c = :data:`CANCELLATION`,
+    :math:`m_j` the pixel's XYZ mean) are what :math:`m_2 - m_1^2` in float32
+    leaves for a noiseless pixel: they become 0. A more negative or a
+    non-finite entry is not a variance: :class:`ImageError` naming the file,
+    the count and the worst pixel. ``zero_small`` also reads positive
+    entries up to that bound as 0 (a high-spp reference: such a value cannot
+    be told from a noiseless pixel's rounding, and the pixel then counts as
+    noiseless in a comparison). Returns ``(variance, entries repaired)``.
+    """
+    bad = ~np.isfinite(var_xyz) | ~np.isfinite(mean_xyz)
+    if bad.any():
+        y, x, _ = np.argwhere(bad)[0]
+        raise ImageError(f"{path}: {int(bad.sum())} non-finite values in the {what} (first at row {y}, column {x})")
+    floor = -CANCELLATION * np.max(mean_xyz * mean_xyz, axis=-1, keepdims=True)
+    wrong = var_xyz < floor
+    if wrong.any():
+        y, x, c = np.argwhere(wrong)[np.argmin((var_xyz - floor)[wrong])]
+        raise ImageError(f"{path}: {int(wrong.sum())} negative XYZ variances beyond float32 rounding in the {what} "
+                         f"(worst {var_xyz[y, x, c]:.3g} at row {y}, column {x}, channel {'XYZ'[c]}, mean {mean_xyz[y, x, c]:.3g})")
+    neg = (var_xyz <= -floor) if zero_small else (var_xyz < 0)
+    return np.where(neg, 0.0, var_xyz), int(np.count_nonzero(neg & (var_xyz != 0)))
+
+
+def xyz_variance_to_rgb(var_xyz: np.ndarray) -> np.ndarray:
+    r"""A per-channel RGB variance bound from a per-channel XYZ variance: :math:`\mathrm{sd}_R \le \sum_j |M_{Rj}|\, \mathrm{sd}_j`.
+
+    The cross moments (E[XY], ...) are not kept, so the variance of
+    :math:`R = \sum_j M_{Rj} X_j` is bounded by Cauchy-Schwarz: conservative
+    (a comparison with it false-alarms less than nominal and detects less).
+    """
+    sd = np.sqrt(np.maximum(var_xyz, 0.0)) @ np.abs(XYZ_TO_RGB).T
+    return sd * sd
+
 
 def _read_moment_channels(path: str, channels: dict, shape: tuple[int, int], spp: int):
     r"""Mean and per-sample variance (linear RGB) of a ``moment`` integrator's EXR, or None for other files.
 
-    The file holds per pixel the mean of each sample's X, Y, Z (``nested.*``)
-    and of their squares (``m2_nested.*``), with a box filter. The mean is
-    :data:`XYZ_TO_RGB` times (X, Y, Z). The per-sample variance of X is
+    The file holds per pixel the mean of each sample's X, Y, Z (``nested.*``,
+    ``_arg_0.*``, ...: :func:`moment_prefix`) and of their squares
+    (``m2_nested.*``), with a box filter. The mean is :data:`XYZ_TO_RGB`
+    times (X, Y, Z). The per-sample variance of X is
     :math:`(m_2 - m_1^2)\, n / (n - 1)` (the unbiased estimate: ``spp`` = n
     must be known, from the file or given; without it the factor is left
-    out and noted). The file keeps no cross moments (E[XY], ...), so the
-    variance of R = sum_j M_Rj X_j is bounded by Cauchy-Schwarz,
-    :math:`\mathrm{sd}_R \le \sum_j |M_{Rj}|\, \mathrm{sd}_j`: conservative (a
-    comparison with it false-alarms less than nominal and detects less).
-    Returns ``(mean, variance, note)``.
+    out and noted), float32 cancellation repaired or refused by
+    :func:`repair_xyz_variance`, and bounded in RGB by
+    :func:`xyz_variance_to_rgb`. Returns ``(mean, variance, note, channels used)``.
     """
-    first, second = MOMENT_CHANNELS
-    found = [n for n in (*first, *second) if n in channels]
-    if not found:
+    p = moment_prefix(path, channels)
+    if p is None:
         return None
-    if len(found) < 6:
-        missing = [n for n in (*first, *second) if n not in channels]
-        raise ImageError(f"{path}: incomplete moment channels, missing {', '.join(missing)}")
+    first, second = tuple(f"{p}.{c}" for c in "XYZ"), tuple(f"m2_{p}.{c}" for c in "XYZ")
     m1 = _exr_stack(path, channels, first, shape).astype(np.float64)
     m2 = _exr_stack(path, channels, second, shape).astype(np.float64)
-    var_xyz = np.maximum(m2 - m1 * m1, 0.0)
+    var_xyz, repaired = repair_xyz_variance(path, m2 - m1 * m1, m1, f"moments {p}")
+    fixed = f", {repaired} rounding-level negatives read as 0" if repaired else ""
     if spp and spp >= 2:
         var_xyz *= spp / (spp - 1)
-        note = f"XYZ moments, variance (m2 - m1^2) n/(n-1) with n = {spp}, RGB sd bounded by sum |M| sd_XYZ"
+        note = f"XYZ moments {p}, variance (m2 - m1^2) n/(n-1) with n = {spp}{fixed}, RGB sd bounded by sum |M| sd_XYZ"
     else:
-        note = "XYZ moments, variance m2 - m1^2 (spp unknown: not scaled by n/(n-1)), RGB sd bounded by sum |M| sd_XYZ"
+        note = (f"XYZ moments {p}, variance m2 - m1^2 (spp unknown: not scaled by n/(n-1)){fixed}, "
+                "RGB sd bounded by sum |M| sd_XYZ")
     mean = m1 @ XYZ_TO_RGB.T
-    sd = np.sqrt(var_xyz) @ np.abs(XYZ_TO_RGB).T
-    return mean.astype(np.float32), (sd * sd).astype(np.float32), note
+    return mean.astype(np.float32), xyz_variance_to_rgb(var_xyz).astype(np.float32), note, (*first, *second)
+
+
+def check_variance(path: str, variance: np.ndarray, what: str) -> None:
+    """Refuse a per-sample variance with negative or non-finite entries: :class:`ImageError` naming the file,
+    the count and the first pixel (a variance of Mitsuba's references is read by :func:`read_variance_exr`)."""
+    for bad, kind in ((~np.isfinite(variance), "non-finite"), (variance < 0, "negative")):
+        if bad.any():
+            y, x, c = np.argwhere(bad)[0]
+            hint = ("; a Mitsuba reference's variance file holds an XYZ variance: read it as such "
+                    "(--variance-kind mitsuba)" if kind == "negative" else "")
+            raise ImageError(f"{path}: {int(bad.sum())} {kind} entries in the {what} (first at row {y}, column {x}, "
+                             f"channel {'RGB'[c]}: {variance[y, x, c]:.3g}){hint}")
+
+
+#: How a variance file given apart from its mean is read (:func:`read_variance_exr`).
+VARIANCE_KINDS = {
+    "auto": "mitsuba for a file whose header says Mitsuba wrote it (generatedBy), else rgb",
+    "rgb": "the file's R, G, B (or variance.R/G/B) are a per-sample RGB variance; negative entries are refused",
+    "mitsuba": "Mitsuba's reference variance: a per-sample XYZ variance pushed through the XYZ-to-RGB matrix "
+               "(so partly negative); turned back into XYZ, float32 rounding repaired, bounded in RGB",
+}
+
+
+def read_variance_exr(path: PathLike, *, mean: np.ndarray, kind: str = "auto", space: str = "rgb"
+                      ) -> tuple[np.ndarray, str]:
+    r"""A per-sample variance image given apart from its mean (``mcrt compare --variance-b FILE``).
+
+    ``mean`` is the (H, W, 3) linear RGB mean the variance belongs to.
+    ``kind`` (:data:`VARIANCE_KINDS`): ``'rgb'`` reads the channels as
+    they are and refuses negative or non-finite entries
+    (:func:`check_variance`). ``'mitsuba'`` reads what Mitsuba's render-test
+    suite writes as ``<name>_ref_rgb_var.exr``: the per-sample XYZ variance
+    :math:`m_2 - m_1^2` of its ``moment`` integrator, converted to RGB by
+    the XYZ-to-RGB matrix *as if it were a colour* (hence up to 41 % negative
+    entries; no variance transforms that way). The conversion is linear and
+    invertible, so :data:`RGB_TO_XYZ` gives back the XYZ variance exactly;
+    rounding-level negatives are repaired by :func:`repair_xyz_variance`.
+    Entries within float32 rounding of 0 are read as 0 (``zero_small``).
+    ``space='xyz'`` returns that XYZ variance, exact per channel (compare in
+    XYZ, as Mitsuba's own test does); ``'rgb'`` returns the Cauchy-Schwarz
+    bound :func:`xyz_variance_to_rgb` (conservative). Returns
+    ``(variance, note)``, the note saying which reading was used.
+    """
+    path = os.fspath(path)
+    if kind not in VARIANCE_KINDS:
+        raise ValueError(f"variance kind must be one of {', '.join(VARIANCE_KINDS)}, got {kind!r}")
+    if space not in ("rgb", "xyz"):
+        raise ValueError(f"space must be 'rgb' or 'xyz', got {space!r}")
+    raw = read_exr(path)
+    header_by = raw.extra.get("exr.generatedBy", "")
+    if kind == "auto":
+        kind = "mitsuba" if header_by.startswith("Mitsuba") else "rgb"
+    data = raw.variance if raw.variance is not None else raw.mean
+    data = data.astype(np.float64)
+    if data.shape != mean.shape:
+        raise ImageError(f"{path}: variance is {data.shape[1]}x{data.shape[0]}, its mean {mean.shape[1]}x{mean.shape[0]}")
+    if kind == "rgb":
+        check_variance(path, data, "variance")
+        if space == "xyz":
+            raise ValueError(f"{path}: a per-channel RGB variance has no exact XYZ variance (the cross terms are not kept)")
+        return data.astype(np.float32), "per-sample RGB variance as stored"
+    mean_xyz = mean.astype(np.float64) @ RGB_TO_XYZ.T
+    var_xyz, repaired = repair_xyz_variance(path, data @ RGB_TO_XYZ.T, mean_xyz, "variance (read back as XYZ)",
+                                            zero_small=True)
+    neg = int(np.count_nonzero(data < 0))
+    note = (f"Mitsuba's XYZ variance ({neg} of {data.size} stored entries negative) turned back into XYZ"
+            + (f", {repaired} within float32 rounding of 0 (|v| <= {CANCELLATION:g} max m^2) read as 0" if repaired else ""))
+    if space == "xyz":
+        return var_xyz.astype(np.float32), note
+    return xyz_variance_to_rgb(var_xyz).astype(np.float32), note + ", RGB sd bounded by sum |M| sd_XYZ (conservative)"
+
+
+def read_mitsuba_reference(mean_path: PathLike, var_path: PathLike | None = None, *, spp: int,
+                           space: str = "rgb") -> RenderResult:
+    """A reference of Mitsuba's render-test suite, ``<name>_ref_rgb.exr`` with ``<name>_ref_rgb_var.exr``.
+
+    ``var_path`` defaults to the mean's name with ``_var`` before ``.exr``.
+    The files do not record their spp: give it (Mitsuba's reference
+    generator renders 32000 spp by default). The variance is read by
+    :func:`read_variance_exr` (kind ``'mitsuba'``). ``space='xyz'`` returns
+    mean and variance in CIE XYZ (``extra['channels'] = 'XYZ'``), the mean
+    turned back by :data:`RGB_TO_XYZ`, as Mitsuba's own test reads it.
+    """
+    mean_path = os.fspath(mean_path)
+    if var_path is None:
+        root, ext = os.path.splitext(mean_path)
+        var_path = f"{root}_var{ext}"
+    r = read_exr(mean_path)
+    variance, note = read_variance_exr(var_path, mean=r.mean, kind="mitsuba", space=space)
+    r.variance, r.spp, r.renderer = variance, int(spp), "mitsuba-reference"
+    r.extra["variance"] = f"{os.fspath(var_path)}: {note}"
+    r.extra["spp"] = f"{spp} (given: the reference files do not record it)"
+    if space == "xyz":
+        r.mean = (r.mean.astype(np.float64) @ RGB_TO_XYZ.T).astype(np.float32)
+        r.extra["channels"] = "XYZ"
+    return r
 
 
 def _exr_shape(path: str, header: dict) -> tuple[int, int]:

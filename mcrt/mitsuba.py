@@ -299,20 +299,84 @@ def _sample_function(integrator):
     return None
 
 
-def _pass_function(mscene, integrator, seed: int, *, jitter: bool = True):
+#: CIE XYZ from linear sRGB (Mitsuba's srgb_to_xyz): renders in ``space='xyz'`` (Mitsuba's own test compares in XYZ).
+RGB_TO_XYZ = ((0.412453, 0.357580, 0.180423), (0.212671, 0.715160, 0.072169), (0.019334, 0.119193, 0.950227))
+
+
+def _to_space(L, space: str):
+    """A colour in the render's space: as is (``'rgb'``), or X, Y, Z by :data:`RGB_TO_XYZ`."""
+    if space == "rgb":
+        return L
+    return mi.Color3f(*(m[0] * L[0] + m[1] * L[1] + m[2] * L[2] for m in RGB_TO_XYZ))
+
+
+def per_sample_method(mscene, integrator) -> str | None:
+    """Why the render must go in batches (a reason), or None when each pixel's samples can be summed apart.
+
+    Samples are summed per pixel only for an integrator that samples camera
+    rays, a ``box`` film filter (a sample counts for its pixel alone) and
+    the ``independent`` sampler (whose streams do not depend on the number
+    of samples per pass). Anything else is rendered by the integrator's own
+    ``render``, as Mitsuba renders it: filter, sampler and film included.
+    """
+    film, sampler = mscene.sensors()[0].film(), mscene.sensors()[0].sampler()
+    if _sample_function(integrator) is None:
+        return f"{integrator.class_name()} splats particles onto the film"
+    if film.rfilter().class_name() != "BoxFilter":
+        return f"the film's {film.rfilter().class_name()} (radius {film.rfilter().radius():g} px) shares samples between pixels"
+    if sampler.class_name() != "IndependentSampler":
+        return f"the {sampler.class_name()} correlates a pixel's samples"
+    return None
+
+
+def filter_area(rfilter) -> float:
+    r"""The effective area :math:`F = (\int g)^2 / \int g^2` of a film filter, in pixels (1 for a box, 3.13 for the default gaussian).
+
+    A pixel's variance with filter g at n samples per pixel is about
+    :math:`\sigma^2 / (F n)` for samples of variance :math:`\sigma^2`, while
+    a tile of many pixels still averages about n samples per pixel: its
+    mean's variance is about F times what its pixels' variances suggest when
+    they are taken as independent. Separable filters: F is the square of the
+    one-dimensional ratio, integrated numerically.
+    """
+    r = float(rfilter.radius())
+    x = np.linspace(-r, r, 4001)
+    dx = x[1] - x[0]
+    g = np.asarray(rfilter.eval(mi.Float(x.astype(np.float32))), dtype=np.float64)
+    a, b = g.sum() * dx, (g * g).sum() * dx
+    return float((a * a / b) ** 2) if b > 0 else 1.0
+
+
+def batch_image(mscene, integrator, seed: int, k: int, n: int, space: str = "rgb") -> "mi.TensorXf":
+    """Batch ``k`` of a render: the integrator's own ``render`` at ``n`` spp with seed :func:`pass_seed` (seed, k).
+
+    The scene's film, filter and sampler apply, as in ``mi.render``; the
+    first three channels in ``space``, an (H, W, 3) tensor on the device.
+    """
+    img = integrator.render(mscene, mscene.sensors()[0], seed=pass_seed(seed, k), spp=n, develop=True)
+    H, W, C = (int(v) for v in img.shape)
+    idx = dr.arange(mi.UInt32, H * W)
+    L = mi.Color3f(*(dr.gather(mi.Float, img.array, idx * C + c) for c in range(3)))
+    L = _to_space(L, space)
+    out = dr.zeros(mi.Float, 3 * H * W)
+    for c in range(3):
+        dr.scatter(out, L[c], idx * 3 + c)
+    return mi.TensorXf(out, (H, W, 3))
+
+
+def _pass_function(mscene, integrator, seed: int, *, jitter: bool = True, space: str = "rgb"):
     """The pass of :func:`mcrt.film.run_passes` for ``integrator`` on a loaded Mitsuba scene (its first sensor).
 
     Returns ``(pass_sums, width, height, method)``. ``method`` is
-    ``'samples'`` for an integrator that samples camera rays
-    (:func:`_sample_function`): pass k traces W H n lanes, lane = pixel n + s,
-    film position ((i + u) / W, (j + v) / H) (a box pixel, whatever
-    reconstruction filter the film names), the sampler seeded with
-    :func:`pass_seed` (seed, k), and reduces each pixel's n samples with
-    ``dr.block_sum`` into sums of x and x^2. ``method`` is ``'batches'`` for
-    an adjoint integrator (``ptracer``): pass k is the integrator's own
-    ``render`` at n spp with seed :func:`pass_seed` (seed, k), and the image
-    of the pass counts as one sample of weight n (sums n x and n x^2; see
-    :func:`_run`).
+    ``'samples'`` where :func:`per_sample_method` allows it: pass k traces
+    W H n lanes, lane = pixel n + s, film position ((i + u) / W, (j + v) / H)
+    (a box pixel), the sampler seeded with :func:`pass_seed` (seed, k), and
+    reduces each pixel's n samples with ``dr.block_sum`` into sums of x and
+    x^2. ``method`` is ``'batches'`` otherwise (an adjoint integrator such
+    as ``ptracer``, a filter wider than a pixel, a sampler other than
+    ``independent``): pass k is :func:`batch_image` (k, n), and the image of
+    the pass counts as one sample of weight n (sums n x and n x^2; see
+    :func:`_run`). ``space`` is ``'rgb'`` or ``'xyz'`` (:func:`_to_space`).
     """
     sensor = mscene.sensors()[0]
     film = sensor.film()
@@ -320,19 +384,14 @@ def _pass_function(mscene, integrator, seed: int, *, jitter: bool = True):
     ox, oy = (int(v) for v in film.crop_offset())
     FW, FH = (int(v) for v in film.size())
     sample = _sample_function(integrator)
-    if sample is None:
-        if not isinstance(integrator, mi.AdjointIntegrator):
+    if per_sample_method(mscene, integrator) is not None:
+        if sample is None and not isinstance(integrator, mi.AdjointIntegrator):
             raise ValueError(f"integrator {integrator.class_name()} neither samples camera rays nor traces particles")
-        if film.rfilter().class_name() != "BoxFilter":
-            raise ValueError(f"integrator {integrator.class_name()} splats through the film's reconstruction filter "
-                             f"({film.rfilter().class_name()}); give the scene's film a box filter (rfilter type 'box')")
 
         def pass_sums(k: int, n: int):
-            img = integrator.render(mscene, sensor, seed=pass_seed(seed, k), spp=n, develop=True)
-            channels = int(img.shape[2])
-            idx = dr.arange(mi.UInt32, 3 * W * H)
-            x = mi.Float64(dr.gather(mi.Float, img.array, (idx // 3) * channels + idx % 3))
+            x = mi.Float64(batch_image(mscene, integrator, seed, k, n, space).array)
             sums = dr.zeros(mi.Float64, 6 * W * H)
+            idx = dr.arange(mi.UInt32, 3 * W * H)
             dr.scatter(sums, x * n, idx)
             dr.scatter(sums, x * x * n, idx + 3 * W * H)
             dr.eval(sums)
@@ -360,7 +419,7 @@ def _pass_function(mscene, integrator, seed: int, *, jitter: bool = True):
         lens = sampler.next_2d() if aperture else mi.Point2f(0.5)
         ray, weight = sensor.sample_ray_differential(time=0.0, sample1=0.0, sample2=pos, sample3=lens)
         L = sample(mscene, sampler, ray)
-        L = L * weight  # the perspective sensor's weight is 1; kept for other sensors
+        L = _to_space(L * weight, space)  # the perspective sensor's weight is 1; kept for other sensors
         dr.eval(L)  # trace once; reducing an unevaluated L re-runs the path kernel per channel
         # Per-pixel sums by block_sum (a deterministic reduction), laid out (moment, pixel, channel).
         sums = dr.zeros(mi.Float64, 6 * W * H)
@@ -376,27 +435,34 @@ def _pass_function(mscene, integrator, seed: int, *, jitter: bool = True):
 
 
 def _run(mscene, integrator, *, seed: int, spp: int, spp_per_pass: int | None, progress: bool, label: str,
-         jitter: bool = True, batches: int = 32):
+         jitter: bool = True, batches: int = 32, space: str = "rgb"):
     """Render a loaded Mitsuba scene with ``integrator`` in passes: the pass loop of every Mitsuba render here.
 
-    Returns ``(totals, spp_per_pass, method)`` (:class:`mcrt.film.PassTotals`).
-    For an integrator that samples camera rays the totals are exact
-    per-sample moments. For an adjoint integrator (``'batches'``) the
-    samples of one pixel are not separable (a particle splats into any
-    pixel), so the spp are split into ``batches`` equal passes of
-    spp_per_pass = spp // batches (spp rounded down to a multiple), each
-    pass image one batch mean; the per-sample variance is the variance
-    between batch means times the batch size,
+    Returns ``(totals, spp_per_pass, method, notes)`` (:class:`mcrt.film.PassTotals`;
+    ``notes``: header entries saying how the variance was estimated).
+    Where each pixel's samples are summed apart (``'samples'``,
+    :func:`per_sample_method`) the totals are exact per-sample moments.
+    Otherwise (``'batches'``: a particle tracer, a filter wider than a
+    pixel, a correlated sampler) the samples of one pixel are not separable,
+    so the spp are split into ``batches`` equal passes of spp_per_pass =
+    spp // batches (spp rounded down to a multiple), each pass image one
+    batch mean, independent of the others (its own seed); the per-sample
+    variance is the variance between batch means times the batch size,
 
         var = n (sum x_k^2 - (sum x_k)^2 / P) / (P - 1),
 
     which :func:`mcrt.film.run_passes`'s formula gives after scaling by
     (nP - 1) / (P - 1). It has P - 1 degrees of freedom, not nP - 1 (keep
-    P >= 16). It ignores the correlation between pixels that one particle
-    path creates (its vertices may land in several pixels of a tile), which
-    :func:`mcrt.stats.compare` assumes away.
+    P >= 16): recorded as ``variance_dof``, which :func:`mcrt.stats.compare`
+    uses. Pixels that share samples (a filter of effective area F > 1 px,
+    :func:`filter_area`) are correlated: ``tile_variance_factor`` = F
+    records by how much a tile's variance exceeds the sum of its pixels'
+    (for tiles of many pixels), which :func:`mcrt.stats.compare` applies to
+    tiles larger than one pixel. A particle path's vertices in several
+    pixels are a correlation it does not bound.
     """
-    pass_sums, W, H, method = _pass_function(mscene, integrator, seed, jitter=jitter)
+    why = per_sample_method(mscene, integrator)
+    pass_sums, W, H, method = _pass_function(mscene, integrator, seed, jitter=jitter, space=space)
     if method == "batches":
         if spp_per_pass is None:
             spp_per_pass = max(1, spp // max(1, min(batches, spp)))
@@ -406,10 +472,16 @@ def _run(mscene, integrator, *, seed: int, spp: int, spp_per_pass: int | None, p
         raise ValueError(f"one pass of {W}x{H}x{per_pass} samples exceeds 2^32 lanes: lower spp_per_pass")
     totals = run_passes(pass_sums, width=W, height=H, spp=spp, spp_per_pass=per_pass,
                         progress=Progress(spp, label=label, enabled=progress))
+    notes = {"variance_method": "per-sample moments of each pixel's own samples"}
     if method == "batches":
         P = totals.spp // per_pass
         totals.variance = (totals.variance.astype(np.float64) * (totals.spp - 1) / (P - 1)).astype(np.float32)
-    return totals, per_pass, method
+        F = filter_area(mscene.sensors()[0].film().rfilter())
+        notes = {"variance_method": f"n times the variance between {P} independent batches of {per_pass} spp ({why})",
+                 "variance_dof": str(P - 1)}
+        if F > 1.0001:
+            notes["tile_variance_factor"] = f"{F:.4f}"
+    return totals, per_pass, method, notes
 
 
 def render_mitsuba(scene: Scene, settings: RenderSettings, *, backend: str = "llvm", progress: bool = True,
@@ -437,7 +509,7 @@ def render_mitsuba(scene: Scene, settings: RenderSettings, *, backend: str = "ll
     mscene = mi.load_dict(scene_dict(scene, s.camera, s.width, s.height, s.max_depth, integrator, rr_depth=s.rr_depth,
                                      spp=s.spp, backend=backend))
     load_time = time.perf_counter() - t_load
-    totals, per_pass, _ = _run(mscene, mscene.integrator(), seed=s.seed, spp=s.spp, spp_per_pass=spp_per_pass,
+    totals, per_pass, _, _ = _run(mscene, mscene.integrator(), seed=s.seed, spp=s.spp, spp_per_pass=spp_per_pass,
                                progress=progress, label="mitsuba", jitter=jitter)
     return RenderResult(
         mean=totals.mean,
@@ -532,17 +604,21 @@ def integrator_max_depth(integrator) -> int:
     return -1 if v < 0 or v >= 2**31 else v
 
 
-def _integrator_spec(integrator: str | dict[str, Any] | None, max_depth: int | None, current: str) -> dict[str, Any] | None:
-    """The integrator dictionary that replaces the scene's (None: keep it).
+def _integrator_spec(integrator: str | dict[str, Any] | None, max_depth: int | None, current: str
+                     ) -> tuple[dict[str, Any] | None, tuple[str, ...]]:
+    """The integrator dictionary that replaces the scene's (None: keep it), and the keys it took from the scene.
 
     A dictionary replaces it as given. A name replaces the plugin and keeps
     the scene integrator's ``max_depth`` and ``rr_depth`` (``current`` is its
     description), so that ``path`` and ``prb`` (default depths -1 and 6)
-    render the same light paths; ``max_depth`` overrides the depth.
+    render the same light paths; :func:`load_integrator` drops those the new
+    plugin does not take (``direct`` has no depth). ``max_depth`` overrides
+    the depth.
     """
+    inherited: tuple[str, ...] = ()
     if integrator is None:
         if max_depth is None:
-            return None
+            return None, ()
         integrator = _INTEGRATOR_CLASSES.get(current.split("[", 1)[0].strip(), None)
         if integrator is None:
             raise ValueError(f"cannot set max_depth of the scene's integrator {current.split('[', 1)[0]}: name the integrator")
@@ -555,15 +631,149 @@ def _integrator_spec(integrator: str | dict[str, Any] | None, max_depth: int | N
             if m is not None:
                 v = int(m.group(1))
                 spec[key] = -1 if v >= 2**31 else v
+                inherited += (key,)
     if max_depth is not None:
         spec["max_depth"] = int(max_depth)
-    return spec
+        inherited = tuple(k for k in inherited if k != "max_depth")
+    return spec, inherited
+
+
+def load_integrator(spec: dict[str, Any], inherited: tuple[str, ...] = ()) -> "mi.Integrator":
+    """``mi.load_dict(spec)``, less the ``inherited`` parameters the plugin does not take.
+
+    Mitsuba refuses a parameter no plugin reads ("unreferenced property");
+    one the caller named is a mistake and raised as such, one copied from
+    the scene's integrator (its depth, for ``direct``, which has none) is
+    dropped.
+    """
+    spec = dict(spec)
+    while True:
+        try:
+            return mi.load_dict(spec)
+        except RuntimeError as e:
+            unused = [k for k in inherited if k in spec and re.search(rf'"{k}"', str(e)) and "unreferenced" in str(e)]
+            if not unused:
+                raise ValueError(f"integrator {spec.get('type')}: {' '.join(str(e).split())}") from None
+            for k in unused:
+                del spec[k]
+
+
+#: Top-level XML integrators that wrap the one that renders: the wrapped one is rendered in their place.
+_WRAPPERS = ("moment",)
+
+
+def _scene_defaults(root) -> dict[str, str]:
+    """The ``<default name=... value=...>`` parameters of a parsed scene (its includes inlined)."""
+    return {d.get("name"): d.get("value") for d in root.iter("default")}
+
+
+def _inline(path: Path, root, depth: int = 0):
+    """``root`` (parsed from ``path``) with ``<path>`` entries made absolute and ``<include>`` files inlined.
+
+    An included file is looked for beside the file that includes it (as
+    Mitsuba's parser does); its own ``<path>`` and ``<include>`` entries are
+    relative to itself.
+    """
+    import xml.etree.ElementTree as ET
+
+    if depth > 16:
+        raise ValueError(f"{path}: includes nested more than 16 deep")
+    for el in root.iter("path"):
+        v = el.get("value")
+        if v and not os.path.isabs(v):
+            el.set("value", str((path.parent / v).resolve()))
+    for parent in list(root.iter()):
+        for i, el in enumerate(list(parent)):
+            if el.tag != "include":
+                continue
+            name = el.get("filename", "")
+            target = path.parent / name
+            if not target.is_file():
+                raise ValueError(f"{path}: included file {name} not found beside it")
+            try:
+                sub = _inline(target, ET.parse(target).getroot(), depth + 1)
+            except ET.ParseError as e:
+                raise ValueError(f"{target}: not a readable XML scene ({e})") from None
+            parent.remove(el)
+            for j, child in enumerate(list(sub)):
+                parent.insert(i + j, child)
+    return root
+
+
+def load_scene_file(path: str | os.PathLike, defaults: dict[str, Any] | None = None) -> tuple["mi.Scene", dict[str, str]]:
+    """Load a Mitsuba XML scene as Mitsuba's render tests do; returns the scene and notes for the render's header.
+
+    * ``defaults`` set the file's ``<default>`` parameters (``-D key=value``;
+      a name the file does not declare is refused, naming those it has);
+    * a top-level ``moment`` integrator (Mitsuba's test scenes wrap theirs in
+      one to write moments) is replaced by the integrator it wraps, which is
+      what renders the image;
+    * the scene's folder, and a ``common`` folder beside any folder above it
+      (Mitsuba's tests add ``common`` to the file resolver), are searched for
+      the files it names; ``<path>`` entries are made absolute and
+      ``<include>`` files inlined (:func:`_inline`).
+    """
+    import xml.etree.ElementTree as ET
+
+    path = Path(path)
+    if not path.is_file():
+        raise ValueError(f"{path}: no such Mitsuba scene file")
+    try:
+        root = _inline(path, ET.parse(path).getroot())
+    except ET.ParseError as e:
+        raise ValueError(f"{path}: not a readable XML scene ({e})") from None
+    notes: dict[str, str] = {}
+    declared = _scene_defaults(root)
+    given = {str(k): str(v) for k, v in (defaults or {}).items()}
+    for k in given:
+        if k not in declared:
+            have = ", ".join(f"{n}={v}" for n, v in declared.items()) or "none"
+            raise ValueError(f"{path}: the scene declares no parameter {k!r} (its defaults: {have})")
+    if given:
+        notes["parameters"] = ",".join(f"{k}={v}" for k, v in sorted(given.items()))
+    for i, el in enumerate(list(root)):
+        if el.tag == "integrator" and el.get("type") in _WRAPPERS:
+            inner = el.find("integrator")
+            if inner is not None:
+                root.remove(el)
+                root.insert(i, inner)
+                notes["unwrapped"] = f"the scene's {el.get('type')} integrator, rendering the integrator it wraps"
+    resolver = mi.file_resolver()
+    old = list(resolver)
+    try:
+        resolver.prepend(str(path.parent.resolve()))
+        for up in path.resolve().parents:
+            if (up / "common").is_dir():
+                resolver.append(str(up / "common"))
+                break
+        text = ET.tostring(root, encoding="unicode")
+        scene = mi.load_string(text, **given)
+    except RuntimeError as e:
+        hint = ("; to change the integrator, name it with --integrator (integrator=...), which passes only the "
+                "parameters it takes" if "unreferenced" in str(e) and "integrator" in given else "")
+        raise ValueError(f"{path}: {' '.join(str(e).split())}{hint}") from None
+    finally:
+        resolver.clear()
+        for p in old:
+            resolver.append(p)
+    return scene, notes
+
+
+#: Mitsuba's class names of its integrators -> their plugin names (the rest: the class name, lower case).
+_INTEGRATOR_CLASSES = {
+    "PathIntegrator": "path", "VolumetricPathIntegrator": "volpath", "VolumetricMisPathIntegrator": "volpathmis",
+    "PRBIntegrator": "prb", "PRBBasicIntegrator": "prb_basic", "PRBVolpathIntegrator": "prbvolpath",
+    "ParticleTracerIntegrator": "ptracer", "DirectIntegrator": "direct", "AOVIntegrator": "aov",
+    "MomentIntegrator": "moment", "DirectProjectiveIntegrator": "direct_projective",
+    "PRBProjectiveIntegrator": "prb_projective",
+}
 
 
 def render_with_variance(scene: "dict[str, Any] | mi.Scene | str | os.PathLike", *, integrator: str | dict[str, Any] | None = None,
                          spp: int | None = None, seed: int = 0, width: int | None = None, height: int | None = None,
                          max_depth: int | None = None, backend: str = "llvm", progress: bool = False,
-                         spp_per_pass: int | None = None, batches: int = 32) -> RenderResult:
+                         spp_per_pass: int | None = None, batches: int = 32, defaults: dict[str, Any] | None = None,
+                         space: str = "rgb") -> RenderResult:
     """Render any Mitsuba scene with any of its integrators: mean and per-sample variance, reproducible from ``seed``.
 
     ``scene`` is a scene dictionary (``mi.cornell_box()``), a loaded
@@ -579,11 +789,20 @@ def render_with_variance(scene: "dict[str, Any] | mi.Scene | str | os.PathLike",
     whose images give the variance (see :func:`_run`; their film adds splats
     atomically, so the image is reproducible only up to rounding).
 
-    Every sample counts for its own pixel (a box pixel): a dictionary's film
-    filter is set to ``box`` (noted in ``extra['rfilter']`` when it was
-    another), so that ``mi.render`` with that scene converges to the same
-    image; a loaded scene or a file keeps its filter, which sampling
-    integrators ignore and ``ptracer`` refuses unless it is ``box``.
+    A dictionary's film filter is set to ``box`` (noted in
+    ``extra['rfilter']`` when it was another), so that each sample counts
+    for its own pixel and ``mi.render`` with that scene converges to the
+    same image. A file (:func:`load_scene_file`: ``defaults`` are its
+    ``<default>`` parameters, a ``moment`` wrapper is unwrapped) or a loaded
+    scene is rendered as Mitsuba renders it: its film, reconstruction filter
+    (Mitsuba's default is a gaussian), sampler and integrator parameters.
+    Where a filter wider than a pixel, a sampler other than ``independent``
+    or a particle tracer keeps a pixel's samples from being summed apart,
+    the render goes in independent batches (:func:`_run`) and the header
+    says how the variance was estimated (``variance_method``), its degrees
+    of freedom (``variance_dof``) and the tile variance factor of the
+    filter (``tile_variance_factor``). ``space='xyz'`` renders CIE X, Y, Z
+    instead of linear RGB (``extra['channels'] = 'XYZ'``).
 
     The result records ``renderer`` = the integrator's plugin name,
     ``max_depth`` = :func:`integrator_max_depth` (-1 unbounded or none),
@@ -616,9 +835,13 @@ def render_with_variance(scene: "dict[str, Any] | mi.Scene | str | os.PathLike",
         path = Path(scene)
         if not path.is_file():
             raise ValueError(f"{path}: no such Mitsuba scene file")
-        mscene, scene_hash, source = mi.load_file(str(path)), mitsuba_scene_hash(path), str(path)
-    spec = _integrator_spec(integrator, max_depth, str(mscene.integrator()))
-    integ = mscene.integrator() if spec is None else mi.load_dict(spec)
+        mscene, notes = load_scene_file(path, defaults)
+        scene_hash, source = mitsuba_scene_hash(path), str(path)
+        extra.update(notes)
+    if defaults and not isinstance(scene, (str, os.PathLike)):
+        raise ValueError("scene parameters (-D key=value) apply to an XML scene file only")
+    spec, inherited = _integrator_spec(integrator, max_depth, str(mscene.integrator()))
+    integ = mscene.integrator() if spec is None else load_integrator(spec, inherited)
     if width is not None or height is not None:
         params = mi.traverse(mscene.sensors()[0])
         fw, fh = (int(v) for v in mscene.sensors()[0].film().size())
@@ -632,9 +855,13 @@ def render_with_variance(scene: "dict[str, Any] | mi.Scene | str | os.PathLike",
     if spp is None:
         spp = int(sensor.sampler().sample_count())
     name = _integrator_name_of(integ)
-    totals, per_pass, method = _run(mscene, integ, seed=seed, spp=int(spp), spp_per_pass=spp_per_pass, progress=progress,
-                                    label=name, batches=batches)
+    totals, per_pass, method, notes = _run(mscene, integ, seed=seed, spp=int(spp), spp_per_pass=spp_per_pass,
+                                           progress=progress, label=name, batches=batches, space=space)
+    film = sensor.film()
+    extra.update(notes)
     extra.update({
+        "film": f"{film.class_name()} {int(film.size()[0])}x{int(film.size()[1])}, filter {film.rfilter().class_name()} "
+                f"(radius {film.rfilter().radius():g} px), sampler {sensor.sampler().class_name()}",
         "variant": variant,
         "mitsuba_version": mi.__version__,
         "drjit_version": dr.__version__,
@@ -644,6 +871,8 @@ def render_with_variance(scene: "dict[str, Any] | mi.Scene | str | os.PathLike",
         "source": source,
         "load_time": f"{load_time:.3f}",
     })
+    if space == "xyz":
+        extra["channels"] = "XYZ"
     return RenderResult(
         mean=totals.mean,
         variance=totals.variance,
@@ -657,16 +886,6 @@ def render_with_variance(scene: "dict[str, Any] | mi.Scene | str | os.PathLike",
         compile_time=totals.compile_time,
         extra=extra,
     )
-
-
-#: Mitsuba's class names of its integrators -> their plugin names (the rest: the class name, lower case).
-_INTEGRATOR_CLASSES = {
-    "PathIntegrator": "path", "VolumetricPathIntegrator": "volpath", "VolumetricMisPathIntegrator": "volpathmis",
-    "PRBIntegrator": "prb", "PRBBasicIntegrator": "prb_basic", "PRBVolpathIntegrator": "prbvolpath",
-    "ParticleTracerIntegrator": "ptracer", "DirectIntegrator": "direct", "AOVIntegrator": "aov",
-    "MomentIntegrator": "moment", "DirectProjectiveIntegrator": "direct_projective",
-    "PRBProjectiveIntegrator": "prb_projective",
-}
 
 
 def _integrator_name_of(integrator) -> str:

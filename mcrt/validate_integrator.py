@@ -90,6 +90,17 @@ def parse_integrator(text: str) -> str | dict[str, Any]:
     return spec
 
 
+def parse_defines(items) -> dict[str, str]:
+    """``['spp=16', 'integrator=direct']`` (``-D KEY=VALUE`` options) -> ``{'spp': '16', 'integrator': 'direct'}``."""
+    out = {}
+    for item in items or ():
+        key, eq, value = item.partition("=")
+        if not eq or not key.strip():
+            raise ValueError(f"-D {item!r}: expected KEY=VALUE")
+        out[key.strip()] = value.strip()
+    return out
+
+
 def _value(v: str):
     for cast in (int, float):
         try:
@@ -106,17 +117,19 @@ def _label(spec) -> str:
     return f"{spec['type']}:{rest}" if rest else str(spec["type"])
 
 
-def _render(scene, spec, spp: int, seed: int, res: int | None, backend: str):
+def _render(scene, spec, spp: int, seed: int, res: int | None, backend: str, defaults=None):
     from mcrt.mitsuba import render_with_variance
 
-    return render_with_variance(scene, integrator=spec, spp=spp, seed=seed, width=res, height=res, backend=backend)
+    return render_with_variance(scene, integrator=spec, spp=spp, seed=seed, width=res, height=res, backend=backend,
+                                defaults=defaults)
 
 
-def calibrate(scene, spec, *, spp: int = 32, res: int | None = None, backend: str = "llvm", seed: int = 999) -> float:
+def calibrate(scene, spec, *, spp: int = 32, res: int | None = None, backend: str = "llvm", seed: int = 999,
+              defaults=None) -> float:
     """Seconds per spp of ``spec`` on ``scene``: (wall - compile) / spp of a short render (run twice: the second is timed)."""
     times = []
     for k in range(2):
-        r = _render(scene, spec, spp, seed + k, res, backend)
+        r = _render(scene, spec, spp, seed + k, res, backend, defaults)
         times.append(max(r.wall_time - (r.compile_time or 0.0), 1e-6) / max(r.spp, 1))
     return times[-1]
 
@@ -147,7 +160,7 @@ def _describe(r, spec) -> dict[str, Any]:
 def validate_integrator(scene, integrator, against, *, budget: float = 2.0, seed: int = 1, res: int | None = None,
                         scene_against=None, alpha: float = 0.01, tile: int = 8, backend: str = "llvm",
                         seconds_per_spp: tuple[float, float] | None = None, calibration_spp: int = 32,
-                        spp: int | None = None) -> dict[str, Any]:
+                        spp: int | None = None, defaults: dict[str, str] | None = None) -> dict[str, Any]:
     """Render ``scene`` with ``integrator`` (A) and ``against`` (B) at equal time (or equal ``spp``) and compare them.
 
     ``scene`` is a Mitsuba scene dictionary, XML path or loaded scene
@@ -157,7 +170,8 @@ def validate_integrator(scene, integrator, against, *, budget: float = 2.0, seed
     render's time in seconds; ``seconds_per_spp`` skips the calibration.
     ``spp`` renders both at that many samples per pixel instead (equal
     samples, no calibration): the verdict is then a function of the seeds
-    alone, the same on every machine.
+    alone, the same on every machine. ``defaults`` set an XML scene's
+    ``<default>`` parameters (``-D key=value``).
     Returns a JSON-ready dictionary: ``passed``, ``summary``, ``a``, ``b``
     (spp, seed, times, MSE, efficiency), ``efficiency_ratio`` (A over B),
     ``seconds_per_spp`` and the :class:`mcrt.stats.Comparison` under
@@ -171,11 +185,12 @@ def validate_integrator(scene, integrator, against, *, budget: float = 2.0, seed
         seconds_per_spp = None
     else:
         if seconds_per_spp is None:
-            seconds_per_spp = (calibrate(scene, integrator, spp=calibration_spp, res=res, backend=backend),
-                               calibrate(scene_b, against, spp=calibration_spp, res=res, backend=backend))
+            seconds_per_spp = (calibrate(scene, integrator, spp=calibration_spp, res=res, backend=backend, defaults=defaults),
+                               calibrate(scene_b, against, spp=calibration_spp, res=res, backend=backend,
+                                         defaults=defaults))
         spp_a, spp_b = spp_for(budget, seconds_per_spp[0], integrator), spp_for(budget, seconds_per_spp[1], against)
-    a = _render(scene, integrator, spp_a, 2 * seed, res, backend)
-    b = _render(scene_b, against, spp_b, 2 * seed + 1, res, backend)
+    a = _render(scene, integrator, spp_a, 2 * seed, res, backend, defaults)
+    b = _render(scene_b, against, spp_b, 2 * seed + 1, res, backend, defaults)
     c = compare(a, b, policy="independent", alpha=alpha, tile=tile)
     da, db = _describe(a, integrator), _describe(b, against)
     return {
@@ -290,6 +305,8 @@ def register(sub) -> None:
     p.add_argument("--alpha", type=float, default=0.01, help="family-wise error rate of the tile tests, Holm (default: 0.01)")
     p.add_argument("--tile", type=int, default=8, help="tile edge in pixels (default: 8)")
     p.add_argument("--backend", choices=("llvm", "cuda"), default="llvm", help="Dr.Jit backend (default: llvm)")
+    p.add_argument("-D", dest="define", action="append", default=[], metavar="KEY=VALUE",
+                   help="set a <default> parameter of the XML scene (repeatable; default: the file's values)")
     p.add_argument("--heatmap", default=None, help="write the heat map of t (PNG) here (default: none)")
     p.add_argument("--json", default=None, help="write the result (seeds, spp, times, verdict, efficiency) as JSON here "
                                                 "(default: none)")
@@ -314,6 +331,8 @@ def cmd_validate_integrator(args) -> int:
             raise ValueError("--seeds N and --report DIR go together")
         if args.seeds == 0 and (len(againsts) > 1 or wrongs):
             raise ValueError("several --against or a --wrong need --seeds N --report DIR")
+        if args.define and args.seeds:
+            raise ValueError("-D applies to a single run (not with --seeds)")
         if args.spp is not None and (args.seeds or args.spp < 1):
             raise ValueError("--spp needs a positive count and a single run (no --seeds)")
     except ValueError as e:
@@ -327,7 +346,8 @@ def cmd_validate_integrator(args) -> int:
         return EXIT_OK
     try:
         r = validate_integrator(scene, integrator, againsts[0], budget=args.budget, seed=args.seed, res=args.res,
-                                alpha=args.alpha, tile=args.tile, backend=args.backend, spp=args.spp)
+                                alpha=args.alpha, tile=args.tile, backend=args.backend, spp=args.spp,
+                                defaults=parse_defines(args.define))
     except (ValueError, RuntimeError) as e:
         print(f"mcrt validate-integrator: {e}", file=sys.stderr)
         return EXIT_UNUSABLE

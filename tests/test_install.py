@@ -52,7 +52,7 @@ def test_the_installed_package_renders_and_compares_from_another_folder(installe
     r = _run(target, tmp_path, "-c", "import mcrt, mcrt.scene as s, mcrt.plugins as p; print(mcrt.__file__, s.DATA_DIR, p.__file__)")
     assert r.returncode == 0, r.stderr
     assert all(str(target) in part for part in r.stdout.split()), r.stdout  # nothing from the checkout
-    for args in (["--help"], ["scene"], ["reference", "list"], ["mutants"]):
+    for args in (["--help"], ["scene"], ["reference", "list"], ["mutants"], ["mitsuba-suite", "--help"]):
         r = _run(target, tmp_path, "-m", "mcrt.cli", *args)
         assert r.returncode == 0, (args, r.stderr[-2000:])
     r = _run(target, tmp_path, "-m", "mcrt.cli", "render", "--res", "8", "--spp", "4", "--seed", "1", "-o", "a.exr")

@@ -14,6 +14,8 @@ One job per module:
 * :mod:`mcrt.stats.policy`: the comparison policy, :func:`compare` with
   ``policy='independent'`` or ``'reference-floor'`` (the variance floor,
   :func:`floor_variance`, against a high-spp reference);
+* :mod:`mcrt.stats.multiscale`: the tile tests of several tile sizes in one
+  family-wise level (:func:`compare_multiscale`);
 * :mod:`mcrt.stats.multiple`: Holm, Bonferroni and Benjamini-Hochberg
   (:func:`adjust_p_values`, :func:`reject`), weighted Holm (:func:`adjust_p_values_weighted`);
 * :mod:`mcrt.stats.goodness`: chi-square goodness of fit with pooling
@@ -30,6 +32,7 @@ reports is :mod:`mcrt.compare`'s job; the pytest assertion is
 from mcrt.stats.errors import StatsError, ZeroPdfError
 from mcrt.stats.goodness import chi2_gof
 from mcrt.stats.interval import binomial_interval
+from mcrt.stats.multiscale import MultiScale, compare_multiscale, scales_for
 from mcrt.stats.multiple import CORRECTIONS, adjust_p_values, adjust_p_values_weighted, reject
 from mcrt.stats.policy import POLICIES, compare, floor_variance
 from mcrt.stats.tiles import tile_box, tile_counts, tile_means, tile_sums
@@ -43,6 +46,9 @@ __all__ = [
     "Comparison",
     "compare_images",
     "variance_dof",
+    "MultiScale",
+    "compare_multiscale",
+    "scales_for",
     "POLICIES",
     "compare",
     "floor_variance",

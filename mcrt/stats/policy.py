@@ -44,7 +44,7 @@ import numpy as np
 
 from mcrt.film import RenderResult
 from mcrt.stats.errors import StatsError
-from mcrt.stats.twosample import Comparison, compare_images
+from mcrt.stats.twosample import EXACT_RTOL, Comparison, compare_images
 
 __all__ = ["POLICIES", "compare", "floor_variance"]
 
@@ -86,6 +86,7 @@ def compare(
     channels: str = "rgb",
     correction: str = "holm",
     min_spp: int = 2,
+    rtol: float = EXACT_RTOL,
 ) -> Comparison:
     """Compare a render with another under a named policy.
 
@@ -104,8 +105,9 @@ def compare(
     image_ref : RenderResult
         The other render (side B); the reference under ``'reference-floor'``.
     policy : {'independent', 'reference-floor'}
-    alpha, tile, channels, correction, min_spp
-        As in :func:`compare_images`.
+    alpha, tile, channels, correction, min_spp, rtol
+        As in :func:`compare_images` (``rtol``: the relative difference
+        accepted between noiseless tiles; float32 rounding by default).
 
     Returns
     -------
@@ -124,5 +126,5 @@ def compare(
     if policy == "reference-floor":
         image_test = floor_variance(image_test, image_ref)
     c = compare_images(image_test, image_ref, alpha=alpha, tile=tile, channels=channels, correction=correction,
-                       min_spp=min_spp)
+                       min_spp=min_spp, rtol=rtol)
     return replace(c, policy=policy)

@@ -44,6 +44,9 @@ LUMINANCE_WEIGHTS = (0.2126, 0.7152, 0.0722)
 #: Schema tag written by :meth:`Comparison.to_dict`.
 SCHEMA = "mcrt.stats.comparison/1"
 
+#: The default tolerance of the equality test of noiseless tiles: float32 rounding, "exact".
+EXACT_RTOL = 1e-5
+
 # A pixel counts as deterministic (zero variance) when its per-sample
 # standard deviation is at most this fraction of its mean. Moments kept in
 # float32 (Mitsuba's 'moment' integrator, var = m2 - m1^2) leave a constant
@@ -152,6 +155,23 @@ class Comparison:
     max_abs_t: TileResult | None = None
     min_p: float = 1.0
     policy: str = "independent"
+    rtol: float = 1e-5
+
+    def noiseless(self) -> dict:
+        """The tests decided by equality (both sides noiseless) apart from the others.
+
+        Returns ``{'tests', 'rejected', 'largest_rel_diff', 'accepted_by_rtol'}``:
+        how many noiseless tests there are and are rejected, the largest
+        |symmetric relative difference| among them, and how many differ by
+        more than float32 rounding (:data:`EXACT_RTOL`) but were accepted
+        because ``rtol`` is larger (a known offset the user accepted).
+        """
+        det = np.asarray(self.deterministic, bool)
+        rel = np.abs(np.where(det, self.rel_diff, 0.0))
+        accepted = det & ~self.rejected & (rel > EXACT_RTOL)
+        return {"tests": int(det.sum()), "rejected": int(np.count_nonzero(det & self.rejected)),
+                "largest_rel_diff": float(rel.max()) if det.any() else 0.0,
+                "accepted_by_rtol": int(accepted.sum())}
 
     def __repr__(self) -> str:
         return f"Comparison({self.summary()!r})"
@@ -285,7 +305,7 @@ def _to_channels(mean: np.ndarray, var: np.ndarray, channels: str) -> tuple[np.n
     """
     mean = mean.astype(np.float64)
     var = np.maximum(var.astype(np.float64), 0.0)
-    if channels == "rgb":
+    if channels in ("rgb", "xyz"):
         return mean, var
     w = np.asarray(LUMINANCE_WEIGHTS)
     sd_y = np.sqrt(var) @ w
@@ -293,30 +313,51 @@ def _to_channels(mean: np.ndarray, var: np.ndarray, channels: str) -> tuple[np.n
 
 
 def variance_dof(r: RenderResult) -> int:
-    """Degrees of freedom of each pixel's variance estimate in ``r``: spp - 1, or R - 1 for R replicates.
+    """Degrees of freedom of each pixel's variance estimate in ``r``: spp - 1, R - 1 for R replicates, or as stated.
 
     ``r.extra['variance_method']`` (the EXR attribute ``mcrt.variance_method``,
     :mod:`mcrt.samplers`) says how the variance was estimated: 'samples' (or
     absent) from independent samples, 'replicates:R' from the spread of R
-    independent replicate means (randomised quasi-Monte Carlo). Raises
-    :class:`StatsError` for a value it does not know.
+    independent replicate means (randomised quasi-Monte Carlo);
+    ``r.extra['variance_dof']``, where present, states it outright (a render
+    made in P independent batches records P - 1). Raises
+    :class:`StatsError` for a malformed 'replicates:' value.
     """
-    method = (r.extra or {}).get("variance_method", "samples")
-    if method in ("", "samples"):
+    extra = r.extra or {}
+    if "variance_dof" in extra:  # stated outright (P independent batches: P - 1)
+        return max(1, int(extra["variance_dof"]))
+    kind, _, count = str(extra.get("variance_method", "samples")).partition(":")
+    if kind != "replicates":  # 'samples', or words saying the moments are each pixel's own samples'
         return int(r.spp) - 1
-    kind, _, count = str(method).partition(":")
-    if kind != "replicates" or not count.isdigit() or int(count) < 2:
-        raise StatsError(f"unknown variance_method {method!r} (expected 'samples' or 'replicates:R' with R >= 2)")
+    if not count.isdigit() or int(count) < 2:
+        raise StatsError(f"variance_method {extra['variance_method']!r}: expected 'replicates:R' with R >= 2")
     return int(count) - 1
 
 
-def _side_stats(mean: np.ndarray, var: np.ndarray, spp: int, tile: int, channels: str, dof: int) -> _Side:
+def side_variance_terms(r: RenderResult, tile: int) -> tuple[int, float]:
+    """The degrees of freedom of a render's variance estimate (:func:`variance_dof`) and the factor its tiles'
+    variance takes.
+
+    A render whose pixels share samples through a film filter records ``extra['tile_variance_factor']``
+    (:func:`mcrt.mitsuba.filter_area`), applied to tiles of more than one
+    pixel, whose pixels are then not independent.
+    """
+    factor = float((r.extra or {}).get("tile_variance_factor", 1.0)) if tile > 1 else 1.0
+    return variance_dof(r), factor
+
+
+def _side_stats(mean: np.ndarray, var: np.ndarray, spp: int, tile: int, channels: str, dof: int | None = None,
+                factor: float = 1.0, rtol: float = EXACT_RTOL) -> _Side:
     mean, var = _to_channels(mean, var, channels)
     npix = tile_counts(*mean.shape[:2], tile)[:, :, None]
-    det_pixel = np.sqrt(var) <= _ZERO_SD_RTOL * np.abs(mean)
-    s = var / spp  # variance of each pixel's mean
+    # Noiseless: a per-sample sd at float32 rounding of the moments, and a mean whose sd is below what the
+    # equality test resolves, a tenth of rtol (else a low-noise pixel at high spp would be tested for equality and
+    # fail on its noise).
+    sd = np.sqrt(var)
+    det_pixel = (sd <= _ZERO_SD_RTOL * np.abs(mean)) & (sd / np.sqrt(spp) <= 0.1 * rtol * np.abs(mean))
+    s = factor * var / spp  # variance of each pixel's mean (times the tile factor of correlated pixels)
     tvar = tile_sums(s, tile) / npix**2
-    dof_term = tile_sums(s * s, tile) / npix**4 / dof
+    dof_term = tile_sums(s * s, tile) / npix**4 / (spp - 1 if dof is None else dof)
     det = tile_sums((~det_pixel).astype(np.float64), tile) == 0
     return _Side(tile_means(mean, tile), tvar, dof_term, det, tile_means(mean, 0)[0, 0])
 
@@ -360,7 +401,7 @@ def compare_images(
     channels: str = "rgb",
     correction: str = "holm",
     min_spp: int = 2,
-    rtol: float = 1e-5,
+    rtol: float = EXACT_RTOL,
 ) -> Comparison:
     r"""Two-sample Welch test of tile means, corrected for multiple testing.
 
@@ -391,6 +432,12 @@ def compare_images(
     (see :func:`mcrt.stats.multiple.adjust_p_values`); the images are
     consistent when no test is rejected at ``alpha``.
 
+    A side rendered in independent batches (a particle tracer, a film
+    filter wider than a pixel) brings its degrees of freedom and a tile
+    variance factor in its ``extra`` (:func:`side_variance_terms`): each
+    pixel's term counts P - 1 degrees of freedom instead of n - 1, and a
+    tile's variance is multiplied by the filter's effective area.
+
     This is the ``'independent'`` comparison policy: each side's own variance
     as given. Against a high-spp reference of the same estimator use
     :func:`mcrt.stats.policy.compare` with ``policy='reference-floor'``.
@@ -398,7 +445,8 @@ def compare_images(
     Zero variance: a pixel is deterministic when its per-sample standard
     deviation is at most 1e-3 of its mean (moments stored in float32 leave
     constant pixels with a rounding-level sd after cancellation, not exactly
-    0). Where every pixel of a tile is deterministic on *both* sides (pixels
+    0) and the standard deviation of its mean at most a tenth of ``rtol``
+    of it (so that noise does not reach the equality test's tolerance). Where every pixel of a tile is deterministic on *both* sides (pixels
     that see only the light, or black ones), the tile means are compared for
     equality: ``|m_A - m_B| <= rtol * max(|m_A|, |m_B|)`` gives p = 1 and
     t = 0, otherwise p = 0 and t = +-inf. Zero variance on one side only goes
@@ -421,12 +469,18 @@ def compare_images(
         (``'bh'``).
     tile : int
         Tile edge in pixels; ``tile=1`` gives per-pixel tests.
-    channels : {'rgb', 'luminance'}
+    channels : {'rgb', 'xyz', 'luminance'}
+        ``'xyz'``: the images hold CIE X, Y, Z (a Mitsuba reference read in
+        XYZ, whose per-channel variance is exact there), tested as they are.
     correction : {'holm', 'bonferroni', 'bh'}
     min_spp : int
         Smallest accepted sample count per side (>= 2).
     rtol : float
-        Relative tolerance of the equality test for deterministic tiles.
+        Relative tolerance of the equality test for deterministic tiles
+        (default: float32 rounding, "exact"). Above the default it is also
+        a margin of the noisy tests, whose statistic then takes only the
+        part of the difference beyond ``rtol max(|mA|, |mB|)``: a known
+        relative offset (a reference's) is accepted everywhere.
 
     Returns
     -------
@@ -443,8 +497,8 @@ def compare_images(
     if int(tile) != tile or tile < 1:
         raise ValueError(f"tile must be a positive integer, got {tile}")
     tile = int(tile)
-    if channels not in ("rgb", "luminance"):
-        raise ValueError(f"channels must be 'rgb' or 'luminance', got {channels!r}")
+    if channels not in ("rgb", "xyz", "luminance"):
+        raise ValueError(f"channels must be 'rgb', 'xyz' or 'luminance', got {channels!r}")
     check_correction(correction)
     min_spp = max(2, int(min_spp))
     if a.mean.shape != b.mean.shape:
@@ -452,9 +506,9 @@ def compare_images(
     _check_side(a, "A", min_spp)
     _check_side(b, "B", min_spp)
 
-    sa = _side_stats(a.mean, a.variance, a.spp, tile, channels, variance_dof(a))
-    sb = _side_stats(b.mean, b.variance, b.spp, tile, channels, variance_dof(b))
-    names = ("R", "G", "B") if channels == "rgb" else ("Y",)
+    sa = _side_stats(a.mean, a.variance, a.spp, tile, channels, *side_variance_terms(a, tile), rtol=rtol)
+    sb = _side_stats(b.mean, b.variance, b.spp, tile, channels, *side_variance_terms(b, tile), rtol=rtol)
+    names = {"rgb": ("R", "G", "B"), "xyz": ("X", "Y", "Z")}.get(channels, ("Y",))
 
     diff = sa.mean - sb.mean
     scale = np.maximum(np.abs(sa.mean), np.abs(sb.mean))
@@ -462,7 +516,10 @@ def compare_images(
     with np.errstate(divide="ignore", invalid="ignore"):
         v = sa.var + sb.var
         det = (sa.deterministic & sb.deterministic) | (v <= 0)
-        t = np.where(det, 0.0, diff / np.sqrt(v))
+        # A tolerance above float32 rounding is a margin on noisy tests too: H0 is |mA - mB| <= rtol max(|mA|, |mB|),
+        # tested by the part of the difference beyond it (a known offset of a reference must not fail them either).
+        beyond = np.copysign(np.maximum(np.abs(diff) - rtol * scale, 0.0), diff) if rtol > EXACT_RTOL else diff
+        t = np.where(det, 0.0, beyond / np.sqrt(v))
         dterm = sa.dof_term + sb.dof_term
         df = np.where(det | (dterm <= 0), np.inf, v * v / dterm)
     p = 2.0 * _sps.t.sf(np.abs(t), df)
@@ -507,4 +564,5 @@ def compare_images(
         largest_effect=largest,
         max_abs_t=max_t,
         min_p=float(p.min()),
+        rtol=float(rtol),
     )

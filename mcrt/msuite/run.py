@@ -1,0 +1,261 @@
+"""The suite's computation: every scene rendered, tested by mcrt and by Mitsuba's rule, perturbed, timed.
+
+:func:`run_case` does one scene, :func:`run_suite` all of them (the tuning
+part first, the held-out part last) and the summary. Everything returned is
+JSON-ready.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from typing import IO, Callable
+
+import numpy as np
+
+from mcrt.msuite.perturb import PERTURBATIONS, perturbed
+from mcrt.msuite.scenes import Case, find_cases
+from mcrt.msuite.zrule import z_rule
+
+#: Mitsuba's render-test budget: 2e6 samples over the image.
+SAMPLE_BUDGET = 2_000_000
+#: The references do not record their spp; Mitsuba's reference generator renders 32000 by default.
+REFERENCE_SPP = 32000
+#: The largest noiseless difference the suite accepts as a reference's offset (rounding of an old colour
+#: conversion is 0.03 to 0.1 %); a larger one is a difference, reported as such.
+MAX_OFFSET = 0.005
+#: Seeds of the correct renders (base + k) and of the perturbed ones (base + index).
+CORRECT_SEED, PERTURBED_SEED = 1000, 2000
+
+
+def budget_spp(h: int, w: int, scale: float = 1.0) -> int:
+    """Mitsuba's spp for an h x w image, 2e6 // pixels, times ``scale`` (at least 2)."""
+    return max(2, int(SAMPLE_BUDGET * scale) // (h * w))
+
+
+def _round_up(x: float) -> float:
+    """A tolerance just above ``x``, two significant digits (0.001084 -> 0.0011)."""
+    if x <= 0:
+        return 0.0
+    e = math.floor(math.log10(x)) - 1
+    return math.ceil(x / 10**e) * 10**e
+
+
+def _test(render, ref, ref_var_raw, *, alpha: float, tiles, rtol: float) -> dict:
+    from mcrt.stats import compare_multiscale
+
+    ms = compare_multiscale(render, ref, tiles=tiles, alpha=alpha, policy="reference-floor", channels="xyz", rtol=rtol)
+    z = z_rule(render.mean, ref.mean, ref_var_raw, render.spp)
+    failing = []
+    for t, c, rej in zip(ms.tiles, ms.comparisons, ms.rejected):
+        for ty, tx, ch in np.argwhere(rej)[:10]:
+            y0, y1, x0, x1 = c.tile_box(int(ty), int(tx))
+            failing.append({"tile": t, "rows": [y0, y1 - 1], "cols": [x0, x1 - 1], "channel": "XYZ"[ch],
+                            "t": float(c.t[ty, tx, ch]) if np.isfinite(c.t[ty, tx, ch]) else None,
+                            "rel_diff": float(c.rel_diff[ty, tx, ch]), "noiseless": bool(c.deterministic[ty, tx, ch]),
+                            "mean": float(c.mean_a[ty, tx, ch]), "reference": float(c.mean_b[ty, tx, ch])})
+    masks = [r.copy() for r in ms.rejected]
+    return {"_masks": masks, "_t": [np.nan_to_num(c.t, nan=0.0, posinf=50.0, neginf=-50.0) for c in ms.comparisons], "mcrt": {"failing": failing[:10], "peak": float(np.abs(ref.mean).max()), "passed": ms.passed, "rejected": ms.n_rejected, "noiseless_rejected": ms.noiseless_rejected,
+                     "noisy_rejected": ms.noisy_rejected, "tests": ms.n_tests, "by_scale": ms.by_scale(),
+                     "largest_noiseless_difference": ms.largest_noiseless_difference(), "headline": ms.headline()},
+            "mitsuba": z}
+
+
+def run_case(case: Case, *, spp_scale: float = 1.0, seeds: int = 1, alpha: float = 0.01, tiles=(2, 4, 8, 16, 32, 0),
+             ref_spp: int = REFERENCE_SPP, perturbations=tuple(PERTURBATIONS), backend: str = "llvm",
+             version_rtol: float = 0.0011) -> dict:
+    """One scene: ``seeds`` correct renders and the perturbed ones, each tested both ways.
+
+    A reference that another Mitsuba version wrote is compared within
+    ``version_rtol`` (a margin of every test: that version's colour
+    conversion stores a constant 1.0 as 1.00108 or 0.99971). The reference
+    offset: where the first correct render still differs from the
+    reference in noiseless tiles (no noise there: a difference of the
+    reference, such as a constant 1.0 stored as 1.00108) of at most
+    :data:`MAX_OFFSET`, that difference,
+    rounded up, becomes the scene's ``rtol`` (a margin of every test,
+    :func:`mcrt.stats.compare_images`), stated in the verdict, and every
+    test of the scene uses it, as a user would with ``mcrt compare --rtol``.
+    """
+    import mitsuba as mi
+
+    from mcrt import mitsuba as mm
+    from mcrt.imageio import RGB_TO_XYZ, read_exr, read_mitsuba_reference
+    from mcrt.stats.twosample import EXACT_RTOL
+
+    mm._use(backend)
+    t0 = time.perf_counter()
+    scene, notes = mm.load_scene_file(case.xml)
+    ref = read_mitsuba_reference(case.ref, case.ref_var, spp=ref_spp, space="xyz")
+    ref_var_raw = read_exr(case.ref_var).mean.astype(np.float64) @ RGB_TO_XYZ.T  # as Mitsuba's test reads it
+    h, w = ref.mean.shape[:2]
+    spp = budget_spp(h, w, spp_scale)
+    depth = mm.integrator_max_depth(scene.integrator())
+    out = {"name": case.name, "held_out": case.held_out, "size": [w, h], "spp": spp, "integrator": None,
+           "max_depth": depth, "notes": notes, "ref_variance": ref.extra["variance"], "correct": [],
+           "perturbations": {}}
+
+    def render(seed, max_depth=None):
+        r = mm.render_with_variance(scene, spp=spp, seed=seed, space="xyz", max_depth=max_depth, backend=backend)
+        if r.mean.shape != ref.mean.shape:
+            raise ValueError(f"{case.name}: renders {r.mean.shape[1]}x{r.mean.shape[0]}, its reference is {w}x{h}")
+        return r
+
+    # A reference written by another Mitsuba version went through that version's colour conversion: a constant
+    # 1.0 comes back as 1.00108 or 0.99971 (up to 0.11 %), in every pixel, noisy or not.
+    written_by = ref.extra.get("exr.generatedBy", "")
+    other_version = written_by != f"Mitsuba version {mi.__version__}"
+    rtol = max(EXACT_RTOL, version_rtol) if other_version else EXACT_RTOL
+    out["written_by"], out["version_rtol"] = written_by, rtol
+    masks, ts = [], []
+    for k in range(seeds):
+        r = render(CORRECT_SEED + k)
+        out["integrator"], out["method"] = r.renderer, r.extra.get("method")
+        out["variance_method"] = r.extra.get("variance_method")
+        res = _test(r, ref, ref_var_raw, alpha=alpha, tiles=tiles, rtol=rtol)
+        # A wider rtol makes more low-noise pixels noiseless (their noise must stay below it): repeat, a few times.
+        for _ in range(3):
+            offset = res["mcrt"]["largest_noiseless_difference"]
+            if k or not res["mcrt"]["noiseless_rejected"] or offset > MAX_OFFSET:
+                break
+            rtol = max(rtol, _round_up(offset))
+            out["reference_offset"] = offset
+            res = _test(r, ref, ref_var_raw, alpha=alpha, tiles=tiles, rtol=rtol)
+        res.update(seed=CORRECT_SEED + k, time=r.wall_time, spp=r.spp)
+        if k == 0:
+            base_masks = res["_masks"]
+        masks.append(res.pop("_masks"))
+        ts.append(res.pop("_t"))
+        out["correct"].append(res)
+    out["rtol"] = rtol
+    confirm(out["correct"], masks, ts)
+    first = out["correct"][0]
+    for i, name in enumerate(perturbations):
+        with perturbed(mi, scene, name, depth) as change:
+            if change is None:
+                out["perturbations"][name] = None
+                continue
+            what, new_depth = change
+            r = render(PERTURBED_SEED + i, new_depth)
+        res = _test(r, ref, ref_var_raw, alpha=alpha, tiles=tiles, rtol=rtol)
+        res.update(change=what, time=r.wall_time)
+        # Caught: the test rejects on evidence the correct render does not show. mcrt: a rejected test (tile,
+        # channel, scale) that the first correct render does not have; Mitsuba's rule: failing where the correct
+        # render passes, or more failing pixel-channels than the correct render's plus the rule's allowance.
+        res.pop("_t")
+        new = sum(int(np.count_nonzero(m & ~b)) for m, b in zip(res.pop("_masks"), base_masks))
+        res["mcrt"]["new_rejections"] = new
+        res["mcrt"]["caught"] = new > 0
+        z0, z1 = first["mitsuba"], res["mitsuba"]
+        res["mitsuba"]["caught"] = bool(not z1["passed"] and (z0["passed"] or z1["failing"] > z0["failing"] + z1["allowed"]))
+        out["perturbations"][name] = res
+    out["time"] = time.perf_counter() - t0
+    return out
+
+
+def confirm(correct: list[dict], masks: list, ts: list, alpha: float = 0.01) -> None:
+    r"""Say of each rejected correct render whether the other seeds confirm its rejected tests (in place).
+
+    A rejected test (tile, channel, scale) of one seed is confirmed when the
+    same test on the other seeds' renders (independent of the seed that
+    picked it, so no selection bias) leans the same way: Stouffer's
+    :math:`z = \sum_j t_j / \sqrt{k}` over the k other seeds beyond the
+    one-sided normal quantile at ``alpha`` over that render's rejected tests
+    (Bonferroni). A confirmed rejection is a difference of the reference
+    too small to be rejected on every seed; an unconfirmed one is a false
+    alarm. Sets ``mcrt['confirmed']`` (None where not rejected or without
+    another seed) and ``mcrt['confirm_z']``.
+    """
+    from scipy import stats as sps
+
+    for i, res in enumerate(correct):
+        res["mcrt"]["confirmed"], res["mcrt"]["confirm_z"] = None, None
+        others = [j for j in range(len(correct)) if j != i]
+        if res["mcrt"]["passed"] or not others:
+            continue
+        tests = [(s, tuple(idx)) for s, m in enumerate(masks[i]) for idx in np.argwhere(m)]
+        crit = sps.norm.isf(alpha / len(tests))
+        best = 0.0
+        for s, idx in tests:
+            sign = np.sign(ts[i][s][idx])
+            z = sign * sum(ts[j][s][idx] for j in others) / np.sqrt(len(others))
+            best = max(best, float(z))
+        res["mcrt"]["confirmed"], res["mcrt"]["confirm_z"] = bool(best >= crit), best
+
+
+def verdict(case: dict) -> str:
+    """mcrt's verdict on the scene's first correct render, in words."""
+    m = case["correct"][0]["mcrt"]
+    if not m["passed"]:
+        return (f"DIFFERENT: {m['noisy_rejected']} noisy and {m['noiseless_rejected']} noiseless tests rejected "
+                f"({', '.join(f'{k} {v}' for k, v in m['by_scale'].items())})")
+    if "reference_offset" in case:
+        return (f"consistent, with the reference's offset in noiseless pixels ({100 * case['reference_offset']:.3g} %) "
+                f"accepted (rtol {case['rtol']:g})")
+    if case.get("rtol", 0) > 1e-5:
+        return f"consistent (rtol {case['rtol']:g}: a reference of {case['written_by'] or 'another version'})"
+    return "consistent"
+
+
+def summarize(cases: list[dict]) -> dict:
+    """Counts over ``cases``: rejected correct renders (a reference's difference where every seed is rejected,
+    false alarms where only some are) and catches of the perturbations, both tests."""
+    s = {"scenes": len(cases), "correct_renders": sum(len(c["correct"]) for c in cases)}
+    for who in ("mcrt", "mitsuba"):
+        # A scene whose every correct render (independent seeds, more than one) is rejected shows a difference of
+        # its reference, not noise; rejections of only some seeds are false alarms.
+        rejected = [[not r[who]["passed"] for r in c["correct"]] for c in cases]
+        # mcrt's rejections confirmed by the other seeds (:func:`confirm`) are differences of the reference too.
+        confirmed = [[bool(r[who].get("confirmed")) for r in c["correct"]] for c in cases]
+        systematic = [(all(x) and len(x) > 1) or any(cf) for x, cf in zip(rejected, confirmed)]
+        s[f"{who}_rejected_correct"] = sum(sum(x) for x in rejected)
+        s[f"{who}_reference_differences"] = sum(systematic)
+        everywhere = [all(x) and len(x) > 1 for x in rejected]
+        s[f"{who}_false_alarms"] = sum(int(xj and not ev and not cj) for x, ev, cf in zip(rejected, everywhere, confirmed)
+                                       for xj, cj in zip(x, cf))
+        applicable = [p for c in cases for p in c["perturbations"].values() if p is not None]
+        s["perturbations"] = len(applicable)
+        s[f"{who}_caught"] = sum(p[who]["caught"] for p in applicable)
+    s["reference_offsets"] = sum("reference_offset" in c for c in cases)
+    return s
+
+
+def run_suite(folder, *, only=(), held_out: str = "include", log: IO[str] | None = None,
+              on_case: Callable[[dict], None] | None = None, **options) -> dict:
+    """Every scene of ``folder`` (:func:`find_cases`), tuning part first, held-out part last.
+
+    ``held_out``: ``'include'``, ``'exclude'`` or ``'only'``. ``options``
+    go to :func:`run_case`. Progress (done, time left) goes to ``log``;
+    ``on_case`` is called with each scene's result as it is done.
+    """
+    cases, skipped = find_cases(folder)
+    if only:
+        unknown = set(only) - {c.name for c in cases}
+        if unknown:
+            raise ValueError(f"no scene {sorted(unknown)[0]!r} with references in {folder}")
+        cases = [c for c in cases if c.name in only]
+    if held_out == "exclude":
+        cases = [c for c in cases if not c.held_out]
+    elif held_out == "only":
+        cases = [c for c in cases if c.held_out]
+    cases = sorted(cases, key=lambda c: (c.held_out, c.name))
+    results, t0 = [], time.perf_counter()
+    for k, case in enumerate(cases):
+        try:
+            r = run_case(case, **options)
+        except (ValueError, RuntimeError) as e:  # one broken scene never stops the suite
+            r = {"name": case.name, "held_out": case.held_out, "error": " ".join(str(e).split())}
+        results.append(r)
+        if on_case is not None:
+            on_case(r)
+        if log is not None:
+            el = time.perf_counter() - t0
+            left = el / (k + 1) * (len(cases) - k - 1)
+            what = r.get("error") or f"{verdict(r)}; Mitsuba's rule {'passes' if r['correct'][0]['mitsuba']['passed'] else 'FAILS'}"
+            print(f"[{k + 1}/{len(cases)}] {case.name}: {what} ({r.get('time', 0):.1f} s; {el:.0f} s, ~{left:.0f} s left)",
+                  file=log, flush=True)
+    done = [r for r in results if "error" not in r]
+    return {"cases": results, "skipped": [{"name": n, "why": w} for n, w in skipped],
+            "summary": {"all": summarize(done), "tuning": summarize([r for r in done if not r["held_out"]]),
+                        "held_out": summarize([r for r in done if r["held_out"]])},
+            "errors": [{"name": r["name"], "error": r["error"]} for r in results if "error" in r]}
