@@ -548,30 +548,50 @@ def copy_submission(src: Path, dest: Path, *, limit: int = SUBMISSION_LIMIT, max
     ``first`` (a name at the top of a folder: the graded module) is copied before anything else, so that many other
     files cannot push it out of the budget.
     """
-    notes: list[str] = []
-    budget = {"bytes": limit, "files": max_files}
+    copy = _SubmissionCopy(limit=limit, max_files=max_files, first=first)
     dest.mkdir(mode=0o755)
+    st = os.lstat(src)
+    if stat.S_ISLNK(st.st_mode):
+        copy.skip(src.name, "a symbolic link (links are not followed)")
+    elif stat.S_ISDIR(st.st_mode):
+        copy.walk(src, "", dest, 0)
+    elif stat.S_ISREG(st.st_mode):
+        copy.copy_file(src, src.name, dest / src.name)
+    else:
+        copy.skip(src.name, "not a regular file")
+    return copy.notes
 
-    def skip(rel: str, why: str) -> None:
-        if len(notes) < 20:
-            notes.append(f"{rel}: {why}, not copied")
-        elif len(notes) == 20:
-            notes.append("(more files skipped)")
 
-    def copy_file(path: Path, rel: str, out: Path) -> None:
-        if budget["files"] <= 0:
-            return skip(rel, f"more than {max_files} files")
+class _SubmissionCopy:
+    """One :func:`copy_submission`: its budget of bytes and files left, and its messages about what was skipped."""
+
+    def __init__(self, *, limit: int, max_files: int, first: str | None):
+        self.limit, self.max_files, self.first = limit, max_files, first
+        self.notes: list[str] = []
+        self.budget = {"bytes": limit, "files": max_files}
+
+    def skip(self, rel: str, why: str) -> None:
+        if len(self.notes) < 20:
+            self.notes.append(f"{rel}: {why}, not copied")
+        elif len(self.notes) == 20:
+            self.notes.append("(more files skipped)")
+
+    def copy_file(self, path: Path, rel: str, out: Path) -> None:
+        """Copy one regular file, opened without following a link (and without blocking on a FIFO), within the budget."""
+        if self.budget["files"] <= 0:
+            return self.skip(rel, f"more than {self.max_files} files")
         try:
             fd = os.open(path, os.O_RDONLY | os.O_NOFOLLOW | os.O_NONBLOCK | os.O_CLOEXEC)
         except OSError as e:
-            return skip(rel, "a symbolic link (links are not followed)" if os.path.islink(path) else f"unreadable ({e.strerror})")
+            return self.skip(rel, "a symbolic link (links are not followed)" if os.path.islink(path)
+                             else f"unreadable ({e.strerror})")
         try:
             st = os.fstat(fd)
             if not stat.S_ISREG(st.st_mode):
-                return skip(rel, "not a regular file")
-            if st.st_size > budget["bytes"]:
-                return skip(rel, f"over the {limit >> 20} MiB a submission may hold")
-            budget["files"] -= 1
+                return self.skip(rel, "not a regular file")
+            if st.st_size > self.budget["bytes"]:
+                return self.skip(rel, f"over the {self.limit >> 20} MiB a submission may hold")
+            self.budget["files"] -= 1
             with os.fdopen(os.open(out, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_NOFOLLOW, 0o644), "wb") as w:
                 left = st.st_size
                 while left > 0:
@@ -580,15 +600,16 @@ def copy_submission(src: Path, dest: Path, *, limit: int = SUBMISSION_LIMIT, max
                         break
                     w.write(chunk)
                     left -= len(chunk)
-            budget["bytes"] -= st.st_size - left
+            self.budget["bytes"] -= st.st_size - left
         finally:
             os.close(fd)
 
-    def walk(folder: Path, rel: str, out: Path, depth: int) -> None:
+    def walk(self, folder: Path, rel: str, out: Path, depth: int) -> None:
+        """Copy a folder's entries (``first`` before the others at the top), recursing into folders up to depth 16."""
         try:
-            entries = sorted(os.scandir(folder), key=lambda e: (not (depth == 0 and e.name == first), e.name))
+            entries = sorted(os.scandir(folder), key=lambda e: (not (depth == 0 and e.name == self.first), e.name))
         except OSError as e:
-            return skip(rel or ".", f"unreadable ({e.strerror})")
+            return self.skip(rel or ".", f"unreadable ({e.strerror})")
         for e in entries:
             if e.name.startswith(".") or e.name == "__pycache__":
                 continue
@@ -598,28 +619,17 @@ def copy_submission(src: Path, dest: Path, *, limit: int = SUBMISSION_LIMIT, max
                     target = os.readlink(e.path)
                 except OSError:
                     target = "?"
-                skip(r, f"a symbolic link (to {target}; links are not followed)")
+                self.skip(r, f"a symbolic link (to {target}; links are not followed)")
             elif e.is_dir(follow_symlinks=False):
                 if depth >= 16:
-                    skip(r, "nested too deep")
+                    self.skip(r, "nested too deep")
                     continue
                 (out / e.name).mkdir(mode=0o755)
-                walk(Path(e.path), r + "/", out / e.name, depth + 1)
+                self.walk(Path(e.path), r + "/", out / e.name, depth + 1)
             elif e.is_file(follow_symlinks=False):
-                copy_file(Path(e.path), r, out / e.name)
+                self.copy_file(Path(e.path), r, out / e.name)
             else:
-                skip(r, "not a regular file (a FIFO, socket or device)")
-
-    st = os.lstat(src)
-    if stat.S_ISLNK(st.st_mode):
-        skip(src.name, "a symbolic link (links are not followed)")
-    elif stat.S_ISDIR(st.st_mode):
-        walk(src, "", dest, 0)
-    elif stat.S_ISREG(st.st_mode):
-        copy_file(src, src.name, dest / src.name)
-    else:
-        skip(src.name, "not a regular file")
-    return notes
+                self.skip(r, "not a regular file (a FIFO, socket or device)")
 
 
 def _read_capped(f, limit: int) -> bytes | None:
