@@ -224,77 +224,112 @@ def run_pool(subs: list[Submission], ctx: Context, out: Path, *, jobs: int, time
     """
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    a = ctx.assignment
-    n = len(subs)
-    total = n + already if total is None else total
-    results: dict[int, StudentResult] = {}
-    t_start = time.monotonic()
-
-    def done(idx: int, res: StudentResult) -> None:
-        results[idx] = res
-        if on_done is not None:
-            on_done(res)
-        k = len(results)
-        left = (time.monotonic() - t_start) / k * (n - k)
-        log(f"  [{k + already}/{total}] {res.student}: {res.score:g}/{res.max_score:g} ({res.status}, {res.elapsed:.1f} s)"
-            + (f"; about {left:.0f} s left" if k < n else ""))
-
+    tally = _Tally(len(subs), already=already, total=total, on_done=on_done, log=log)
     if jobs <= 0:
         for i, s in enumerate(subs):
-            done(i, grade_and_write(s, ctx, out))
-        return [results[i] for i in range(n)]
+            tally.done(i, grade_and_write(s, ctx, out))
+        return tally.in_order()
+    with open(Path(log_dir or out) / "grading.log", "ab") as log_file:
+        pool = _Pool(ctx, out, tally, timeout=timeout, memory_mb=memory_mb, log_file=log_file)
+        pool.run(list(enumerate(subs))[::-1], jobs=min(jobs, len(subs)))
+    return tally.in_order()
 
-    pending = list(enumerate(subs))[::-1]
-    log_file = open(Path(log_dir or out) / "grading.log", "ab")  # noqa: SIM115 - closed in the finally below
-    workers: list[_Worker] = []
 
-    def fail(w: _Worker, status: str, message: str) -> None:
+class _Tally:
+    """The results so far, by index: each one is passed to ``on_done``, then logged with the time left."""
+
+    def __init__(self, n: int, *, already: int, total: int | None, on_done, log):
+        self.n, self.already, self.on_done, self.log = n, already, on_done, log
+        self.total = n + already if total is None else total
+        self.results: dict[int, StudentResult] = {}
+        self.t_start = time.monotonic()
+
+    @property
+    def complete(self) -> bool:
+        return len(self.results) >= self.n
+
+    def done(self, idx: int, res: StudentResult) -> None:
+        self.results[idx] = res
+        if self.on_done is not None:
+            self.on_done(res)
+        k = len(self.results)
+        left = (time.monotonic() - self.t_start) / k * (self.n - k)
+        self.log(f"  [{k + self.already}/{self.total}] {res.student}: {res.score:g}/{res.max_score:g} ({res.status}, "
+                 f"{res.elapsed:.1f} s)" + (f"; about {left:.0f} s left" if k < self.n else ""))
+
+    def in_order(self) -> list[StudentResult]:
+        return [self.results[i] for i in range(self.n)]
+
+
+class _Pool:
+    """Workers grading into ``out``, supervised: a student whose worker dies or overruns ``timeout`` gets a zero
+    result saying so, and the worker is replaced."""
+
+    def __init__(self, ctx: Context, out: Path, tally: _Tally, *, timeout: float, memory_mb: int, log_file):
+        self.ctx, self.out, self.tally = ctx, out, tally
+        self.timeout, self.memory_mb, self.log_file = timeout, memory_mb, log_file
+
+    def spawn(self) -> _Worker:
+        return _Worker(self.ctx, self.out, self.memory_mb, self.log_file)
+
+    def run(self, pending: list[tuple[int, Submission]], *, jobs: int) -> None:
+        """Grade every (index, submission) of ``pending`` (taken from its end) with ``jobs`` workers, stopped after."""
+        workers: list[_Worker] = []
+        try:
+            workers = [self.spawn() for _ in range(jobs)]
+            for w in workers:
+                if pending:
+                    w.give(*pending.pop())
+            while not self.tally.complete:
+                ready = self.wait_ready(workers)
+                for i, w in enumerate(workers):
+                    if w.task is None:
+                        continue
+                    if self.collect(w, ready):
+                        w.task = None
+                        w.kill()
+                        workers[i] = w = self.spawn()
+                    if w.task is None and pending:
+                        w.give(*pending.pop())
+        finally:
+            for w in workers:
+                w.stop()
+
+    def wait_ready(self, workers: list[_Worker]) -> list:
+        """The busy workers' readable pipes, waited for until the first deadline (at least 0.05 s, at most 1 s)."""
+        busy = [w for w in workers if w.task is not None]
+        now = time.monotonic()
+        wait_for = max(0.05, min(w.started + self.timeout - now for w in busy)) if busy else 0.05
+        return wait([w.proc.stdout for w in busy], timeout=min(wait_for, 1.0))
+
+    def collect(self, w: _Worker, ready: list) -> bool:
+        """Take the result of a busy worker that sent one, or fail its student if it died or is over time; True when
+        the worker must be replaced (dead, or still grading past the limit)."""
+        if w.proc.stdout in ready:
+            msg = w.receive()
+            if msg is EOFError:
+                code = w.proc.wait()
+                self.fail(w, STATUS_ERROR, f"the grading process died while grading this submission (exit code {code}); "
+                                           "the file may crash an image decoder or exceed the memory limit")
+                return True
+            if time.monotonic() - w.started > self.timeout:  # finished, but too late: the limit is the limit
+                self.fail(w, STATUS_TIMEOUT, f"grading took longer than {self.timeout:g} s and was stopped")
+            else:
+                idx, res = msg
+                res.elapsed = time.monotonic() - w.started
+                self.tally.done(idx, res)
+            w.task = None
+            return False
+        if time.monotonic() - w.started > self.timeout:
+            self.fail(w, STATUS_TIMEOUT, f"grading took longer than {self.timeout:g} s and was stopped")
+            return True
+        return False
+
+    def fail(self, w: _Worker, status: str, message: str) -> None:
+        """A zero result for ``w``'s student, saying why, written like any other."""
         idx, sub = w.task
+        a = self.ctx.assignment
         res = error_result(sub.student, a, status, message)
         res.elapsed = time.monotonic() - w.started
-        write_student(res, a, out)
-        done(idx, res)
-
-    try:
-        workers = [_Worker(ctx, out, memory_mb, log_file) for _ in range(min(jobs, n))]
-        for w in workers:
-            if pending:
-                w.give(*pending.pop())
-        while len(results) < n:
-            busy = [w for w in workers if w.task is not None]
-            now = time.monotonic()
-            wait_for = max(0.05, min(w.started + timeout - now for w in busy)) if busy else 0.05
-            ready = wait([w.proc.stdout for w in busy], timeout=min(wait_for, 1.0))
-            for i, w in enumerate(workers):
-                if w.task is None:
-                    continue
-                replace = False
-                if w.proc.stdout in ready:
-                    msg = w.receive()
-                    if msg is EOFError:
-                        code = w.proc.wait()
-                        fail(w, STATUS_ERROR, f"the grading process died while grading this submission (exit code {code}); "
-                                              "the file may crash an image decoder or exceed the memory limit")
-                        replace = True
-                    elif time.monotonic() - w.started > timeout:  # finished, but too late: the limit is the limit
-                        fail(w, STATUS_TIMEOUT, f"grading took longer than {timeout:g} s and was stopped")
-                        w.task = None
-                    else:
-                        idx, res = msg
-                        res.elapsed = time.monotonic() - w.started
-                        done(idx, res)
-                        w.task = None
-                elif time.monotonic() - w.started > timeout:
-                    fail(w, STATUS_TIMEOUT, f"grading took longer than {timeout:g} s and was stopped")
-                    replace = True
-                if replace:
-                    w.task = None
-                    w.kill()
-                    workers[i] = w = _Worker(ctx, out, memory_mb, log_file)
-                if w.task is None and pending:
-                    w.give(*pending.pop())
-    finally:
-        for w in workers:
-            w.stop()
-        log_file.close()
-    return [results[i] for i in range(n)]
+        write_student(res, a, self.out)
+        self.tally.done(idx, res)

@@ -548,30 +548,50 @@ def copy_submission(src: Path, dest: Path, *, limit: int = SUBMISSION_LIMIT, max
     ``first`` (a name at the top of a folder: the graded module) is copied before anything else, so that many other
     files cannot push it out of the budget.
     """
-    notes: list[str] = []
-    budget = {"bytes": limit, "files": max_files}
+    copy = _SubmissionCopy(limit=limit, max_files=max_files, first=first)
     dest.mkdir(mode=0o755)
+    st = os.lstat(src)
+    if stat.S_ISLNK(st.st_mode):
+        copy.skip(src.name, "a symbolic link (links are not followed)")
+    elif stat.S_ISDIR(st.st_mode):
+        copy.walk(src, "", dest, 0)
+    elif stat.S_ISREG(st.st_mode):
+        copy.copy_file(src, src.name, dest / src.name)
+    else:
+        copy.skip(src.name, "not a regular file")
+    return copy.notes
 
-    def skip(rel: str, why: str) -> None:
-        if len(notes) < 20:
-            notes.append(f"{rel}: {why}, not copied")
-        elif len(notes) == 20:
-            notes.append("(more files skipped)")
 
-    def copy_file(path: Path, rel: str, out: Path) -> None:
-        if budget["files"] <= 0:
-            return skip(rel, f"more than {max_files} files")
+class _SubmissionCopy:
+    """One :func:`copy_submission`: its budget of bytes and files left, and its messages about what was skipped."""
+
+    def __init__(self, *, limit: int, max_files: int, first: str | None):
+        self.limit, self.max_files, self.first = limit, max_files, first
+        self.notes: list[str] = []
+        self.budget = {"bytes": limit, "files": max_files}
+
+    def skip(self, rel: str, why: str) -> None:
+        if len(self.notes) < 20:
+            self.notes.append(f"{rel}: {why}, not copied")
+        elif len(self.notes) == 20:
+            self.notes.append("(more files skipped)")
+
+    def copy_file(self, path: Path, rel: str, out: Path) -> None:
+        """Copy one regular file, opened without following a link (and without blocking on a FIFO), within the budget."""
+        if self.budget["files"] <= 0:
+            return self.skip(rel, f"more than {self.max_files} files")
         try:
             fd = os.open(path, os.O_RDONLY | os.O_NOFOLLOW | os.O_NONBLOCK | os.O_CLOEXEC)
         except OSError as e:
-            return skip(rel, "a symbolic link (links are not followed)" if os.path.islink(path) else f"unreadable ({e.strerror})")
+            return self.skip(rel, "a symbolic link (links are not followed)" if os.path.islink(path)
+                             else f"unreadable ({e.strerror})")
         try:
             st = os.fstat(fd)
             if not stat.S_ISREG(st.st_mode):
-                return skip(rel, "not a regular file")
-            if st.st_size > budget["bytes"]:
-                return skip(rel, f"over the {limit >> 20} MiB a submission may hold")
-            budget["files"] -= 1
+                return self.skip(rel, "not a regular file")
+            if st.st_size > self.budget["bytes"]:
+                return self.skip(rel, f"over the {self.limit >> 20} MiB a submission may hold")
+            self.budget["files"] -= 1
             with os.fdopen(os.open(out, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_NOFOLLOW, 0o644), "wb") as w:
                 left = st.st_size
                 while left > 0:
@@ -580,15 +600,16 @@ def copy_submission(src: Path, dest: Path, *, limit: int = SUBMISSION_LIMIT, max
                         break
                     w.write(chunk)
                     left -= len(chunk)
-            budget["bytes"] -= st.st_size - left
+            self.budget["bytes"] -= st.st_size - left
         finally:
             os.close(fd)
 
-    def walk(folder: Path, rel: str, out: Path, depth: int) -> None:
+    def walk(self, folder: Path, rel: str, out: Path, depth: int) -> None:
+        """Copy a folder's entries (``first`` before the others at the top), recursing into folders up to depth 16."""
         try:
-            entries = sorted(os.scandir(folder), key=lambda e: (not (depth == 0 and e.name == first), e.name))
+            entries = sorted(os.scandir(folder), key=lambda e: (not (depth == 0 and e.name == self.first), e.name))
         except OSError as e:
-            return skip(rel or ".", f"unreadable ({e.strerror})")
+            return self.skip(rel or ".", f"unreadable ({e.strerror})")
         for e in entries:
             if e.name.startswith(".") or e.name == "__pycache__":
                 continue
@@ -598,28 +619,17 @@ def copy_submission(src: Path, dest: Path, *, limit: int = SUBMISSION_LIMIT, max
                     target = os.readlink(e.path)
                 except OSError:
                     target = "?"
-                skip(r, f"a symbolic link (to {target}; links are not followed)")
+                self.skip(r, f"a symbolic link (to {target}; links are not followed)")
             elif e.is_dir(follow_symlinks=False):
                 if depth >= 16:
-                    skip(r, "nested too deep")
+                    self.skip(r, "nested too deep")
                     continue
                 (out / e.name).mkdir(mode=0o755)
-                walk(Path(e.path), r + "/", out / e.name, depth + 1)
+                self.walk(Path(e.path), r + "/", out / e.name, depth + 1)
             elif e.is_file(follow_symlinks=False):
-                copy_file(Path(e.path), r, out / e.name)
+                self.copy_file(Path(e.path), r, out / e.name)
             else:
-                skip(r, "not a regular file (a FIFO, socket or device)")
-
-    st = os.lstat(src)
-    if stat.S_ISLNK(st.st_mode):
-        skip(src.name, "a symbolic link (links are not followed)")
-    elif stat.S_ISDIR(st.st_mode):
-        walk(src, "", dest, 0)
-    elif stat.S_ISREG(st.st_mode):
-        copy_file(src, src.name, dest / src.name)
-    else:
-        skip(src.name, "not a regular file")
-    return notes
+                self.skip(r, "not a regular file (a FIFO, socket or device)")
 
 
 def _read_capped(f, limit: int) -> bytes | None:
@@ -730,12 +740,11 @@ class _Monitor:
 
 def _run_student(iso: Isolation, module_src: Path, module_name: str, function: str, calls: list[dict],
                  arrays: dict[str, np.ndarray], *, timeout: float, memory_mb: int, first_of_tuple: bool = False) -> CallResult:
+    """:func:`run_student` under ``iso``: stage the inputs in a fresh folder, run the runner, read back its results."""
     t0 = time.monotonic()
     if iso.kind == "none" and not _ALLOW_UNISOLATED:
         raise SandboxError(REFUSAL.format(why=iso.detail))
-    bwrap = iso.kind == "bubblewrap"
-    root = os.geteuid() == 0
-    uid = _sandbox_uid() if root else None  # never root, on any path: the runner refuses to go on as root
+    uid = _sandbox_uid() if os.geteuid() == 0 else None  # never root, on any path: the runner refuses to go on as root
     tmp = Path(tempfile.mkdtemp(prefix="mcrt-code-", dir=_scratch_base(iso)))
     try:
         os.chmod(tmp, 0o711)
@@ -744,128 +753,190 @@ def _run_student(iso: Isolation, module_src: Path, module_name: str, function: s
         notes = copy_submission(Path(module_src), indir / "student")
         for name, arr in arrays.items():
             np.save(indir / name, np.ascontiguousarray(arr), allow_pickle=False)
-        landlock = None
-        if iso.kind == "fallback":
-            roots = _read_roots()
-            landlock = _landlock_rules(roots, _hidden_paths(roots))
-        task = {"module": f"student/{module_name}", "function": function, "calls": calls, "first_of_tuple": first_of_tuple,
-                "limits": _limits(timeout, memory_mb), "uid": uid, "landlock": landlock,
-                "mount_work": {"size": DISK_LIMIT, "nr_inodes": INODE_LIMIT} if bwrap and root else None,
-                "require": ["landlock", "seccomp"] if iso.kind == "fallback" else ["seccomp"] if bwrap else [],
-                "output_limit": OUTPUT_LIMIT}
+        task = _task(iso, module_name, function, calls, first_of_tuple=first_of_tuple, timeout=timeout,
+                     memory_mb=memory_mb, uid=uid)
         (indir / "input.json").write_text(json.dumps(task))
-        for dirpath, dirs, files in os.walk(indir):
-            os.chmod(dirpath, 0o755)
-            for f in files:
-                os.chmod(os.path.join(dirpath, f), 0o644)
-        env = {"PATH": "/usr/bin:/bin", "LANG": "C.UTF-8",
-               "PYTHONDONTWRITEBYTECODE": "1", "PYTHONHASHSEED": "0", "OMP_NUM_THREADS": "1",
-               "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1", "NUMEXPR_NUM_THREADS": "1"}
-        mon = _Monitor()
-        args_r = None
-        with tempfile.TemporaryFile(dir=tmp) as out, tempfile.TemporaryFile(dir=tmp) as resf:
-            fds = [resf.fileno(), mon.write_fd]
-            if bwrap:
-                env.update({"HOME": "/sandbox/work", "TMPDIR": "/sandbox/work"})
-                # The options through a pipe (--args): the sandbox's /proc/1/cmdline shows "bwrap --args N -- python
-                # ... runner.py", not what is bound from where. (bwrap takes the command itself only from its argv.)
-                full = _bwrap_argv(iso, indir, resf.fileno(), mon.write_fd, uid)
-                cut = full.index("--")
-                packed = b"".join(os.fsencode(x) + b"\0" for x in full[1:cut])
-                args_r, args_w = os.pipe()
-                if len(packed) > 60000:  # a pipe holds 64 KiB: bwrap reads it only once started
-                    os.close(args_r)
-                    os.close(args_w)
-                    raise SandboxError(f"bwrap's command line is {len(packed)} bytes; at most 60000 fit its --args pipe")
-                os.write(args_w, packed)
-                os.close(args_w)
-                fds.append(args_r)
-                argv, cwd = [full[0], "--args", str(args_r), *full[cut:]], tmp
-            else:
-                work = tmp / "work"
-                work.mkdir(mode=0o700)
-                if uid is not None:
-                    os.chown(work, uid, uid)
-                env.update({"HOME": str(work), "TMPDIR": str(work)})
-                argv = [sys.executable, "-I", "-B", str(RUNNER), str(indir), str(work), str(resf.fileno()), str(mon.write_fd)]
-                cwd = work
-            # No preexec_fn (unsafe with the threads that grade students in parallel): a new session for
-            # killing the whole group is done by Popen itself; the runner sets its own resource limits,
-            # then switches to uid, before anything of the student's loads.
-            try:
-                proc = subprocess.Popen(argv, cwd=cwd, env=env, stdin=subprocess.DEVNULL, stdout=out, stderr=subprocess.STDOUT,
-                                        start_new_session=True, close_fds=True, pass_fds=tuple(fds))
-            except BaseException:
-                os.close(mon.write_fd)
-                os.close(mon.read_fd)
-                raise
-            finally:
-                if args_r is not None:
-                    os.close(args_r)
-            mon.start()
-            try:
-                code = proc.wait(timeout=timeout)
-                timed_out = False
-            except subprocess.TimeoutExpired:
-                timed_out = True
-                code = None
-            finally:
-                try:
-                    os.killpg(proc.pid, signal.SIGKILL)  # the whole group: no orphan keeps running
-                except (ProcessLookupError, PermissionError):
-                    pass
-                proc.wait()
-            mon.join()
-            stdout = _tail_fd(out)
-            raw = None if timed_out else _read_capped(resf, OUTPUT_LIMIT + TRAILER_LIMIT + 8)
-            too_big = not timed_out and raw is None and os.fstat(resf.fileno()).st_size > 0
-        seconds = time.monotonic() - t0
-        common = dict(seconds=seconds, stdout=stdout, notes=notes, violations=mon.violations)
-        if not mon.reached:
-            last = [ln for ln in stdout.strip().splitlines() if ln.strip()]
-            why = "timed out" if timed_out else _exit_reason(code, memory_mb)
-            return CallResult(False, [], [], f"the sandbox failed before the module ran ({why}"
-                              f"{': ' + last[-1].strip()[:300] if last else ''}): a problem of the grader, not the module",
-                              grader_fault=True, **common)
-        if timed_out:
-            return CallResult(False, [], [], f"stopped after {timeout:g} s (time limit): an infinite loop, or far too slow",
-                              **common)
-        data = _parse_results(raw)
-        if data is None:
-            why = (f"its results exceed {OUTPUT_LIMIT >> 20} MiB" if too_big else _exit_reason(code, memory_mb))
-            return CallResult(False, [], [], f"the module's process ended without returning results ({why})", **common)
-        blobs = data.pop("_blobs")
-        res = CallResult(True, [], [], sandbox=data.get("sandbox", {}) if isinstance(data.get("sandbox"), dict) else {},
-                         **common)
-        res.sandbox["isolation"] = iso.kind
-        if "import_error" in data:
-            res.ok = False
-            err = str(data["import_error"])[:6000]
-            if err.startswith("the module has no function"):
-                res.message, res.errors = err, []
-            else:
-                res.message, res.errors = "importing the module failed", [err]
-            return res
-        results = data.get("results", [])
-        for r in (results if isinstance(results, list) else [])[:len(calls)]:
-            loc = r.get("npy") if isinstance(r, dict) else None
-            if isinstance(loc, list) and len(loc) == 2 and all(isinstance(x, int) and x >= 0 for x in loc) \
-                    and loc[0] + loc[1] <= len(blobs):
-                try:
-                    res.outputs.append(_decode_npy(bytes(blobs[loc[0]:loc[0] + loc[1]])))
-                    res.errors.append(None)
-                except (ValueError, OSError, SyntaxError) as e:
-                    res.outputs.append(None)
-                    res.errors.append(f"the result could not be read back as numbers ({e})")
-            else:
-                res.outputs.append(None)
-                res.errors.append(str(r.get("error", "no result"))[:6000] if isinstance(r, dict) else "no result")
-        while len(res.outputs) < len(calls):
-            res.outputs.append(None)
-            res.errors.append("no result")
-        return res
+        _readable_by_all(indir)
+        ran = _launch(iso, tmp, indir, uid, timeout=timeout)
+        common = dict(seconds=time.monotonic() - t0, stdout=ran.stdout, notes=notes, violations=ran.monitor.violations)
+        return _call_result(iso, ran, len(calls), timeout=timeout, memory_mb=memory_mb, common=common)
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
+
+
+def _task(iso: Isolation, module_name: str, function: str, calls: list[dict], *, first_of_tuple: bool, timeout: float,
+          memory_mb: int, uid: int | None) -> dict:
+    """input.json: what the runner calls, and what it must enforce on itself before anything of the student's loads."""
+    bwrap = iso.kind == "bubblewrap"
+    landlock = None
+    if iso.kind == "fallback":
+        roots = _read_roots()
+        landlock = _landlock_rules(roots, _hidden_paths(roots))
+    return {"module": f"student/{module_name}", "function": function, "calls": calls, "first_of_tuple": first_of_tuple,
+            "limits": _limits(timeout, memory_mb), "uid": uid, "landlock": landlock,
+            "mount_work": {"size": DISK_LIMIT, "nr_inodes": INODE_LIMIT} if bwrap and os.geteuid() == 0 else None,
+            "require": ["landlock", "seccomp"] if iso.kind == "fallback" else ["seccomp"] if bwrap else [],
+            "output_limit": OUTPUT_LIMIT}
+
+
+def _readable_by_all(folder: Path) -> None:
+    """Folders 0755 and files 0644 under ``folder``: the runner reads them as the unprivileged uid."""
+    for dirpath, dirs, files in os.walk(folder):
+        os.chmod(dirpath, 0o755)
+        for f in files:
+            os.chmod(os.path.join(dirpath, f), 0o644)
+
+
+#: The runner's whole environment (HOME and TMPDIR added: its work folder); one thread per numeric library.
+_RUNNER_ENV = {"PATH": "/usr/bin:/bin", "LANG": "C.UTF-8",
+               "PYTHONDONTWRITEBYTECODE": "1", "PYTHONHASHSEED": "0", "OMP_NUM_THREADS": "1",
+               "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1", "NUMEXPR_NUM_THREADS": "1"}
+
+
+@dataclass
+class _Ran:
+    """How one run of the runner ended, as the grader saw it."""
+    code: int | None  # exit code (negative: the signal), None after a timeout
+    timed_out: bool
+    stdout: str  # its tail
+    raw: bytes | None  # the results file, None when missing, not a regular file or over the cap
+    too_big: bool  # the results file is over the cap
+    monitor: "_Monitor"  # what the runner reported on its monitor pipe: refused operations, reaching the module
+
+
+def _launch(iso: Isolation, tmp: Path, indir: Path, uid: int | None, *, timeout: float) -> _Ran:
+    """Run the runner on ``indir`` (under bubblewrap or directly), wait for it at most ``timeout`` s, kill its group."""
+    mon = _Monitor()
+    args_r = None
+    with tempfile.TemporaryFile(dir=tmp) as out, tempfile.TemporaryFile(dir=tmp) as resf:
+        fds = [resf.fileno(), mon.write_fd]
+        if iso.kind == "bubblewrap":
+            argv, args_r = _bwrap_command(iso, indir, resf.fileno(), mon.write_fd, uid)
+            fds.append(args_r)
+            cwd, home = tmp, "/sandbox/work"
+        else:
+            work = _fallback_work(tmp, uid)
+            argv = [sys.executable, "-I", "-B", str(RUNNER), str(indir), str(work), str(resf.fileno()), str(mon.write_fd)]
+            cwd, home = work, str(work)
+        proc = _start_runner(argv, cwd, {**_RUNNER_ENV, "HOME": home, "TMPDIR": home}, out, fds, mon, args_r)
+        mon.start()
+        code, timed_out = _wait_then_kill_group(proc, timeout)
+        mon.join()
+        stdout = _tail_fd(out)
+        raw = None if timed_out else _read_capped(resf, OUTPUT_LIMIT + TRAILER_LIMIT + 8)
+        too_big = not timed_out and raw is None and os.fstat(resf.fileno()).st_size > 0
+    return _Ran(code, timed_out, stdout, raw, too_big, mon)
+
+
+def _bwrap_command(iso: Isolation, indir: Path, result_fd: int, monitor_fd: int, uid: int | None) -> tuple[list[str], int]:
+    """bwrap's command line with its options written to a pipe (``--args``), and the pipe's read end to pass on.
+
+    The sandbox's /proc/1/cmdline then shows "bwrap --args N -- python ... runner.py", not what is bound from where
+    (bwrap takes the command itself only from its argv).
+    """
+    full = _bwrap_argv(iso, indir, result_fd, monitor_fd, uid)
+    cut = full.index("--")
+    packed = b"".join(os.fsencode(x) + b"\0" for x in full[1:cut])
+    args_r, args_w = os.pipe()
+    if len(packed) > 60000:  # a pipe holds 64 KiB: bwrap reads it only once started
+        os.close(args_r)
+        os.close(args_w)
+        raise SandboxError(f"bwrap's command line is {len(packed)} bytes; at most 60000 fit its --args pipe")
+    os.write(args_w, packed)
+    os.close(args_w)
+    return [full[0], "--args", str(args_r), *full[cut:]], args_r
+
+
+def _fallback_work(tmp: Path, uid: int | None) -> Path:
+    """The runner's work folder without bubblewrap: private, owned by the uid it switches to."""
+    work = tmp / "work"
+    work.mkdir(mode=0o700)
+    if uid is not None:
+        os.chown(work, uid, uid)
+    return work
+
+
+def _start_runner(argv: list[str], cwd: Path, env: dict, out, fds: list[int], mon: "_Monitor",
+                  args_r: int | None) -> subprocess.Popen:
+    """Start the runner in a new session, its stdout and stderr to ``out``, passing it only ``fds``."""
+    # No preexec_fn (unsafe with the threads that grade students in parallel): a new session for
+    # killing the whole group is done by Popen itself; the runner sets its own resource limits,
+    # then switches to uid, before anything of the student's loads.
+    try:
+        return subprocess.Popen(argv, cwd=cwd, env=env, stdin=subprocess.DEVNULL, stdout=out, stderr=subprocess.STDOUT,
+                                start_new_session=True, close_fds=True, pass_fds=tuple(fds))
+    except BaseException:
+        os.close(mon.write_fd)
+        os.close(mon.read_fd)
+        raise
+    finally:
+        if args_r is not None:
+            os.close(args_r)
+
+
+def _wait_then_kill_group(proc: subprocess.Popen, timeout: float) -> tuple[int | None, bool]:
+    """(exit code, False), or (None, True) after ``timeout`` s; either way its whole group is killed after."""
+    try:
+        return proc.wait(timeout=timeout), False
+    except subprocess.TimeoutExpired:
+        return None, True
+    finally:
+        try:
+            os.killpg(proc.pid, signal.SIGKILL)  # the whole group: no orphan keeps running
+        except (ProcessLookupError, PermissionError):
+            pass
+        proc.wait()
+
+
+def _call_result(iso: Isolation, ran: _Ran, n_calls: int, *, timeout: float, memory_mb: int, common: dict) -> CallResult:
+    """What the calls returned, or why nothing did (the grader's fault when the runner never reached the module)."""
+    if not ran.monitor.reached:
+        last = [ln for ln in ran.stdout.strip().splitlines() if ln.strip()]
+        why = "timed out" if ran.timed_out else _exit_reason(ran.code, memory_mb)
+        return CallResult(False, [], [], f"the sandbox failed before the module ran ({why}"
+                          f"{': ' + last[-1].strip()[:300] if last else ''}): a problem of the grader, not the module",
+                          grader_fault=True, **common)
+    if ran.timed_out:
+        return CallResult(False, [], [], f"stopped after {timeout:g} s (time limit): an infinite loop, or far too slow",
+                          **common)
+    data = _parse_results(ran.raw)
+    if data is None:
+        why = (f"its results exceed {OUTPUT_LIMIT >> 20} MiB" if ran.too_big else _exit_reason(ran.code, memory_mb))
+        return CallResult(False, [], [], f"the module's process ended without returning results ({why})", **common)
+    blobs = data.pop("_blobs")
+    res = CallResult(True, [], [], sandbox=data.get("sandbox", {}) if isinstance(data.get("sandbox"), dict) else {},
+                     **common)
+    res.sandbox["isolation"] = iso.kind
+    if "import_error" in data:
+        res.ok = False
+        err = str(data["import_error"])[:6000]
+        if err.startswith("the module has no function"):
+            res.message, res.errors = err, []
+        else:
+            res.message, res.errors = "importing the module failed", [err]
+        return res
+    _read_outputs(res, data.get("results", []), blobs, n_calls)
+    return res
+
+
+def _read_outputs(res: CallResult, results, blobs: memoryview, n_calls: int) -> None:
+    """Append each call's array (or its error) to ``res``, read only within ``blobs``; a missing call gets "no result"."""
+    for r in (results if isinstance(results, list) else [])[:n_calls]:
+        loc = r.get("npy") if isinstance(r, dict) else None
+        if isinstance(loc, list) and len(loc) == 2 and all(isinstance(x, int) and x >= 0 for x in loc) \
+                and loc[0] + loc[1] <= len(blobs):
+            try:
+                res.outputs.append(_decode_npy(bytes(blobs[loc[0]:loc[0] + loc[1]])))
+                res.errors.append(None)
+            except (ValueError, OSError, SyntaxError) as e:
+                res.outputs.append(None)
+                res.errors.append(f"the result could not be read back as numbers ({e})")
+        else:
+            res.outputs.append(None)
+            res.errors.append(str(r.get("error", "no result"))[:6000] if isinstance(r, dict) else "no result")
+    while len(res.outputs) < n_calls:
+        res.outputs.append(None)
+        res.errors.append("no result")
 
 
 def _exit_reason(code, memory_mb) -> str:

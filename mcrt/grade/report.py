@@ -353,9 +353,18 @@ def write_class(results: list, assignment, out_dir: Path, *, elapsed: float = 0.
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     criteria = criteria if criteria is not None else [(c.name, c.points, c.title) for c in assignment.rubric]
-    crit = [c[0] for c in criteria]
-    maxs = sum(c[1] for c in criteria)
-    with (atomic.replacing(out / "grades.csv", fsync=False) as tmp,
+    _write_grades_csv(out / "grades.csv", results, [c[0] for c in criteria])
+    summ = _class_summary(results, assignment, criteria, elapsed=elapsed, context_note=context_note, power=power,
+                          pending=pending)
+    write_json_atomic(out / "summary.json", summ)
+    lines = _summary_md(summ, assignment, [r.score for r in results])
+    atomic.write_text(out / "summary.md", "\n".join(lines), fsync=False)
+    return summ
+
+
+def _write_grades_csv(path: Path, results: list, crit: list[str]) -> None:
+    """grades.csv: one row per student (sorted by id), one column per criterion named in ``crit``."""
+    with (atomic.replacing(path, fsync=False) as tmp,
           open(tmp, "w", newline="", encoding="utf-8", errors="replace") as f):
         w = csv.writer(f)
         w.writerow(["student", "status", "score", "max_score", *crit, "diagnosis", "summary", "seconds"])
@@ -365,6 +374,11 @@ def write_class(results: list, assignment, out_dir: Path, *, elapsed: float = 0.
             w.writerow([r.student, r.status, f"{r.score:g}", f"{r.max_score:g}", *(f"{by.get(c, 0):g}" for c in crit), top,
                         r.summary[:300], f"{r.elapsed:.2f}"])
 
+
+def _class_summary(results: list, assignment, criteria: list[tuple[str, float, str]], *, elapsed: float,
+                   context_note: str, power: list[dict] | None, pending: list[str] | None) -> dict:
+    """summary.json's content: scores, points lost per criterion, diagnoses, whether the run is complete."""
+    maxs = sum(c[1] for c in criteria)
     scores = [r.score for r in results]
     summ = {
         "schema": "mcrt.grade.summary/1", "assignment": assignment.name, "students": len(results),
@@ -383,18 +397,21 @@ def write_class(results: list, assignment, out_dir: Path, *, elapsed: float = 0.
         pts = [t.score for r in results for t in r.tests if t.name == name]
         summ["criteria"][name] = {"points": points, "students_losing_points": len(lost),
                                   "mean_score": statistics.fmean(pts) if pts else None}
-    diag = Counter(r.diagnosis[0]["mutant"] for r in results if r.diagnosis)
-    summ["diagnoses"] = dict(diag.most_common())
+    summ["diagnoses"] = dict(Counter(r.diagnosis[0]["mutant"] for r in results if r.diagnosis).most_common())
     if power:
         summ["catalogue_power"] = power
-    write_json_atomic(out / "summary.json", summ)
+    return summ
 
+
+def _summary_md(summ: dict, assignment, scores: list[float]) -> list[str]:
+    """summary.md's lines: everything in :func:`_class_summary`'s dict, and the distribution of ``scores``."""
+    maxs, pending = summ["max_score"], summ["pending"]
     lines = [f"# {assignment.title}: class summary", ""]
     if pending:
         lines += [f"**Incomplete:** {len(pending)} more student(s) to grade ({', '.join(md_text(p) for p in pending[:20])}"
                   f"{', ...' if len(pending) > 20 else ''}). The run was stopped or is still running (run.json); "
                   "`mcrt grade` with the same output folder grades only those.", ""]
-    lines += [f"{len(results)} students, {summ['graded']} graded; scores out of {maxs:g}."]
+    lines += [f"{summ['students']} students, {summ['graded']} graded; scores out of {maxs:g}."]
     if scores:
         lines.append(f"Mean {summ['mean']:.1f}, median {summ['median']:.1f}, min {summ['min']:g}, max {summ['max']:g}; "
                      f"{summ['full_marks']} with full marks.")
@@ -409,21 +426,26 @@ def write_class(results: list, assignment, out_dir: Path, *, elapsed: float = 0.
     for name, c in summ["criteria"].items():
         ms = "" if c["mean_score"] is None else f"{c['mean_score']:.2f}"
         lines.append(f"| {name} | {c['points']:g} | {c['students_losing_points']} | {ms} |")
-    if diag:
+    if summ["diagnoses"]:
         lines += ["", "## Most common diagnoses (closest catalogued bug)", ""]
-        lines += [f"- {m}: {n} student{'s' if n != 1 else ''}" for m, n in diag.most_common()]
-    if power:
-        lines += ["", f"## Which catalogued bugs the bias test sees at {assignment.spp} spp", "",
-                  ("Expected largest tile statistic |z| of a render with the bug, against Holm's first threshold "
-                   f"{power[0]['z_crit']:.2f}; 'spp needed' gives about 84 % power at the best tile."), "",
-                  "| bug | expected max z | seen at this spp | spp needed |", "|---|---|---|---|"]
-        for p in sorted(power, key=lambda p: -p["z_max"]):
-            need = f"({p.get('limit') or 'unknown'})" if p["spp_needed"] is None else f"{p['spp_needed']}"
-            lines.append(f"| {p['mutant']} | {p['z_max']:.1f} | {'yes' if p['detectable'] else 'no'} | {need} |")
+        lines += [f"- {m}: {n} student{'s' if n != 1 else ''}" for m, n in summ["diagnoses"].items()]
+    if summ.get("catalogue_power"):
+        lines += _power_md(summ["catalogue_power"], assignment)
     if summ["not_graded"]:
         lines += ["", "## Not graded (score 0, results.json written)", ""]
         lines += [f"- {md_text(d['student'])} ({d['status']}): {md_text(' '.join(str(d['reason']).split()))}"
                   for d in summ["not_graded"]]
-    lines += ["", f"Grading took {elapsed:.1f} s. {context_note}".rstrip(), ""]
-    atomic.write_text(out / "summary.md", "\n".join(lines), fsync=False)
-    return summ
+    lines += ["", f"Grading took {summ['seconds']:.1f} s. {summ['context']}".rstrip(), ""]
+    return lines
+
+
+def _power_md(power: list[dict], assignment) -> list[str]:
+    """The summary's table of which catalogued bugs the bias test sees at the assignment's spp."""
+    lines = ["", f"## Which catalogued bugs the bias test sees at {assignment.spp} spp", "",
+             ("Expected largest tile statistic |z| of a render with the bug, against Holm's first threshold "
+              f"{power[0]['z_crit']:.2f}; 'spp needed' gives about 84 % power at the best tile."), "",
+             "| bug | expected max z | seen at this spp | spp needed |", "|---|---|---|---|"]
+    for p in sorted(power, key=lambda p: -p["z_max"]):
+        need = f"({p.get('limit') or 'unknown'})" if p["spp_needed"] is None else f"{p['spp_needed']}"
+        lines.append(f"| {p['mutant']} | {p['z_max']:.1f} | {'yes' if p['detectable'] else 'no'} | {need} |")
+    return lines
