@@ -160,8 +160,9 @@ def write_json(c: Comparison, path) -> Path:
 
 def _describe(r: RenderResult, path) -> str:
     h, w = r.mean.shape[:2]
+    kind = str((r.extra or {}).get("variance_method", "samples")).partition(":")[0]  # mcrt.variance_method
     var = "NO variance" if r.variance is None else "variance" if variance_dof(r) == r.spp - 1 else \
-        f"variance of {variance_dof(r) + 1} replicates, {variance_dof(r)} df"  # mcrt.variance_method
+        f"variance of {variance_dof(r) + 1} {kind}, {variance_dof(r)} df"
     spp = f"{r.spp} spp" if r.spp else "spp unknown"
     who = f", {r.renderer}" if r.renderer else ""
     cam = f", camera {r.camera}" if r.camera else ""

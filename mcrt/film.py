@@ -127,7 +127,7 @@ def _merge_replicates(results: list[RenderResult]) -> RenderResult:
     dofs = []
     for r in results:
         kind, _, count = r.extra.get("variance_method", "samples").partition(":")
-        if kind != "replicates" or not count.isdigit() or r.variance is None:
+        if kind not in ("replicates", "batches") or not count.isdigit() or r.variance is None:
             raise ValueError("cannot merge renders whose variance comes from replicates with renders whose does not")
         dofs.append(int(count) - 1)
     n = sum(r.spp for r in results)

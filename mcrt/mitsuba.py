@@ -472,13 +472,13 @@ def _run(mscene, integrator, *, seed: int, spp: int, spp_per_pass: int | None, p
         raise ValueError(f"one pass of {W}x{H}x{per_pass} samples exceeds 2^32 lanes: lower spp_per_pass")
     totals = run_passes(pass_sums, width=W, height=H, spp=spp, spp_per_pass=per_pass,
                         progress=Progress(spp, label=label, enabled=progress))
-    notes = {"variance_method": "per-sample moments of each pixel's own samples"}
+    notes = {"variance_method": "samples", "variance_note": "per-sample moments of each pixel's own samples"}
     if method == "batches":
         P = totals.spp // per_pass
         totals.variance = (totals.variance.astype(np.float64) * (totals.spp - 1) / (P - 1)).astype(np.float32)
         F = filter_area(mscene.sensors()[0].film().rfilter())
-        notes = {"variance_method": f"n times the variance between {P} independent batches of {per_pass} spp ({why})",
-                 "variance_dof": str(P - 1)}
+        notes = {"variance_method": f"batches:{P}", "variance_dof": str(P - 1),
+                 "variance_note": f"n times the variance between {P} independent batches of {per_pass} spp ({why})"}
         if F > 1.0001:
             notes["tile_variance_factor"] = f"{F:.4f}"
     return totals, per_pass, method, notes

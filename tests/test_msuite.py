@@ -177,7 +177,7 @@ def test_scene_file_rendered_with_its_filter_in_batches_and_its_wrapped_integrat
     r = render_with_variance(suite / "tests/scenes/projector/test_projector_textured_direct.xml", spp=64, seed=1)
     assert r.renderer == "direct" and "moment" in r.extra["unwrapped"]
     assert r.extra["method"] == "batches" and r.extra["variance_dof"] == "31"
-    assert "GaussianFilter" in r.extra["variance_method"] and "GaussianFilter (radius 2 px)" in r.extra["film"]
+    assert r.extra["variance_method"] == "batches:32" and "GaussianFilter" in r.extra["variance_note"] and "GaussianFilter (radius 2 px)" in r.extra["film"]
     assert abs(float(r.extra["tile_variance_factor"]) - np.pi) < 0.05  # (int g)^2 / int g^2 of a gaussian of sd 1/2
     box = render_with_variance(suite / "tests/scenes/spot_light/test_spot_direct.xml", spp=16, seed=1)
     assert box.extra["method"] == "samples" and "variance_dof" not in box.extra

@@ -318,19 +318,22 @@ def variance_dof(r: RenderResult) -> int:
     ``r.extra['variance_method']`` (the EXR attribute ``mcrt.variance_method``,
     :mod:`mcrt.samplers`) says how the variance was estimated: 'samples' (or
     absent) from independent samples, 'replicates:R' from the spread of R
-    independent replicate means (randomised quasi-Monte Carlo);
+    independent replicate means (randomised quasi-Monte Carlo), 'batches:P'
+    from the spread of P independent batches (a film filter wider than a pixel);
     ``r.extra['variance_dof']``, where present, states it outright (a render
     made in P independent batches records P - 1). Raises
-    :class:`StatsError` for a malformed 'replicates:' value.
+    :class:`StatsError` for a value it does not know.
     """
     extra = r.extra or {}
     if "variance_dof" in extra:  # stated outright (P independent batches: P - 1)
         return max(1, int(extra["variance_dof"]))
-    kind, _, count = str(extra.get("variance_method", "samples")).partition(":")
-    if kind != "replicates":  # 'samples', or words saying the moments are each pixel's own samples'
+    method = str(extra.get("variance_method", "samples"))
+    if method in ("", "samples"):
         return int(r.spp) - 1
-    if not count.isdigit() or int(count) < 2:
-        raise StatsError(f"variance_method {extra['variance_method']!r}: expected 'replicates:R' with R >= 2")
+    kind, _, count = method.partition(":")
+    if kind not in ("replicates", "batches") or not count.isdigit() or int(count) < 2:
+        raise StatsError(f"unknown variance_method {method!r} (expected 'samples', 'replicates:R' or 'batches:P', "
+                         "R, P >= 2)")
     return int(count) - 1
 
 
