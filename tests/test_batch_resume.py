@@ -93,7 +93,11 @@ def running(pid: int) -> bool:
 
 
 def assert_consistent(out: Path) -> list[dict]:
-    """Every row of grades.csv agrees with that student's results.json and with run.json; returns the rows."""
+    """Every row of grades.csv agrees with that student's results.json and with run.json; returns the rows.
+
+    A student is committed in order: results.json, then run.json, then grades.csv (rewritten from run.json). A kill
+    can fall between the last two, so grades.csv may lack the one student being recorded, never hold one more.
+    """
     with open(out / "grades.csv", newline="") as f:
         rows = list(csv.DictReader(f))
     run = read_run(out)
@@ -102,7 +106,8 @@ def assert_consistent(out: Path) -> list[dict]:
         assert float(row["score"]) == pytest.approx(res["score"]), row["student"]
         assert row["status"] == res["extra_data"]["status"]
         assert run["students"][row["student"]]["score"] == pytest.approx(res["score"])
-    assert {r["student"] for r in rows} == set(run["students"])
+    listed, recorded = {r["student"] for r in rows}, set(run["students"])
+    assert listed <= recorded and len(recorded - listed) <= 1, (listed, recorded)
     return rows
 
 
