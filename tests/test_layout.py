@@ -100,17 +100,21 @@ LAYERS = (
                                "mcrt.provenance")),
     ("studies and reports", 3, ("mcrt.report", "mcrt.validate", "mcrt.hardcases", "mcrt.tricks", "mcrt.bench",
                                 "mcrt.bench_limits", "mcrt.bench_report", "mcrt.threeway", "mcrt.validate_integrator",
-                                "mcrt.reports", "mcrt.pytest_plugin", "mcrt.sampler_study")),
+                                "mcrt.reports", "mcrt.pytest_plugin", "mcrt.sampler_study", "mcrt.msuite")),
     ("grading and command line", 4, ("mcrt.grade", "mcrt.cli")),
 )
 
 
 def layer_of(module: str, layers=LAYERS) -> tuple[str, int] | None:
-    """(layer name, rank) of ``module``: the layer of its longest matching prefix; None where no prefix matches."""
+    """(layer name, rank) of ``module``: the layer of its longest matching prefix; None where no prefix matches.
+
+    The package itself ("mcrt", its __init__) names only itself: a new module must be placed in a layer.
+    """
     best = None
     for name, rank, prefixes in layers:
         for p in prefixes:
-            if (module == p or module.startswith(p + ".")) and (best is None or len(p) > best[2]):
+            below = "." in p and module.startswith(p + ".")  # a top-level name covers no module below it
+            if (module == p or below) and (best is None or len(p) > best[2]):
                 best = (name, rank, len(p))
     return best[:2] if best else None
 
@@ -162,9 +166,11 @@ def test_layer_check_finds_an_import_planted_in_a_copy_of_the_source(tmp_path):
 
 
 def test_layer_lookup_takes_the_longest_prefix():
-    """On a synthetic table: a submodule listed apart from its package gets its own layer."""
+    """On a synthetic table: a submodule listed apart from its package gets its own layer; the top-level package
+    names only itself, so a module nobody placed has no layer (and test_every_module_has_a_layer names it)."""
     layers = (("low", 0, ("p.a",)), ("high", 1, ("p", "p.b")))
-    assert layer_of("p.a.x", layers) == ("low", 0) and layer_of("p.c", layers) == ("high", 1)
+    assert layer_of("p.a.x", layers) == ("low", 0) and layer_of("p.b.y", layers) == ("high", 1)
+    assert layer_of("p", layers) == ("high", 1) and layer_of("p.c", layers) is None
     assert layer_of("q", layers) is None
     assert upward_imports({"p.a.x": {"p.b"}, "p.b": {"p.a.x"}}, layers) == ["p.a.x (low) imports p.b (high)"]
 
