@@ -474,7 +474,8 @@ class _Grader:
         def structure(res, nz):
             # Second moment of the lower-tail bound: E[X^2] / n = sigma^2 / n + mu^2 / n (structure.py).
             st = detect_structure(res, R, clip_mask, weight_var, nz.model + nz.reference + R**2 / samples,
-                                  base=ctx.baseline.mean if cam == a.camera else None, labels=ctx.labels[cam])
+                                  base=ctx.baseline.mean if cam == a.camera else None, labels=ctx.labels[cam],
+                                  pair=imgs[0] - imgs[1] if n_r == 2 else None)
             return st, structure_families(st, th)
 
         st, fam = structure(resid, noise)
