@@ -122,7 +122,7 @@ TRIED = 3
 
 
 def judge(e, S: np.ndarray, R: np.ndarray, mask: np.ndarray, noise: Noise, sc: Scene2D, *,
-          extra_var: np.ndarray | None = None, claimable=None):
+          extra_var=None, claimable=None):
     """Apply the rule to an explanation ``e`` (:class:`mcrt.grade.explain.Explanation`): (the explanation with
     ``named``, ``sentence`` and ``headline`` rewritten, the :class:`Adequacy` of what it says).
 
@@ -131,10 +131,15 @@ def judge(e, S: np.ndarray, R: np.ndarray, mask: np.ndarray, noise: Noise, sc: S
     explanation's own rule for the best) and whose remainder is noise is
     claimed; else the best is partial if it explains :data:`PARTIAL`, else
     nothing is named and the difference itself is placed on objects.
+    ``extra_var(c)`` is the noise (H, W, 3) of candidate c's predicted change
+    (None: none).
     """
     from dataclasses import replace
 
     from mcrt.grade.explain import NAMED
+
+    def var(c):
+        return extra_var(c) if extra_var is not None else None
 
     def ok(c):
         return c.delta is not None and (claimable(c) if claimable is not None else c.explained >= NAMED)
@@ -144,7 +149,7 @@ def judge(e, S: np.ndarray, R: np.ndarray, mask: np.ndarray, noise: Noise, sc: S
         cands = [e.named] + [c for c in cands if c is not e.named]
     first = None
     for c in cands:
-        ad = remainder_test(S, R, c.delta, mask, noise, sc, extra_var=extra_var, explained=c.explained)
+        ad = remainder_test(S, R, c.delta, mask, noise, sc, extra_var=var(c), explained=c.explained)
         if ad.verdict == "adequate":
             s, h = claim(c.text, ad)
             return replace(e, named=c, sentence=s + (f" It changes the image {c.where}." if c.where else ""),
@@ -155,7 +160,7 @@ def judge(e, S: np.ndarray, R: np.ndarray, mask: np.ndarray, noise: Noise, sc: S
         c, ad = first
     elif best is not None and best.explained >= PARTIAL and best.delta is not None:
         c = best
-        ad = remainder_test(S, R, c.delta, mask, noise, sc, extra_var=extra_var, explained=c.explained)
+        ad = remainder_test(S, R, c.delta, mask, noise, sc, extra_var=var(c), explained=c.explained)
     else:
         c = None
     if c is None or ad.verdict != "partial":

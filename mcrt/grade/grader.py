@@ -53,6 +53,7 @@ from pathlib import Path
 import numpy as np
 
 from mcrt.grade import checks as ck
+from mcrt.grade.adequacy import Scene2D, judge
 from mcrt.grade.assignment import Assignment, Criterion
 from mcrt.grade.diagnose import (
     describe_tiles,
@@ -61,6 +62,7 @@ from mcrt.grade.diagnose import (
     signature_region,
 )
 from mcrt.grade.expected import Context, coarsen, grading_settings
+from mcrt.grade.objects import object_tests
 from mcrt.grade.score import (
     LUMINANCE,
     Noise,
@@ -224,6 +226,7 @@ class _Grader:
         self.encoding = "linear"
         self.corrected: list[str] = []
         self.explanation = None  # mcrt.grade.explain.Explanation, when the image was explained
+        self.adequacy = None  # mcrt.grade.adequacy.Adequacy of what the explanation says
 
     # -- files ---------------------------------------------------------------
     def run_files(self, sub: Submission) -> None:
@@ -476,7 +479,8 @@ class _Grader:
             st = detect_structure(res, R, clip_mask, weight_var, nz.model + nz.reference + R**2 / samples,
                                   base=ctx.baseline.mean if cam == a.camera else None, labels=ctx.labels[cam],
                                   pair=imgs[0] - imgs[1] if n_r == 2 else None)
-            return st, structure_families(st, th)
+            objs = object_tests(res, R, clip_mask, nz, ctx.labels[cam], len(ctx.label_names) - 1)
+            return st, structure_families(st, th) + [objs.family(th.min_effect)]
 
         st, fam = structure(resid, noise)
         bt = bias_test(resid, R, clip_mask, noise, a.tiles, **kw, extra=fam)
@@ -564,6 +568,8 @@ class _Grader:
                 # Likewise the residual of any structured mistake is correlated between neighbours:
                 # where another cause explains it, the image is not also called filtered.
                 found.pop("filter", None)
+            if named is None and self.adequacy is not None and self.adequacy.verdict != "adequate":
+                self._findings_rule(found, img, R, clip_mask, noise, structure)
             loss, why = self._loss(bt, cam, registration="registration" in found, filtered="filter" in found,
                                    major=named.key if named is not None and named.family in _major_families() else None)
             lines += [found[k] + "." for k in found]
@@ -783,8 +789,12 @@ class _Grader:
 
         e = explain(img, R, noise.model + noise.reference, mask, basis, mutants=ctx.mutants, baseline=ctx.baseline,
                     texts=ctx.mutant_texts, where_fn=where_fn, tile=tile)
+        e, self.adequacy = judge(e, img, R, mask, noise, self._scene2d(cam),
+                                 extra_var=lambda c: self._candidate_var(c, basis))
         self.explanation = e
-        self.details["explanation"] = e.to_dict()
+        self.details["explanation"] = dict(e.to_dict(), adequacy=self.adequacy.to_dict())
+        if self.adequacy.map is not None:
+            self.figures["objects_rel"] = self.adequacy.map
         if e.named is not None:
             self.diagnosis = [c.to_dict() for c in e.candidates[:5]]
             self.figures["mutant_rel_tiles"] = rel_lum(_tile_means(e.named.delta, mask, tile), _tile_means(R, mask, tile))
@@ -794,6 +804,39 @@ class _Grader:
             self.figures.pop("mutant_rel_tiles", None)
             self.figures.pop("mutant_name", None)
         return e
+
+    def _findings_rule(self, found, img, R, mask, noise, structure) -> None:
+        """The adequacy rule for the checks' own findings, where no cause is adequate (mcrt.grade.adequacy).
+
+        A structured remainder makes neighbours alike and moves edges: the
+        filter finding stands only if the noise is still correlated in what
+        the best candidate leaves, the camera finding only if that candidate
+        is the camera's.
+        """
+        from mcrt.grade.adequacy import PARTIAL
+        from mcrt.grade.structure import SHARES
+
+        best = self.explanation.candidates[0] if self.explanation.candidates else None
+        if best is None or best.family not in _camera_families():
+            found.pop("registration", None)
+        if "filter" in found and best is not None and best.delta is not None and best.explained >= PARTIAL:
+            rest = np.where(mask[..., None], img - R - best.delta, 0.0)
+            st, _ = structure(rest, noise)
+            th = self.th
+            if not (st.p_correlation <= th.alpha * SHARES["correlation"] and st.correlation >= th.min_correlation):
+                found.pop("filter", None)
+
+    def _scene2d(self, cam):
+        th = self.th
+        return Scene2D(tuple(self.a.tiles), th.alpha, th.min_effect, th.full_effect, self.ctx.labels[cam],
+                       self.ctx.label_names)
+
+    def _candidate_var(self, c, basis):
+        """The noise of a candidate's predicted change: its expected images' (catalogue) or the basis renders'."""
+        if c.catalogue and c.key in self.ctx.mutants:
+            m, b = self.ctx.mutants[c.key], self.ctx.baseline
+            return m.var.astype(np.float64) / m.spp + b.var.astype(np.float64) / b.spp
+        return basis.var.astype(np.float64) / basis.spp
 
     def _diagnose_noise(self, resid, R, mask, noise, cam, tile, samples):
         """Rank the catalogue by its noise pattern (:func:`mcrt.grade.diagnose.rank_noise`)."""
