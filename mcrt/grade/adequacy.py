@@ -54,11 +54,12 @@ class Adequacy:
     where: str = ""  # those objects in words, with how they differ
     map: np.ndarray | None = None  # (H, W) per-object relative difference of the remainder (rejected objects)
     excess_rms: float = 0.0  # the remainder's bias beyond noise, relative
+    alternatives: list[str] = field(default_factory=list)  # families that fit as well (adequate too)
 
     def to_dict(self) -> dict:
         return {"verdict": self.verdict, "explained": self.explained, "rejected": self.rejected,
                 "n_tests": self.n_tests, "objects": self.objects, "where": self.where,
-                "remainder_excess_rms": self.excess_rms}
+                "remainder_excess_rms": self.excess_rms, "alternatives": self.alternatives}
 
 
 @dataclass
@@ -104,7 +105,10 @@ def claim(text: str, ad: Adequacy, *, alt: str = "") -> tuple[str, str]:
     pct = f"{100 * ad.explained:.0f} %"
     if ad.verdict == "adequate":
         s = f"It looks like {text}: that explains {pct} of the difference, and what is left is consistent with noise"
-        return s + (f" (so would {alt})" if alt else "") + ".", f"It looks like {text}."
+        if alt:
+            return (s + f"; so would {alt}: the image cannot tell them apart.",
+                    f"It looks like {text}, or {alt.split(', ')[0]}.")
+        return s + ".", f"It looks like {text}."
     if ad.verdict == "partial":
         rest = f"something else is wrong {ad.where}" if ad.where else "something else is wrong as well"
         s = (f"Partly like {text}, which explains {pct} of the difference; {rest} (what is left after that "
@@ -119,6 +123,9 @@ def claim(text: str, ad: Adequacy, *, alt: str = "") -> tuple[str, str]:
 
 #: How many of the best candidates are tried, in order, for one whose remainder is noise.
 TRIED = 3
+#: Another family within this share of the claimed one whose remainder is noise too is named beside it: the
+#: image cannot tell the two apart.
+AMBIGUOUS = 0.05
 
 
 def judge(e, S: np.ndarray, R: np.ndarray, mask: np.ndarray, noise: Noise, sc: Scene2D, *,
@@ -151,7 +158,10 @@ def judge(e, S: np.ndarray, R: np.ndarray, mask: np.ndarray, noise: Noise, sc: S
     for c in cands:
         ad = remainder_test(S, R, c.delta, mask, noise, sc, extra_var=var(c), explained=c.explained)
         if ad.verdict == "adequate":
-            s, h = claim(c.text, ad)
+            alts = [a for a in cands if a is not c and a.family != c.family and a.explained >= c.explained - AMBIGUOUS
+                    and remainder_test(S, R, a.delta, mask, noise, sc, extra_var=var(a)).verdict == "adequate"]
+            ad.alternatives = [a.family for a in alts]
+            s, h = claim(c.text, ad, alt=" or ".join(f"{a.text}, {100 * a.explained:.0f} %" for a in alts))
             return replace(e, named=c, sentence=s + (f" It changes the image {c.where}." if c.where else ""),
                            headline=h), ad
         first = first or (c, ad)

@@ -68,8 +68,11 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, field, replace
+from types import SimpleNamespace
 import numpy as np
 
+from mcrt.grade.families import FAMILIES
+from mcrt.grade.families import prepare as prepare_families
 from mcrt.scene import Lambertian, Mirror, Scene
 
 #: Share of the excess chi-square the best candidate must explain to be named.
@@ -122,6 +125,7 @@ class Basis:
     albedo: dict[str, tuple[np.ndarray, np.ndarray, tuple]] = field(default_factory=dict)  # label -> (nodes, images, scene)
     nodes: dict[str, list[tuple[object, np.ndarray]]] = field(default_factory=dict)  # family/key -> [(value, image)]
     values: dict[str, object] = field(default_factory=dict)  # the scene's values, for the words
+    extra: dict[str, object] = field(default_factory=dict)  # renders of other families (mcrt.grade.families)
     prepare_time: float = 0.0
 
 
@@ -250,6 +254,7 @@ def prepare_basis(a, scene: Scene, render) -> Basis:
                     eye=tuple(c.eye), objects={o.name: tuple(float(x) for x in (o.center if hasattr(o, "center")
                                                                             else np.mean(o.vertices, axis=0)))
                                                 for o in scene.objects})
+    b.extra["families"] = prepare_families(a, scene, render)
     b.prepare_time = time.perf_counter() - t0
     return b
 
@@ -689,7 +694,8 @@ def _catalogue_candidates(fit: _Fit, mutants: dict, baseline, texts: dict) -> li
 CAMERA_FAMILIES = frozenset({"fov", "pixel_offset", "rotation", "eye"})
 #: The families a TA counts as major mistakes whatever their share of the image: the camera, the scene's geometry
 #: (an object or the light missing, moved or resized) and its colours (mcrt.grade.grader._Grader._loss).
-MAJOR_FAMILIES = CAMERA_FAMILIES | {"object_missing", "object_moved", "light_position", "light_size", "albedo", "channels"}
+MAJOR_FAMILIES = CAMERA_FAMILIES | {"object_missing", "object_moved", "light_position", "light_size", "albedo", "channels",
+                                    "material", "object_size"}
 
 
 @dataclass
@@ -732,6 +738,7 @@ def explain(S: np.ndarray, R: np.ndarray, V: np.ndarray, mask: np.ndarray, basis
     fit = _Fit(S, R, V, ok, W, tile)
     cands = _scale_candidates(fit, basis.values) + _curve_candidates(fit) + _albedo_candidates(fit, basis) + \
         _node_candidates(fit, basis) + _camera_candidates(fit, basis)
+    cands += [c for family in FAMILIES for c in family(fit, SimpleNamespace(basis=basis))]
     if mutants:
         cands += _catalogue_candidates(fit, mutants, baseline, texts or {})
     # What noise alone leaves: n terms of about 1 (less where the cap bites on heavy tails), or what the best

@@ -569,14 +569,15 @@ class _Grader:
                 # where another cause explains it, the image is not also called filtered.
                 found.pop("filter", None)
             if named is None and self.adequacy is not None and self.adequacy.verdict != "adequate":
-                self._findings_rule(found, img, R, clip_mask, noise, structure)
+                self._findings_rule(found, bt, img, R, clip_mask, noise, structure)
             loss, why = self._loss(bt, cam, registration="registration" in found, filtered="filter" in found,
                                    major=named.key if named is not None and named.family in _major_families() else None)
             lines += [found[k] + "." for k in found]
             lines.append(f"Bias beyond noise: {_fmt_pct(bt.excess_rms)} RMS; {_fmt_pct(loss)} of these points lost ({why}).")
             rub.failed("unbiased", " ".join(lines), loss=loss)
             self.headline = where[0].upper() + where[1:] + "." if where else "Biased."
-            if self.explanation is not None and (self.explanation.named is not None or not found):
+            if self.explanation is not None and (self.explanation.named is not None or not found or (
+                    self.adequacy is not None and self.adequacy.verdict in ("partial", "none"))):
                 self.headline = self.explanation.headline
             elif diag and self.explanation is None:
                 self.headline = f"{where[0].upper() + where[1:] if where else 'Biased'}: consistent with {short_text(diag[0].text)}."
@@ -805,13 +806,14 @@ class _Grader:
             self.figures.pop("mutant_name", None)
         return e
 
-    def _findings_rule(self, found, img, R, mask, noise, structure) -> None:
+    def _findings_rule(self, found, bt, img, R, mask, noise, structure) -> None:
         """The adequacy rule for the checks' own findings, where no cause is adequate (mcrt.grade.adequacy).
 
-        A structured remainder makes neighbours alike and moves edges: the
-        filter finding stands only if the noise is still correlated in what
-        the best candidate leaves, the camera finding only if that candidate
-        is the camera's.
+        A structured remainder makes neighbours alike, moves edges and darkens
+        pixels: the filter finding stands only if the noise is still
+        correlated in what the best candidate leaves, the camera finding only
+        if that candidate is the camera's, the wrong-pixels finding (cracks,
+        shadow rays) only if its pixels are a minor share of the image.
         """
         from mcrt.grade.adequacy import PARTIAL
         from mcrt.grade.structure import SHARES
@@ -819,6 +821,9 @@ class _Grader:
         best = self.explanation.candidates[0] if self.explanation.candidates else None
         if best is None or best.family not in _camera_families():
             found.pop("registration", None)
+        if "pixels" in found and bt.extra["pixels"].reshape(bt.shape + (3,)).any(axis=2).mean() > self.th.minor_area:
+            # Cracks and shadow-ray misses darken a few pixels; many dark pixels are part of a wider difference.
+            found.pop("pixels")
         if "filter" in found and best is not None and best.delta is not None and best.explained >= PARTIAL:
             rest = np.where(mask[..., None], img - R - best.delta, 0.0)
             st, _ = structure(rest, noise)
