@@ -25,6 +25,8 @@ emitter        the light black where seen directly          R minus the max-dept
 encoding       sRGB or a power curve on the values          closed form on R
 blur           a Gaussian blur of width sigma               closed form on R
 catalogue      R + (E_m - E_0) for each catalogued bug      the catalogue's renders
+beyond the     tone curves, fall-off, resampling, an        :mod:`mcrt.grade.families`
+scene file     object's material and size
 ============== ============================================ ===================================
 
 Every rendered family changes the reference by what mcrt says the mistake
@@ -56,7 +58,9 @@ that is lower, since capped terms of heavy-tailed noise average less than
 1). The best candidate is named when it explains at least :data:`NAMED` of
 the difference and lowers chi^2 by at least :data:`GAIN_SIGMAS` standard
 deviations of noise's (:math:`\sqrt{2n}`); otherwise the feedback
-says that no candidate does and shows where the image differs. A catalogued
+says that no candidate does and shows where the image differs. The grader
+then claims the named cause only when what it leaves is noise
+(:func:`mcrt.grade.adequacy.judge`). A catalogued
 bug that explains nearly as much as the best (within :data:`TIE`) is named
 first: several families contain a catalogued bug exactly (the mirror's
 reflectance 0 is ``mirror_wrong_sign``, the sRGB curve ``gamma_output``,

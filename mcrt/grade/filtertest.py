@@ -10,21 +10,22 @@ is accounted for:
   the noise of both and no bias at all, by the self-normalised lag-one
   statistic :math:`T = \sum z_i z_j / \sqrt{\sum z_i^2 z_j^2}` over
   adjacent pairs (N(0, 1) for independent pixels of mean 0);
-* **one render**: the first differences of neighbours along rows and
+* **one render**: second differences of neighbours along rows and
   columns, within one surface (a bias bound to an object has its step at the
-  object's border, which no difference crosses). A difference removes any
-  bias that is smooth at the scale of a pixel; for independent pixels
-  consecutive differences :math:`x_1 = (e_1 - e_0)/\sqrt{v_0 + v_1}`,
-  :math:`x_2 = (e_2 - e_1)/\sqrt{v_1 + v_2}` have the correlation
-  :math:`c = -v_1 / \sqrt{(v_0 + v_1)(v_1 + v_2)}` (-1/2 at equal
-  variances), and a filter raises it (a Gaussian blur of 0.8 pixel, to about
-  +0.2). The statistic is :math:`\sum (x_1 x_2 - c\,(x_1^2 + x_2^2)/2)`,
-  of mean 0 for independent pixels whatever the common scale of their
-  variances, self-normalised; overlapping triples make its terms dependent,
-  so its spread is that of :data:`SIMS` white-noise images of the same
-  variances through the same steps (fixed seed). The effect size is the
-  sum over :math:`\sum (x_1^2 + x_2^2)/2`: the correlation beyond what
-  independent pixels give.
+  object's border, which no difference crosses). A second difference
+  removes any bias that is linear over three pixels (a ramp of shading); for
+  independent pixels consecutive second differences
+  :math:`x_1 = (e_0 - 2 e_1 + e_2)/s_1`, :math:`x_2 = (e_1 - 2 e_2 + e_3)/s_2`
+  (:math:`s_1^2 = v_0 + 4 v_1 + v_2`) have the correlation
+  :math:`c = -2 (v_1 + v_2) / (s_1 s_2)` (-2/3 at equal variances), and a
+  filter raises it (a Gaussian blur of 0.8 pixel, to about -0.05). The
+  statistic is :math:`\sum (x_1 x_2 - c\,(x_1^2 + x_2^2)/2)`, of mean 0
+  for independent pixels whatever the common scale of their variances,
+  self-normalised; overlapping runs make its terms dependent, so its spread
+  is that of :data:`SIMS` white-noise images of the same variances through
+  the same steps (fixed seed). The effect size is the sum over
+  :math:`\sum (x_1^2 + x_2^2)/2`: the correlation beyond what independent
+  pixels give.
 
 The test is one-sided (a filter raises the correlation).
 """
@@ -58,22 +59,23 @@ def lag_one(z: np.ndarray, mask: np.ndarray) -> tuple[float, float]:
 
 
 def _differences(e: np.ndarray, v: np.ndarray, keep: np.ndarray, labels: np.ndarray):
-    """Consecutive normalised first differences (x1, x2) along rows and columns within one surface, and the
+    """Consecutive normalised second differences (x1, x2) along rows and columns within one surface, and the
     correlation c that independent pixels of variances v give them."""
     out1, out2, out_c = [], [], []
     for ee, vv, kk, ll in ((e, v, keep, labels), (e.T, v.T, keep.T, labels.T)):
-        e0, e1, e2 = ee[:, :-2], ee[:, 1:-1], ee[:, 2:]
-        v0, v1, v2 = vv[:, :-2], vv[:, 1:-1], vv[:, 2:]
-        m = kk[:, :-2] & kk[:, 1:-1] & kk[:, 2:] & (ll[:, :-2] == ll[:, 1:-1]) & (ll[:, 1:-1] == ll[:, 2:])
-        s01, s12 = np.sqrt(np.maximum(v0 + v1, 1e-300)), np.sqrt(np.maximum(v1 + v2, 1e-300))
-        out1.append(((e1 - e0) / s01)[m])
-        out2.append(((e2 - e1) / s12)[m])
-        out_c.append((-v1 / (s01 * s12))[m])
+        e0, e1, e2, e3 = ee[:, :-3], ee[:, 1:-2], ee[:, 2:-1], ee[:, 3:]
+        v0, v1, v2, v3 = vv[:, :-3], vv[:, 1:-2], vv[:, 2:-1], vv[:, 3:]
+        m = kk[:, :-3] & kk[:, 1:-2] & kk[:, 2:-1] & kk[:, 3:]
+        m &= (ll[:, :-3] == ll[:, 1:-2]) & (ll[:, 1:-2] == ll[:, 2:-1]) & (ll[:, 2:-1] == ll[:, 3:])
+        s1, s2 = np.sqrt(np.maximum(v0 + 4 * v1 + v2, 1e-300)), np.sqrt(np.maximum(v1 + 4 * v2 + v3, 1e-300))
+        out1.append(((e0 - 2 * e1 + e2) / s1)[m])
+        out2.append(((e1 - 2 * e2 + e3) / s2)[m])
+        out_c.append((-2 * (v1 + v2) / (s1 * s2))[m])
     return np.concatenate(out1), np.concatenate(out2), np.concatenate(out_c)
 
 
 def _stat(x1: np.ndarray, x2: np.ndarray, c: np.ndarray) -> tuple[float, float]:
-    """(T, excess correlation) of consecutive differences: the sum of x1 x2 - c (x1^2 + x2^2) / 2, which has
+    """(T, excess correlation) of consecutive second differences: the sum of x1 x2 - c (x1^2 + x2^2) / 2, which has
     mean 0 for independent pixels whatever their variances' common scale, self-normalised."""
     half = 0.5 * (x1 * x1 + x2 * x2)
     u = x1 * x2 - c * half

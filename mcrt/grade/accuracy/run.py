@@ -31,7 +31,7 @@ from mcrt.grade.accuracy.cases import Case, write_submission
 
 #: What each explanation family (and catalogued bug) names, as a cause of :data:`mcrt.grade.accuracy.cases.CAUSES`.
 CAUSE_OF: dict[str, tuple[str, ...]] = {
-    "scale": ("light_radiance",), "light_radiance": ("light_radiance",), "channels": ("albedo",),
+    "scale": ("light_radiance",), "light_radiance": ("light_radiance",), "channels": ("albedo", "channels"),
     "albedo": ("albedo",), "reflectance": ("albedo",), "light_position": ("light_position",),
     "light_size": ("light_size",), "object_missing": ("object_missing",), "object_moved": ("object_moved",),
     # Moving the eye along the view is nearly a zoom: either word is right for either mistake.
@@ -41,6 +41,9 @@ CAUSE_OF: dict[str, tuple[str, ...]] = {
     "encoding": ("encoding",), "blur": ("blur",),
     "gamma_output": ("encoding",), "depth_off_by_one": ("depth",), "albedo_1pct": ("albedo",),
     "mirror_wrong_sign": ("albedo",), "no_jitter": ("blur",),
+    # Families beyond the scene file (mcrt.grade.families).
+    "tone_curve": ("tone_map", "encoding"), "falloff": ("falloff",), "resampling": ("resampling", "blur"),
+    "material": ("material",), "object_size": ("object_size",),
 }
 
 
@@ -71,6 +74,7 @@ class Outcome:
     also_wrong: bool  # named a wrong cause beside the right one
     said: str  # what the feedback says of the cause
     seconds: float
+    verdict: str = ""  # the explanation's adequacy verdict: 'adequate', 'partial', 'none' ('' where none was run)
 
     @property
     def lost(self) -> bool:
@@ -88,6 +92,8 @@ def named_causes(res) -> tuple[list[str], str]:
     if expl and expl.get("named"):
         fam = expl["family"] if expl["family"] != "catalogue" else expl["named"]
         causes += CAUSE_OF.get(fam, (f"catalogue:{fam}",))
+        for alt in (expl.get("adequacy") or {}).get("alternatives", []):  # named beside it as fitting as well
+            causes += CAUSE_OF.get(alt, (alt,))
         said.append(expl["sentence"])
     elif expl:
         said.append(expl["sentence"])
@@ -108,6 +114,9 @@ def named_causes(res) -> tuple[list[str], str]:
     noise = tests.get("noise")
     if noise is not None and noise.status == "failed" and any(w in noise.output for w in ("blur", "denois", "filter")):
         causes.append("blur")
+        said.append(noise.output.split(";")[0])
+    elif noise is not None and noise.status == "failed" and "noisier" in noise.output:
+        causes.append("spp_claim")
         said.append(noise.output.split(";")[0])
     return list(dict.fromkeys(causes)), " | ".join(said)
 
@@ -131,8 +140,9 @@ def grade_cases(cases: list[Case], ctx, *, workdir: str | Path | None = None, lo
             right = None if c.cause is None else c.cause in named
             wrong = bool(named) and (c.cause is None or c.cause not in named)
             also = bool(right) and any(n not in _ACCEPTED.get(c.cause, (c.cause,)) for n in named)
+            verdict = ((res.details.get("explanation") or {}).get("adequacy") or {}).get("verdict", "")
             out.append(Outcome(c.name, c.spec.truth, c.cause, c.major, c.held_out, c.spp, c.spec.file, float(res.score),
-                               float(res.max_score), named, right, wrong, also, said or res.summary, dt))
+                               float(res.max_score), named, right, wrong, also, said or res.summary, dt, verdict))
             if log:
                 el = time.perf_counter() - t0
                 log(f"graded {k + 1}/{len(cases)}: {c.name} {res.score:g}/{res.max_score:g} ({dt:.1f} s); "
@@ -154,6 +164,7 @@ def rates(outcomes: list[Outcome]) -> dict:
         "detected": frac(wrong, lambda o: o.lost),
         "named_right": frac(wrong, lambda o: o.right),
         "named_wrong": frac(wrong, lambda o: o.wrong),
+        "honest_partial": frac(wrong, lambda o: not o.named and o.verdict in ("partial", "none")),
         "also_named_wrong": frac(wrong, lambda o: o.also_wrong),
         "major_lost_a_quarter": frac(major, lambda o: o.max_score - o.score >= 0.25 * o.max_score),
         "false_alarms": frac(ok, lambda o: o.lost),
