@@ -104,7 +104,7 @@ def claim(text: str, ad: Adequacy, *, alt: str = "") -> tuple[str, str]:
     """(sentence, headline) for a candidate ``text`` ('the light moved by +1 along y') and its verdict."""
     pct = f"{100 * ad.explained:.0f} %"
     if ad.verdict == "adequate":
-        s = f"It looks like {text}: that explains {pct} of the difference, and what is left is consistent with noise"
+        s = f"It looks like {text}: what is left after it is consistent with noise ({pct} of the difference explained)"
         if alt:
             return (s + f"; so would {alt}: the image cannot tell them apart.",
                     f"It looks like {text}, or {alt.split(', ')[0]}.")

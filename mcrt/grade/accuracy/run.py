@@ -10,7 +10,9 @@ prepared context. For each case the outcome says:
   family (:mod:`mcrt.grade.explain`), a catalogued bug named in its place,
   or a criterion whose failure names the cause itself (``linear``: an
   encoding; ``exposure``: a constant factor, which a light of the wrong
-  radiance is; a camera criterion failed for misregistration);
+  radiance is, where dividing by it passes the bias test; a camera criterion
+  failed for misregistration; the noise criterion: a filter, or fewer
+  samples than declared);
 * whether the named cause is the right one (:data:`CAUSE_OF`), or a wrong
   one (a confident wrong cause), or none.
 
@@ -52,7 +54,11 @@ CAUSE_OF: dict[str, tuple[str, ...]] = {
 _CAMERA_CAUSES = ("camera_fov", "camera_rotation", "camera_eye", "pixel_offset")
 _ACCEPTED = {**{c: _CAMERA_CAUSES for c in _CAMERA_CAUSES},
              # A light of another size at the same radiance emits another power: the exposure criterion says so.
-             "light_size": ("light_size", "light_radiance")}
+             "light_size": ("light_size", "light_radiance"),
+             # The same mistake in other words: a curve on the values is an encoding, BGR is a colour mistake,
+             # enlarging a small render blurs it.
+             "tone_map": ("tone_map", "encoding"), "channels": ("channels", "albedo"),
+             "resampling": ("resampling", "blur")}
 
 
 @dataclass
@@ -104,7 +110,9 @@ def named_causes(res) -> tuple[list[str], str]:
     tests = {t.name: t for t in res.tests}
     for crit, cause in (("linear", "encoding"), ("exposure", "light_radiance")):
         t = tests.get(crit)
-        if t is not None and t.status == "failed":
+        # The exposure criterion claims a constant factor only where dividing by it passes the bias test; a
+        # brightness off by more than it allows, which no constant explains, names no cause.
+        if t is not None and t.status == "failed" and (crit != "exposure" or "passes the bias test" in t.output):
             causes.append(cause)
             said.append(t.output.split(";")[0])
     cam = tests.get("camera")
