@@ -48,7 +48,7 @@ SIZES = (0.8, 0.9, 0.95, 1.05, 1.1, 1.2)
 FACTORS = (2, 4)
 
 
-def _candidate(family: str, name: str, text: str, chi2: float, params: int, value, change: np.ndarray):
+def _candidate(family: str, name: str, text: str, chi2: float, params: int, *, value, change: np.ndarray):
     """A candidate of the explanation stage (its Candidate class; ``change`` is M - R)."""
     from mcrt.grade.explain import Candidate
 
@@ -107,7 +107,7 @@ def tone_curve(fit, inputs) -> list:
         k = scan[i]
         exp = f" after an exposure of {_num(k)}" if k != 1.0 else ""
         out.append(_candidate("tone_curve", f"tone map {key}", f"the values {words}{exp} before saving",
-                              errs[i], 1 if len(scan) > 1 else 0, {"curve": key, "exposure": k}, f(k * R) - fit.R))
+                              errs[i], 1 if len(scan) > 1 else 0, value={"curve": key, "exposure": k}, change=f(k * R) - fit.R))
     out.append(_isotonic(fit))
     return out
 
@@ -139,7 +139,7 @@ def _isotonic(fit):
     text = (f"the values through a monotone curve (a tone map, clamp or encoding) that maps {says}" if says
             else "the values through a monotone curve")
     return _candidate("tone_curve", "monotone curve", text, fit.delta(change), params,
-                      {"curve": "monotone", "maps": [[p, q] for p, q in zip(probe, lum)]}, change)
+                      value={"curve": "monotone", "maps": [[p, q] for p, q in zip(probe, lum)]}, change=change)
 
 
 # --------------------------------------------------------------------------
@@ -167,7 +167,7 @@ def falloff(fit, inputs) -> list:
     words = ", ".join(f"{100 * v:.0f} % at the {k}" for k, v in edges.items())  # the centre's factor is 1
     out = [_candidate("falloff", "smooth fall-off", "the brightness changing smoothly across the image, relative to its centre: "
                       f"{words} (a vignette, a weight per pixel, a light's fall-off)", fit.delta(change), 5,
-                      {k: float(v) for k, v in edges.items()}, change)]
+                      value={k: float(v) for k, v in edges.items()}, change=change)]
     basis = getattr(inputs, "basis", None)
     fov = getattr(basis, "fov_deg", 90.0)
     t = math.tan(math.radians(fov) / 2)
@@ -179,7 +179,7 @@ def falloff(fit, inputs) -> list:
     how = (f"multiplied by cos^{_num(k)} of the angle between its ray and the view axis" if k > 0 else
            f"divided by cos^{_num(-k)} of the angle between its ray and the view axis")
     out.append(_candidate("falloff", "cosine weight", f"each pixel {how} (a camera model that weights rays)",
-                          errs[i], 1, {"cos_power": k}, fit.R * (cos[..., None] ** k - 1.0)))
+                          errs[i], 1, value={"cos_power": k}, change=fit.R * (cos[..., None] ** k - 1.0)))
     return out
 
 
@@ -215,10 +215,10 @@ def resampling(fit, inputs) -> list:
         blocks = f" ({100 * eq:.0f} % of its {k} x {k} blocks are one colour)" if eq > 0.5 else ""
         out.append(_candidate("resampling", f"enlarged {k}x (nearest)", f"the image rendered at {w // k} x {h // k} "
                               f"pixels and enlarged {k} times by repeating pixels{blocks}", fit.model(near), 1,
-                              {"factor": k, "method": "nearest", "equal_blocks": eq}, near - fit.R))
+                              value={"factor": k, "method": "nearest", "equal_blocks": eq}, change=near - fit.R))
         out.append(_candidate("resampling", f"enlarged {k}x (bilinear)", f"the image rendered at {w // k} x {h // k} "
                               f"pixels and enlarged {k} times by bilinear interpolation", fit.model(lin), 1,
-                              {"factor": k, "method": "bilinear"}, lin - fit.R))
+                              value={"factor": k, "method": "bilinear"}, change=lin - fit.R))
     return out
 
 
@@ -303,7 +303,7 @@ def material(fit, inputs) -> list:
         was = "a diffuse surface" if kind == "mirror" else "a mirror"
         out.append(_candidate("material", f"{name} as {kind}", f"the {name} rendered as {word} {_fmt(fitted)} where "
                               f"the scene makes it {was}", fit.delta(change), 3,
-                              {"object": name, "material": kind, "value": fitted}, change))
+                              value={"object": name, "material": kind, "value": fitted}, change=change))
     return out
 
 
@@ -326,7 +326,7 @@ def object_size(fit, inputs) -> list:
         e, f, dm = best
         what = "radius" if name == "sphere" else "size"
         out.append(_candidate("object_size", f"size of the {name}", f"the {name}'s {what} {_num(f)} times the "
-                              "scene's", e, 1, {"object": name, "scale": f}, dm))
+                              "scene's", e, 1, value={"object": name, "scale": f}, change=dm))
     return out
 
 
