@@ -18,6 +18,7 @@ import pytest
 
 from mcrt.grade.accuracy.cases import Spec, _render_spec, light, wall_albedo, without
 from mcrt.grade.assignment import assignment_from_dict
+from mcrt.grade.candidates import Inputs
 from mcrt.grade.explain import explain
 from mcrt.grade.expected import prepare_context
 from mcrt.grade.grader import grade_image
@@ -45,8 +46,8 @@ def _mitsuba(scene, seed: int, spp: int = 1024):
 def _explain(ctx, image, spp):
     ref = ctx.references["near"]
     V = ctx.model_var["near"] / spp + ref.var / ref.spp
-    return explain(image, ref.mean, V, np.ones((RES, RES), bool), ctx.explain, mutants=ctx.mutants,
-                   baseline=ctx.baseline, texts=ctx.mutant_texts)
+    inputs = Inputs(ctx.explain, mutants=ctx.mutants, baseline=ctx.baseline, texts=ctx.mutant_texts)
+    return explain(image, ref.mean, V, np.ones((RES, RES), bool), inputs)
 
 
 def test_a_recoloured_wall_is_that_walls_albedo(ctx):
@@ -55,7 +56,7 @@ def test_a_recoloured_wall_is_that_walls_albedo(ctx):
     edit = (0.15, 0.20, 0.75)
     r = _mitsuba(wall_albedo("EF", edit)(load_scene()), seed=11)
     e = _explain(ctx, r.mean, r.spp)
-    assert e.named is not None and e.named.key == "albedo of wall EF", e.sentence
+    assert e.named is not None and e.named.name == "albedo of wall EF", e.sentence
     assert np.allclose(e.named.value, edit, atol=0.06), e.named.value
     assert e.named.explained >= 0.8
     assert "wall EF with albedo (" in e.sentence and "the scene says (0.15, 0.70, 0.15)" in e.sentence
@@ -94,7 +95,7 @@ def test_a_catalogued_bug_keeps_its_name(ctx):
     img = render(s, s.settings(camera="near", width=RES, height=RES, spp=256, max_depth=8), seed=14, progress=False,
                  mutants=("nee_no_area",)).mean
     e = _explain(ctx, img, 256)
-    assert e.named is not None and e.named.catalogue and e.named.key == "nee_no_area", e.sentence
+    assert e.named is not None and e.named.catalogue and e.named.name == "nee_no_area", e.sentence
 
 
 def test_a_cut_path_depth_is_not_also_blamed_on_the_camera(ctx):

@@ -25,8 +25,8 @@ from mcrt.grade.expected import prepare_context
 from mcrt.grade.filtertest import noise_correlation
 from mcrt.grade.grader import grade_image
 from mcrt.grade.objects import object_tests
-from mcrt.grade.score import Noise, bias_test
 from mcrt.scene import Lambertian, Sphere, load_scene
+from mcrt.stats.onesample import Noise, multiscale_test
 
 
 @pytest.fixture(scope="module")
@@ -87,9 +87,9 @@ def test_the_object_test_sees_a_small_change_on_one_object():
     S = np.where((sc.labels == 3)[..., None], S * 0.98, S)
     mask = np.ones((RES, RES), bool)
     kw = {"alpha": sc.alpha, "min_effect": sc.min_effect, "full_effect": sc.full_effect}
-    assert not bias_test(S - R, R, mask, noise, sc.tiles, **kw).penalised_any
+    assert not multiscale_test(S - R, R, mask, noise, sc.tiles, **kw).penalised_any
     ot = object_tests(S - R, R, mask, noise, sc.labels, 4)
-    bt = bias_test(S - R, R, mask, noise, sc.tiles, **kw, extra=[ot.family(sc.min_effect)])
+    bt = multiscale_test(S - R, R, mask, noise, sc.tiles, **kw, extra=[ot.family(sc.min_effect)])
     assert list(bt.extra["objects"].reshape(4, 3).any(axis=1)) == [False, False, False, True]
 
 

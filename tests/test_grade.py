@@ -17,7 +17,7 @@ own message. ``light_two_sided`` (the light's upper side, just under the
 ceiling, lights it through a 1/d^2 singularity) barely changes the mean
 but multiplies the variance with rare fireflies: it fails the noise
 criterion, and is named there by the amount of its noise
-(mcrt.grade.diagnose.rank_noise_level); a correct render with too few
+(mcrt.grade.explain.catalogue.rank_noise_level); a correct render with too few
 samples fails the same criterion and must not be named a bug. Seeds are
 pinned, so each test is deterministic; a correct render's false-alarm
 probability is below the 1 % family-wise level of the bias test.

@@ -13,7 +13,8 @@ API (imported lazily, so ``mcrt --help`` stays fast):
 * :func:`load_assignment` -> :class:`Assignment` (``mcrt.grade.assignment``)
 * :func:`prepare_context` -> :class:`Context` (``mcrt.grade.expected``)
 * :func:`grade_class` -> :class:`ClassResult` (``mcrt.grade.batch``)
-* :func:`grade_submission`, :func:`grade_image` -> :class:`StudentResult` (``mcrt.grade.grader``)
+* :func:`grade_submission`, :func:`grade_image` -> :class:`StudentResult` (``mcrt.grade.grader``, which runs
+  the stages of ``mcrt.grade.stages``; results and points: ``mcrt.grade.scoring``)
 * :func:`discover` (``mcrt.grade.submissions``)
 * :func:`grade_code`, :func:`grade_code_class` (``mcrt.grade.codemode``)
 * :func:`register` adds ``grade`` to the ``mcrt`` command line (``mcrt.grade.cli``)
@@ -27,7 +28,7 @@ _API = {
     "load_assignment": "assignment", "Assignment": "assignment", "AssignmentError": "assignment",
     "prepare_context": "expected", "Context": "expected",
     "grade_class": "batch", "ClassResult": "batch",
-    "grade_submission": "grader", "grade_image": "grader", "StudentResult": "grader", "TestResult": "grader",
+    "grade_submission": "grader", "grade_image": "grader", "StudentResult": "scoring", "TestResult": "scoring",
     "discover": "submissions", "Submission": "submissions",
     "grade_code": "codemode", "grade_code_class": "codemode",
     "register": "cli", "main": "cli",

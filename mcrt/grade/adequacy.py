@@ -7,7 +7,7 @@ predicts a change :math:`\Delta` of the reference R. What it leaves,
 
     r = S - R - \Delta,
 
-is tested with the bias test itself (:func:`mcrt.grade.score.bias_test`:
+is tested with the bias test itself (:func:`mcrt.stats.onesample.multiscale_test`:
 the same noise model, tiles, Holm family at the same ``alpha`` and the same
 relevance threshold ``min_effect``), with the per-object test of
 :mod:`mcrt.grade.objects` in its family and the candidate's own noise
@@ -19,14 +19,17 @@ relevance threshold ``min_effect``), with the per-object test of
   structured remainder is left: it is named as partial, with the share and
   the objects the remainder sits on ("partly like X, which explains 56 %;
   something else is wrong on the ceiling and the light");
-* **none**: no candidate explains enough (:data:`PARTIAL` of the
+* **none**: no candidate explains enough (:data:`PARTIAL_SHARE` of the
   difference) to be mentioned: the objects the difference sits on are named
   instead, with how they differ.
 
-The checks that print findings of their own (a filtered image, a camera that
-does not match, an exposure factor) go through :func:`remainder_test` too:
-the finding's own model is the candidate (for an exposure factor k,
-:math:`\Delta = (k - 1) R`).
+The checks that print findings of their own follow the same rule: the
+exposure criterion claims a constant factor only where the image divided by
+it passes the bias test (:mod:`mcrt.grade.stages.exposure`); the filter,
+camera and wrong-pixels findings stand beside an unexplained difference only
+where they hold on what the best candidate leaves
+(:mod:`mcrt.grade.stages.bias`). :func:`claim_rule` is the rule as the
+explanation engine takes it.
 """
 
 from __future__ import annotations
@@ -36,10 +39,10 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from mcrt.grade import objects as obj
-from mcrt.grade.score import Noise, bias_test
+from mcrt.stats.onesample import Noise, multiscale_test
 
 #: A candidate that explains less than this share of the difference is not mentioned at all.
-PARTIAL = 0.3
+PARTIAL_SHARE = 0.3
 
 
 @dataclass
@@ -54,12 +57,12 @@ class Adequacy:
     where: str = ""  # those objects in words, with how they differ
     map: np.ndarray | None = None  # (H, W) per-object relative difference of the remainder (rejected objects)
     excess_rms: float = 0.0  # the remainder's bias beyond noise, relative
-    alternatives: list[str] = field(default_factory=list)  # families that fit as well (adequate too)
+    alternatives: list[tuple] = field(default_factory=list)  # (family, text, share) of causes that fit as well
 
     def to_dict(self) -> dict:
         return {"verdict": self.verdict, "explained": self.explained, "rejected": self.rejected,
                 "n_tests": self.n_tests, "objects": self.objects, "where": self.where,
-                "remainder_excess_rms": self.excess_rms, "alternatives": self.alternatives}
+                "remainder_excess_rms": self.excess_rms, "alternatives": [a[0] for a in self.alternatives]}
 
 
 @dataclass
@@ -85,7 +88,7 @@ def remainder_test(S: np.ndarray, R: np.ndarray, delta: np.ndarray | float, mask
                pair=noise.pair)
     K = len(sc.names) - 1
     ot = obj.object_tests(resid, R, ok, nz, sc.labels, K)
-    bt = bias_test(resid, R, ok, nz, sc.tiles, alpha=sc.alpha, min_effect=sc.min_effect,
+    bt = multiscale_test(resid, R, ok, nz, sc.tiles, alpha=sc.alpha, min_effect=sc.min_effect,
                    full_effect=sc.full_effect, extra=[ot.family(sc.min_effect)])
     rej_o = bt.extra.get("objects", np.zeros(K * 3, bool)).reshape(K, 3)
     n_rej = sum(int(np.count_nonzero(s.penalised)) for s in bt.scales) + int(np.count_nonzero(rej_o))
@@ -95,30 +98,9 @@ def remainder_test(S: np.ndarray, R: np.ndarray, delta: np.ndarray | float, mask
     where = obj.flagged_objects(ot, rej_o, tile_effect=bt.pixel_effect, labels=sc.labels, mask=ok)
     nv = nz.model + nz.reference
     words = obj.sentence(S - d, R, ok, nv, sc.labels, sc.names, where)
-    verdict = "partial" if explained >= PARTIAL else "none"
+    verdict = "partial" if explained >= PARTIAL_SHARE else "none"
     return Adequacy(verdict, explained, n_rej, n_tests, where, words, obj.effect_map(ot, rej_o, sc.labels, ok),
                     bt.excess_rms)
-
-
-def claim(text: str, ad: Adequacy, *, alt: str = "") -> tuple[str, str]:
-    """(sentence, headline) for a candidate ``text`` ('the light moved by +1 along y') and its verdict."""
-    pct = f"{100 * ad.explained:.0f} %"
-    if ad.verdict == "adequate":
-        s = f"It looks like {text}: what is left after it is consistent with noise ({pct} of the difference explained)"
-        if alt:
-            return (s + f"; so would {alt}: the image cannot tell them apart.",
-                    f"It looks like {text}, or {alt.split(', ')[0]}.")
-        return s + ".", f"It looks like {text}."
-    if ad.verdict == "partial":
-        rest = f"something else is wrong {ad.where}" if ad.where else "something else is wrong as well"
-        s = (f"Partly like {text}, which explains {pct} of the difference; {rest} (what is left after that "
-             f"explanation is not noise: {ad.rejected} of {ad.n_tests} tests of it are significant).")
-        return s, f"Partly like {text}; {rest}."
-    where = f"The difference sits {ad.where}" if ad.where else "The difference has no single place"
-    s = ("No single mistake we tried explains the difference well enough to name it. " + where + ".")
-    return s, (f"No single mistake we tried explains the difference; it sits {ad.where}." if ad.where
-               else "No single mistake we tried explains the difference.")
-
 
 
 #: How many of the best candidates are tried, in order, for one whose remainder is noise.
@@ -128,57 +110,61 @@ TRIED = 3
 AMBIGUOUS = 0.05
 
 
-def judge(e, S: np.ndarray, R: np.ndarray, mask: np.ndarray, noise: Noise, sc: Scene2D, *,
-          extra_var=None, claimable=None):
-    """Apply the rule to an explanation ``e`` (:class:`mcrt.grade.explain.Explanation`): (the explanation with
-    ``named``, ``sentence`` and ``headline`` rewritten, the :class:`Adequacy` of what it says).
+def claim_rule(S: np.ndarray, R: np.ndarray, mask: np.ndarray, noise: Noise, sc: Scene2D, *, extra_var=None):
+    """The adequacy rule as a claim rule of the explanation engine (:class:`mcrt.grade.candidates.ClaimRule`).
 
-    The first of the :data:`TRIED` best candidates that ``claimable(c)`` allows
-    (default: explaining at least :data:`mcrt.grade.explain.NAMED`; the
-    explanation's own rule for the best) and whose remainder is noise is
-    claimed; else the best is partial if it explains :data:`PARTIAL`, else
-    nothing is named and the difference itself is placed on objects.
-    ``extra_var(c)`` is the noise (H, W, 3) of candidate c's predicted change
-    (None: none).
+    After the share rule (:func:`mcrt.grade.explain.claim.share_rule`), a
+    claimed cause stands only if its remainder is noise: the first of the
+    :data:`TRIED` best candidates (explaining at least
+    :data:`mcrt.grade.explain.NAMED`) whose remainder is noise is claimed
+    (moved first), with the other families that fit as well
+    (:data:`AMBIGUOUS`); else the best is PARTIAL, with where its remainder
+    lies, if it explains :data:`PARTIAL_SHARE` of the difference; else nothing is
+    claimed and the difference itself is placed on objects
+    (``remainder_where``). ``extra_var(c)`` is the noise (H, W, 3) of
+    candidate c's predicted change (None: none). The rule's measurements
+    go to ``e.adequacy`` (:class:`Adequacy`).
     """
-    from dataclasses import replace
+    from mcrt.grade import candidates as cd
+    from mcrt.grade.explain.claim import NAMED, share_rule
 
-    from mcrt.grade.explain import NAMED
+    def test(c):
+        var = extra_var(c) if extra_var is not None else None
+        return remainder_test(S, R, c.change, mask, noise, sc, extra_var=var, explained=c.explained)
 
-    def var(c):
-        return extra_var(c) if extra_var is not None else None
-
-    def ok(c):
-        return c.delta is not None and (claimable(c) if claimable is not None else c.explained >= NAMED)
-
-    cands = [c for c in e.candidates[:TRIED] if ok(c)]
-    if e.named is not None and e.named in cands:  # the explanation's own choice first (a catalogued bug in a tie)
-        cands = [e.named] + [c for c in cands if c is not e.named]
-    first = None
-    for c in cands:
-        ad = remainder_test(S, R, c.delta, mask, noise, sc, extra_var=var(c), explained=c.explained)
-        if ad.verdict == "adequate":
-            alts = [a for a in cands if a is not c and a.family != c.family and a.explained >= c.explained - AMBIGUOUS
-                    and remainder_test(S, R, a.delta, mask, noise, sc, extra_var=var(a)).verdict == "adequate"]
-            ad.alternatives = [a.family for a in alts]
-            s, h = claim(c.text, ad, alt=" or ".join(f"{a.text}, {100 * a.explained:.0f} %" for a in alts))
-            return replace(e, named=c, sentence=s + (f" It changes the image {c.where}." if c.where else ""),
-                           headline=h), ad
-        first = first or (c, ad)
-    best = e.candidates[0] if e.candidates else None
-    if first is not None and first[0] is best:
-        c, ad = first
-    elif best is not None and best.explained >= PARTIAL and best.delta is not None:
-        c = best
-        ad = remainder_test(S, R, c.delta, mask, noise, sc, extra_var=var(c), explained=c.explained)
-    else:
-        c = None
-    if c is None or ad.verdict != "partial":
+    def rule(e, fit, inputs) -> None:
+        share_rule(e, fit, inputs)
+        best = e.best
+        tried = {}
+        if e.verdict == cd.CLAIMED:
+            for c in [c for c in e.candidates[:TRIED] if c.change is not None and c.explained >= NAMED]:
+                tried[id(c)] = ad = test(c)
+                if ad.verdict == "adequate":
+                    _claim(e, c, ad, [a for a in e.candidates[:TRIED] if a is not c and a.family != c.family
+                                      and a.change is not None and a.explained >= c.explained - AMBIGUOUS
+                                      and test(a).verdict == "adequate"],
+                           np.where(mask[..., None], S - R - c.change, 0.0))
+                    return
+        if (best is not None and best.change is not None and best.explained >= PARTIAL_SHARE
+                and e.verdict != cd.INDISTINCT):
+            ad = tried.get(id(best)) or test(best)
+            if ad.verdict == "partial":
+                e.verdict, e.remainder_where, e.adequacy = cd.PARTIAL, ad.where, ad
+                return
+        e.verdict = cd.NONE if e.verdict == cd.CLAIMED else e.verdict
         ad = remainder_test(S, R, 0.0, mask, noise, sc, explained=0.0)
         ad.verdict = "none" if ad.rejected else "adequate"
-        if ad.verdict == "adequate":  # the difference itself is noise at this level: nothing to place
-            return replace(e, named=None), ad
-        s, h = claim("", ad)
-        return replace(e, named=None, sentence=s, headline=h), ad
-    s, h = claim(c.text, ad)
-    return replace(e, named=None, sentence=s, headline=h), ad
+        e.remainder_where, e.adequacy = ad.where, ad
+
+    return rule
+
+
+def _claim(e, c, ad: Adequacy, alternatives: list, remainder: np.ndarray) -> None:
+    """Claim candidate c of explanation e (first in its list, ``remainder`` its own), naming the alternatives."""
+    from mcrt.grade import candidates as cd
+
+    if c is not e.best:
+        e.remainder = remainder
+        e.candidates = [c] + [x for x in e.candidates if x is not c]
+    ad.alternatives = [(a.family, a.text, a.explained) for a in alternatives]
+    e.verdict, e.adequacy = cd.CLAIMED, ad

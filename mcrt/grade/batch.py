@@ -83,7 +83,7 @@ def grade_class(submissions: str | os.PathLike, assignment: Assignment, out: str
     odd = [f"{s.student} ({s.special})" for s in subs if getattr(s, "special", None)]
     if odd:  # links, FIFOs, devices where a hand-in should be: never opened, graded 0, and said here
         note += " Not regular files, never followed or opened (graded 0): " + ", ".join(odd) + "."
-    from mcrt.grade.diagnose import catalogue_power
+    from mcrt.grade.explain.catalogue import catalogue_power
 
     try:
         power = catalogue_power(ctx)

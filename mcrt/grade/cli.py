@@ -217,7 +217,7 @@ def _prepare(a, args, log) -> int:
     except (OSError, RuntimeError, ValueError) as e:
         print(f"mcrt grade: {e}", file=sys.stderr)
         return EXIT_UNUSABLE
-    from mcrt.grade.diagnose import catalogue_power
+    from mcrt.grade.explain.catalogue import catalogue_power
 
     print(f"prepared {a.name}: reference {ctx.references[a.camera].source}; {len(ctx.mutants)} bugs; {ctx.prepare_time:.1f} s")
     power = catalogue_power(ctx)

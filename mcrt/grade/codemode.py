@@ -99,7 +99,7 @@ from pathlib import Path
 import numpy as np
 
 from mcrt.grade.assignment import Assignment
-from mcrt.grade.grader import StudentResult, TestResult
+from mcrt.grade.scoring import Rubric, StudentResult, code_items
 
 RUNNER = Path(__file__).with_name("_sandbox.py")
 FSIZE_LIMIT = 128 << 20  # any one file the student's process writes (its stdout included)
@@ -922,7 +922,6 @@ def grade_code(student: str, src: Path, a: Assignment, *, ctx=None, timeout: flo
     spec = a.code
     to = timeout or spec.timeout
     mem = memory_mb or spec.memory_mb
-    tests: list[TestResult] = []
     details: dict = {}
     notes: list[str] = []
     diagnosis: list = []
@@ -935,66 +934,64 @@ def grade_code(student: str, src: Path, a: Assignment, *, ctx=None, timeout: flo
         notes += [f"submission: {n}" for n in skipped]
         root = stage / "s" / root.name if root.is_file() else stage / "s"
     try:
-        return _grade_code_checks(student, a, root, mod, problem, ctx, to, mem, tests, details, notes, diagnosis, t0)
+        return _grade_code_checks(student, a, root, mod, problem, ctx, to, mem, details, notes, diagnosis, t0)
     finally:
         if stage is not None:
             shutil.rmtree(stage, ignore_errors=True)
 
 
-def _grade_code_checks(student, a, root, mod, problem, ctx, to, mem, tests, details, notes, diagnosis, t0):
-    spec = a.code
+def _grade_code_checks(student, a, root, mod, problem, ctx, to, mem, details, notes, diagnosis, t0):
+    rub = Rubric(code_items(a, CHECK_TITLES), mode="code")
     scene = None
-    for chk in spec.checks:
-        title = CHECK_TITLES.get(chk.name, chk.name)
+    for chk in a.code.checks:
         if root is None:
-            tests.append(TestResult(chk.name, title, 0.0, chk.points, f"not graded: {problem}", chk.visibility, "not graded"))
+            rub.not_graded(chk.name, f"not graded: {problem}")
             continue
 
         def run(function, calls, arrays, first_of_tuple=False):
             return run_student(root, mod, function, calls, arrays, timeout=to, memory_mb=mem, first_of_tuple=first_of_tuple)
 
         try:
-            if chk.name == "sample_cosine_hemisphere":
-                out = check_sample_cosine(run, chk.params)
-            elif chk.name == "intersect_triangle":
-                out = check_intersect(run, chk.params)
-            elif chk.name == "estimate_direct":
-                scene = scene or a.load_scene()
-                out = check_direct(run, chk.params, scene)
-            elif chk.name == "render":
-                import tomllib
-
-                scene = scene or a.load_scene()
-                with open(scene.path, "rb") as f:
-                    scene_dict = tomllib.load(f)
-                if ctx is None:
-                    from mcrt.grade.expected import prepare_context
-
-                    ctx = prepare_context(a)
-                out, sr = check_render(run, chk.params, a, ctx, scene_dict)
-                if sr is not None:
-                    diagnosis = sr.diagnosis
-            else:  # pragma: no cover - validated by the assignment loader
-                out = CheckOutcome(0.0, f"unknown check {chk.name}")
+            out, scene, ctx, sr = _run_check(chk, run, a, scene, ctx)
+            if sr is not None:
+                diagnosis = sr.diagnosis
         except Exception as e:  # noqa: BLE001 - a grader bug must not stop the class
             out = CheckOutcome(0.0, f"the grader failed on this check ({type(e).__name__}: {e})")
         details[chk.name] = out.details
-        score = round(chk.points * max(0.0, min(1.0, out.fraction)), 4)
-        status = "passed" if out.fraction >= 1.0 else "failed"
-        tests.append(TestResult(chk.name, title, score, chk.points, out.message, chk.visibility, status))
+        rub.credit(chk.name, out.fraction, out.message)
     if problem:
         notes.append(problem)
-    score = round(sum(t.score for t in tests), 4)
-    maxs = sum(t.max_score for t in tests)
-    failed = [t for t in tests if t.score < t.max_score]
-    shown = f"{score:.2f}".rstrip("0").rstrip(".")
-    summary = (f"Full marks: {shown}/{maxs:g}." if not failed else
-               f"{shown}/{maxs:g}. " + "; ".join(f"{t.name}: {t.output.splitlines()[0][:160]}" for t in failed[:2]))
     details["mode"] = "code"
     details["sandbox"] = isolation().detail
-    res = StudentResult(student, "graded", score, maxs, tests, summary, notes, diagnosis, details)
+    res = rub.result(student, notes=notes, diagnosis=diagnosis, details=details)
     res.elapsed = time.perf_counter() - t0
     return res
+
+
+def _run_check(chk, run, a: Assignment, scene, ctx):
+    """One check's outcome; the scene and the context are loaded on first use and passed on."""
+    sr = None
+    if chk.name == "sample_cosine_hemisphere":
+        out = check_sample_cosine(run, chk.params)
+    elif chk.name == "intersect_triangle":
+        out = check_intersect(run, chk.params)
+    elif chk.name == "estimate_direct":
+        scene = scene or a.load_scene()
+        out = check_direct(run, chk.params, scene)
+    elif chk.name == "render":
+        import tomllib
+
+        scene = scene or a.load_scene()
+        with open(scene.path, "rb") as f:
+            scene_dict = tomllib.load(f)
+        if ctx is None:
+            from mcrt.grade.expected import prepare_context
+
+            ctx = prepare_context(a)
+        out, sr = check_render(run, chk.params, a, ctx, scene_dict)
+    else:  # pragma: no cover - validated by the assignment loader
+        out = CheckOutcome(0.0, f"unknown check {chk.name}")
+    return out, scene, ctx, sr
 
 
 def discover_code(path, *, single: bool = False, student: str | None = None) -> list[tuple[str, Path]]:

@@ -200,7 +200,7 @@ def prepare_context(a: Assignment, cache_dir: str | os.PathLike | None = None, *
     ``mutants`` restricts the catalogue (default: all of it); ``log`` is a
     callable taking one line of progress text; ``explain`` (default true)
     renders the scene's variations that explain a failing image
-    (:func:`mcrt.grade.explain.prepare_basis`).
+    (:func:`mcrt.grade.explain.families.prepare`).
     """
     from mcrt.mutants import MUTANTS
 
@@ -233,7 +233,7 @@ def prepare_context(a: Assignment, cache_dir: str | os.PathLike | None = None, *
             notes.append(f"mutant {m} left out of the diagnosis: {e}")
             continue
         muts[m] = _expected(r, f"mcrt with mutant {m} ({a.diagnosis_spp} spp)")
-    from mcrt.grade.explain import prepare_basis
+    from mcrt.grade.explain.families import prepare as prepare_basis
 
     def render_cached(sc, cam, width, height, depth, spp, seed):
         return cached_render(sc, cam, width, height, depth, spp, seed, "none", cache, log)

@@ -5,7 +5,7 @@ A tile mixes the surfaces it covers; a small change confined to one object
 the object is a few pixels of many. Here the pixels are grouped by what they
 see (:func:`mcrt.grade.expected.surface_labels`: each wall, the floor, the
 ceiling, the light, the tetrahedron, the sphere) and each group's mean
-residual is tested like a tile of the bias test (:func:`mcrt.grade.score.scale_stats`):
+residual is tested like a tile of the bias test (:func:`mcrt.stats.onesample.scale_stats`):
 
 .. math::
 
@@ -15,7 +15,7 @@ residual is tested like a tile of the bias test (:func:`mcrt.grade.score.scale_s
 
 two-sided with :math:`n_k - 1` degrees of freedom, per channel. Its p-values
 join the bias test's Holm family as one more detector
-(``bias_test(..., extra=...)``, share :data:`SHARE` of alpha), with the same
+(``multiscale_test(..., extra=...)``, share :data:`SHARE` of alpha), with the same
 relevance threshold (``min_effect`` on :math:`|\bar r_k| / |\bar R_k|`).
 
 :func:`describe` words how each object differs from the reference (darker,
@@ -54,13 +54,13 @@ class ObjectTests:
     rel: np.ndarray  # diff / |ref|
 
     def family(self, min_effect: float) -> tuple[str, np.ndarray, np.ndarray, float]:
-        """(name, p-values, relevant, share) for :func:`mcrt.grade.score.bias_test`'s ``extra``."""
+        """(name, p-values, relevant, share) for :func:`mcrt.stats.onesample.multiscale_test`'s ``extra``."""
         return ("objects", self.p.ravel(), (np.abs(self.rel) >= min_effect).ravel(), SHARE)
 
 
 def object_tests(resid: np.ndarray, ref: np.ndarray, mask: np.ndarray, noise, labels: np.ndarray,
                  n_labels: int) -> ObjectTests:
-    """The per-object test of the module docstring; ``noise`` is the bias test's :class:`mcrt.grade.score.Noise`."""
+    """The per-object test of the module docstring; ``noise`` is the bias test's :class:`mcrt.stats.onesample.Noise`."""
     k = np.where(mask, labels, n_labels).ravel().astype(np.int64)
     r = resid.reshape(-1, 3).astype(np.float64)
     R = ref.reshape(-1, 3).astype(np.float64)
@@ -138,7 +138,7 @@ def flagged_objects(ot: ObjectTests, rejected: np.ndarray | None, *, tile_effect
 
     ``rejected`` (K, 3) marks the objects whose test is rejected and
     relevant; ``tile_effect`` (H, W), the relative effect of the penalised
-    tiles covering each pixel (:attr:`mcrt.grade.score.BiasTest.pixel_effect`),
+    tiles covering each pixel (:attr:`mcrt.stats.onesample.MultiScaleTest.pixel_effect`),
     adds the objects by the effect summed over their pixels.
     """
     K = ot.n.size

@@ -261,7 +261,7 @@ SHARES = {"registration": 0.05, "blur": 0.025, "correlation": 0.025, "pixels": 0
 
 
 def families(st: Structure, th) -> list[tuple[str, np.ndarray, np.ndarray, float]]:
-    """(name, raw p-values, relevant, share of alpha) of every detector, for :func:`mcrt.grade.score.bias_test`.
+    """(name, raw p-values, relevant, share of alpha) of every detector, for :func:`mcrt.stats.onesample.multiscale_test`.
 
     ``th`` holds the relevance thresholds (:class:`mcrt.grade.assignment.Thresholds`).
     """

@@ -6,6 +6,9 @@ One job per module:
   pooled statistic goes through them);
 * :mod:`mcrt.stats.twosample`: the two-sample Welch test of tile means,
   :func:`compare_images`, and its result :class:`Comparison`;
+* :mod:`mcrt.stats.onesample`: the one-sample multi-scale tile test of an
+  image against a reference's expected value under a noise model,
+  :func:`~mcrt.stats.onesample.multiscale_test` (grading's bias test);
 * :mod:`mcrt.stats.policy`: the comparison policy, :func:`compare` with
   ``policy='independent'`` or ``'reference-floor'`` (the variance floor,
   :func:`floor_variance`, against a high-spp reference);

@@ -1,4 +1,4 @@
-r"""Which catalogued bug does a failing image most resemble, and where is it wrong?
+r"""The bug catalogue as candidates: fitted among the families, and ranked by tiles, pixels or noise.
 
 Each mutant m of :data:`mcrt.mutants.MUTANTS` has an expected image E_m,
 rendered once by mcrt with the same seed as the bug-free baseline E_0 (see
@@ -18,60 +18,44 @@ for what no render reproduces exactly. Mutants are ranked by
 amplitude :math:`\hat a \in [0, 4]` is reported too ("the same pattern at
 half the strength" points to a variant of the bug). The share of the
 excess chi-square a mutant removes, :math:`1 - \chi^2_m(1)/\chi^2_0`, is
-reported as how much of the difference it explains.
+reported as how much of the difference it explains (:func:`rank_mutants`: by
+tiles, or by single pixels for deviations that cancel within tiles).
 
-Regions are described by the surfaces the camera sees there (the walls by
-their colour, the floor, the ceiling, the sphere...) and by the share of
-direct light, so that the words match what a student sees in the image.
+Among the families of the engine (:func:`catalogue`), each bug predicts the
+change :math:`\Delta_m` at full resolution and is scored like any family.
+Bugs that mostly add variance are ranked by their noise instead: its
+pattern (:func:`rank_noise`) or its amount (:func:`rank_noise_level`).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
-from mcrt.grade.score import LUMINANCE, bias_scales
-from mcrt.stats.tiles import tile_box, tile_counts, tile_sums
-
-FLOOR = 0.002
-
-
-@dataclass
-class Candidate:
-    name: str
-    text: str
-    chi2: float  # at amplitude 1
-    chi2_fit: float  # at the best amplitude
-    amplitude: float
-    explained: float  # 1 - chi2 / chi2_none
-    where: str  # where this bug changes the image (from its expected image)
-
-    def to_dict(self) -> dict:
-        return {"mutant": self.name, "description": self.text, "chi2": self.chi2, "chi2_best_amplitude": self.chi2_fit,
-                "amplitude": self.amplitude, "explained": self.explained, "where": self.where}
+from mcrt.grade.candidates import FLOOR, Candidate
+from mcrt.grade.regions import short_text, tile_means, valid_counts
+from mcrt.stats.onesample import bias_scales
+from mcrt.stats.tiles import tile_counts, tile_sums
 
 
-_PROPER = ("Russian", "Lambertian", "Monte")
+def catalogue(fit, inputs) -> list[Candidate]:
+    """Every catalogued bug as a candidate with the change its expected image makes (no parameter)."""
+    out = []
+    if not inputs.mutants:
+        return out
+    base = inputs.baseline.mean.astype(np.float64)
+    for name, e in inputs.mutants.items():
+        dm = e.mean.astype(np.float64) - base
+        out.append(Candidate("catalogue", name, short_text(inputs.texts.get(name, name)), fit.delta(dm), 0,
+                             catalogue=True, change=dm))
+    return out
 
 
-def short_text(text: str) -> str:
-    """The first clause of a catalogue entry, to follow 'consistent with': 'Russian roulette without dividing by
-    the survival probability', 'next-event estimation without the cosine at the light'."""
-    s = text.split(": ")[0].split(". ")[0].rstrip(".")
-    if len(s) > 1 and s[1].islower() and not s.startswith(_PROPER):
-        s = s[0].lower() + s[1:]
-    return s
+catalogue.name = "catalogue"
 
 
-def tile_means(x: np.ndarray, mask: np.ndarray, tile: int) -> np.ndarray:
-    """Means of an (H, W, 3) array over the valid pixels (``mask``) of each tile (0 where a tile has none)."""
-    return tile_sums(np.where(mask[..., None], x, 0.0), tile) / _valid_counts(mask, tile)
-
-
-def _valid_counts(mask: np.ndarray, tile: int) -> np.ndarray:
-    """Valid pixels per tile, at least 1, shape (tiles_y, tiles_x, 1)."""
-    return np.maximum(tile_sums(mask.astype(np.float64), tile), 1.0)[..., None]
+def _ranked(name: str, texts: dict, chi2: float, chi2_fit: float, amplitude: float, explained: float) -> Candidate:
+    return Candidate("catalogue", name, texts.get(name, name), chi2, explained=explained, catalogue=True,
+                     amplitude=amplitude, chi2_fit=chi2_fit, ranked=True)
 
 
 def rank_mutants(diff: np.ndarray, var: np.ndarray, ref_t: np.ndarray, valid: np.ndarray, mutants: dict,
@@ -88,7 +72,7 @@ def rank_mutants(diff: np.ndarray, var: np.ndarray, ref_t: np.ndarray, valid: np
     v0 = np.where(ok, var + floor, 1.0)
     v0 = np.where(v0 > 0, v0, 1e-30)
     chi0 = float(np.sum(np.where(ok, diff**2 / v0, 0.0)))
-    n_pix = _valid_counts(mask, tile)
+    n_pix = valid_counts(mask, tile)
     base_t = tile_means(baseline.mean.astype(np.float64), mask, tile)
     out = []
     for name, e in mutants.items():
@@ -101,98 +85,13 @@ def rank_mutants(diff: np.ndarray, var: np.ndarray, ref_t: np.ndarray, valid: np
         den = float(np.sum(np.where(ok, delta * delta / w, 0.0)))
         a = float(np.clip(num / den, 0.0, 4.0)) if den > 0 else 0.0
         chia = float(np.sum(np.where(ok, (diff - a * delta) ** 2 / w, 0.0)))
-        out.append(Candidate(name, texts.get(name, name), chi1, chia, a, 1.0 - chi1 / chi0 if chi0 > 0 else 0.0, ""))
+        out.append(_ranked(name, texts, chi1, chia, a, 1.0 - chi1 / chi0 if chi0 > 0 else 0.0))
     out.sort(key=lambda c: c.chi2)
     if where_fn is not None:
         for c in out[:5]:
             c.where = where_fn(c.name)
     return out, chi0
 
-
-def rel_lum(d: np.ndarray, ref_t: np.ndarray) -> np.ndarray:
-    """Relative luminance difference d / |ref| per tile (0 where the reference is black)."""
-    dl, rl = d @ LUMINANCE, ref_t @ LUMINANCE
-    with np.errstate(divide="ignore", invalid="ignore"):
-        return np.where(np.abs(rl) > 1e-12, dl / np.abs(rl), 0.0)
-
-
-def _join(items: list[str]) -> str:
-    if len(items) <= 1:
-        return "".join(items)
-    return ", ".join(items[:-1]) + " and " + items[-1]
-
-
-def describe_tiles(rel: np.ndarray, chosen: np.ndarray, shape: tuple[int, int], tile: int, labels: np.ndarray,
-                   names: tuple[str, ...], direct: np.ndarray) -> str:
-    """Words for the tiles marked in ``chosen`` (tiles_y, tiles_x), with signed relative effects ``rel``.
-
-    For example: 'too dark (about -38 %) on the floor, wall AB (red) and the ceiling, where
-    indirect light dominates (70 % of the light there is indirect); too bright
-    (about +12 %) on the mirror sphere'.
-    """
-    h, w = shape
-    parts = []
-    for sign, word in ((-1, "too dark"), (1, "too bright")):
-        sel = chosen & (np.sign(rel) == sign)
-        if not sel.any():
-            continue
-        weights = np.zeros(len(names))
-        eff, npx, dsum, wsum = 0.0, 0, 0.0, 0.0
-        for ty, tx in zip(*np.nonzero(sel)):
-            y0, y1, x0, x1 = tile_box(h, w, tile, int(ty), int(tx))
-            lab = labels[y0:y1, x0:x1].ravel()
-            a = abs(float(rel[ty, tx]))
-            np.add.at(weights, lab, a)
-            eff += float(rel[ty, tx]) * lab.size
-            npx += lab.size
-            dsum += a * float(direct[y0:y1, x0:x1].sum())
-            wsum += a * lab.size
-        order = np.argsort(-weights)
-        total = weights.sum()
-        where = [names[i] for i in order[:3] if weights[i] >= 0.15 * total and names[i] != "nothing"]
-        if not where:
-            where = [names[order[0]]]
-        text = f"{word} (about {100 * eff / max(npx, 1):+.0f} %) on {_join(where)}"
-        share = dsum / wsum if wsum > 0 else 1.0
-        if share < 0.45:
-            text += f", where indirect light dominates ({100 * (1 - share):.0f} % of the light there is indirect)"
-        elif share > 0.8:
-            text += ", where direct light dominates"
-        parts.append(text)
-    return "; ".join(parts)
-
-
-def signature_region(rel: np.ndarray, shape, tile, labels, names, direct, min_effect: float) -> str:
-    """Where a bug's expected signature (relative luminance per tile) is strong."""
-    mx = float(np.max(np.abs(rel))) if rel.size else 0.0
-    if mx < min_effect:
-        return "no visible change at this resolution"
-    chosen = np.abs(rel) >= max(0.3 * mx, min_effect)
-    return describe_tiles(rel, chosen, shape, tile, labels, names, direct)
-
-
-def change_region(delta: np.ndarray, ref: np.ndarray, mask: np.ndarray, tile: int, labels, names, direct,
-                  min_effect: float) -> str:
-    """Where an image change ``delta`` (H, W, 3) lies, in the words of :func:`describe_tiles`.
-
-    Tiles are chosen by the mean *absolute* relative change in luminance
-    (a shift or a blur moves light within a tile, so its signed mean can
-    vanish where the change is strong) and worded with the sign of the
-    signed mean; a change whose tile means all stay below ``min_effect``
-    is 'no visible change at this resolution'.
-    """
-    d = np.asarray(delta, np.float64)
-    r_t = tile_means(np.asarray(ref, np.float64), mask, tile)
-    signed = rel_lum(tile_means(d, mask, tile), r_t)
-    lum = np.abs(d @ LUMINANCE)[..., None] * np.ones(3)
-    mag = rel_lum(tile_means(lum, mask, tile), r_t)
-    mx = float(np.max(np.abs(mag))) if mag.size else 0.0
-    if mx < min_effect:
-        return "no visible change at this resolution"
-    chosen = np.abs(mag) >= max(0.3 * mx, min_effect)
-    rel = np.where(signed < 0, -np.abs(mag), np.abs(mag))
-    h, w = np.asarray(ref).shape[:2]
-    return describe_tiles(rel, chosen, (h, w), tile, labels, names, direct)
 
 
 def rank_noise(spread: np.ndarray, n: np.ndarray, valid: np.ndarray, image_t: np.ndarray, mutants: dict, baseline,
@@ -231,9 +130,10 @@ def rank_noise(spread: np.ndarray, n: np.ndarray, valid: np.ndarray, image_t: np
     out = []
     for name, e in mutants.items():
         dm = deviance(e)
-        out.append(Candidate(name, texts.get(name, name), dm, dm, 1.0, 1.0 - dm / d0 if d0 > 0 else 0.0, ""))
+        out.append(_ranked(name, texts, dm, dm, 1.0, 1.0 - dm / d0 if d0 > 0 else 0.0))
     out.sort(key=lambda c: c.chi2)
     return out, d0
+
 
 
 def variance_inflation(e, baseline, mask: np.ndarray) -> float:
@@ -267,10 +167,10 @@ def rank_noise_level(var_ratio: float, mutants: dict, baseline, mask: np.ndarray
     for name in hidden:
         infl = variance_inflation(mutants[name], baseline, mask)
         dist = abs(np.log(var_ratio / infl)) if infl > 0 else np.inf
-        out.append(Candidate(name, texts.get(name, name), float(dist), float(dist), float(infl),
-                             float(1.0 - dist / np.log(var_ratio)), ""))
+        out.append(_ranked(name, texts, float(dist), float(dist), float(infl), float(1.0 - dist / np.log(var_ratio))))
     out.sort(key=lambda c: c.chi2)
     return out
+
 
 
 def catalogue_power(ctx, spp: float | None = None) -> list[dict]:

@@ -1,0 +1,182 @@
+"""The basis: mcrt renders of the scene's variations that the families fit (what the grading cache holds)."""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from mcrt.scene import Lambertian, Mirror, Scene
+
+#: Oversampling of the image warped for the camera families, and samples per grade pixel and axis of a warp;
+#: the fine image sees WIDE times further to each side (tan of the half angle), so that warps stay inside it.
+FINE = 4
+WIDE = 1.2
+SUB = 2
+#: Albedo nodes rendered per surface (with the scene's own value).
+ALBEDO_NODES = (0.0, 0.5, 1.0)
+#: Offsets (scene units) of the light, the objects and the eye; light size factors.
+LIGHT_OFFSETS = (-2.0, -1.5, -1.0, -0.5, 0.5, 1.0, 1.5, 2.0)
+LIGHT_DROPS = (-0.5, -1.0)
+LIGHT_SIZES = (0.5, 0.75, 1.25, 1.5)
+OBJECT_OFFSETS = (-1.5, -1.0, -0.5, 0.5, 1.0, 1.5)
+EYE_OFFSETS = (-0.5, -0.3, -0.2, -0.1, 0.1, 0.2, 0.3, 0.5)
+DEPTHS = (1, 2, 3, 4, 5, 6, 7, 9, 10, 12, -1)
+AXES = "xyz"
+
+
+@dataclass
+class Basis:
+    """mcrt renders of the scene's variations at the grade resolution (see the module docstring)."""
+
+    camera: str
+    spp: int
+    base: np.ndarray  # (H, W, 3) the scene as it is, basis seed
+    var: np.ndarray  # (H, W, 3) its per-sample variance
+    fine: np.ndarray  # (~FINE WIDE H, ~FINE WIDE W, 3) the scene as it is, wider, for warps
+    fine_tan: float  # tan of the fine image's horizontal half angle
+    fov_deg: float
+    max_depth: int
+    albedo: dict[str, tuple[np.ndarray, np.ndarray, tuple]] = field(default_factory=dict)  # label -> (nodes, images, scene)
+    nodes: dict[str, list[tuple[object, np.ndarray]]] = field(default_factory=dict)  # family/key -> [(value, image)]
+    values: dict[str, object] = field(default_factory=dict)  # the scene's values, for the words
+    extra: dict[str, object] = field(default_factory=dict)  # family name -> what its prepare() rendered
+    prepare_time: float = 0.0
+
+
+
+def _surface_edits(scene: Scene) -> dict[str, tuple[str, tuple, callable]]:
+    """label -> (kind, the scene's value, value -> edited scene) for every surface with a colour."""
+    out = {}
+    room = scene.room
+    for w in room.walls:
+        key = "".join(w.corners)
+
+        def wall(v, key=key):
+            walls = tuple(replace(x, albedo=tuple(v)) if "".join(x.corners) == key else x for x in scene.room.walls)
+            return replace(scene, room=replace(scene.room, walls=walls))
+        out[f"wall {key}"] = ("albedo", tuple(w.albedo), wall)
+    out["the floor"] = ("albedo", tuple(room.floor_albedo),
+                        lambda v: replace(scene, room=replace(scene.room, floor_albedo=tuple(v))))
+    out["the ceiling"] = ("albedo", tuple(room.ceiling_albedo),
+                          lambda v: replace(scene, room=replace(scene.room, ceiling_albedo=tuple(v))))
+    for o in scene.objects:
+        def obj(v, name=o.name):
+            objs = []
+            for x in scene.objects:
+                if x.name == name:
+                    m = x.material
+                    x = replace(x, material=replace(m, albedo=tuple(v)) if isinstance(m, Lambertian)
+                                else replace(m, reflectance=tuple(v)))
+                objs.append(x)
+            return replace(scene, objects=tuple(objs))
+        m = o.material
+        if isinstance(m, Lambertian):
+            out[f"the {o.name}"] = ("albedo", tuple(m.albedo), obj)
+        elif isinstance(m, Mirror):
+            out[f"the mirror {o.name}"] = ("reflectance", tuple(m.reflectance), obj)
+    return out
+
+
+def _shift(p, axis: int, d: float):
+    q = list(p)
+    q[axis] = float(q[axis] + d)
+    return tuple(q)
+
+
+def _light_variants(scene: Scene) -> dict[str, list[tuple[float, Scene]]]:
+    lt = scene.light
+    out: dict[str, list] = {}
+    for axis, offsets in ((0, LIGHT_OFFSETS), (1, LIGHT_OFFSETS), (2, LIGHT_DROPS)):
+        out[f"light_{AXES[axis]}"] = [(d, replace(scene, light=replace(lt, center=_shift(lt.center, axis, d))))
+                                      for d in offsets]
+    out["light_size"] = [(f, replace(scene, light=replace(lt, size=(lt.size[0] * f, lt.size[1] * f)))) for f in LIGHT_SIZES]
+    return {k: [(d, s) for d, s in v if _light_inside(s)] for k, v in out.items()}
+
+
+def _light_inside(s: Scene) -> bool:
+    return all(s.room.contains(c, -1e-6 * s.room.size()) for c in s.light.corners()) and \
+        s.light.center[2] < s.room.ceiling_z
+
+
+def _object_variants(scene: Scene) -> dict[str, list[tuple[object, Scene]]]:
+    out: dict[str, list] = {}
+    for o in scene.objects:
+        out[f"missing:{o.name}"] = [(None, replace(scene, objects=tuple(x for x in scene.objects if x.name != o.name)))]
+        for axis in range(3):
+            vs = []
+            for d in OBJECT_OFFSETS:
+                if hasattr(o, "center"):
+                    moved = replace(o, center=_shift(o.center, axis, d))
+                    ok = scene.room.contains(moved.center, moved.radius)
+                else:
+                    moved = replace(o, vertices=tuple(_shift(v, axis, d) for v in o.vertices))
+                    ok = all(scene.room.contains(v, 0.0) for v in moved.vertices)
+                if ok:
+                    vs.append((d, replace(scene, objects=tuple(moved if x.name == o.name else x for x in scene.objects))))
+            out[f"moved:{o.name}:{AXES[axis]}"] = vs
+    return out
+
+
+def _eye_variants(scene: Scene, camera: str) -> dict[str, list[tuple[float, Scene]]]:
+    c = scene.cameras[camera]
+    out = {}
+    for axis in range(3):
+        vs = []
+        for d in EYE_OFFSETS:
+            c2 = replace(c, eye=_shift(c.eye, axis, d))
+            if scene.room.contains(c2.eye, 1e-3 * scene.room.size()):
+                vs.append((d, replace(scene, cameras={**scene.cameras, camera: c2})))
+        out[f"eye_{AXES[axis]}"] = vs
+    return out
+
+
+def basis_settings(a) -> tuple[int, int]:
+    """(spp, seed) of every basis render of assignment ``a``: one seed for all, so that a variation minus the
+    base shares its random numbers (families that render for themselves use them too)."""
+    return max(64, a.diagnosis_spp // 4), a.seed + 7
+
+
+def prepare_basis(a, scene: Scene, render) -> Basis:
+    """Render every image :func:`explain` needs, for the assignment ``a``.
+
+    ``render(scene, camera, width, height, max_depth, spp, seed)`` returns a
+    :class:`mcrt.film.RenderResult`; the grading context passes its cached
+    mcrt render (:func:`mcrt.grade.expected.cached_render`), so each image is
+    rendered once per machine.
+    """
+    t0 = time.perf_counter()
+    w, h, d, cam = a.grade_width, a.grade_height, a.max_depth, a.camera
+    spp, seed = basis_settings(a)
+
+    def img(s: Scene, depth: int = d, width: int = w, height: int = h, n: int = spp) -> np.ndarray:
+        return render(s, cam, width, height, depth, n, seed).mean.astype(np.float32)
+
+    base_r = render(scene, cam, w, h, d, spp, seed)
+    c0 = scene.cameras[cam]
+    t_fine = WIDE * math.tan(math.radians(c0.fov_x_deg) / 2)
+    wide = replace(scene, cameras={**scene.cameras, cam: replace(c0, fov_x_deg=math.degrees(2 * math.atan(t_fine)))})
+    fine = img(wide, width=round(FINE * WIDE * w), height=round(FINE * WIDE * h), n=max(16, spp // FINE**2 * 4))
+    b = Basis(camera=cam, spp=spp, base=base_r.mean.astype(np.float32),
+              var=np.maximum(base_r.variance, 0).astype(np.float32), fine=fine, fine_tan=t_fine,
+              fov_deg=float(c0.fov_x_deg), max_depth=d)
+    for label, (kind, value, edit) in _surface_edits(scene).items():
+        nodes = [v for v in ALBEDO_NODES if not (kind == "reflectance" and v == 1.0 and all(x == 1.0 for x in value))]
+        imgs = [img(edit((v, v, v))) for v in nodes]
+        b.albedo[label] = (np.asarray(nodes, np.float64), np.stack(imgs), tuple(value))
+        b.values[label] = (kind, tuple(value))
+    for fam in (_light_variants(scene), _object_variants(scene), _eye_variants(scene, cam)):
+        for key, vs in fam.items():
+            if vs:
+                b.nodes[key] = [(v, img(s)) for v, s in vs]
+    b.nodes["depth"] = [(k, img(scene, depth=k)) for k in DEPTHS if k != d]
+    lt, c = scene.light, scene.cameras[cam]
+    b.values.update(light_center=tuple(lt.center), light_size=tuple(lt.size), light_radiance=tuple(lt.radiance),
+                    eye=tuple(c.eye), objects={o.name: tuple(float(x) for x in (o.center if hasattr(o, "center")
+                                                                            else np.mean(o.vertices, axis=0)))
+                                                for o in scene.objects})
+    b.prepare_time = time.perf_counter() - t0
+    return b
+

@@ -1,0 +1,156 @@
+"""The camera families: field of view, pixel-centre offset and rotation, fitted by warping a finer image."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from mcrt.grade.candidates import Candidate, Inputs
+from mcrt.grade.explain.basis import SUB, Basis
+from mcrt.grade.explain.fit import Fit
+from mcrt.grade.feedback import num as _num
+
+
+def _rot(yaw: float, pitch: float, roll: float) -> np.ndarray:
+    """Rotation of camera-frame directions (x right, y up, z forward): yaw left, pitch up, roll, in degrees."""
+    a, b, c = (math.radians(t) for t in (yaw, pitch, roll))
+    Ry = np.array([[math.cos(a), 0, -math.sin(a)], [0, 1, 0], [math.sin(a), 0, math.cos(a)]])
+    Rx = np.array([[1, 0, 0], [0, math.cos(b), math.sin(b)], [0, -math.sin(b), math.cos(b)]])
+    Rz = np.array([[math.cos(c), -math.sin(c), 0], [math.sin(c), math.cos(c), 0], [0, 0, 1]])
+    return Ry @ Rx @ Rz
+
+
+class _Warp:
+    r"""The image of a pinhole camera with another field of view, rotation or pixel-centre offset.
+
+    A student pixel's sample (i + (s + 1/2)/SUB + dx, j + ...) is a
+    direction in the student's camera frame,
+    :math:`d = (s_x t_s, s_y t_s h/w, 1)` with :math:`t = \tan(fov/2)`;
+    rotated into the scene's camera frame it projects to the scene camera's
+    film, where the FINE times finer (and WIDE times wider) image is sampled bilinearly; the SUB^2
+    samples of a pixel are averaged (its box filter). Exact for a pinhole (a
+    rotation about the eye is a homography) up to the interpolation. The
+    model image is ``image(...) - identity``, added to the reference.
+    """
+
+    def __init__(self, b: Basis):
+        from scipy.ndimage import map_coordinates
+
+        self.map = map_coordinates
+        self.F = [np.ascontiguousarray(b.fine[..., c], dtype=np.float32) for c in range(3)]
+        self.Hf, self.Wf = b.fine.shape[:2]
+        self.h, self.w = b.base.shape[:2]
+        self.t = math.tan(math.radians(b.fov_deg) / 2)
+        self.tf = b.fine_tan
+        jj, ii = np.mgrid[0:self.h * SUB, 0:self.w * SUB]
+        self.u, self.v = (ii + 0.5) / SUB, (jj + 0.5) / SUB  # in grade pixels
+        self.identity = self.image()
+
+    def image(self, fov: float | None = None, yaw=0.0, pitch=0.0, roll=0.0, dx=0.0, dy=0.0) -> np.ndarray:
+        ts = self.t if fov is None else math.tan(math.radians(fov) / 2)
+        asp = self.h / self.w
+        sx = 2 * (self.u + dx) / self.w - 1
+        sy = 1 - 2 * (self.v + dy) / self.h
+        R = _rot(yaw, pitch, roll)
+        x, y = sx * ts, sy * ts * asp
+        X = R[0, 0] * x + R[0, 1] * y + R[0, 2]
+        Y = R[1, 0] * x + R[1, 1] * y + R[1, 2]
+        Z = np.maximum(R[2, 0] * x + R[2, 1] * y + R[2, 2], 1e-9)
+        px = (X / Z / self.tf + 1) * self.Wf / 2 - 0.5
+        py = (1 - Y / Z / (self.tf * self.Hf / self.Wf)) * self.Hf / 2 - 0.5
+        coords = np.stack([py.ravel(), px.ravel()])
+        out = np.stack([self.map(f, coords, order=1, mode="nearest").reshape(py.shape) for f in self.F], axis=-1)
+        return out.reshape(self.h, SUB, self.w, SUB, 3).mean(axis=(1, 3), dtype=np.float64)
+
+
+#: The camera families: parameter names, start scans, finite-difference steps, bounds.
+_CAMERA = {
+    "fov": (("fov",), {"fov": (0.9, 0.95, 1.05, 1.1)}, {"fov": 0.2}, {"fov": (0.8, 1.2)}),
+    "pixel_offset": (("dx", "dy"), {"dx": (-1.0, -0.5, 0.5, 1.0), "dy": (-1.0, -0.5, 0.5, 1.0)},
+                     {"dx": 0.1, "dy": 0.1}, {"dx": (-2.0, 2.0), "dy": (-2.0, 2.0)}),
+    "rotation": (("yaw", "pitch", "roll"), {"yaw": (-4.0, -2.0, -1.0, 1.0, 2.0, 4.0), "pitch": (-4.0, -2.0, -1.0, 1.0, 2.0, 4.0),
+                                            "roll": (-6.0, -3.0, 3.0, 6.0)},
+                 {"yaw": 0.1, "pitch": 0.1, "roll": 0.2}, {"yaw": (-10, 10), "pitch": (-10, 10), "roll": (-20, 20)}),
+}
+
+
+def _fit_camera(fit: Fit, wp: _Warp, family: str, fov0: float, steps: int = 4) -> tuple[dict, float, np.ndarray]:
+    r"""Fit one camera family: a scan of each parameter alone for a start, then Gauss-Newton steps.
+
+    Each step solves :math:`(J^T W J)\,\delta = J^T W r` with J by central
+    differences and W the capped chi^2's weights (:meth:`Fit.irls`); a step
+    that does not lower chi^2 is halved, twice at most.
+    """
+    names, scans, h, bounds = _CAMERA[family]
+    scale = {"fov": fov0}
+
+    def kw(p):
+        return {n: p[i] for i, n in enumerate(names)}
+
+    def img(p):
+        return wp.image(**kw(p)) - wp.identity
+
+    p = np.array([fov0 if n == "fov" else 0.0 for n in names])
+    best = fit.delta(img(p))
+    for i, n in enumerate(names):
+        for v in scans[n]:
+            q = p.copy()
+            q[i] = v * scale.get(n, 1.0)
+            c = fit.delta(img(q))
+            if c < best:
+                best, p = c, q
+    lo = np.array([bounds[n][0] * scale.get(n, 1.0) for n in names])
+    hi = np.array([bounds[n][1] * scale.get(n, 1.0) for n in names])
+    for _ in range(steps):
+        m = img(p)
+        J = []
+        for i, n in enumerate(names):
+            e = np.zeros_like(p)
+            e[i] = h[n]
+            J.append(((img(p + e) - img(p - e)) / (2 * h[n])).ravel())
+        J = np.stack(J, axis=1)
+        wv = fit.irls(m).ravel()
+        r = (fit.D - m).ravel()
+        A = J.T @ (J * wv[:, None])
+        g = J.T @ (wv * r)
+        try:
+            d = np.linalg.solve(A + 1e-9 * np.trace(A) * np.eye(len(p)), g)
+        except np.linalg.LinAlgError:
+            break
+        for _ in range(3):
+            q = np.clip(p + d, lo, hi)
+            c = fit.delta(img(q))
+            if c < best:
+                best, p = c, q
+                break
+            d = d / 2
+        else:
+            break
+    return kw(p), best, img(p)
+
+
+def camera(fit: Fit, inputs: Inputs) -> list[Candidate]:
+    """The camera's field of view, a pixel-centre offset, a rotation: each fitted by warping the fine image."""
+    b = inputs.basis
+    wp = _Warp(b)
+    f0 = b.fov_deg
+    out = []
+    p, chi, dm = _fit_camera(fit, wp, "fov", f0)
+    out.append(Candidate("fov", "field of view", f"the camera's field of view {p['fov']:.1f} degrees where the scene "
+                         f"says {_num(f0)}", chi, 1, value=float(p["fov"]), change=dm))
+    p, chi, dm = _fit_camera(fit, wp, "pixel_offset", f0)
+    dx, dy = float(p["dx"]), float(p["dy"])
+    out.append(Candidate("pixel_offset", "pixel-centre offset", f"the image shifted by ({dx:+.2f}, {dy:+.2f}) pixel "
+                         "(x right, y down), as when pixel centres are not at (i + 0.5, j + 0.5)", chi, 2,
+                         value=(dx, dy), change=dm))
+    p, chi, dm = _fit_camera(fit, wp, "rotation", f0)
+    ya, pi_, ro = (float(p[k]) for k in ("yaw", "pitch", "roll"))
+    out.append(Candidate("rotation", "camera rotation", f"the camera rotated by yaw {ya:+.1f}, pitch {pi_:+.1f} and roll "
+                         f"{ro:+.1f} degrees (left, up and anticlockwise positive), as when its forward or up vector is "
+                         "off", chi, 3, value=(ya, pi_, ro), change=dm))
+    return out
+
+
+
+camera.name = "camera"

@@ -1,0 +1,44 @@
+"""Closed-form families on the reference: encoding curves and a blur."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from mcrt.grade.candidates import Candidate, Inputs
+from mcrt.grade.explain.fit import Fit, refine
+from mcrt.grade.feedback import num as _num
+
+
+def curves(fit: Fit, inputs: Inputs) -> list[Candidate]:
+    """Encoding curves on the reference: sRGB (and its inverse), power curves; a Gaussian blur."""
+    from scipy.ndimage import gaussian_filter
+
+    from mcrt.imageio import srgb_eotf, srgb_oetf
+
+    R = np.maximum(fit.R, 0.0)
+    out = [Candidate("encoding", "sRGB curve", "the values sRGB-encoded (a display curve) instead of linear",
+                     fit.model(srgb_oetf(R)), 0, value="srgb", change=srgb_oetf(R) - fit.R),
+           Candidate("encoding", "decoded twice", "the values decoded from sRGB once too often (linear values written "
+                     "to a PNG that says sRGB, or decoded twice)", fit.model(srgb_eotf(np.minimum(R, 1.0))), 0,
+                     value="srgb-inverse", change=srgb_eotf(np.minimum(R, 1.0)) - fit.R)]
+    exps = np.linspace(0.25, 2.5, 91)
+    errs = np.array([fit.model(R**p) for p in exps])
+    i = int(np.argmin(errs))
+    p = refine(exps, errs, i)
+    g = 1.0 / p
+    what = (f"a power curve x^(1/{_num(g)}) (gamma {_num(g)} encoding)" if p < 1 else
+            f"a power curve x^{_num(p)} (decoded with gamma {_num(p)} once too often)")
+    out.append(Candidate("encoding", "power curve", f"the values through {what} instead of linear", fit.model(R**p), 1,
+                         value=g, change=R**p - fit.R))
+    sig = np.array([0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 1.0, 1.2, 1.5, 2.0, 3.0])
+    errs = np.array([fit.model(gaussian_filter(fit.R, (s, s, 0), mode="nearest")) for s in sig])
+    i = int(np.argmin(errs))
+    s = sig[i]
+    out.append(Candidate("blur", "blur", f"the image blurred (or denoised) by about {_num(s)} pixel (a Gaussian of that "
+                         "standard deviation)", float(errs[i]), 1, value=float(s),
+                         change=gaussian_filter(fit.R, (s, s, 0), mode="nearest") - fit.R))
+    return out
+
+
+
+curves.name = "curves"

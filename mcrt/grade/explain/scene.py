@@ -1,0 +1,142 @@
+"""The scene's parameters as families: an overall scale, the light's radiance, the channels' order, each
+surface's albedo, and the rendered variations (the light, the objects, the eye, the path depth, the emitter)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from mcrt.grade.candidates import Candidate, Inputs
+from mcrt.grade.explain.basis import AXES, _shift
+from mcrt.grade.explain.fit import CAP, Fit, refine
+from mcrt.grade.feedback import fmt_values as _fmt
+from mcrt.grade.feedback import num as _num
+
+
+def scale(fit: Fit, inputs: Inputs) -> list[Candidate]:
+    """An overall scale, the light's radiance (a scale per channel), the channels in another order."""
+    values = inputs.basis.values
+    S, R, w = fit.S, fit.R, fit.w
+    ok = fit.ok
+    num = np.sum(np.where(ok, S * R * w, 0.0), axis=(0, 1))
+    den = np.sum(np.where(ok, R * R * w, 0.0), axis=(0, 1))
+    kc = np.where(den > 0, num / np.maximum(den, 1e-300), 1.0)
+    k1 = float(np.sum(num) / max(np.sum(den), 1e-300))
+    out = [Candidate("scale", "overall scale", f"the whole image {_num(k1)} times the reference (an exposure or "
+                     f"display scale, or the light's radiance {_fmt(np.asarray(values.get('light_radiance', (1, 1, 1))) * k1, 1)})",
+                     fit.model(k1 * R), 1, value=k1, change=(k1 - 1) * R)]
+    Le = np.asarray(values.get("light_radiance", (1.0, 1.0, 1.0)))
+    out.append(Candidate("light_radiance", "the light's radiance",
+                         f"the light's radiance {_fmt(Le * kc, 1)} where the scene says {_fmt(Le, 1)} (every channel of "
+                         f"the image scaled by {_fmt(kc)})", fit.model(kc * R), 3, value=tuple(Le * kc),
+                         change=(kc - 1) * R))
+    names = "RGB"
+    for perm in ((0, 2, 1), (1, 0, 2), (1, 2, 0), (2, 0, 1), (2, 1, 0)):
+        Rp = R[..., perm]
+        k = float(np.sum(np.where(ok, S * Rp * w, 0.0)) / max(np.sum(np.where(ok, Rp * Rp * w, 0.0)), 1e-300))
+        order = "".join(names[i] for i in perm)
+        out.append(Candidate("channels", f"channels {order}", f"the colour channels written in the order {order} "
+                             "instead of RGB", fit.model(k * Rp), 1, value=order, change=k * Rp - R))
+    return out
+
+
+def lagrange(x: np.ndarray, nodes: np.ndarray) -> np.ndarray:
+    """Lagrange weights (len(x), len(nodes)) of the polynomial through ``nodes`` evaluated at ``x``."""
+    L = np.ones((len(x), len(nodes)))
+    for j, xj in enumerate(nodes):
+        for m, xm in enumerate(nodes):
+            if m != j:
+                L[:, j] *= (x - xm) / (xj - xm)
+    return L
+
+
+def albedo(fit: Fit, inputs: Inputs) -> list[Candidate]:
+    r"""Each surface's albedo, fitted per channel on a grid of 101 values in [0, 1] then refined by a parabola.
+
+    Channel c of the image depends on channel c of the albedos only (RGB
+    transport is channel-independent), so the three channels fit apart.
+    """
+    b = inputs.basis
+    grid = np.linspace(0.0, 1.0, 101)
+    out = []
+    for label, (nodes, imgs, scene_v) in b.albedo.items():
+        fitted, dm = [], np.zeros_like(b.base, dtype=np.float64)
+        for c in range(3):
+            xs = np.append(nodes, scene_v[c])
+            ys = np.concatenate([imgs[:, :, :, c], b.base[None, :, :, c]]).astype(np.float64)
+            keep = np.concatenate([np.abs(nodes - scene_v[c]) > 1e-3, [True]])
+            xs, ys = xs[keep], ys[keep]
+            L = lagrange(grid, xs)
+            curves = np.tensordot(L, ys, axes=(1, 0)) - b.base[None, :, :, c]  # (101, H, W): M - R
+            err = np.sum(np.minimum((fit.D[None, :, :, c] - curves) ** 2 * fit.w[None, :, :, c], CAP), axis=(1, 2))
+            ct = fit.blocks(np.where(fit.ok[None, :, :, c:c + 1], curves[..., None], 0.0))[..., 0] / fit.cnt[None, :, :, c]
+            err = err + np.sum(np.minimum((fit.Dt[None, :, :, c] - ct) ** 2 * fit.wt[None, :, :, c], CAP), axis=(1, 2))
+            i = int(np.argmin(err))
+            fitted.append(float(refine(grid, err, i)))
+            dm[..., c] = np.tensordot(lagrange(np.array([fitted[-1]]), xs), ys, axes=(1, 0))[0] - b.base[..., c]
+        kind = b.values[label][0]
+        word = "albedo" if kind == "albedo" else "reflectance"
+        out.append(Candidate(word, f"{word} of {label}", f"{label} with {word} {_fmt(fitted)} where the scene says "
+                             f"{_fmt(scene_v)}", fit.delta(dm), 3, value=tuple(fitted), change=dm))
+    return out
+
+
+def rendered(fit: Fit, inputs: Inputs) -> list[Candidate]:
+    """The rendered variations: the best node of each family (light, objects, eye, depth)."""
+    b = inputs.basis
+    out = []
+    v = b.values
+    best_moved: dict[str, Candidate] = {}
+    for key, nodes in b.nodes.items():
+        scores = [fit.delta(img.astype(np.float64) - b.base) for _, img in nodes]
+        i = int(np.argmin(scores))
+        val, img = nodes[i]
+        dm = img.astype(np.float64) - b.base
+        fam = key.split(":")[0]
+        if key.startswith("light_") and key != "light_size":
+            axis = AXES.index(key[-1])
+            c = _shift(v["light_center"], axis, val)
+            text = (f"the light moved by {val:+g} along {key[-1]} (centre {_fmt(c, 2)} where the scene says "
+                    f"{_fmt(v['light_center'], 2)})")
+            cand = Candidate("light_position", f"light moved along {key[-1]}", text, scores[i], 1, value=c)
+        elif key == "light_size":
+            s = tuple(x * val for x in v["light_size"])
+            cand = Candidate("light_size", "the light's size", f"the light's size {_num(s[0])} x {_num(s[1])} where "
+                             f"the scene says {_num(v['light_size'][0])} x {_num(v['light_size'][1])} (same radiance)",
+                             scores[i], 1, value=s)
+        elif fam == "missing":
+            name = key.split(":")[1]
+            cand = Candidate("object_missing", f"{name} missing", f"the {name} missing from the image", scores[i], 0,
+                             value=name)
+        elif fam == "moved":
+            name, ax = key.split(":")[1:]
+            cand = Candidate("object_moved", f"{name} moved", f"the {name} moved by {val:+g} along {ax}", scores[i], 1,
+                             value=(name, ax, val))
+            if name in best_moved and best_moved[name].chi2 <= cand.chi2:
+                continue
+            cand.change = dm
+            best_moved[name] = cand
+            continue
+        elif key.startswith("eye_"):
+            cand = Candidate("eye", "the camera's eye", f"the camera's eye moved by {val:+g} along {key[-1]} (at "
+                             f"{_fmt(_shift(v['eye'], AXES.index(key[-1]), val), 2)} where the scene says "
+                             f"{_fmt(v['eye'], 2)})", scores[i], 1, value=val)
+        elif key == "depth":
+            cand = Candidate("depth", "path depth", f"paths cut at depth {'unbounded' if val == -1 else val} "
+                             f"(Mitsuba's convention, where the assignment asks for {b.max_depth})", scores[i], 1,
+                             value=val)
+        else:
+            continue
+        cand.change = dm
+        out.append(cand)
+    out += list(best_moved.values())
+    emit = dict(b.nodes.get("depth", []))
+    if 1 in emit:
+        dm = -emit[1].astype(np.float64)
+        out.append(Candidate("emitter_hidden", "the light not seen directly", "the light itself black where the camera "
+                             "sees it directly (emission left out at the first hit)", fit.delta(dm), 0, change=dm))
+    return out
+
+
+
+
+scale.name, albedo.name, rendered.name = "scale", "albedo", "rendered"

@@ -1,0 +1,155 @@
+"""Feedback text: the summary line, the explanation's sentences and the words for numbers.
+
+Everything a student reads that is not a criterion's own one-line verdict
+is worded here, so that image mode and code mode say the same thing the
+same way ("Full marks: 100/100.").
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from mcrt.grade.candidates import CLAIMED, INDISTINCT, PARTIAL, TIE, Explanation
+
+
+def num(x: float) -> str:
+    """x with at most two decimals, trailing zeros dropped: 1.5, 2, 0.33."""
+    return f"{x:.2f}".rstrip("0").rstrip(".")
+
+
+def fmt_pct(x: float) -> str:
+    """A share as a percentage: two significant digits below 10 %, whole per cents above."""
+    return f"{100 * x:.2g} %" if abs(x) < 0.1 else f"{100 * x:.0f} %"
+
+
+def spp_text(spp: float) -> str:
+    return f"{spp:.0f}" if spp >= 10 else f"{spp:.1f}"
+
+
+def fmt_values(v, digits: int = 2) -> str:
+    """One value, or an RGB triple when its channels differ: '0.60', '(0.74, 0.20, 0.15)'."""
+    v = tuple(float(x) for x in v)
+    if len(set(round(x, digits) for x in v)) == 1:
+        return f"{v[0]:.{digits}f}"
+    return "(" + ", ".join(f"{x:.{digits}f}" for x in v) + ")"
+
+
+def summary(tests, score: float, max_score: float, *, blocked: str | None, headline: str, mode: str) -> str:
+    """The one-line summary of a graded hand-in: full marks, or the points lost and why.
+
+    Image mode names the lost criteria and the first failure's verdict
+    (then the headline of the bias test); code mode quotes the first two
+    failed checks.
+    """
+    shown = num(score)
+    if mode == "code":
+        failed = [t for t in tests if t.score < t.max_score]
+        if failed:
+            return f"{shown}/{max_score:g}. " + "; ".join(f"{t.name}: {t.output.splitlines()[0][:160]}" for t in failed[:2])
+    else:
+        failed = [t for t in tests if t.status in ("failed", "not graded") and t.max_score > 0]
+    if not failed:
+        return (f"Full marks: {shown}/{max_score:g}. " + (headline or "")).strip()
+    first = failed[0]
+    if blocked:
+        text = f"{shown}/{max_score:g}; nothing after '{first.title}' could be graded."
+    else:
+        lost = ", ".join(f"{t.title.split(' (')[0].lower()} (-{num(t.max_score - t.score)})" for t in failed)
+        text = f"{shown}/{max_score:g}; points lost: {lost}."
+    if first.name != "unbiased":
+        text += f" {first.title}: {first.output.split('; ')[0]}."
+    if headline and headline != "No significant bias.":
+        text += f" {headline}"
+    return text.strip()
+
+
+_TRIED = ("No single mistake we tried (the catalogued bugs, the scene's colours, light, objects and camera, "
+          "the path depth, encodings and blur)")
+
+
+def explanation_words(e: Explanation) -> tuple[str, str]:
+    """The sentence (for the bias test's output) and the headline (for the summary) of an explanation."""
+    best, where = e.best, e.where
+    if e.verdict == CLAIMED and e.adequacy is not None:  # the adequacy rule: the remainder is noise
+        alts = e.adequacy.alternatives
+        sentence = (f"It looks like {best.text}: what is left after it is consistent with noise "
+                    f"({100 * best.explained:.0f} % of the difference explained)"
+                    + ("; so would " + " or ".join(f"{t} ({100 * x:.0f} %)" for _, t, x in alts)
+                       + ": the image cannot tell them apart" if alts else "")
+                    + (f"; it changes the image {best.where}" if best.where else "") + ".")
+        return sentence, f"It looks like {best.text}" + (f", or {alts[0][1]}." if alts else ".")
+    if e.verdict == CLAIMED:
+        alt = next((c for c in e.candidates[1:3] if c.family != best.family and not c.catalogue
+                    and c.explained >= best.explained - TIE), None)
+        sentence = (f"It looks like {best.text}: that explains {100 * best.explained:.0f} % of the difference"
+                    + (f" (so would {alt.text}, {100 * alt.explained:.0f} %)" if alt else "")
+                    + (f"; it changes the image {best.where}" if best.where else "") + ".")
+        return sentence, f"It looks like {best.text}."
+    if e.verdict == PARTIAL:
+        rest = f"something else is wrong {e.remainder_where}" if e.remainder_where else "something else is wrong too"
+        sentence = f"Partly like {best.text}, which explains {100 * best.explained:.0f} % of the difference; {rest}."
+        return sentence, f"Partly like {best.text}; {rest}."
+    if e.verdict == INDISTINCT:  # it fits, but no better than noise would let anything fit
+        gain = e.chi2_none - best.chi2
+        sentence = (f"{_TRIED} stands out: the difference is too close to the noise to tell them apart (the closest, "
+                    f"{best.text}, lowers chi-square by {gain:.0f} where noise alone varies it by about "
+                    f"{math.sqrt(2 * e.terms):.0f})")
+    else:
+        sentence = (f"{_TRIED} explains most of the difference"
+                    + (f": the closest, {best.text}, explains {100 * max(best.explained, 0):.0f} %" if best else ""))
+    if e.remainder_where:  # the adequacy rule placed the difference on objects
+        return (sentence + f". The difference sits {e.remainder_where}.",
+                f"No single mistake we tried explains the difference; it sits {e.remainder_where}.")
+    sentence += (f". The image differs {where}" if where else "") + "."
+    headline = "No single mistake we tried explains the difference" + (f"; it differs {where}" if where else "") + "."
+    return sentence, headline
+
+
+def bias_family_text(bt, th) -> str:
+    """The bias test's family of tests, in words: the tile sizes, the channels, the level and the effect."""
+    sizes = [f"{t}x{t}" for t in [s.tile for s in bt.scales] if t > 0]
+    sizes = (", ".join(sizes[:-1]) + " and " + sizes[-1] if len(sizes) > 1 else "".join(sizes)) + " pixel tiles"
+    if any(s.tile == 0 for s in bt.scales):
+        sizes += " and the whole image"
+    return (f"{sizes}, RGB; Holm at a family-wise error rate of {th.alpha:g}; "
+            f"relative effects of {fmt_pct(th.min_effect)} or more")
+
+
+def registration_text(reg, shape, min_shift: float) -> str:
+    """The misregistration finding: how the camera differs, and what to check."""
+    h, w = shape
+    radius = 0.5 * float(np.hypot(h - 1, w - 1))
+    parts = []
+    if np.hypot(*reg.shift) >= min_shift:
+        parts.append(f"shifted by ({reg.shift[0]:+.2f}, {reg.shift[1]:+.2f}) pixels (right, down)")
+    if abs(reg.zoom) * radius >= min_shift:
+        parts.append(f"a field of view about {fmt_pct(abs(reg.zoom))} {'wider' if reg.zoom > 0 else 'narrower'} "
+                     "(in tan(fov/2))")
+    if abs(reg.roll) * radius >= min_shift:
+        parts.append(f"rotated by about {np.degrees(abs(reg.roll)):.2g} degrees")
+    return ("the camera does not match the reference: the image is " + ", ".join(parts or ["misregistered"])
+            + f" (up to {reg.edge_displacement:.2f} pixels at the border; a first-order fit, "
+            f"p = {reg.p:.2g}); check the pixel centre ((i + 0.5) / width), the field of view "
+            "(horizontal, in degrees) and the camera's eye, look-at and up vectors")
+
+
+def filter_text(st, blur: bool, spp_eff: float, spp: int | None) -> str:
+    """The filter finding: correlated noise and softened edges."""
+    how = [f"neighbouring pixels' noise is correlated ({st.correlation:.2f})"] if st.correlation > 0 else []
+    if blur:
+        how.append(f"edges are {'softened' if st.blur > 0 else 'sharpened'} as by a filter of about "
+                   f"{np.sqrt(abs(st.blur)):.2g} pixels")
+    low = (f"; its noise is like {spp_text(spp_eff)} spp where {spp} were declared" if spp and np.isfinite(spp_eff)
+           and spp_eff > 4 * spp else "")
+    return ("the image was filtered (blurred, denoised or resampled): " + " and ".join(how) + low
+            + "; a Monte-Carlo render's pixels are independent: hand in the unfiltered render")
+
+
+def pixels_text(pix: np.ndarray) -> str:
+    """The wrong-pixels finding: how many, the first, and the usual causes."""
+    first = np.argwhere(pix)[0]
+    return (f"{int(pix.sum())} pixels are darker than any correct render's noise allows (the first at row "
+            f"{int(first[0])}, column {int(first[1])}): rays that miss geometry (cracks between triangles, "
+            "a hit test's epsilon) or shadow rays that hit the surface they start from")

@@ -1,0 +1,119 @@
+"""Calibration: the image's orientation and camera, and its encoding (a transfer curve on the values).
+
+A detected mistake is undone for the later stages; grading continues on the
+corrected image only when ``grading.grade_corrected`` is true.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from mcrt.grade import checks as ck
+from mcrt.grade.score import quantisation_variance
+from mcrt.grade.stages.state import Grading, Hand
+
+
+def orientation(g: Grading, hand: Hand, declared_camera: str | None) -> None:
+    """The best of {cameras} x {flips, rotations} by rank correlation (``orientation``, ``camera``)."""
+    a, rub = g.a, g.rubric
+    ori = ck.detect_orientation(hand.imgs[0], {c: e.mean for c, e in g.ctx.references.items()}, a.camera,
+                                g.th.orientation_margin)
+    g.details["orientation"] = {"camera": ori.camera, "transform": ori.transform,
+                                "rank_correlations_luminance_chroma": ori.correlations}
+    if ori.transform != "identity":
+        inv = ck.TRANSFORMS[ori.transform][1]
+        hand.imgs, hand.qvar, hand.mask = [inv(i) for i in hand.imgs], [inv(q) for q in hand.qvar], inv(hand.mask)
+        rub.failed("orientation", f"the image is {ori.transform} compared with the reference (rank correlation "
+                   f"{ori.correlations[f'{ori.camera}/{ori.transform}'][0]:.2f} after undoing it, "
+                   f"{ori.correlations[f'{a.camera}/identity'][0]:.2f} as handed in); row 0 must be the top of the "
+                   "image and column 0 its left: check the order in which you write rows and columns (and whether "
+                   "your camera's up and right vectors point the right way)")
+        hand.corrected.append("orientation")
+    elif not ori.resembles:
+        rub.passed("orientation", "could not be checked: the image does not resemble the scene from any camera")
+    else:
+        rub.passed("orientation", "as expected (top row first, left column first)")
+    if ori.camera != a.camera:
+        rub.failed("camera", f"this is the view of the {ori.camera!r} camera, the assignment asks for {a.camera!r}"
+                   + (" (the near and far cameras are swapped)" if {ori.camera, a.camera} == {"near", "far"} else "")
+                   + (f"; your manifest says {declared_camera!r}" if declared_camera else ""))
+        hand.corrected.append("camera")
+    else:
+        rub.passed("camera", f"the {a.camera!r} camera, as asked")
+    hand.cam = ori.camera
+    hand.ref = g.ctx.references[hand.cam]
+    hand.R = hand.ref.mean.astype(np.float64)
+    hand.diag_imgs = [i.copy() for i in hand.imgs]
+    hand.transform = ori.transform
+
+
+def encoding(g: Grading, hand: Hand) -> None:
+    """The ``linear`` criterion: a display image's curve, or a curve on data that should be linear radiance."""
+    a = g.a
+    hand.base_tile = next((t for t in a.tiles if t > 0), 8)
+    if hand.loaded.fmt.startswith("png"):
+        hand.png_safe = _png_unclipped(hand.R, g.ctx.model_var[hand.cam].astype(np.float64), hand.spp or a.min_spp)
+        hand.imgs, hand.qvar = _png_curve(g, hand)
+    else:
+        _hdr_encoding(g, hand)
+
+
+def _png_curve(g: Grading, hand: Hand):
+    """A display image's transfer curve (:func:`mcrt.grade.checks.detect_png_curve`), decoded per hand-in pixel."""
+    rub, th, loaded, plan = g.rubric, g.th, hand.loaded, hand.plan
+    fmt = loaded.fmt
+    declared = "linear" if fmt.endswith("linear") else "srgb"
+    inv = ck.TRANSFORMS[hand.transform][1]
+    codes = [inv(ck.png_codes(i, fmt)) for i in loaded.images]
+    cands = {c: [ck.box_down(dec(x), plan.down) for x in codes] for c, (dec, _) in ck.PNG_CURVES.items()}
+    enc = ck.detect_png_curve({c: v[0] for c, v in cands.items()}, hand.R, hand.mask & hand.png_safe, hand.base_tile,
+                              declared)
+    curve = enc.curve
+    g.details["encoding"] = {"detected": curve, "declared": declared, "curve_chi2": {k: round(v, 2) for k, v in enc.chi2.items()}}
+    qvar = [ck.box_down(ck.curve_quantisation_variance(x, curve, fmt), plan.down) / plan.down**2 for x in codes]
+    what = ck.PNG_CURVES[curve][1]
+    if curve == declared:
+        rub.passed("linear", "sRGB-encoded image, decoded to linear" if curve == "srgb" else "linear image, as declared")
+    elif curve == "linear":
+        rub.failed("linear", "the PNG holds linear values but PNGs are read as sRGB-encoded: declare `linear = true` in "
+                   "your manifest, or encode with the sRGB curve before writing 8-bit files")
+        hand.corrected.append("linear")
+    elif declared == "linear":
+        rub.failed("linear", f"the manifest declares the image linear, but its values follow {what}; it was decoded "
+                   "with that curve: leave `linear` out of the manifest for a gamma-encoded image")
+        hand.corrected.append("linear")
+    else:
+        text = (f"written with {what} rather than the sRGB curve; decoded with it (the sRGB curve is the standard "
+                "one for 8-bit files)")
+        if th.png_gamma_loss > 0:
+            rub.failed("linear", text, loss=th.png_gamma_loss)
+            hand.corrected.append("linear")
+        else:
+            rub.passed("linear", text)
+    return cands[curve], qvar
+
+
+def _hdr_encoding(g: Grading, hand: Hand) -> None:
+    """A gamma or sRGB curve on data that should be linear radiance (:func:`mcrt.grade.checks.detect_encoding`)."""
+    rub, fmt = g.rubric, hand.loaded.fmt
+    enc = ck.detect_encoding(hand.imgs[0], hand.R, hand.mask, fmt, hand.base_tile)
+    g.details["encoding"] = {"detected": enc.kind, "spreads": {k: round(v, 4) for k, v in enc.spreads.items()}}
+    g.encoding = enc.kind
+    if enc.kind != "linear":
+        rub.failed("linear", enc.message)
+        dec = ck.ENCODINGS[enc.kind][0]
+        hand.imgs = [dec(i) for i in hand.imgs]
+        hand.qvar = [quantisation_variance(i, fmt) / hand.plan.down**2 for i in hand.imgs]
+        hand.corrected.append("linear")
+    else:
+        rub.passed("linear", "linear radiance")
+
+
+def _png_unclipped(R, model_ps, spp: int) -> np.ndarray:
+    """Grade pixels an 8-bit image cannot have clipped: expected value plus 3 sd of a hand-in pixel below 1,
+    and not next to a pixel that is not (a grade pixel's hand-in pixels may see a brighter neighbour)."""
+    from scipy import ndimage
+
+    sd = np.sqrt(model_ps / max(spp, 1))  # a hand-in pixel's noise: its per-sample variance is at most a grade pixel's
+    bright = np.any(R + 3 * sd >= 1.0, axis=2)
+    return ~ndimage.binary_dilation(bright, structure=np.ones((3, 3), bool))

@@ -1,0 +1,104 @@
+"""Noise: the hand-in's noise level against mcrt's at the declared spp, and the noise model the tests use.
+
+The level is measured before the bias test (its noise model needs it) and
+judged after it (a biased image's noise says nothing about its sample
+count); noise correlated between neighbours (a filter) fails it. Excess
+noise on unbiased tiles is told apart from a deterministic error that
+cancels within tiles by ranking the catalogue at pixel level, by its noise
+pattern and by its amount of noise (:mod:`mcrt.grade.explain.catalogue`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from mcrt.grade.feedback import spp_text
+from mcrt.grade.score import noise_ratio
+from mcrt.grade.stages.state import Grading, Hand, Level
+from mcrt.stats.onesample import Noise
+
+
+def measure(g: Grading, hand: Hand, clip_mask: np.ndarray) -> Level:
+    """Noise level: 1 / (samples per grade pixel) of an mcrt-like estimator, and the verdict it would get."""
+    a, ctx, imgs, qvar, n_r = g.a, g.ctx, hand.imgs, hand.qvar, hand.n_r
+    model_ps = ctx.model_var[hand.cam].astype(np.float64)  # mcrt per-sample variance at the grade resolution
+    ref_noise = hand.ref.var.astype(np.float64) / hand.ref.spp
+    img = imgs[0] if n_r == 1 else 0.5 * (imgs[0] + imgs[1])
+    q = qvar[0] if n_r == 1 else 0.25 * (qvar[0] + qvar[1])
+    pair = 0.25 * (imgs[0] - imgs[1]) ** 2 if n_r == 2 else None
+    if pair is not None:
+        pair = np.where(np.isfinite(pair), pair, 0.0)
+    resid = np.where(hand.mask[..., None], img - hand.R, 0.0)
+    ratio = noise_ratio(resid, hand.R, clip_mask, model_ps, ref_noise + q, hand.base_tile, pair)
+    per = n_r * hand.k_down**2
+    spp_eff = (1.0 / ratio) / per if np.isfinite(ratio) and ratio > 0 else float("inf")
+    g.details["noise"] = {"spp_declared": hand.spp, "renders": n_r,
+                          "spp_effective": None if not np.isfinite(spp_eff) else spp_eff}
+    spp = hand.spp
+    lvl = Level(img, q, pair, resid, clip_mask, model_ps, ref_noise, per, spp_eff, 0.0, spp or a.min_spp, 0,
+                ("passed", "", False))
+    if spp:
+        _declared(g, lvl, spp)
+    else:
+        _undeclared(g, lvl)
+    g.details["noise"]["spp_model"] = lvl.spp_model
+    lvl.noise = Noise(model=model_ps / (lvl.spp_model * per) + q, reference=ref_noise, pair=pair)
+    return lvl
+
+
+def _declared(g: Grading, lvl: Level, spp: int) -> None:
+    a, th, spp_eff = g.a, g.th, lvl.spp_eff
+    lvl.spp_model = spp
+    lvl.var_ratio = var_ratio = spp / spp_eff if np.isfinite(spp_eff) else 0.0
+    if spp < a.min_spp:
+        lvl.verdict = ("failed", f"you declared {spp} samples per pixel; the assignment asks for at least {a.min_spp}", True)
+    elif var_ratio > th.max_noise_ratio:
+        # Trust the noise, not the declaration: a render whose noise belongs to fewer samples would
+        # otherwise be judged with too small a noise model.
+        lvl.spp_model = max(1, min(spp, int(spp_eff)))
+        lvl.verdict = ("failed", (f"the image is {var_ratio:.1f} times noisier (relative variance) than mcrt with "
+                                  f"the declared {spp} spp, like mcrt with about {spp_text(spp_eff)} spp; render "
+                                  "more samples, check the spp you declared, or reduce your estimator's variance "
+                                  "(next-event estimation)"), False)
+    else:
+        extra = ""
+        if 0 < var_ratio < 1 / th.max_noise_ratio:
+            extra = (f"; it is less noisy than mcrt at {spp} spp (like about {spp_text(spp_eff)} spp): more samples "
+                     "than declared, a better estimator, or a denoiser")
+        lvl.verdict = ("passed", f"noise consistent with {spp} spp (like mcrt with about {spp_text(spp_eff)} spp){extra}", False)
+    if 0 < var_ratio < 1 / th.max_noise_ratio**2 and np.isfinite(spp_eff):
+        # Far less noise than the declared spp implies: the noise model follows the image (with a
+        # margin), so that declaring few samples cannot hide a bias behind an inflated noise model.
+        lvl.spp_model = max(lvl.spp_model, int(spp_eff / th.max_noise_ratio))
+        g.notes.append(f"the declared {spp} spp does not match the image's noise (like mcrt with about "
+                       f"{spp_text(spp_eff)} spp); the bias test assumed {lvl.spp_model} spp")
+
+
+def _undeclared(g: Grading, lvl: Level) -> None:
+    a, th, spp_eff = g.a, g.th, lvl.spp_eff
+    lvl.var_ratio = var_ratio = a.min_spp / spp_eff if np.isfinite(spp_eff) else 0.0
+    lvl.spp_model = max(1, min(a.spp, int(spp_eff))) if np.isfinite(spp_eff) else a.spp
+    if var_ratio > th.max_noise_ratio:
+        lvl.verdict = ("failed", (f"spp not declared, and the noise is like mcrt with about {spp_text(spp_eff)} "
+                                  f"spp, far fewer than the {a.min_spp} asked for at least; render more samples (and "
+                                  "declare them in a manifest)"), False)
+    else:
+        lvl.verdict = ("passed", (f"spp not declared (add a manifest with `spp = N`); the noise is like mcrt "
+                                  f"with about {spp_text(spp_eff)} spp"), False)
+
+
+def verdict(g: Grading, hand: Hand, lvl: Level, bt, found: dict[str, str], flagged: bool) -> None:
+    """The ``noise`` criterion, now that the bias test is known (``flagged``: it failed)."""
+    from mcrt.grade.stages.explanation import explain_excess_noise
+
+    status, text, firm = lvl.verdict
+    if "filter" in found:
+        status, text, firm = "failed", found["filter"], True
+    if status == "failed" and not firm and flagged:
+        status, text = "passed", (f"not judged: the image is biased, so its noise cannot be compared with a correct "
+                                  f"renderer's (it is like mcrt with about {spp_text(lvl.spp_eff)} spp)")
+    elif status == "failed" and not firm:
+        # Excess pixel-to-pixel deviation with unbiased tiles: noise, or a deterministic error that
+        # cancels within tiles (aliasing). Only the catalogue at pixel level can tell.
+        text += explain_excess_noise(g, hand, lvl)
+    g.rubric.set("noise", status, text)
