@@ -114,7 +114,9 @@ def claim_rule(S: np.ndarray, R: np.ndarray, mask: np.ndarray, noise: Noise, sc:
     """The adequacy rule as a claim rule of the explanation engine (:class:`mcrt.grade.candidates.ClaimRule`).
 
     After the share rule (:func:`mcrt.grade.explain.claim.share_rule`), a
-    claimed cause stands only if its remainder is noise: the first of the
+    candidate with its share (claimed, or indistinct: a small gain over
+    noise's chi-square, as a change confined to one object has) is claimed
+    only if its remainder is noise: the first of the
     :data:`TRIED` best candidates (explaining at least
     :data:`mcrt.grade.explain.NAMED`) whose remainder is noise is claimed
     (moved first), with the other families that fit as well
@@ -136,7 +138,7 @@ def claim_rule(S: np.ndarray, R: np.ndarray, mask: np.ndarray, noise: Noise, sc:
         share_rule(e, fit, inputs)
         best = e.best
         tried = {}
-        if e.verdict == cd.CLAIMED:
+        if e.verdict in (cd.CLAIMED, cd.INDISTINCT):  # a share of NAMED; a small gain over noise is no objection
             for c in [c for c in e.candidates[:TRIED] if c.change is not None and c.explained >= NAMED]:
                 tried[id(c)] = ad = test(c)
                 if ad.verdict == "adequate":
@@ -145,8 +147,7 @@ def claim_rule(S: np.ndarray, R: np.ndarray, mask: np.ndarray, noise: Noise, sc:
                                       and test(a).verdict == "adequate"],
                            np.where(mask[..., None], S - R - c.change, 0.0))
                     return
-        if (best is not None and best.change is not None and best.explained >= PARTIAL_SHARE
-                and e.verdict != cd.INDISTINCT):
+        if best is not None and best.change is not None and best.explained >= PARTIAL_SHARE:
             ad = tried.get(id(best)) or test(best)
             if ad.verdict == "partial":
                 e.verdict, e.remainder_where, e.adequacy = cd.PARTIAL, ad.where, ad
