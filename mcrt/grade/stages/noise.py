@@ -35,8 +35,10 @@ def measure(g: Grading, hand: Hand, clip_mask: np.ndarray) -> Level:
     g.details["noise"] = {"spp_declared": hand.spp, "renders": n_r,
                           "spp_effective": None if not np.isfinite(spp_eff) else spp_eff}
     spp = hand.spp
-    lvl = Level(img, q, pair, resid, clip_mask, model_ps, ref_noise, per, spp_eff, 0.0, spp or a.min_spp, 0,
-                ("passed", "", False))
+    # var_ratio, spp_model and the verdict are set by _declared or _undeclared.
+    lvl = Level(img=img, q=q, pair=pair, resid=resid, clip_mask=clip_mask, model_ps=model_ps, ref_noise=ref_noise,
+                per=per, spp_eff=spp_eff, var_ratio=0.0, spp_nominal=spp or a.min_spp, spp_model=0,
+                verdict=("passed", "", False))
     if spp:
         _declared(g, lvl, spp)
     else:
