@@ -89,7 +89,7 @@ def remainder_test(S: np.ndarray, R: np.ndarray, delta: np.ndarray | float, mask
     K = len(sc.names) - 1
     ot = obj.object_tests(resid, R, ok, nz, sc.labels, K)
     bt = multiscale_test(resid, R, ok, nz, sc.tiles, alpha=sc.alpha, min_effect=sc.min_effect,
-                   full_effect=sc.full_effect, extra=[ot.family(sc.min_effect)])
+                         full_effect=sc.full_effect, extra=[ot.family(sc.min_effect)])
     rej_o = bt.extra.get("objects", np.zeros(K * 3, bool)).reshape(K, 3)
     n_rej = sum(int(np.count_nonzero(s.penalised)) for s in bt.scales) + int(np.count_nonzero(rej_o))
     n_tests = bt.n_tests + K * 3

@@ -53,7 +53,7 @@ def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta
          "Mitsuba's `path` and `volpath` with several samplers, 16 to 1024 spp, as EXR or 8-bit PNG. Each is "
          "written as a student's folder and graded with the course assignment. *Named right*: the feedback names "
          "the mistake's cause (the explanation's family, or a criterion that names it: `linear` for an encoding, "
-         "`exposure` for a constant factor, `camera` for misregistration). *Named wrong*: it names a cause, and "
+         "`exposure` for a constant factor, `camera` for misregistration). *Confidently wrong*: it names a cause, and "
          "not the right one; *also wrong*: it names the right cause and a wrong one beside it. **Held-out** cases (marked H) were not looked at while the diagnosis was tuned, with one exception: the last two rules of the grader (the camera not blamed beside a cause outside it; an explained wrong geometry, light placement, colour or camera scored as a major mistake) were added after the held-out results had been seen."
          if klass != "outside" else _OUTSIDE, "",
          "## Rates", "",
