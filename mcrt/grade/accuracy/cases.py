@@ -68,7 +68,8 @@ class Spec:
     max_depth: int | None = None  # None: the assignment's
     sensor: dict = field(default_factory=dict)  # entries of the Mitsuba sensor that change
     hide_emitters: bool = False
-    post: str | None = None  # 'blur', 'denoise', a key of mcrt.grade.accuracy.outside.POSTS, or None
+    post: str | None = None  # 'blur', 'denoise', another post-process's name (post_fn), or None
+    post_fn: Callable[[np.ndarray], np.ndarray] | None = None  # a post-process other than blur and denoise
     file: str = "exr"  # 'exr', or 'png-srgb', 'png-gamma2.2', 'png-gamma2', 'png-linear', 'exr-srgb', 'exr-gamma2'
     truth: str = ""  # the mistake in words, for the report
     mitsuba_edit: Callable[[dict], dict] | None = None  # a change of the Mitsuba scene dict (a material, a light)
@@ -326,10 +327,8 @@ def _post(spec: Spec, mean: np.ndarray, noise_sd: float) -> np.ndarray:
 
         return denoise_nl_means(mean, h=0.8 * noise_sd, sigma=noise_sd, patch_size=3, patch_distance=4, channel_axis=-1,
                                 fast_mode=True).astype(np.float32)
-    if spec.post is not None:
-        from mcrt.grade.accuracy.outside import POSTS
-
-        return POSTS[spec.post](mean)
+    if spec.post_fn is not None:
+        return spec.post_fn(mean)
     return mean
 
 

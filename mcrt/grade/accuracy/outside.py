@@ -109,6 +109,11 @@ def _sphere_bsdf(d: dict, bsdf: dict) -> dict:
     return d
 
 
+def _posted(name: str) -> dict:
+    """The Spec fields of a post-process of :data:`POSTS`: its name (for the report) and its function."""
+    return {"post": name, "post_fn": POSTS[name]}
+
+
 def _material(s: Scene, name: str, material) -> Scene:
     return replace(s, objects=tuple(replace(o, material=material) if o.name == name else o for o in s.objects))
 
@@ -155,27 +160,34 @@ def _specs() -> tuple[Spec, ...]:
     glossy = {"type": "roughconductor", "material": "none", "alpha": 0.15}
     return (
         # Post-processing and file writing
-        Spec("tm_reinhard", "tone_map", post="reinhard", truth="Reinhard's x/(1+x) applied before writing the EXR"),
-        Spec("tm_reinhard_exp2", "tone_map", held_out=True, post="reinhard_exp2",
+        Spec("tm_reinhard", "tone_map", **_posted("reinhard"),
+             truth="Reinhard's x/(1+x) applied before writing the EXR"),
+        Spec("tm_reinhard_exp2", "tone_map", held_out=True, **_posted("reinhard_exp2"),
              truth="exposure 2 then Reinhard's x/(1+x), written as EXR"),
-        Spec("tm_aces", "tone_map", held_out=True, post="aces", truth="the ACES filmic curve applied before writing the EXR"),
-        Spec("tm_clamp", "tone_map", post="clamp", truth="values clamped to [0, 1] before writing the EXR"),
-        Spec("tm_reinhard_png", "tone_map", held_out=True, post="reinhard", file="png-srgb",
+        Spec("tm_aces", "tone_map", held_out=True, **_posted("aces"),
+             truth="the ACES filmic curve applied before writing the EXR"),
+        Spec("tm_clamp", "tone_map", **_posted("clamp"), truth="values clamped to [0, 1] before writing the EXR"),
+        Spec("tm_reinhard_png", "tone_map", held_out=True, **_posted("reinhard"), file="png-srgb",
              truth="Reinhard's x/(1+x), then an sRGB 8-bit PNG"),
-        Spec("bgr_exr", "channels", post="bgr", truth="channels written in BGR order (an EXR)"),
-        Spec("bgr_png", "channels", held_out=True, post="bgr", file="png-srgb",
+        Spec("bgr_exr", "channels", **_posted("bgr"), truth="channels written in BGR order (an EXR)"),
+        Spec("bgr_png", "channels", held_out=True, **_posted("bgr"), file="png-srgb",
              truth="channels written in BGR order (an sRGB PNG, as OpenCV writes them)"),
         # Materials
-        Spec("sphere_diffuse", "material", True, edit=partial(_material, name="sphere", material=Lambertian((0.8, 0.8, 0.8))),
+        Spec("sphere_diffuse", "material", True,
+             edit=partial(_material, name="sphere", material=Lambertian((0.8, 0.8, 0.8))),
              truth="the mirror sphere rendered as a white diffuse surface (albedo 0.8)"),
-        Spec("sphere_grey", "material", True, held_out=True, edit=partial(_material, name="sphere", material=Lambertian((0.5, 0.5, 0.5))),
+        Spec("sphere_grey", "material", True, held_out=True,
+             edit=partial(_material, name="sphere", material=Lambertian((0.5, 0.5, 0.5))),
              truth="the mirror sphere rendered as a grey diffuse surface (albedo 0.5)"),
         Spec("sphere_glossy", "material", True, held_out=True, mitsuba_edit=partial(_sphere_bsdf, bsdf=glossy),
              truth="the mirror sphere rendered glossy (a rough conductor, alpha 0.15)"),
-        Spec("tetra_mirror", "material", True, edit=partial(_material, name="tetrahedron", material=Mirror()), truth="the tetrahedron rendered as a mirror"),
+        Spec("tetra_mirror", "material", True, edit=partial(_material, name="tetrahedron", material=Mirror()),
+             truth="the tetrahedron rendered as a mirror"),
         # Camera models
-        Spec("cos4", "falloff", post="cos4", truth="each pixel weighted by cos^4 of its ray's angle (a lens fall-off)"),
-        Spec("cos1", "falloff", held_out=True, post="cos1", truth="each pixel weighted by the cosine of its ray's angle"),
+        Spec("cos4", "falloff", **_posted("cos4"),
+             truth="each pixel weighted by cos^4 of its ray's angle (a lens fall-off)"),
+        Spec("cos1", "falloff", held_out=True, **_posted("cos1"),
+             truth="each pixel weighted by the cosine of its ray's angle"),
         # Light models
         Spec("point_light", "light_model", True, edit=_dark_light,
              mitsuba_edit=partial(_point_light, **_light_args()),
@@ -183,18 +195,19 @@ def _specs() -> tuple[Spec, ...]:
         Spec("radiance_over_pi", "light_radiance", True, held_out=True, edit=_radiance_over_pi,
              truth="the light's radiance divided by pi (radiance taken for power per area)"),
         # Resolution
-        Spec("nearest2", "resampling", render_scale=2, post="nearest2",
+        Spec("nearest2", "resampling", render_scale=2, **_posted("nearest2"),
              truth="rendered at half the resolution, enlarged 2x by repeating pixels"),
-        Spec("bilinear2", "resampling", held_out=True, render_scale=2, post="bilinear2",
+        Spec("bilinear2", "resampling", held_out=True, render_scale=2, **_posted("bilinear2"),
              truth="rendered at half the resolution, enlarged 2x bilinearly"),
-        Spec("nearest4", "resampling", held_out=True, render_scale=4, post="nearest4",
+        Spec("nearest4", "resampling", held_out=True, render_scale=4, **_posted("nearest4"),
              truth="rendered at a quarter of the resolution, enlarged 4x by repeating pixels"),
         # Object sizes
         Spec("sphere_small", "object_size", True, edit=partial(_scaled_object, name="sphere", f=0.9),
              truth="the sphere's radius 0.9 times the scene's"),
         Spec("sphere_large", "object_size", True, held_out=True, edit=partial(_scaled_object, name="sphere", f=1.1),
              truth="the sphere's radius 1.1 times the scene's"),
-        Spec("tetra_small", "object_size", True, held_out=True, edit=partial(_scaled_object, name="tetrahedron", f=0.85),
+        Spec("tetra_small", "object_size", True, held_out=True,
+             edit=partial(_scaled_object, name="tetrahedron", f=0.85),
              truth="the tetrahedron 0.85 times its size (about its centroid)"),
         # Claimed samples per pixel
         Spec("claims_1024", "spp_claim", spp=64, declared_spp=1024, truth="64 spp rendered, 1024 declared"),
@@ -202,7 +215,8 @@ def _specs() -> tuple[Spec, ...]:
         # Correct hand-ins
         Spec("ok_path_256", None, spp=256, truth="Mitsuba path, 256 spp, EXR"),
         Spec("ok_strat_128", None, spp=128, sampler="stratified", truth="Mitsuba path, stratified, 128 spp"),
-        Spec("ok_png_1024", None, spp=1024, file="png-srgb", held_out=True, truth="Mitsuba path 1024 spp as an sRGB PNG"),
+        Spec("ok_png_1024", None, spp=1024, file="png-srgb", held_out=True,
+             truth="Mitsuba path 1024 spp as an sRGB PNG"),
         Spec("ok_mcrt_64", None, spp=64, renderer="mcrt", held_out=True, truth="mcrt, 64 spp"),
     )
 
