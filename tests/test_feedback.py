@@ -180,3 +180,14 @@ def test_resampling_and_falloff_are_named(ctx, post, scale, family):
     ex = res.details["explanation"]
     assert ex["family"] == family and ex["adequacy"]["verdict"] == "adequate", ex["sentence"]
     assert res.score < res.max_score
+
+
+def test_a_curve_no_tone_map_has_is_fitted_as_a_monotone_curve(ctx):
+    """A Mitsuba render (seed 48) through a knee no named curve has (linear to 0.3, a quarter of the slope above):
+    claimed as a monotone curve that maps the brightest value (the light, 20) to about 5.2."""
+    img = _mitsuba(load_scene(), 48)
+    res = grade_image("knee", ctx, [np.minimum(img, 0.3) + 0.25 * np.maximum(img - 0.3, 0.0)], spp=1024)
+    ex = res.details["explanation"]
+    assert ex["named"] == "monotone curve" and ex["verdict"] == "claimed", ex["sentence"]
+    top = ex["candidates"][0]["value"]["maps"][-1]
+    assert top[0] == pytest.approx(20.0, rel=0.01) and top[1] == pytest.approx(0.3 + 0.25 * 19.7, rel=0.05), top

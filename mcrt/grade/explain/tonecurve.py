@@ -20,7 +20,7 @@ from mcrt.grade.explain.fit import Fit
 from mcrt.grade.feedback import num as _num
 
 #: Quantile bins of R per channel for the isotonic fit (each bin's fitted level is one parameter at most).
-BINS = 24
+BINS = 64
 #: Exposures scanned before a named tone map (a student's exposure slider; 1 is none).
 EXPOSURES = (0.25, 0.35, 0.5, 0.7, 1.0, 1.4, 2.0, 2.8, 4.0)
 
