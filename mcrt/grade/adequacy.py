@@ -105,8 +105,9 @@ def remainder_test(S: np.ndarray, R: np.ndarray, delta: np.ndarray | float, mask
 
 #: How many of the best candidates are tried, in order, for one whose remainder is noise.
 TRIED = 3
-#: Another family within this share of the claimed one whose remainder is noise too is named beside it: the
-#: image cannot tell the two apart.
+#: Another family within this share of the claimed one whose remainder is noise too, with no more parameters, is
+#: named beside it: the image cannot tell the two apart (a family with more parameters that also fits, as a
+#: monotone curve fits a constant factor, is no other explanation).
 AMBIGUOUS = 0.05
 
 
@@ -143,8 +144,8 @@ def claim_rule(S: np.ndarray, R: np.ndarray, mask: np.ndarray, noise: Noise, sc:
                 tried[id(c)] = ad = test(c)
                 if ad.verdict == "adequate":
                     _claim(e, c, ad, [a for a in e.candidates[:TRIED] if a is not c and a.family != c.family
-                                      and a.change is not None and a.explained >= c.explained - AMBIGUOUS
-                                      and test(a).verdict == "adequate"],
+                                      and a.params <= c.params and a.change is not None
+                                      and a.explained >= c.explained - AMBIGUOUS and test(a).verdict == "adequate"],
                            np.where(mask[..., None], S - R - c.change, 0.0))
                     return
         if best is not None and best.change is not None and best.explained >= PARTIAL_SHARE:
