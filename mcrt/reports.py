@@ -85,6 +85,9 @@ REPORTS: tuple[Report, ...] = (
     Report("grading_accuracy", "grade-accuracy --out reports/grading_accuracy",
            "grading on a class of realistic mistakes made by Mitsuba scene edits and correct renders: scores, "
            "detection, naming and false-alarm rates, one student's CPU time and memory"),
+    Report("grading_accuracy/outside", "grade-accuracy --class outside --out reports/grading_accuracy/outside",
+           "grading on mistakes made outside the scene file (tone maps, BGR, materials, cosine weights, a point light, "
+           "enlarged renders, object sizes, claimed spp): named right, confidently wrong, partial, false alarms"),
     Report("grading/false_alarms", "grade-false-alarms --out reports/grading/false_alarms",
            "grading's false alarms on correct renders: estimators, samplers, spp 16-1024, 64x64 to 800x800, PNG curves"),
 )

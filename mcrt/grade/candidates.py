@@ -126,7 +126,9 @@ class Explanation:
     sentence: str = ""  # for the bias test's output (set by mcrt.grade.feedback.explanation_words)
     headline: str = ""  # for the summary
     where: str = ""  # where S - R lies, in words
-    remainder_where: str = ""  # where the remainder lies, when the rule found it structured (PARTIAL)
+    remainder_where: str = ""  # where the remainder lies, when the rule found it structured (PARTIAL); for NONE,
+    # where the difference itself lies (the adequacy rule, by object)
+    adequacy: object = None  # what the claim rule measured of the remainder (mcrt.grade.adequacy.Adequacy), if it did
     seconds: float = 0.0
 
     @property
@@ -146,7 +148,8 @@ class Explanation:
         named = self.named
         return {"chi2_none": self.chi2_none, "terms": self.terms, "named": named.name if named else None,
                 "family": named.family if named else None, "sentence": self.sentence,
-                "where": self.where, "seconds": self.seconds,
+                "where": self.where, "seconds": self.seconds, "verdict": self.verdict,
+                "adequacy": self.adequacy.to_dict() if self.adequacy is not None else None,
                 "candidates": [c.to_dict() for c in self.candidates[:8]]}
 
 

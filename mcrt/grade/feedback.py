@@ -68,6 +68,14 @@ _TRIED = ("No single mistake we tried (the catalogued bugs, the scene's colours,
 def explanation_words(e: Explanation) -> tuple[str, str]:
     """The sentence (for the bias test's output) and the headline (for the summary) of an explanation."""
     best, where = e.best, e.where
+    if e.verdict == CLAIMED and e.adequacy is not None:  # the adequacy rule: the remainder is noise
+        alts = e.adequacy.alternatives
+        sentence = (f"It looks like {best.text}: what is left after it is consistent with noise "
+                    f"({100 * best.explained:.0f} % of the difference explained)"
+                    + ("; so would " + " or ".join(f"{t} ({100 * x:.0f} %)" for _, t, x in alts)
+                       + ": the image cannot tell them apart" if alts else "")
+                    + (f"; it changes the image {best.where}" if best.where else "") + ".")
+        return sentence, f"It looks like {best.text}" + (f", or {alts[0][1]}." if alts else ".")
     if e.verdict == CLAIMED:
         alt = next((c for c in e.candidates[1:3] if c.family != best.family and not c.catalogue
                     and c.explained >= best.explained - TIE), None)
@@ -87,6 +95,9 @@ def explanation_words(e: Explanation) -> tuple[str, str]:
     else:
         sentence = (f"{_TRIED} explains most of the difference"
                     + (f": the closest, {best.text}, explains {100 * max(best.explained, 0):.0f} %" if best else ""))
+    if e.remainder_where:  # the adequacy rule placed the difference on objects
+        return (sentence + f". The difference sits {e.remainder_where}.",
+                f"No single mistake we tried explains the difference; it sits {e.remainder_where}.")
     sentence += (f". The image differs {where}" if where else "") + "."
     headline = "No single mistake we tried explains the difference" + (f"; it differs {where}" if where else "") + "."
     return sentence, headline

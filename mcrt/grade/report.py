@@ -116,6 +116,10 @@ def render_figures(fig: dict) -> list[tuple[str, str, str]]:
     if "mutant_rel_tiles" in fig:
         out.append((f"Pattern of the closest bug ({fig['mutant_name']})", ("what this bug would do to a correct image, same "
                     "colours as the relative difference"), png_base64(tile_figure(fig["mutant_rel_tiles"], shape, tile, vmax=vmax))))
+    if "objects_rel" in fig:
+        out.append(("Where something else is wrong, by object", ("each surface the rest of the difference sits on (after "
+                    "the closest explanation), same colours as the relative difference"),
+                    png_base64(_enlarge(diverging(fig["objects_rel"], vmax), s))))
     if "flip" in fig and fig["flip"] is not None:
         f = np.asarray(fig["flip"])
         if f.ndim == 3 and f.shape[2] == 3:

@@ -44,7 +44,11 @@ lag-one statistic
 over horizontally and vertically adjacent pairs is N(0, 1) when the pixels are
 independent with mean 0, whatever their variances (its denominator estimates
 the variance of its numerator); a filter makes it large and positive
-(one-sided test). Its effect size is the lag-one correlation.
+(one-sided test). A bias left in the residual (a wrong material on one
+object) also makes neighbours alike, so T is read on what is left of the
+structure: the difference of two renders, or a high-pass residual within
+each surface (:mod:`mcrt.grade.filtertest`). Its effect size is the lag-one
+correlation beyond what independent noise gives.
 
 **Pixels too dark to be noise.** A pixel of n non-negative samples X can
 fall short of its mean only so far: :math:`P(\bar X \le \mu - t) \le
@@ -67,6 +71,7 @@ import numpy as np
 from scipy import ndimage
 from scipy import stats as _sps
 
+from mcrt.grade.filtertest import noise_correlation
 from mcrt.stats import LUMINANCE_WEIGHTS
 
 LUMINANCE = np.asarray(LUMINANCE_WEIGHTS)
@@ -189,25 +194,8 @@ def _wald(beta: np.ndarray, cov: np.ndarray, sel: list[int]) -> tuple[float, flo
     return wald, float(_sps.chi2.sf(wald, len(sel)))
 
 
-def _lag_one(e: np.ndarray, mask: np.ndarray) -> tuple[float, float, float]:
-    """(T, p one-sided, correlation) of the self-normalised lag-one statistic over adjacent valid pairs."""
-    num = den = ss = 0.0
-    n = 0
-    for a, b, ma, mb in ((e[:, :-1], e[:, 1:], mask[:, :-1], mask[:, 1:]), (e[:-1], e[1:], mask[:-1], mask[1:])):
-        m = ma & mb
-        pa, pb = a[m], b[m]
-        num += float(np.sum(pa * pb))
-        den += float(np.sum(pa * pa * pb * pb))
-        ss += float(np.sum(0.5 * (pa * pa + pb * pb)))
-        n += int(m.sum())
-    if n < 16 or den <= 0:
-        return 0.0, 1.0, 0.0
-    t = num / np.sqrt(den)
-    return t, float(_sps.norm.sf(t)), num / max(ss, 1e-300)
-
-
 def detect(resid: np.ndarray, ref: np.ndarray, mask: np.ndarray, var: np.ndarray, second_moment: np.ndarray,
-           *, base: np.ndarray | None, labels: np.ndarray | None) -> Structure:
+           *, base: np.ndarray | None, labels: np.ndarray | None, pair: np.ndarray | None = None) -> Structure:
     """Run the three detectors (module docstring) on one graded image.
 
     ``resid`` and ``ref`` are (H, W, 3); ``var`` (H, W, 3) is the variance of
@@ -219,7 +207,8 @@ def detect(resid: np.ndarray, ref: np.ndarray, mask: np.ndarray, var: np.ndarray
     reference's and quantisation's variance; ``base`` (H, W, 3) the
     independent render the regression's columns are made from (None: no
     registration or blur test, e.g. for a camera without one); ``labels``
-    the surface each pixel sees.
+    the surface each pixel sees; ``pair`` (H, W, 3) the difference a - b of two renders handed in, whose
+    noise the correlation test then reads (:mod:`mcrt.grade.filtertest`).
     """
     out = Structure()
     h, w = resid.shape[:2]
@@ -253,8 +242,8 @@ def detect(resid: np.ndarray, ref: np.ndarray, mask: np.ndarray, var: np.ndarray
         e = np.zeros(h * w)
         e[m] = e_m
         e = e.reshape(h, w)
-    z = np.where(mask, e * np.sqrt(wt), 0.0)
-    out.t_correlation, out.p_correlation, out.correlation = _lag_one(z, mask)
+    pl = np.where(mask, pair @ LUMINANCE, 0.0) if pair is not None else None
+    out.t_correlation, out.p_correlation, out.correlation = noise_correlation(e, wt, mask, labels, pair=pl)
 
     # Pixels darker than the non-negative lower-tail bound allows.
     with np.errstate(divide="ignore", invalid="ignore"):

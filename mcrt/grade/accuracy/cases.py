@@ -68,9 +68,13 @@ class Spec:
     max_depth: int | None = None  # None: the assignment's
     sensor: dict = field(default_factory=dict)  # entries of the Mitsuba sensor that change
     hide_emitters: bool = False
-    post: str | None = None  # 'blur', 'denoise' or None
+    post: str | None = None  # 'blur', 'denoise', another post-process's name (post_fn), or None
+    post_fn: Callable[[np.ndarray], np.ndarray] | None = None  # a post-process other than blur and denoise
     file: str = "exr"  # 'exr', or 'png-srgb', 'png-gamma2.2', 'png-gamma2', 'png-linear', 'exr-srgb', 'exr-gamma2'
     truth: str = ""  # the mistake in words, for the report
+    mitsuba_edit: Callable[[dict], dict] | None = None  # a change of the Mitsuba scene dict (a material, a light)
+    render_scale: int = 1  # rendered at 1/render_scale of the resolution (a post then enlarges it)
+    declared_spp: int | None = None  # the spp the manifest claims, when not the rendered one
 
 
 @dataclass
@@ -289,6 +293,7 @@ def _seed(name: str) -> int:
 def _render_spec(spec: Spec, scene: Scene, *, width: int, height: int, max_depth: int, seed: int):
     from mcrt.render import render
 
+    width, height = width // spec.render_scale, height // spec.render_scale
     s = scene.settings(camera="near", width=width, height=height, spp=spec.spp, max_depth=spec.max_depth or max_depth)
     if spec.renderer == "mcrt":
         return render(scene, s, seed=seed, progress=False)
@@ -299,6 +304,8 @@ def _render_spec(spec: Spec, scene: Scene, *, width: int, height: int, max_depth
     sensor = dict(d["sensor"], **spec.sensor)
     sensor["sampler"] = {"type": spec.sampler, "sample_count": spec.spp}
     d["sensor"] = sensor
+    if spec.mitsuba_edit is not None:
+        d = spec.mitsuba_edit(d)
     # A stratified or low-discrepancy sampler stratifies over its whole sample count: all of it in one pass.
     per_pass = spec.spp if spec.sampler != "independent" else None
     return render_with_variance(d, spp=spec.spp, seed=seed, spp_per_pass=per_pass)
@@ -320,25 +327,29 @@ def _post(spec: Spec, mean: np.ndarray, noise_sd: float) -> np.ndarray:
 
         return denoise_nl_means(mean, h=0.8 * noise_sd, sigma=noise_sd, patch_size=3, patch_distance=4, channel_axis=-1,
                                 fast_mode=True).astype(np.float32)
+    if spec.post_fn is not None:
+        return spec.post_fn(mean)
     return mean
 
 
 def build_class(scene: Scene | None = None, *, width: int = 64, height: int = 64, max_depth: int = 8,
-                names: tuple[str, ...] | None = None, held_out: bool | None = None, log=None) -> list[Case]:
-    """Render the class (or the cases ``names``; ``held_out`` True/False: only those) at ``width`` x ``height``.
+                names: tuple[str, ...] | None = None, held_out: bool | None = None, log=None,
+                specs: tuple[Spec, ...] = SPECS) -> list[Case]:
+    """Render the class ``specs`` (or its cases ``names``; ``held_out`` True/False: only those) at ``width`` x ``height``.
 
     ``scene`` defaults to the canonical scene; ``log`` takes one line of
-    progress per case.
+    progress per case; ``specs`` defaults to this module's class
+    (:data:`mcrt.grade.accuracy.outside.SPECS` is the second).
     """
     import time
 
     from mcrt.scene import load_scene
 
     scene = scene or load_scene()
-    specs = [s for s in SPECS if (names is None or s.name in names) and (held_out is None or s.held_out == held_out)]
-    unknown = sorted(set(names or ()) - {s.name for s in SPECS})
+    unknown = sorted(set(names or ()) - {s.name for s in specs})
     if unknown:
-        raise ValueError(f"no case named {unknown[0]!r} in the class (have {', '.join(s.name for s in SPECS)})")
+        raise ValueError(f"no case named {unknown[0]!r} in the class (have {', '.join(s.name for s in specs)})")
+    specs = [s for s in specs if (names is None or s.name in names) and (held_out is None or s.held_out == held_out)]
     out = []
     t0 = time.perf_counter()
     for k, spec in enumerate(specs):
@@ -391,5 +402,5 @@ def write_submission(case: Case, folder: str | Path) -> Path:
         path = folder / "render.exr"
         write_exr(path, RenderResult(mean=v.astype(np.float32), variance=None, spp=case.spp, seed=case.seed, max_depth=-1,
                                      renderer="student", scene_hash="", camera="near"))
-    (folder / "manifest.toml").write_text(f"spp = {case.spp}\n")
+    (folder / "manifest.toml").write_text(f"spp = {case.spec.declared_spp or case.spp}\n")
     return path

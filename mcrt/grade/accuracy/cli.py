@@ -16,7 +16,13 @@ def register(sub) -> None:
     p = sub.add_parser("grade-accuracy", help="grade a class of realistic hand-ins (Mitsuba scene edits, correct renders "
                        "of several estimators) and report scores, detection, naming and false-alarm rates",
                        description=__doc__)
-    p.add_argument("--out", default=DEFAULT_OUT, help=f"report folder (default: {DEFAULT_OUT})")
+    p.add_argument("--class", dest="klass", choices=("scene", "outside"), default="scene",
+                   help="the class graded: 'scene' (scene edits, mcrt.grade.accuracy.cases) or 'outside' (mistakes "
+                   "outside the scene file, mcrt.grade.accuracy.outside) (default: scene)")
+    p.add_argument("--held-out", choices=("all", "only", "none"), default="all",
+                   help="grade all cases, only the held-out ones, or none of them (default: all)")
+    p.add_argument("--out", default=None, help=f"report folder (default: {DEFAULT_OUT}, or {DEFAULT_OUT}/outside "
+                   "for --class outside)")
     p.add_argument("--assignment", default=DEFAULT_ASSIGNMENT,
                    help=f"assignment: a name of the package's assignments or a file (default: {DEFAULT_ASSIGNMENT})")
     p.add_argument("--cache", default=None, help="grading cache folder (default: $MCRT_CACHE/grade or ~/.cache/mcrt/grade)")
@@ -29,7 +35,8 @@ def register(sub) -> None:
 
 
 def _command(args) -> str:
-    words = ["mcrt", "grade-accuracy", "--out", args.out]
+    words = ["mcrt", "grade-accuracy"] + (["--class", args.klass] if args.klass != "scene" else []) + \
+        (["--held-out", args.held_out] if args.held_out != "all" else []) + ["--out", args.out]
     if args.assignment != DEFAULT_ASSIGNMENT:
         words += ["--assignment", args.assignment]
     for c in args.only:
@@ -49,14 +56,21 @@ def cmd_grade_accuracy(args) -> int:
     def log(line: str) -> None:
         progress.log(f"mcrt grade-accuracy: {line}", not args.quiet)
 
+    from mcrt.grade.accuracy import cases as scene_class
+    from mcrt.grade.accuracy import outside
+
+    if args.out is None:
+        args.out = DEFAULT_OUT + ("/outside" if args.klass == "outside" else "")
     t0 = time.perf_counter()
     a = load_assignment(args.assignment)
     cache = args.cache or default_cache_dir()
     log(f"preparing {a.name} (cache {cache})")
     ctx = prepare_context(a, cache, log=log)
     prep = time.perf_counter() - t0
+    specs = outside.SPECS if args.klass == "outside" else scene_class.SPECS
+    held = {"all": None, "only": True, "none": False}[args.held_out]
     cases = build_class(width=a.grade_width, height=a.grade_height, max_depth=a.max_depth,
-                        names=tuple(args.only) or None, log=log)
+                        names=tuple(args.only) or None, held_out=held, log=log, specs=specs)
     outcomes = grade_cases(cases, ctx, log=log)
     gs = []
     picks = [c for c in cases if c.cause is not None][: max(args.gradescope - 1, 0)] + [c for c in cases if c.cause is None][:1]
@@ -66,6 +80,6 @@ def cmd_grade_accuracy(args) -> int:
     meta = {"date": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"),
             "seconds": time.perf_counter() - t0, "prepare_seconds": prep, "assignment": a.name,
             "reference": ctx.references[a.camera].source}
-    path = write_report(args.out, outcomes, command=_command(args), meta=meta, gradescope=gs)
+    path = write_report(args.out, outcomes, command=_command(args), meta=meta, gradescope=gs, klass=args.klass)
     log(f"wrote {path} ({time.perf_counter() - t0:.0f} s)")
     return EXIT_OK

@@ -18,8 +18,27 @@ def _cell(text: str, limit: int = 260) -> str:
     return t if len(t) <= limit else t[: limit - 3] + "..."
 
 
-def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta: dict, gradescope: list[dict]) -> Path:
-    """Write index.md and data.json under ``out``; returns the Markdown's path."""
+_OUTSIDE = ("The wrong renders are mistakes made **outside the scene file** (mcrt.grade.accuracy.outside): "
+            "Mitsuba renders of the right scene post-processed or written as a student's program does (tone maps, "
+            "a clamp, BGR channels, a cosine weight per pixel, a lower resolution enlarged), Mitsuba renders with "
+            "another material, light model or object size, and renders that claim more samples per pixel than they "
+            "took; the correct ones come from Mitsuba and mcrt. Each is written as a student's folder and graded "
+            "with the course assignment. *Named right*: the feedback claims the mistake's cause. *Confidently "
+            "wrong*: it claims a cause (\"It looks like ...\", or a criterion that names one) and not the right "
+            "one. *Partial or none*: it claims no cause and says what it can (\"partly like X; something else is "
+            "wrong on ...\", or where the difference sits): neither right nor wrong. **Held-out** cases (marked H) "
+            "were chosen when the class was written and not graded until the rules were final, with one exception: "
+            "after they were first graded, the monotone curve's fit was refined (64 bins, for curves outside both "
+            "halves) and a family with more parameters was no longer named as an alternative beside a claimed "
+            "cause (one held-out case, the radiance divided by pi, had a monotone curve named beside the constant "
+            "factor); no held-out case changed its verdict.")
+
+
+def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta: dict, gradescope: list[dict],
+                 klass: str = "scene") -> Path:
+    """Write index.md and data.json under ``out``; returns the Markdown's path. ``klass`` is the class graded:
+    'scene' (mcrt.grade.accuracy.cases) or 'outside' (mcrt.grade.accuracy.outside)."""
+    from mcrt.grade.accuracy import outside
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     tuned = [o for o in outcomes if not o.held_out]
@@ -28,7 +47,9 @@ def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta
     data = {"command": command, "meta": meta, "rates": groups, "gradescope": gradescope,
             "cases": [o.to_dict() for o in outcomes]}
     (out / "data.json").write_text(json.dumps(data, indent=1, default=str) + "\n", encoding="utf-8")
-    L = ["# Grading accuracy on a class of realistic hand-ins", "",
+    title = "Grading accuracy on a class of realistic hand-ins" + (": mistakes outside the scene file"
+                                                                    if klass == "outside" else "")
+    L = [f"# {title}", "",
          f"Written by `{command}` ({meta.get('date', '')}, {meta.get('seconds', 0):.0f} s). "
          f"Assignment: `{meta.get('assignment')}`; reference: {meta.get('reference')}.", "",
          "The wrong renders are **Mitsuba** renders of the scene edited the way a student's tracer goes wrong "
@@ -36,15 +57,16 @@ def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta
          "Mitsuba's `path` and `volpath` with several samplers, 16 to 1024 spp, as EXR or 8-bit PNG. Each is "
          "written as a student's folder and graded with the course assignment. *Named right*: the feedback names "
          "the mistake's cause (the explanation's family, or a criterion that names it: `linear` for an encoding, "
-         "`exposure` for a constant factor, `camera` for misregistration). *Named wrong*: it names a cause, and "
-         "not the right one; *also wrong*: it names the right cause and a wrong one beside it. **Held-out** cases (marked H) were not looked at while the diagnosis was tuned, with one exception: the last two rules of the grader (the camera not blamed beside a cause outside it; an explained wrong geometry, light placement, colour or camera scored as a major mistake) were added after the held-out results had been seen.", "",
+         "`exposure` for a constant factor, `camera` for misregistration). *Confidently wrong*: it names a cause, and "
+         "not the right one; *also wrong*: it names the right cause and a wrong one beside it. **Held-out** cases (marked H) were not looked at while the diagnosis was tuned, with one exception: the last two rules of the grader (the camera not blamed beside a cause outside it; an explained wrong geometry, light placement, colour or camera scored as a major mistake) were added after the held-out results had been seen."
+         if klass != "outside" else _OUTSIDE, "",
          "## Rates", "",
-         "| | mistakes | detected (lost points) | named right | named wrong | also wrong | major mistakes losing >= 25 % | "
-         "correct renders | false alarms | correct named a bug |",
-         "|---|---|---|---|---|---|---|---|---|---|"]
+         "| | mistakes | detected (lost points) | named right | confidently wrong | partial or none | also wrong | "
+         "major mistakes losing >= 25 % | correct renders | false alarms | correct named a bug |",
+         "|---|---|---|---|---|---|---|---|---|---|---|"]
     for g, r in groups.items():
         L.append(f"| {g} | {r['mistakes']} | {_pct(r['detected'])} | {_pct(r['named_right'])} | {_pct(r['named_wrong'])} | "
-                 f"{_pct(r['also_named_wrong'])} | "
+                 f"{_pct(r['honest_partial'])} | {_pct(r['also_named_wrong'])} | "
                  f"{_pct(r['major_lost_a_quarter'])} | {r['correct']} | {_pct(r['false_alarms'])} | "
                  f"{_pct(r['correct_named_a_bug'])} |")
     L += ["", "## Wrong renders", "",
@@ -53,7 +75,8 @@ def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta
     for o in outcomes:
         if o.cause is None:
             continue
-        named = ("right, and a wrong one" if o.also_wrong else "right") if o.right else ("wrong" if o.wrong else "none")
+        named = ("right, and a wrong one" if o.also_wrong else "right") if o.right else (
+            "confidently wrong" if o.wrong else (o.verdict or "none"))
         L.append(f"| {o.name} | {'H' if o.held_out else ''} | {_cell(o.truth, 90)} | {o.cause} | {'yes' if o.major else 'no'} | "
                  f"{o.spp} | {o.file} | {o.score:g}/{o.max_score:g} | {named} | {_cell(o.said)} | {o.seconds:.1f} |")
     L += ["", "## Correct renders", "",
@@ -63,7 +86,8 @@ def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta
             continue
         L.append(f"| {o.name} | {'H' if o.held_out else ''} | {_cell(o.truth, 90)} | {o.spp} | {o.file} | "
                  f"{o.score:g}/{o.max_score:g} | {'yes' if o.wrong else 'no'} | {_cell(o.said) or '-'} | {o.seconds:.1f} |")
-    L += ["", "Causes: " + "; ".join(f"`{k}` {v}" for k, v in CAUSES.items()) + "."]
+    causes = outside.CAUSES if klass == "outside" else CAUSES
+    L += ["", "Causes: " + "; ".join(f"`{k}` {v}" for k, v in causes.items()) + "."]
     if gradescope:
         L += ["", "## One student as Gradescope grades it", "",
               "A fresh process imports mcrt, loads the prepared context (the grading cache, as workers receive it) "

@@ -10,7 +10,9 @@ prepared context. For each case the outcome says:
   family (:mod:`mcrt.grade.explain`), a catalogued bug named in its place,
   or a criterion whose failure names the cause itself (``linear``: an
   encoding; ``exposure``: a constant factor, which a light of the wrong
-  radiance is; a camera criterion failed for misregistration);
+  radiance is, where dividing by it passes the bias test; a camera criterion
+  failed for misregistration; the noise criterion: a filter, or fewer
+  samples than declared);
 * whether the named cause is the right one (:data:`CAUSE_OF`), or a wrong
   one (a confident wrong cause), or none.
 
@@ -31,7 +33,7 @@ from mcrt.grade.accuracy.cases import Case, write_submission
 
 #: What each explanation family (and catalogued bug) names, as a cause of :data:`mcrt.grade.accuracy.cases.CAUSES`.
 CAUSE_OF: dict[str, tuple[str, ...]] = {
-    "scale": ("light_radiance",), "light_radiance": ("light_radiance",), "channels": ("albedo",),
+    "scale": ("light_radiance",), "light_radiance": ("light_radiance",), "channels": ("albedo", "channels"),
     "albedo": ("albedo",), "reflectance": ("albedo",), "light_position": ("light_position",),
     "light_size": ("light_size",), "object_missing": ("object_missing",), "object_moved": ("object_moved",),
     # Moving the eye along the view is nearly a zoom: either word is right for either mistake.
@@ -41,6 +43,9 @@ CAUSE_OF: dict[str, tuple[str, ...]] = {
     "encoding": ("encoding",), "blur": ("blur",),
     "gamma_output": ("encoding",), "depth_off_by_one": ("depth",), "albedo_1pct": ("albedo",),
     "mirror_wrong_sign": ("albedo",), "no_jitter": ("blur",),
+    # Families beyond the scene file (mcrt.grade.families).
+    "tone_curve": ("tone_map", "encoding"), "falloff": ("falloff",), "resampling": ("resampling", "blur"),
+    "material": ("material",), "object_size": ("object_size",),
 }
 
 
@@ -49,7 +54,11 @@ CAUSE_OF: dict[str, tuple[str, ...]] = {
 _CAMERA_CAUSES = ("camera_fov", "camera_rotation", "camera_eye", "pixel_offset")
 _ACCEPTED = {**{c: _CAMERA_CAUSES for c in _CAMERA_CAUSES},
              # A light of another size at the same radiance emits another power: the exposure criterion says so.
-             "light_size": ("light_size", "light_radiance")}
+             "light_size": ("light_size", "light_radiance"),
+             # The same mistake in other words: a curve on the values is an encoding, BGR is a colour mistake,
+             # enlarging a small render blurs it.
+             "tone_map": ("tone_map", "encoding"), "channels": ("channels", "albedo"),
+             "resampling": ("resampling", "blur")}
 
 
 @dataclass
@@ -71,6 +80,7 @@ class Outcome:
     also_wrong: bool  # named a wrong cause beside the right one
     said: str  # what the feedback says of the cause
     seconds: float
+    verdict: str = ""  # the explanation's adequacy verdict: 'adequate', 'partial', 'none' ('' where none was run)
 
     @property
     def lost(self) -> bool:
@@ -88,6 +98,8 @@ def named_causes(res) -> tuple[list[str], str]:
     if expl and expl.get("named"):
         fam = expl["family"] if expl["family"] != "catalogue" else expl["named"]
         causes += CAUSE_OF.get(fam, (f"catalogue:{fam}",))
+        for alt in (expl.get("adequacy") or {}).get("alternatives", []):  # named beside it as fitting as well
+            causes += CAUSE_OF.get(alt, (alt,))
         said.append(expl["sentence"])
     elif expl:
         said.append(expl["sentence"])
@@ -98,7 +110,9 @@ def named_causes(res) -> tuple[list[str], str]:
     tests = {t.name: t for t in res.tests}
     for crit, cause in (("linear", "encoding"), ("exposure", "light_radiance")):
         t = tests.get(crit)
-        if t is not None and t.status == "failed":
+        # The exposure criterion claims a constant factor only where dividing by it passes the bias test; a
+        # brightness off by more than it allows, which no constant explains, names no cause.
+        if t is not None and t.status == "failed" and (crit != "exposure" or "passes the bias test" in t.output):
             causes.append(cause)
             said.append(t.output.split(";")[0])
     cam = tests.get("camera")
@@ -108,6 +122,9 @@ def named_causes(res) -> tuple[list[str], str]:
     noise = tests.get("noise")
     if noise is not None and noise.status == "failed" and any(w in noise.output for w in ("blur", "denois", "filter")):
         causes.append("blur")
+        said.append(noise.output.split(";")[0])
+    elif noise is not None and noise.status == "failed" and "noisier" in noise.output:
+        causes.append("spp_claim")
         said.append(noise.output.split(";")[0])
     return list(dict.fromkeys(causes)), " | ".join(said)
 
@@ -131,8 +148,9 @@ def grade_cases(cases: list[Case], ctx, *, workdir: str | Path | None = None, lo
             right = None if c.cause is None else c.cause in named
             wrong = bool(named) and (c.cause is None or c.cause not in named)
             also = bool(right) and any(n not in _ACCEPTED.get(c.cause, (c.cause,)) for n in named)
+            verdict = ((res.details.get("explanation") or {}).get("adequacy") or {}).get("verdict", "")
             out.append(Outcome(c.name, c.spec.truth, c.cause, c.major, c.held_out, c.spp, c.spec.file, float(res.score),
-                               float(res.max_score), named, right, wrong, also, said or res.summary, dt))
+                               float(res.max_score), named, right, wrong, also, said or res.summary, dt, verdict))
             if log:
                 el = time.perf_counter() - t0
                 log(f"graded {k + 1}/{len(cases)}: {c.name} {res.score:g}/{res.max_score:g} ({dt:.1f} s); "
@@ -154,6 +172,7 @@ def rates(outcomes: list[Outcome]) -> dict:
         "detected": frac(wrong, lambda o: o.lost),
         "named_right": frac(wrong, lambda o: o.right),
         "named_wrong": frac(wrong, lambda o: o.wrong),
+        "honest_partial": frac(wrong, lambda o: not o.named and o.verdict in ("partial", "none")),
         "also_named_wrong": frac(wrong, lambda o: o.also_wrong),
         "major_lost_a_quarter": frac(major, lambda o: o.max_score - o.score >= 0.25 * o.max_score),
         "false_alarms": frac(ok, lambda o: o.lost),

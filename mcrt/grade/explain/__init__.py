@@ -25,6 +25,11 @@ emitter        the light black where seen directly          R minus the max-dept
 encoding       sRGB or a power curve on the values          closed form on R
 blur           a Gaussian blur of width sigma               closed form on R
 catalogue      R + (E_m - E_0) for each catalogued bug      the catalogue's renders
+tone_curve     a tone map, clamp or any monotone curve      closed form; isotonic regression
+falloff        a smooth fall-off, cos^k of the ray's angle  weighted least squares; a scan
+resampling     rendered at 1/k the resolution and enlarged  closed form on R
+material       an object rendered with the other material   mcrt renders at 0, 1/2, 1
+object_size    an object's size                             mcrt renders at a few scales
 ============== ============================================ ===================================
 
 Every rendered family changes the reference by what mcrt says the mistake
@@ -65,9 +70,12 @@ depth 9 ``depth_off_by_one``).
 Layout: the contract (:class:`~mcrt.grade.candidates.Candidate`,
 :class:`~mcrt.grade.candidates.Explanation`) is :mod:`mcrt.grade.candidates`;
 the engine :mod:`.engine`, the chi^2 :mod:`.fit`, the renders :mod:`.basis`,
-the claim rule :mod:`.claim`; the families :mod:`.scene`, :mod:`.curves`,
-:mod:`.camera` and :mod:`.catalogue` (the catalogued bugs among them, and
-their rankings by tiles, pixels and noise), in the order of :data:`FAMILIES`.
+the claim rule :mod:`.claim` (the grader's is :func:`mcrt.grade.adequacy.claim_rule`:
+a cause is claimed only when what it leaves is noise); the families
+:mod:`.scene`, :mod:`.curves`, :mod:`.camera` and :mod:`.catalogue` (the
+catalogued bugs among them, and their rankings by tiles, pixels and noise),
+and beyond the scene file :mod:`.tonecurve`, :mod:`.falloff`,
+:mod:`.resampling` and :mod:`.objects`, in the order of :data:`FAMILIES`.
 """
 
 from __future__ import annotations

@@ -133,6 +133,12 @@ def _eye_variants(scene: Scene, camera: str) -> dict[str, list[tuple[float, Scen
     return out
 
 
+def basis_settings(a) -> tuple[int, int]:
+    """(spp, seed) of every basis render of assignment ``a``: one seed for all, so that a variation minus the
+    base shares its random numbers (families that render for themselves use them too)."""
+    return max(64, a.diagnosis_spp // 4), a.seed + 7
+
+
 def prepare_basis(a, scene: Scene, render) -> Basis:
     """Render every image :func:`explain` needs, for the assignment ``a``.
 
@@ -143,8 +149,7 @@ def prepare_basis(a, scene: Scene, render) -> Basis:
     """
     t0 = time.perf_counter()
     w, h, d, cam = a.grade_width, a.grade_height, a.max_depth, a.camera
-    spp = max(64, a.diagnosis_spp // 4)
-    seed = a.seed + 7
+    spp, seed = basis_settings(a)
 
     def img(s: Scene, depth: int = d, width: int = w, height: int = h, n: int = spp) -> np.ndarray:
         return render(s, cam, width, height, depth, n, seed).mean.astype(np.float32)

@@ -39,7 +39,7 @@ def scale(fit: Fit, inputs: Inputs) -> list[Candidate]:
     return out
 
 
-def _lagrange(x: np.ndarray, nodes: np.ndarray) -> np.ndarray:
+def lagrange(x: np.ndarray, nodes: np.ndarray) -> np.ndarray:
     """Lagrange weights (len(x), len(nodes)) of the polynomial through ``nodes`` evaluated at ``x``."""
     L = np.ones((len(x), len(nodes)))
     for j, xj in enumerate(nodes):
@@ -65,14 +65,14 @@ def albedo(fit: Fit, inputs: Inputs) -> list[Candidate]:
             ys = np.concatenate([imgs[:, :, :, c], b.base[None, :, :, c]]).astype(np.float64)
             keep = np.concatenate([np.abs(nodes - scene_v[c]) > 1e-3, [True]])
             xs, ys = xs[keep], ys[keep]
-            L = _lagrange(grid, xs)
+            L = lagrange(grid, xs)
             curves = np.tensordot(L, ys, axes=(1, 0)) - b.base[None, :, :, c]  # (101, H, W): M - R
             err = np.sum(np.minimum((fit.D[None, :, :, c] - curves) ** 2 * fit.w[None, :, :, c], CAP), axis=(1, 2))
             ct = fit.blocks(np.where(fit.ok[None, :, :, c:c + 1], curves[..., None], 0.0))[..., 0] / fit.cnt[None, :, :, c]
             err = err + np.sum(np.minimum((fit.Dt[None, :, :, c] - ct) ** 2 * fit.wt[None, :, :, c], CAP), axis=(1, 2))
             i = int(np.argmin(err))
             fitted.append(float(refine(grid, err, i)))
-            dm[..., c] = np.tensordot(_lagrange(np.array([fitted[-1]]), xs), ys, axes=(1, 0))[0] - b.base[..., c]
+            dm[..., c] = np.tensordot(lagrange(np.array([fitted[-1]]), xs), ys, axes=(1, 0))[0] - b.base[..., c]
         kind = b.values[label][0]
         word = "albedo" if kind == "albedo" else "reflectance"
         out.append(Candidate(word, f"{word} of {label}", f"{label} with {word} {_fmt(fitted)} where the scene says "

@@ -2,7 +2,8 @@
 
 The tile test is :func:`mcrt.stats.onesample.multiscale_test`; the detectors
 of :mod:`mcrt.grade.structure` (misregistration, blur, correlated noise,
-too-dark pixels) join its family with their shares of ``alpha``. Another
+too-dark pixels) and the per-object test of :mod:`mcrt.grade.objects` join
+its family with their shares of ``alpha``. Another
 detector joins the same way: one more (name, p-values, relevant, share) in
 ``extra``.
 """
@@ -14,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from mcrt.grade import feedback as fb
+from mcrt.grade.objects import object_tests
 from mcrt.grade.regions import short_text
 from mcrt.grade.score import LUMINANCE, metrics
 from mcrt.grade.stages.state import Grading, Hand, Level
@@ -44,9 +46,12 @@ def test(g: Grading, hand: Hand, lvl: Level, img: np.ndarray, resid: np.ndarray,
     weight_var = lvl.model_ps / lvl.samples + lvl.model_ps / hand.ref.spp
     # Second moment of the lower-tail bound: E[X^2] / n = sigma^2 / n + mu^2 / n (structure.py).
     st = detect_structure(resid, R, lvl.clip_mask, weight_var, noise.model + noise.reference + R**2 / lvl.samples,
-                          base=ctx.baseline.mean if hand.cam == a.camera else None, labels=ctx.labels[hand.cam])
+                          base=ctx.baseline.mean if hand.cam == a.camera else None, labels=ctx.labels[hand.cam],
+                          pair=hand.imgs[0] - hand.imgs[1] if hand.n_r == 2 else None)
+    # Beside the tiles, a test per object (mcrt.grade.objects): a small change confined to one object loses points.
+    objs = object_tests(resid, R, lvl.clip_mask, noise, ctx.labels[hand.cam], len(ctx.label_names) - 1)
     bt = multiscale_test(resid, R, lvl.clip_mask, noise, a.tiles, alpha=th.alpha, min_effect=th.min_effect,
-                         full_effect=th.full_effect, extra=structure_families(st, th))
+                         full_effect=th.full_effect, extra=structure_families(st, th) + [objs.family(th.min_effect)])
     return Tested(bt, st, img)
 
 
@@ -159,6 +164,9 @@ def verdict(g: Grading, hand: Hand, lvl: Level, t: Tested, found: dict[str, str]
         # Likewise the residual of any structured mistake is correlated between neighbours:
         # where another cause explains it, the image is not also called filtered.
         found.pop("filter", None)
+    unexplained = named is None and g.explanation is not None and g.explanation.adequacy is not None
+    if unexplained:
+        _findings_rule(g, hand, lvl, t, found)
     from mcrt.grade.scoring import unbiased_loss
 
     major = named.name if named is not None and named.family in _families("MAJOR_FAMILIES") else None
@@ -168,12 +176,36 @@ def verdict(g: Grading, hand: Hand, lvl: Level, t: Tested, found: dict[str, str]
     lines.append(f"Bias beyond noise: {fb.fmt_pct(bt.excess_rms)} RMS; {fb.fmt_pct(loss)} of these points lost ({why}).")
     g.rubric.failed("unbiased", " ".join(lines), loss=loss)
     g.headline = where_text[0].upper() + where_text[1:] + "." if where_text else "Biased."
-    if g.explanation is not None and (g.explanation.named is not None or not found):
+    if g.explanation is not None and (g.explanation.named is not None or not found or unexplained):
         g.headline = g.explanation.headline
     elif diag and g.explanation is None:
         g.headline = f"{where_text[0].upper() + where_text[1:] if where_text else 'Biased'}: consistent with {short_text(diag[0].text)}."
     elif found:
         g.headline = next(iter(found.values())).split(":")[0] + "."
+
+
+def _findings_rule(g: Grading, hand: Hand, lvl: Level, t: Tested, found: dict[str, str]) -> None:
+    """The adequacy rule for the checks' own findings, where no cause is claimed (mcrt.grade.adequacy).
+
+    A structured remainder makes neighbours alike, moves edges and darkens
+    pixels: the filter finding stands only if the noise is still
+    correlated in what the best candidate leaves, the camera finding only
+    if that candidate is the camera's, the wrong-pixels finding (cracks,
+    shadow rays) only if its pixels are a minor share of the image.
+    """
+    from mcrt.grade.adequacy import PARTIAL_SHARE
+    from mcrt.grade.structure import SHARES
+
+    bt, th, best = t.bt, g.th, g.explanation.best
+    if best is None or best.family not in _families("CAMERA_FAMILIES"):
+        found.pop("registration", None)
+    if "pixels" in found and bt.extra["pixels"].reshape(bt.shape + (3,)).any(axis=2).mean() > th.minor_area:
+        found.pop("pixels")
+    if "filter" in found and best is not None and best.change is not None and best.explained >= PARTIAL_SHARE:
+        rest = np.where(lvl.clip_mask[..., None], t.img - hand.R - best.change, 0.0)
+        st = test(g, hand, lvl, t.img, rest, lvl.noise).st
+        if not (st.p_correlation <= th.alpha * SHARES["correlation"] and st.correlation >= th.min_correlation):
+            found.pop("filter", None)
 
 
 def _explained(g: Grading, hand: Hand, lvl: Level, t: Tested, family: str) -> tuple[list[str], str, list]:

@@ -2,7 +2,8 @@
 
 Every family of :mod:`mcrt.grade.explain` (the catalogued bugs among them)
 is fitted to the image by the engine, and the claim rule :data:`CLAIM_RULE`
-decides what the feedback may claim. Without the engine's renders (a
+decides what the feedback may claim: a cause only when what it leaves is
+noise (:mod:`mcrt.grade.adequacy`). Without the engine's renders (a
 context prepared without them, another camera) the catalogue is ranked by
 tile statistics alone. Excess noise on unbiased tiles is told apart from a
 deterministic error by ranking the catalogue at pixel level, by its noise
@@ -15,13 +16,22 @@ import numpy as np
 
 from mcrt.grade.candidates import Inputs
 from mcrt.grade.explain.catalogue import catalogue_power, rank_mutants, rank_noise, rank_noise_level
-from mcrt.grade.explain.claim import share_rule
+from mcrt.grade.adequacy import Scene2D, claim_rule
 from mcrt.grade.regions import change_region, rel_lum, short_text, signature_region, tile_means
 from mcrt.grade.stages.state import Grading, Hand, Level
 from mcrt.stats.onesample import Noise, multiscale_test, scale_stats
 
-#: The rule that decides whether the best explanation is claimed (mcrt.grade.candidates.ClaimRule).
-CLAIM_RULE = share_rule
+#: Makes the rule that decides whether the best explanation is claimed (mcrt.grade.candidates.ClaimRule): the
+#: share rule, then the remainder tested with the bias test's noise model (mcrt.grade.adequacy.claim_rule).
+CLAIM_RULE = claim_rule
+
+
+def _change_var(g: Grading, c, basis) -> np.ndarray:
+    """The noise of a candidate's predicted change: its expected images' (a catalogued bug) or the basis renders'."""
+    if c.catalogue and c.name in g.ctx.mutants:
+        m, b = g.ctx.mutants[c.name], g.ctx.baseline
+        return m.var.astype(np.float64) / m.spp + b.var.astype(np.float64) / b.spp
+    return basis.var.astype(np.float64) / basis.spp
 
 
 def _tile_means(x, mask, tile):
@@ -89,9 +99,13 @@ def explain(g: Grading, hand: Hand, img, mask, noise: Noise):
 
     inputs = Inputs(basis, mutants=ctx.mutants, baseline=ctx.baseline, texts=ctx.mutant_texts, labels=labels,
                     label_names=names, where=where_fn, test_remainder=test_remainder)
-    e = engine(img, R, noise.model + noise.reference, mask, inputs, claim=CLAIM_RULE, tile=tile)
+    sc = Scene2D(tuple(a.tiles), th.alpha, th.min_effect, th.full_effect, labels, names)
+    rule = CLAIM_RULE(img, R, mask, noise, sc, extra_var=lambda c: _change_var(g, c, basis))
+    e = engine(img, R, noise.model + noise.reference, mask, inputs, claim=rule, tile=tile)
     g.explanation = e
     g.details["explanation"] = e.to_dict()
+    if e.adequacy is not None and e.adequacy.map is not None:
+        g.figures["objects_rel"] = e.adequacy.map
     if e.named is not None:
         g.diagnosis = [c.to_dict() for c in e.candidates[:5]]
         g.figures["mutant_rel_tiles"] = rel_lum(_tile_means(e.named.change, mask, tile), _tile_means(R, mask, tile))

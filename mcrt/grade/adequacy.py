@@ -1,0 +1,172 @@
+r"""Is a fitted cause enough? The remainder tested as the hand-in was.
+
+A candidate explanation (a family's best fit, :mod:`mcrt.grade.explain`)
+predicts a change :math:`\Delta` of the reference R. What it leaves,
+
+.. math::
+
+    r = S - R - \Delta,
+
+is tested with the bias test itself (:func:`mcrt.stats.onesample.multiscale_test`:
+the same noise model, tiles, Holm family at the same ``alpha`` and the same
+relevance threshold ``min_effect``), with the per-object test of
+:mod:`mcrt.grade.objects` in its family and the candidate's own noise
+(``extra_var``: the basis renders' variance) added to the reference's. Then:
+
+* **adequate**: nothing is rejected: the remainder is consistent with noise,
+  and the cause may be claimed ("It looks like ...");
+* **partial**: the candidate explains a share of the difference but a
+  structured remainder is left: it is named as partial, with the share and
+  the objects the remainder sits on ("partly like X, which explains 56 %;
+  something else is wrong on the ceiling and the light");
+* **none**: no candidate explains enough (:data:`PARTIAL_SHARE` of the
+  difference) to be mentioned: the objects the difference sits on are named
+  instead, with how they differ.
+
+The checks that print findings of their own follow the same rule: the
+exposure criterion claims a constant factor only where the image divided by
+it passes the bias test (:mod:`mcrt.grade.stages.exposure`); the filter,
+camera and wrong-pixels findings stand beside an unexplained difference only
+where they hold on what the best candidate leaves
+(:mod:`mcrt.grade.stages.bias`). :func:`claim_rule` is the rule as the
+explanation engine takes it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from mcrt.grade import objects as obj
+from mcrt.stats.onesample import Noise, multiscale_test
+
+#: A candidate that explains less than this share of the difference is not mentioned at all.
+PARTIAL_SHARE = 0.3
+
+
+@dataclass
+class Adequacy:
+    """The verdict on one candidate and where its remainder lies."""
+
+    verdict: str  # 'adequate', 'partial' or 'none'
+    explained: float  # share of the difference the candidate explains (0 for none)
+    rejected: int  # remainder tests rejected and relevant (tiles and objects)
+    n_tests: int
+    objects: list[int] = field(default_factory=list)  # labels the remainder sits on, largest first
+    where: str = ""  # those objects in words, with how they differ
+    map: np.ndarray | None = None  # (H, W) per-object relative difference of the remainder (rejected objects)
+    excess_rms: float = 0.0  # the remainder's bias beyond noise, relative
+    alternatives: list[tuple] = field(default_factory=list)  # (family, text, share) of causes that fit as well
+
+    def to_dict(self) -> dict:
+        return {"verdict": self.verdict, "explained": self.explained, "rejected": self.rejected,
+                "n_tests": self.n_tests, "objects": self.objects, "where": self.where,
+                "remainder_excess_rms": self.excess_rms, "alternatives": [a[0] for a in self.alternatives]}
+
+
+@dataclass
+class Scene2D:
+    """What the remainder test needs besides the images: the bias test's settings and the surface labels."""
+
+    tiles: tuple
+    alpha: float
+    min_effect: float
+    full_effect: float
+    labels: np.ndarray  # (H, W) surface index
+    names: tuple[str, ...]  # label names (the last is 'nothing')
+
+
+def remainder_test(S: np.ndarray, R: np.ndarray, delta: np.ndarray | float, mask: np.ndarray, noise: Noise,
+                   sc: Scene2D, *, extra_var: np.ndarray | None = None, explained: float = 1.0) -> Adequacy:
+    """Test S - R - delta (the module docstring); ``explained`` is the candidate's share, for the verdict's words."""
+    S, R = np.asarray(S, np.float64), np.asarray(R, np.float64)
+    d = np.broadcast_to(np.asarray(delta, np.float64), S.shape)
+    ok = mask & np.isfinite(S).all(axis=-1) & np.isfinite(d).all(axis=-1)
+    resid = np.where(ok[..., None], S - R - d, 0.0)
+    nz = Noise(model=noise.model, reference=noise.reference + (extra_var if extra_var is not None else 0.0),
+               pair=noise.pair)
+    K = len(sc.names) - 1
+    ot = obj.object_tests(resid, R, ok, nz, sc.labels, K)
+    bt = multiscale_test(resid, R, ok, nz, sc.tiles, alpha=sc.alpha, min_effect=sc.min_effect,
+                         full_effect=sc.full_effect, extra=[ot.family(sc.min_effect)])
+    rej_o = bt.extra.get("objects", np.zeros(K * 3, bool)).reshape(K, 3)
+    n_rej = sum(int(np.count_nonzero(s.penalised)) for s in bt.scales) + int(np.count_nonzero(rej_o))
+    n_tests = bt.n_tests + K * 3
+    if n_rej == 0:
+        return Adequacy("adequate", explained, 0, n_tests, excess_rms=bt.excess_rms)
+    where = obj.flagged_objects(ot, rej_o, tile_effect=bt.pixel_effect, labels=sc.labels, mask=ok)
+    nv = nz.model + nz.reference
+    words = obj.sentence(S - d, R, ok, nv, sc.labels, sc.names, where)
+    verdict = "partial" if explained >= PARTIAL_SHARE else "none"
+    return Adequacy(verdict, explained, n_rej, n_tests, where, words, obj.effect_map(ot, rej_o, sc.labels, ok),
+                    bt.excess_rms)
+
+
+#: How many of the best candidates are tried, in order, for one whose remainder is noise.
+TRIED = 3
+#: Another family within this share of the claimed one whose remainder is noise too, with no more parameters, is
+#: named beside it: the image cannot tell the two apart (a family with more parameters that also fits, as a
+#: monotone curve fits a constant factor, is no other explanation).
+AMBIGUOUS = 0.05
+
+
+def claim_rule(S: np.ndarray, R: np.ndarray, mask: np.ndarray, noise: Noise, sc: Scene2D, *, extra_var=None):
+    """The adequacy rule as a claim rule of the explanation engine (:class:`mcrt.grade.candidates.ClaimRule`).
+
+    After the share rule (:func:`mcrt.grade.explain.claim.share_rule`), a
+    candidate with its share (claimed, or indistinct: a small gain over
+    noise's chi-square, as a change confined to one object has) is claimed
+    only if its remainder is noise: the first of the
+    :data:`TRIED` best candidates (explaining at least
+    :data:`mcrt.grade.explain.NAMED`) whose remainder is noise is claimed
+    (moved first), with the other families that fit as well
+    (:data:`AMBIGUOUS`); else the best is PARTIAL, with where its remainder
+    lies, if it explains :data:`PARTIAL_SHARE` of the difference; else nothing is
+    claimed and the difference itself is placed on objects
+    (``remainder_where``). ``extra_var(c)`` is the noise (H, W, 3) of
+    candidate c's predicted change (None: none). The rule's measurements
+    go to ``e.adequacy`` (:class:`Adequacy`).
+    """
+    from mcrt.grade import candidates as cd
+    from mcrt.grade.explain.claim import NAMED, share_rule
+
+    def test(c):
+        var = extra_var(c) if extra_var is not None else None
+        return remainder_test(S, R, c.change, mask, noise, sc, extra_var=var, explained=c.explained)
+
+    def rule(e, fit, inputs) -> None:
+        share_rule(e, fit, inputs)
+        best = e.best
+        tried = {}
+        if e.verdict in (cd.CLAIMED, cd.INDISTINCT):  # a share of NAMED; a small gain over noise is no objection
+            for c in [c for c in e.candidates[:TRIED] if c.change is not None and c.explained >= NAMED]:
+                tried[id(c)] = ad = test(c)
+                if ad.verdict == "adequate":
+                    _claim(e, c, ad, [a for a in e.candidates[:TRIED] if a is not c and a.family != c.family
+                                      and a.params <= c.params and a.change is not None
+                                      and a.explained >= c.explained - AMBIGUOUS and test(a).verdict == "adequate"],
+                           np.where(mask[..., None], S - R - c.change, 0.0))
+                    return
+        if best is not None and best.change is not None and best.explained >= PARTIAL_SHARE:
+            ad = tried.get(id(best)) or test(best)
+            if ad.verdict == "partial":
+                e.verdict, e.remainder_where, e.adequacy = cd.PARTIAL, ad.where, ad
+                return
+        e.verdict = cd.NONE if e.verdict == cd.CLAIMED else e.verdict
+        ad = remainder_test(S, R, 0.0, mask, noise, sc, explained=0.0)
+        ad.verdict = "none" if ad.rejected else "adequate"
+        e.remainder_where, e.adequacy = ad.where, ad
+
+    return rule
+
+
+def _claim(e, c, ad: Adequacy, alternatives: list, remainder: np.ndarray) -> None:
+    """Claim candidate c of explanation e (first in its list, ``remainder`` its own), naming the alternatives."""
+    from mcrt.grade import candidates as cd
+
+    if c is not e.best:
+        e.remainder = remainder
+        e.candidates = [c] + [x for x in e.candidates if x is not c]
+    ad.alternatives = [(a.family, a.text, a.explained) for a in alternatives]
+    e.verdict, e.adequacy = cd.CLAIMED, ad

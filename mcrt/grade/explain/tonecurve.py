@@ -1,0 +1,95 @@
+r"""A monotone value curve: any tone map, clamp or encoding a student's program applies before saving.
+
+The model image is :math:`f_c(R)` with :math:`f_c` monotone per channel.
+Named curves come first, each with an exposure scanned before it (a
+student's exposure slider): Reinhard's :math:`x/(1+x)`, the ACES filmic
+curve (Narkowicz's fit), either followed by the sRGB curve, a clamp to
+[0, 1], and 8-bit rounding. Any other monotone curve is fitted as an
+isotonic regression of S on R per channel
+(:func:`scipy.optimize.isotonic_regression`) on :data:`BINS` quantile bins
+of R, each bin's level one parameter at most, and worded by the values it
+maps three quantiles of R to.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from mcrt.grade.candidates import Candidate, Inputs
+from mcrt.grade.explain.fit import Fit
+from mcrt.grade.feedback import num as _num
+
+#: Quantile bins of R per channel for the isotonic fit (each bin's fitted level is one parameter at most).
+BINS = 64
+#: Exposures scanned before a named tone map (a student's exposure slider; 1 is none).
+EXPOSURES = (0.25, 0.35, 0.5, 0.7, 1.0, 1.4, 2.0, 2.8, 4.0)
+
+
+def _aces(x):
+    """Narkowicz's fit of the ACES filmic curve."""
+    return np.clip(x * (2.51 * x + 0.03) / (x * (2.43 * x + 0.59) + 0.14), 0.0, 1.0)
+
+
+def _named_curves() -> dict[str, tuple[str, callable]]:
+    from mcrt.imageio import srgb_oetf
+
+    def q8(x):
+        return np.floor(np.clip(x, 0.0, 1.0) * 255.0 + 0.5) / 255.0
+
+    return {
+        "reinhard": ("put through Reinhard's tone map x / (1 + x)", lambda x: x / (1.0 + x)),
+        "reinhard+srgb": ("put through Reinhard's tone map x / (1 + x), then the sRGB curve", lambda x: srgb_oetf(x / (1.0 + x))),
+        "aces": ("put through the ACES filmic tone map", _aces),
+        "aces+srgb": ("put through the ACES filmic tone map, then the sRGB curve", lambda x: srgb_oetf(_aces(x))),
+        "clamp": ("clamped to [0, 1]", lambda x: np.clip(x, 0.0, 1.0)),
+        "quantised": ("clamped to [0, 1] and rounded to 8 bits (linear)", q8),
+    }
+
+
+def tone_curve(fit: Fit, inputs: Inputs) -> list[Candidate]:
+    """Named tone maps (an exposure scanned before each), and any monotone curve per channel (isotonic)."""
+    R = np.maximum(fit.R, 0.0)
+    out = []
+    for key, (words, f) in _named_curves().items():
+        scan = EXPOSURES if key not in ("clamp", "quantised") else (1.0,)
+        errs = [fit.model(f(k * R)) for k in scan]
+        i = int(np.argmin(errs))
+        k = scan[i]
+        exp = f" after an exposure of {_num(k)}" if k != 1.0 else ""
+        out.append(Candidate("tone_curve", f"tone map {key}", f"the values {words}{exp} before saving",
+                              errs[i], 1 if len(scan) > 1 else 0, value={"curve": key, "exposure": k}, change=f(k * R) - fit.R))
+    out.append(_isotonic(fit))
+    return out
+
+
+def _isotonic(fit: Fit) -> Candidate:
+    from scipy.optimize import isotonic_regression
+
+    M = np.array(fit.R, np.float64)
+    params, knots = 0, []
+    for c in range(3):
+        ok = fit.ok[..., c]
+        x, y, w = fit.R[..., c][ok], fit.S[..., c][ok], fit.w[..., c][ok]
+        if x.size < BINS:
+            continue
+        order = np.argsort(x, kind="stable")
+        groups = np.array_split(order, BINS)
+        wx = np.array([max(float(w[g].sum()), 1e-300) for g in groups])
+        xm = np.array([float(np.sum(w[g] * x[g])) for g in groups]) / wx
+        ym = np.array([float(np.sum(w[g] * y[g])) for g in groups]) / wx
+        res = isotonic_regression(ym, weights=wx, increasing=True)
+        levels = res.x
+        params += len(res.blocks) - 1
+        M[..., c] = np.interp(fit.R[..., c], xm, levels)
+        knots.append((xm, levels))
+    change = M - fit.R
+    probe = [float(v) for v in np.quantile(fit.R[fit.ok], [0.1, 0.5, 0.99])] if fit.ok.any() else []
+    lum = [float(np.mean([np.interp(p, xm, lv) for xm, lv in knots])) for p in probe] if knots else []
+    says = ", ".join(f"{p:.3g} to {q:.3g}" for p, q in zip(probe, lum))
+    text = (f"the values through a monotone curve (a tone map, clamp or encoding) that maps {says}" if says
+            else "the values through a monotone curve")
+    return Candidate("tone_curve", "monotone curve", text, fit.delta(change), params,
+                      value={"curve": "monotone", "maps": [[p, q] for p, q in zip(probe, lum)]}, change=change)
+
+
+tone_curve.name = "tone_curve"

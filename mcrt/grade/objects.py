@@ -1,0 +1,181 @@
+r"""Differences per object: a test beside the tiles, and how each object differs, in words and as a map.
+
+A tile mixes the surfaces it covers; a small change confined to one object
+(a sphere slightly too small, a reflection missing) can hide in tiles where
+the object is a few pixels of many. Here the pixels are grouped by what they
+see (:func:`mcrt.grade.expected.surface_labels`: each wall, the floor, the
+ceiling, the light, the tetrahedron, the sphere) and each group's mean
+residual is tested like a tile of the bias test (:func:`mcrt.stats.onesample.scale_stats`):
+
+.. math::
+
+    t_k = \bar r_k / \sqrt{V_k}, \qquad
+    V_k = \max\Big(\frac{1}{n_k^2}\sum_{i \in k} (v^{model}_i + v^{ref}_i),\;
+                   \frac{s_k^2}{n_k}\Big),
+
+two-sided with :math:`n_k - 1` degrees of freedom, per channel. Its p-values
+join the bias test's Holm family as one more detector
+(``multiscale_test(..., extra=...)``, share :data:`SHARE` of alpha), with the same
+relevance threshold (``min_effect`` on :math:`|\bar r_k| / |\bar R_k|`).
+
+:func:`describe` words how each object differs from the reference (darker,
+brighter, less contrast, missing detail) and :func:`effect_map` gives the
+map the feedback shows: each pixel the relative luminance difference of its
+object, where that object's test is rejected.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import stats as _sps
+
+from mcrt.stats import LUMINANCE_WEIGHTS
+
+LUMINANCE = np.asarray(LUMINANCE_WEIGHTS)
+#: Share of the family-wise error rate the per-object test gets (the tiles keep the rest).
+SHARE = 0.05
+#: Fewest pixels an object needs to be tested on its own.
+MIN_PIXELS = 4
+#: Within an object, the reference's variation must be this many times its noise to speak of contrast or detail.
+MIN_STRUCTURE = 4.0
+
+
+@dataclass
+class ObjectTests:
+    """Per-object statistics; arrays (K, 3) over the K labels (rows of labels absent from the image have n = 0)."""
+
+    n: np.ndarray  # (K,) pixels per label
+    diff: np.ndarray  # mean residual
+    ref: np.ndarray  # mean reference
+    var: np.ndarray  # variance of the mean residual
+    p: np.ndarray  # two-sided p-values (1 where untested)
+    rel: np.ndarray  # diff / |ref|
+
+    def family(self, min_effect: float) -> tuple[str, np.ndarray, np.ndarray, float]:
+        """(name, p-values, relevant, share) for :func:`mcrt.stats.onesample.multiscale_test`'s ``extra``."""
+        return ("objects", self.p.ravel(), (np.abs(self.rel) >= min_effect).ravel(), SHARE)
+
+
+def object_tests(resid: np.ndarray, ref: np.ndarray, mask: np.ndarray, noise, labels: np.ndarray,
+                 n_labels: int) -> ObjectTests:
+    """The per-object test of the module docstring; ``noise`` is the bias test's :class:`mcrt.stats.onesample.Noise`."""
+    k = np.where(mask, labels, n_labels).ravel().astype(np.int64)
+    r = resid.reshape(-1, 3).astype(np.float64)
+    R = ref.reshape(-1, 3).astype(np.float64)
+    vm = (noise.model + noise.reference).reshape(-1, 3).astype(np.float64)
+    if noise.pair is not None:
+        vm = np.maximum(vm, (noise.pair + noise.reference).reshape(-1, 3))
+
+    def sums(x):
+        return np.stack([np.bincount(k, x[:, c], minlength=n_labels + 1)[:n_labels] for c in range(3)], axis=1)
+
+    n = np.bincount(k, minlength=n_labels + 1)[:n_labels].astype(np.float64)
+    safe = np.maximum(n, 1.0)[:, None]
+    d = sums(r) / safe
+    rm = sums(R) / safe
+    s2 = np.maximum(sums(r * r) - safe * d * d, 0.0) / np.maximum(safe - 1.0, 1.0)
+    var = np.maximum(sums(vm) / safe**2, s2 / safe)
+    ok = (n >= MIN_PIXELS)[:, None] & (var > 0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = np.where(ok, d / np.sqrt(np.where(ok, var, 1.0)), 0.0)
+        rel = np.where(np.abs(rm) > 0, d / np.abs(rm), 0.0)
+    p = np.where(ok, 2.0 * _sps.t.sf(np.abs(t), np.maximum(n - 1.0, 1.0)[:, None]), 1.0)
+    return ObjectTests(n, d, rm, var, np.minimum(p, 1.0), np.where(ok, rel, 0.0))
+
+
+def describe(S: np.ndarray, R: np.ndarray, mask: np.ndarray, noise_var: np.ndarray, labels: np.ndarray,
+             k: int) -> list[str]:
+    r"""How the image S differs from R on object ``k``: 'darker by 12 %', 'less contrast', 'missing detail'.
+
+    Brightness is the mean luminance ratio. Contrast is the slope of S on R
+    within the object (least squares on luminance, centred), spoken of only
+    where R varies there by :data:`MIN_STRUCTURE` times its noise; detail
+    is the same for the pixel-to-pixel differences (a Laplacian), which a
+    blur or a missing reflection flattens.
+    """
+    sel = mask & (labels == k)
+    if sel.sum() < MIN_PIXELS:
+        return []
+    s, r = S[sel] @ LUMINANCE, R[sel] @ LUMINANCE
+    v = noise_var[sel] @ LUMINANCE**2
+    out = []
+    ms, mr = float(s.mean()), float(r.mean())
+    if mr > 0 and abs(ms / mr - 1) >= 0.01:
+        out.append(f"{'darker' if ms < mr else 'brighter'} by {100 * abs(ms / mr - 1):.0f} %")
+    rc, sc = r - mr, s - ms
+    if float(np.sum(rc * rc)) > MIN_STRUCTURE**2 * float(np.sum(v)):
+        slope = float(np.sum(sc * rc) / np.sum(rc * rc))
+        if slope < 0.8:
+            out.append(f"less contrast ({100 * max(slope, 0):.0f} % of the reference's variation)")
+        elif slope > 1.25:
+            out.append(f"more contrast ({100 * slope:.0f} % of the reference's variation)")
+    lap_r, lap_s = _laplacian(R @ LUMINANCE), _laplacian(S @ LUMINANCE)
+    inner = sel & _interior(labels == k)
+    if inner.sum() >= MIN_PIXELS:
+        er = float(np.sum(lap_r[inner] ** 2))
+        es = float(np.sum(lap_s[inner] ** 2)) - 20.0 * float(np.sum(v[inner[sel]]))  # the Laplacian's noise: 20 v
+        if er > MIN_STRUCTURE**2 * 20.0 * float(np.sum(v[inner[sel]])) and es < 0.4 * er:
+            out.append("missing detail")
+    return out
+
+
+def _laplacian(x: np.ndarray) -> np.ndarray:
+    p = np.pad(x, 1, mode="edge")
+    return p[1:-1, 2:] + p[1:-1, :-2] + p[2:, 1:-1] + p[:-2, 1:-1] - 4.0 * x
+
+
+def _interior(sel: np.ndarray) -> np.ndarray:
+    """Pixels whose four neighbours are in ``sel`` too."""
+    p = np.pad(sel, 1, mode="constant")
+    return sel & p[1:-1, 2:] & p[1:-1, :-2] & p[2:, 1:-1] & p[:-2, 1:-1]
+
+
+def flagged_objects(ot: ObjectTests, rejected: np.ndarray | None, *, tile_effect: np.ndarray | None = None,
+                    labels: np.ndarray | None = None, mask: np.ndarray | None = None) -> list[int]:
+    """Labels where a difference is established, largest share of it first.
+
+    ``rejected`` (K, 3) marks the objects whose test is rejected and
+    relevant; ``tile_effect`` (H, W), the relative effect of the penalised
+    tiles covering each pixel (:attr:`mcrt.stats.onesample.MultiScaleTest.pixel_effect`),
+    adds the objects by the effect summed over their pixels.
+    """
+    K = ot.n.size
+    weight = np.zeros(K)
+    if rejected is not None:
+        hit = np.asarray(rejected, bool).reshape(K, 3).any(axis=1)
+        weight += np.where(hit, np.abs(ot.rel @ LUMINANCE) * ot.n, 0.0)
+    if tile_effect is not None and labels is not None:
+        eff = np.where(mask, tile_effect, 0.0) if mask is not None else tile_effect
+        for k in range(K):
+            if ot.n[k] >= MIN_PIXELS:
+                weight[k] += float(eff[labels == k].sum())
+    order = [int(k) for k in np.argsort(-weight) if weight[k] > 0]
+    top = weight[order[0]] if order else 0.0
+    return [k for k in order if weight[k] >= 0.1 * top]
+
+
+def effect_map(ot: ObjectTests, rejected: np.ndarray, labels: np.ndarray, mask: np.ndarray) -> np.ndarray:
+    """(H, W) relative luminance difference of each pixel's object where its test is rejected (0 elsewhere)."""
+    K = ot.n.size
+    hit = np.asarray(rejected, bool).reshape(K, 3).any(axis=1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        rl = np.where(np.abs(ot.ref @ LUMINANCE) > 0, (ot.diff @ LUMINANCE) / np.abs(ot.ref @ LUMINANCE), 0.0)
+    per = np.append(np.where(hit, rl, 0.0), 0.0)
+    return np.where(mask, per[np.minimum(labels, K)], 0.0)
+
+
+def join(items: list[str]) -> str:
+    if len(items) <= 1:
+        return "".join(items)
+    return ", ".join(items[:-1]) + " and " + items[-1]
+
+
+def sentence(S, R, mask, noise_var, labels, names, objects: list[int], limit: int = 3) -> str:
+    """'on the ceiling (darker by 12 %) and the light (brighter by 30 %, missing detail)' for the objects given (at most ``limit``)."""
+    parts = []
+    for k in objects[:limit]:
+        how = describe(S, R, mask, noise_var, labels, k)
+        parts.append(names[k] + (f" ({', '.join(how)})" if how else ""))
+    return "on " + join(parts) if parts else ""

@@ -1,0 +1,193 @@
+"""Feedback that claims a cause only when it fits (issue 27): adequacy, the filter test, families, objects.
+
+The hand-ins are **Mitsuba** renders of edited scenes, or Mitsuba renders
+post-processed as a student's program would (NumPy, SciPy), never the
+grader's own model images; the unit tests of the statistics draw their noise
+from fixed seeds. The context is a 32x32 course assignment prepared once per
+module in a temporary cache (test_diagnose's assignment); every render names its seed, and the levels are
+the production ones.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+from scipy.ndimage import gaussian_filter
+from test_diagnose import ASSIGNMENT, RES
+
+from mcrt.grade.accuracy.cases import Spec, _render_spec, wall_albedo
+from mcrt.grade.accuracy.outside import POSTS
+from mcrt.grade.adequacy import Scene2D, remainder_test
+from mcrt.grade.assignment import assignment_from_dict
+from mcrt.grade.expected import prepare_context
+from mcrt.grade.filtertest import noise_correlation
+from mcrt.grade.grader import grade_image
+from mcrt.grade.objects import object_tests
+from mcrt.scene import Lambertian, Sphere, load_scene
+from mcrt.stats.onesample import Noise, multiscale_test
+
+
+@pytest.fixture(scope="module")
+def ctx(tmp_path_factory):
+    """The 32x32 assignment of test_diagnose (the same scene, tiles and sample counts)."""
+    a = assignment_from_dict(ASSIGNMENT, str(tmp_path_factory.mktemp("feedback") / "explain32.toml"))
+    return prepare_context(a, tmp_path_factory.mktemp("cache"))
+
+
+def _mitsuba(scene, seed: int, spp: int = 1024, res: int = RES):
+    return _render_spec(Spec("t", None, spp=spp), scene, width=res, height=res, max_depth=8, seed=seed).mean
+
+
+def _objects(s, name, **changes):
+    return replace(s, objects=tuple(replace(o, **changes) if o.name == name else o for o in s.objects))
+
+
+def _output(res, name):
+    return next(t for t in res.tests if t.name == name).output
+
+
+# --------------------------------------------------------------------------
+# The statistics, on noise of fixed seeds
+# --------------------------------------------------------------------------
+
+
+def _synthetic(seed: int):
+    """A 32x32 reference of four surfaces (labels), its noise model and a noisy image of it (seed)."""
+    rng = np.random.default_rng(seed)
+    labels = np.zeros((RES, RES), np.int16)
+    labels[:, 16:] = 1
+    labels[16:, :] = 2
+    labels[20:26, 4:10] = 3
+    R = np.stack([0.2 + 0.1 * labels, 0.3 + 0.05 * labels, 0.25 * np.ones_like(labels)], axis=-1).astype(np.float64)
+    var = np.full(R.shape, 1e-4)
+    S = R + rng.standard_normal(R.shape) * np.sqrt(var)
+    sc = Scene2D((8, 16, 0), 0.01, 0.003, 0.1, labels, ("left", "right", "floor", "box", "nothing"))
+    return R, S, Noise(model=var, reference=np.zeros_like(var)), sc
+
+
+def test_the_remainder_of_the_right_cause_is_noise():
+    """A change predicted exactly (a tenth brighter on the right) leaves noise: adequate at the bias test's level
+    (seed 1); the same change with the box also 3 % darker leaves a structured remainder, placed on the box."""
+    R, S, noise, sc = _synthetic(1)
+    change = np.where((sc.labels == 1)[..., None], 0.1 * R, 0.0)
+    ad = remainder_test(S + change, R, change, np.ones((RES, RES), bool), noise, sc, explained=0.9)
+    assert ad.verdict == "adequate" and ad.rejected == 0
+    box = np.where((sc.labels == 3)[..., None], -0.03 * R, 0.0)
+    ad = remainder_test(S + change + box, R, change, np.ones((RES, RES), bool), noise, sc, explained=0.9)
+    assert ad.verdict == "partial" and ad.objects[0] == 3, ad
+    assert ad.where.startswith("on box (darker by 3 %"), ad.where
+
+
+def test_the_object_test_sees_a_small_change_on_one_object():
+    """2 % darker on the 36 pixels of one surface (seed 2): in the bias test's Holm family (level 0.01) the
+    tiles alone miss it, the per-object test finds it on that surface and no other."""
+    R, S, noise, sc = _synthetic(2)
+    S = np.where((sc.labels == 3)[..., None], S * 0.98, S)
+    mask = np.ones((RES, RES), bool)
+    kw = {"alpha": sc.alpha, "min_effect": sc.min_effect, "full_effect": sc.full_effect}
+    assert not multiscale_test(S - R, R, mask, noise, sc.tiles, **kw).penalised_any
+    ot = object_tests(S - R, R, mask, noise, sc.labels, 4)
+    bt = multiscale_test(S - R, R, mask, noise, sc.tiles, **kw, extra=[ot.family(sc.min_effect)])
+    assert list(bt.extra["objects"].reshape(4, 3).any(axis=1)) == [False, False, False, True]
+
+
+def test_the_filter_test_ignores_a_bias_and_sees_a_filter():
+    """A bias bound to one surface (a ramp and a step, 50 noise deviations) is not correlated noise; a
+    Gaussian blur of 0.8 pixel of the noise is; and the difference of two renders, bias and all, is not (seeds 3-5)."""
+    R, S, noise, sc = _synthetic(3)
+    v = noise.model[..., 0]
+    yy, xx = np.mgrid[0:RES, 0:RES]
+    bias = np.where(sc.labels == 3, 0.5 + 0.02 * xx, 0.0) * np.sqrt(v[0, 0]) * 50 / 0.6
+    e = (S - R)[..., 0] + bias
+    mask = np.ones((RES, RES), bool)
+    t, p, c = noise_correlation(e, 1.0 / v, mask, sc.labels)
+    assert p > 0.01 and c < 0.05, (t, p, c)
+    rng = np.random.default_rng(4)
+    blurred = gaussian_filter(rng.standard_normal((RES, RES)), 0.8) * np.sqrt(v) / 0.35
+    t, p, c = noise_correlation(blurred, 1.0 / v, mask, sc.labels)
+    assert p < 1e-6 and c > 0.2, (t, p, c)
+    _, S2, _, _ = _synthetic(5)
+    t, p, c = noise_correlation(e, 1.0 / v, mask, sc.labels, pair=(S - S2)[..., 0])
+    assert p > 0.01, (t, p, c)
+
+
+# --------------------------------------------------------------------------
+# Hand-ins graded end to end
+# --------------------------------------------------------------------------
+
+
+def test_a_tone_mapped_exr_is_named_as_the_tone_map(ctx):
+    """A Mitsuba render (seed 41) through Reinhard's x / (1 + x): the feedback claims the tone map, and the
+    remainder is noise; no scene parameter (a light moved) is claimed."""
+    img = POSTS["reinhard"](_mitsuba(load_scene(), 41))
+    res = grade_image("reinhard", ctx, [img], spp=1024)
+    ex = res.details["explanation"]
+    assert ex["family"] == "tone_curve" and ex["adequacy"]["verdict"] == "adequate", ex["sentence"]
+    assert "Reinhard" in ex["sentence"] and "light moved" not in res.summary
+    assert res.score < res.max_score
+
+
+def test_a_wrong_material_is_not_called_filtered(ctx):
+    """The mirror sphere rendered white diffuse by Mitsuba (seed 42; and two renders, seeds 43 and 44): the
+    image loses points and the noise criterion does not call it filtered."""
+    s = _objects(load_scene(), "sphere", material=Lambertian((0.8, 0.8, 0.8)))
+    for imgs, spp in (([_mitsuba(s, 42)], 1024), ([_mitsuba(s, 43, 512), _mitsuba(s, 44, 512)], 512)):
+        res = grade_image("sphere_diffuse", ctx, imgs, spp=spp)
+        assert res.score < res.max_score
+        assert "filtered" not in _output(res, "noise"), _output(res, "noise")
+
+
+def test_a_blurred_render_is_still_called_filtered(ctx):
+    """A Gaussian blur (sigma 0.8 pixel) of a Mitsuba render (seed 45, 1024 spp): called filtered."""
+    img = gaussian_filter(_mitsuba(load_scene(), 45), (0.8, 0.8, 0))
+    res = grade_image("blur", ctx, [img], spp=1024)
+    assert "filtered" in _output(res, "noise"), _output(res, "noise")
+
+
+def test_a_cause_outside_every_family_is_placed_on_objects(ctx):
+    """A grey ball the scene does not have (Mitsuba, seed 13): no cause is claimed, and the feedback says which
+    surfaces the difference sits on and how."""
+    s = load_scene()
+    ball = Sphere("ball", (6.0, -2.0, 1.0), 1.0, Lambertian((0.5, 0.5, 0.5)))
+    res = grade_image("ball", ctx, [_mitsuba(replace(s, objects=s.objects + (ball,)), 13)], spp=1024)
+    ex = res.details["explanation"]
+    assert ex["named"] is None and ex["adequacy"]["verdict"] == "none", ex["sentence"]
+    assert "It looks like" not in res.summary and "sits on the floor (darker by" in res.summary, res.summary
+    assert res.score < res.max_score
+
+
+def test_a_partial_explanation_says_something_else_is_wrong(ctx):
+    """Wall EF recoloured blue (Mitsuba, seed 11) and a vignette of 15 % at the corners on top: wall EF's albedo
+    explains part of it; the feedback says so and that something else is wrong, and claims nothing."""
+    img = _mitsuba(wall_albedo("EF", (0.15, 0.20, 0.75))(load_scene()), 11)
+    yy, xx = np.mgrid[0:RES, 0:RES]
+    r2 = ((xx + 0.5) / RES * 2 - 1) ** 2 + ((yy + 0.5) / RES * 2 - 1) ** 2
+    res = grade_image("wall_vignette", ctx, [img * (1 - 0.15 * r2)[..., None]], spp=1024)
+    ex = res.details["explanation"]
+    assert ex["named"] is None and ex["adequacy"]["verdict"] == "partial", ex["sentence"]
+    assert res.summary.split("). ", 1)[-1].startswith("Partly like wall EF") or "Partly like wall EF" in res.summary
+    assert "something else is wrong on" in ex["sentence"]
+
+
+@pytest.mark.parametrize("post, scale, family", [("nearest2", 2, "resampling"), ("cos4", 1, "falloff")])
+def test_resampling_and_falloff_are_named(ctx, post, scale, family):
+    """A Mitsuba render at half the resolution enlarged by repeating pixels (seed 46), and one weighted by
+    cos^4 of each ray's angle (seed 47): each named by its family, adequately."""
+    img = POSTS[post](_mitsuba(load_scene(), 46 if scale == 2 else 47, 1024, RES // scale))
+    res = grade_image(post, ctx, [img], spp=1024)
+    ex = res.details["explanation"]
+    assert ex["family"] == family and ex["adequacy"]["verdict"] == "adequate", ex["sentence"]
+    assert res.score < res.max_score
+
+
+def test_a_curve_no_tone_map_has_is_fitted_as_a_monotone_curve(ctx):
+    """A Mitsuba render (seed 48) through a knee no named curve has (linear to 0.3, a quarter of the slope above):
+    claimed as a monotone curve that maps the brightest value (the light, 20) to about 5.2."""
+    img = _mitsuba(load_scene(), 48)
+    res = grade_image("knee", ctx, [np.minimum(img, 0.3) + 0.25 * np.maximum(img - 0.3, 0.0)], spp=1024)
+    ex = res.details["explanation"]
+    assert ex["named"] == "monotone curve" and ex["verdict"] == "claimed", ex["sentence"]
+    top = ex["candidates"][0]["value"]["maps"][-1]
+    assert top[0] == pytest.approx(20.0, rel=0.01) and top[1] == pytest.approx(0.3 + 0.25 * 19.7, rel=0.05), top
