@@ -13,14 +13,14 @@ render of those rows alone (``render_tracer(rows=...)``, the render's own
 launches), Mitsuba's ``mi.render`` of films cropped to them. Each row
 records the paths a timed render traced and whether it was bounded.
 
-Where a committed Mitsuba reference of the case exists (mcrt.reference), each
+Where a committed Mitsuba reference of the case exists (mcrt.groundtruth), each
 timed render is also scored against it: the excess MSE (the squared error
 minus the reference's own noise, mean(var_ref / spp_ref)), averaged over the
 repetitions, and the efficiency 1 / (MSE_excess x median time). For unbiased
 renderers MSE falls as 1/spp while time grows as spp, so the efficiency does
 not depend on the spp and its ratio is the ratio at equal time.
 
-This module measures; :mod:`mcrt.bench_report` writes the report
+This module measures; :mod:`mcrt.bench_page` writes the report
 (``mcrt bench --report DIR``) from the measurements' dictionary
 (:func:`bench_data`, also the JSON file).
 """
@@ -156,7 +156,7 @@ def bounded_rows(c: BenchCase, max_paths: int) -> list[tuple[int, int]] | None:
 
 def _cropped(scene, c: BenchCase, band: tuple[int, int], backend: str) -> dict:
     """Mitsuba's scene dictionary of the case, its film cropped to the rows of ``band`` (first row, count)."""
-    from mcrt.mitsuba import scene_dict
+    from mcrt.mitsuba_scene import scene_dict
 
     s = scene.settings(camera=c.camera, width=c.width, height=c.height, max_depth=c.max_depth)
     d = scene_dict(scene, s.camera, s.width, s.height, s.max_depth, "path", rr_depth=s.rr_depth, spp=c.spp, backend=backend)
@@ -219,8 +219,8 @@ def run_bench(scene, cases: list[BenchCase], *, renderers=("mcrt", "mitsuba"), r
 
 def _committed_reference(scene, case: BenchCase, progress: bool):
     """(mean, noise floor mean(var / spp)) of the case's committed Mitsuba reference, or None where there is none."""
-    from mcrt.reference import MissingReference, ReferenceUnavailable, load_reference
-    from mcrt.report.run import reference_floor
+    from mcrt.groundtruth import MissingReference, ReferenceUnavailable, load_reference
+    from mcrt.convergence.run import reference_floor
 
     try:
         ref = load_reference(scene, case.camera, (case.width, case.height), case.max_depth)
@@ -422,7 +422,7 @@ def bench_data(rows: list[BenchRow], *, command: str, backend: str, intersector:
                profile: list[ProfileRow] = (), profile_case: dict | None = None, memory: list[dict] = (),
                limits: dict | None = None, max_paths: int = MAX_PATHS, mse_renders: int = MSE_RENDERS,
                flat: dict | None = None, seconds: float | None = None) -> dict:
-    """The run as one JSON-ready dictionary: what ``--json`` writes and :mod:`mcrt.bench_report` reads.
+    """The run as one JSON-ready dictionary: what ``--json`` writes and :mod:`mcrt.bench_page` reads.
 
     Machine and versions come from :func:`mcrt.provenance.provenance`, with
     the backend, the intersector, the libLLVM version and the CPU's vector
@@ -543,7 +543,7 @@ def _tried_file(args) -> Path | None:
 
 
 def cmd_bench(args) -> int:
-    from mcrt.bench_report import format_profile, format_table, write_report
+    from mcrt.bench_page import format_profile, format_table, write_report
     from mcrt.scene import CANONICAL, load_scene
 
     if args.repeats < 1:

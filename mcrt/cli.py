@@ -62,7 +62,7 @@ def _load(args):
 
 def render_to_files(result, out: Path, exposure: float = 0.0) -> tuple[Path, Path]:
     """Write ``out`` (EXR with mean and variance) and the PNG preview beside it."""
-    from mcrt.imageio import write_exr, write_png
+    from mcrt.image_files import write_exr, write_png
 
     out = Path(out)
     if out.suffix.lower() != ".exr":
@@ -76,7 +76,7 @@ def render_to_files(result, out: Path, exposure: float = 0.0) -> tuple[Path, Pat
 
 def _render_mitsuba_scene(args) -> int:
     """``mcrt render --mitsuba-scene FILE.xml``: any Mitsuba scene, any integrator, through render_with_variance."""
-    from mcrt.mitsuba import render_with_variance
+    from mcrt.mitsuba_scene import render_with_variance
     from mcrt.validate_integrator import load_scene_arg, parse_defines, parse_integrator
 
     refused = [o for o, v in (("--scene", args.scene), ("--camera", args.camera), ("--preset", args.preset),
@@ -207,8 +207,8 @@ def cmd_mutants(args) -> int:
 def cmd_main(args) -> int:
     """The main job: the convergence report of the canonical scene, and mcrt beside Mitsuba."""
     from mcrt.compare import write_heatmap
-    from mcrt.imageio import side_by_side
-    from mcrt.report import main_report
+    from mcrt.image_files import side_by_side
+    from mcrt.convergence import main_report
     from mcrt.stats import compare_images
 
     out = Path(args.out)
@@ -252,7 +252,7 @@ def build_parser() -> argparse.ArgumentParser:
                         "render by the caustic paths' share of the variance (mcrt.bidir.choose_light_paths; default: 0.05)")
     p.add_argument("--exposure", type=_finite_float, default=0.0, help="PNG preview exposure in stops (default: 0)")
     p.add_argument("-o", "--output", default="out.exr", help="output EXR; the PNG preview goes beside it (default: out.exr)")
-    # Any Mitsuba scene (mcrt.mitsuba.render_with_variance); --res/--width/--height, --spp, --seed, --max-depth apply.
+    # Any Mitsuba scene (mcrt.mitsuba_scene.render_with_variance); --res/--width/--height, --spp, --seed, --max-depth apply.
     mitsuba_help = {
         "--mitsuba-scene": ("FILE", "render this Mitsuba XML scene (or cornell-box) with its own or --integrator's "
                                     "integrator, variance from per-sample moments (default: none, the mcrt scene)"),
@@ -323,17 +323,17 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("mutants", help="list the bug catalogue")
     p.set_defaults(func=cmd_mutants)
 
-    from mcrt import bench, hardcases, reference, report, reports, threeway, validate, validate_integrator
+    from mcrt import bench, convergence, groundtruth, hardcases, rebuild_reports, threeway, validate, validate_integrator
     from mcrt.grade.cli import register as register_grade
 
-    report.register(sub)
-    reference.register(sub)
+    convergence.register(sub)
+    groundtruth.register(sub)
     validate.register(sub)
     register_grade(sub)
     hardcases.register(sub)
     bench.register(sub)
     threeway.register(sub)
-    reports.register(sub)
+    rebuild_reports.register(sub)
     validate_integrator.register(sub)
     from mcrt.tricks.cli import register as register_tricks
 

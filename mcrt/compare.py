@@ -1,7 +1,7 @@
 """``mcrt compare``: two renders in, compared under a policy, the verdict out.
 
 A thin layer over :mod:`mcrt.stats`. Each side is an image file
-(:func:`mcrt.imageio.read_image`; OpenEXR through :func:`mcrt.imageio.read_exr`,
+(:func:`mcrt.image_files.read_image`; OpenEXR through :func:`mcrt.image_files.read_exr`,
 which also reads Mitsuba's ``moment`` integrator), a
 :class:`~mcrt.film.RenderResult`, or a NumPy mean with its per-sample
 variance and spp given alongside (:func:`as_result`, :func:`image`).
@@ -188,19 +188,19 @@ def as_result(x, *, name: str = "A", variance=None, spp: int | None = None, vari
     """One side of a comparison as a RenderResult: a file path, a RenderResult, or a NumPy mean.
 
     A path is read (``spp`` replaces a sample count the file lacks, and
-    scales a ``moment`` file's variance, :func:`mcrt.imageio.read_exr`); a
+    scales a ``moment`` file's variance, :func:`mcrt.image_files.read_exr`); a
     RenderResult is used as is (a copy with ``spp``/``variance`` replaced
     when given); an array is the mean and needs ``variance`` and ``spp``
     alongside. ``variance`` may also be the path of a variance EXR, read by
-    :func:`mcrt.imageio.read_variance_exr` as ``variance_kind`` says
+    :func:`mcrt.image_files.read_variance_exr` as ``variance_kind`` says
     (Mitsuba's reference variance, an XYZ variance, by default where the
     file says Mitsuba wrote it). Raises :class:`StatsError` naming the side
-    and what is missing, :class:`mcrt.imageio.ImageError` for an unreadable
+    and what is missing, :class:`mcrt.image_files.ImageError` for an unreadable
     file or a variance with negative or non-finite entries.
     """
     from dataclasses import replace
 
-    imageio = importlib.import_module("mcrt.imageio")  # what sys.modules holds (tests stand in for it)
+    imageio = importlib.import_module("mcrt.image_files")  # what sys.modules holds (tests stand in for it)
     if isinstance(variance, (str, bytes)) or hasattr(variance, "__fspath__"):
         r = as_result(x, name=name, spp=spp)
         var, note = imageio.read_variance_exr(variance, mean=r.mean, kind=variance_kind)
@@ -349,7 +349,7 @@ def compare_files(
 
     Variance files: ``variance_a`` / ``variance_b`` may name an EXR
     holding that side's per-sample variance (``--variance-a/-b FILE``),
-    read as ``variance_kind`` says (:data:`mcrt.imageio.VARIANCE_KINDS`):
+    read as ``variance_kind`` says (:data:`mcrt.image_files.VARIANCE_KINDS`):
     Mitsuba's reference variance (an XYZ variance written through the
     XYZ-to-RGB matrix, partly negative) is turned back into XYZ and bounded
     in RGB; a plain variance with negative or non-finite entries is refused
@@ -384,7 +384,7 @@ def compare_files(
     """
     out = sys.stdout if out is None else out
     err = sys.stderr if err is None else err
-    imageio = importlib.import_module("mcrt.imageio")  # what sys.modules holds (tests stand in for it)
+    imageio = importlib.import_module("mcrt.image_files")  # what sys.modules holds (tests stand in for it)
 
     label_a = _label(path_a, "A")
     label_b = _label(path_b, "B")

@@ -2,7 +2,7 @@
 
 Every metric compares a test image with a reference (``image_true``), both
 (height, width, 3) linear RGB radiance. The convergence reports
-(:mod:`mcrt.report`) and the grading harness (:mod:`mcrt.grade`) both
+(:mod:`mcrt.convergence`) and the grading harness (:mod:`mcrt.grade`) both
 measure with these functions, so their numbers mean the same. Conventions
 (also written into every report, :data:`CONVENTIONS`):
 
@@ -13,7 +13,7 @@ measure with these functions, so their numbers mean the same. Conventions
   radiance is below about 0.01, weigh as if their radiance were 0.1).
 * **SSIM** (scikit-image ``structural_similarity``) on tone-mapped images
   (:func:`ssim_tonemap`): both are clipped to [0, 1] and sRGB-encoded
-  (:func:`mcrt.imageio.srgb_oetf`; exposure 0, the same curve as the PNG
+  (:func:`mcrt.image_files.srgb_oetf`; exposure 0, the same curve as the PNG
   previews, but kept as floats, not rounded to 8 bits), then compared with
   ``data_range`` = :data:`SSIM_DATA_RANGE` = 1, ``channel_axis=2`` and
   scikit-image's defaults (7 x 7 uniform window, or the largest odd size
@@ -105,7 +105,7 @@ def relmse(image_true, image_test, *, eps: float = RELMSE_EPS) -> float:
 
 def ssim_tonemap(rgb) -> np.ndarray:
     """The image SSIM sees: linear RGB clipped to [0, 1] (NaN as 0), sRGB-encoded, float64 in [0, 1]."""
-    from mcrt.imageio import srgb_oetf
+    from mcrt.image_files import srgb_oetf
 
     x = np.nan_to_num(np.asarray(rgb, dtype=np.float64), nan=0.0)
     return srgb_oetf(np.clip(x, 0.0, 1.0))

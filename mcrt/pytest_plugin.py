@@ -6,7 +6,7 @@ so any test in an environment where mcrt is installed can ask for the
 
     def test_my_renderer_matches_mitsuba(assert_same_image):
         mean, var = my_render(spp=1024, seed=1)       # NumPy (H, W, 3): mean and per-sample variance
-        ref = mcrt.reference.load_reference(None, "near", 64, 8)
+        ref = mcrt.groundtruth.load_reference(None, "near", 64, 8)
         assert_same_image(mean, ref, variance_a=var, spp_a=1024, policy="reference-floor")
 
 Each side is a RenderResult, an image file (an EXR with its variance,

@@ -132,7 +132,7 @@ def _mcrt():
 
 
 def _mitsuba():
-    from mcrt.mitsuba import render_mitsuba
+    from mcrt.mitsuba_scene import render_mitsuba
 
     return render_mitsuba
 

@@ -105,7 +105,7 @@ def _region_errors(recs, ref_mean: np.ndarray, edge: np.ndarray, floor_map: np.n
 def analyse(data, recorded: list[_Recorded], edge: np.ndarray) -> dict:
     """The study's numbers: per (variant, spp) the errors, the efficiency ratios both ways, the regions."""
     from mcrt import metrics as M
-    from mcrt.reference import load_reference
+    from mcrt.groundtruth import load_reference
     from mcrt.tricks.verdicts import ratio, rungs_of
 
     cfg = data.config
@@ -210,7 +210,7 @@ def markdown(results: dict, *, command: str, prov: dict) -> list[str]:
 
 
 def plots(results: dict, out: Path) -> None:
-    from mcrt.report.plots import COLORS, _plt, _save
+    from mcrt.convergence.plots import COLORS, _plt, _save
 
     plt = _plt()
     for res, block in results.items():

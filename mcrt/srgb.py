@@ -1,7 +1,7 @@
 """The sRGB transfer functions (IEC 61966-2-1) on NumPy arrays, and an image encoded with them.
 
 Core-level (NumPy only): the tracer and the plugin encode a mutant's output
-here without loading the image formats of :mod:`mcrt.imageio`.
+here without loading the image formats of :mod:`mcrt.image_files`.
 """
 
 from __future__ import annotations
@@ -43,7 +43,7 @@ def srgb_oetf(x: np.ndarray) -> np.ndarray:
                            1.055\, x^{1/2.4} - 0.055 & x > 0.0031308 \end{cases}
 
     The linear segment continues below 0 and NaN stays NaN, without
-    warnings. Used for PNG previews (:func:`mcrt.imageio.tonemap`) and SSIM's tone map
+    warnings. Used for PNG previews (:func:`mcrt.image_files.tonemap`) and SSIM's tone map
     (:func:`mcrt.metrics.ssim_tonemap`); the inverse of :func:`srgb_eotf`.
     """
     x = np.asarray(x, dtype=np.float64)

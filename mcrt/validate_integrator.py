@@ -1,7 +1,7 @@
 """``mcrt validate-integrator``: is a Mitsuba integrator right on a Mitsuba scene? One command.
 
 :func:`validate_integrator` renders one scene with integrator A and with
-integrator B (:func:`mcrt.mitsuba.render_with_variance`: mean and per-sample
+integrator B (:func:`mcrt.mitsuba_scene.render_with_variance`: mean and per-sample
 variance, reproducible from recorded seeds) *at equal time*, compares them
 with the Welch tile test under the ``independent`` policy (two different
 estimators: each keeps its own variance) and reports the verdict, the heat
@@ -25,7 +25,7 @@ each vertex to the camera: it cannot render what the camera sees through a
 delta (mirror, glass) surface, and it ignores ``hide_emitters``; on a scene
 with such surfaces it differs from ``path`` for that reason alone, which
 this command does not detect or excuse. Its per-pixel samples are not
-separable, so it is rendered in batches (:func:`mcrt.mitsuba._run`) and the
+separable, so it is rendered in batches (:func:`mcrt.mitsuba_scene._run`) and the
 tile test ignores the correlation one particle path creates between pixels
 of a tile; the false-alarm report (``--seeds N --report DIR``) measures
 what that costs.
@@ -59,7 +59,7 @@ MIN_SPP = 16
 def load_scene_arg(text: str):
     """``'cornell-box'`` -> ``mitsuba.cornell_box()`` (a dictionary); anything else is an XML file path."""
     if text.replace("_", "-") == "cornell-box":
-        import mcrt.mitsuba  # noqa: F401  (selects nothing; imports Mitsuba after mcrt)
+        import mcrt.mitsuba_scene  # noqa: F401  (selects nothing; imports Mitsuba after mcrt)
         import mitsuba as mi
 
         if not mi.variant():
@@ -118,7 +118,7 @@ def _label(spec) -> str:
 
 
 def _render(scene, spec, spp: int, seed: int, res: int | None, backend: str, defaults=None):
-    from mcrt.mitsuba import render_with_variance
+    from mcrt.mitsuba_scene import render_with_variance
 
     return render_with_variance(scene, integrator=spec, spp=spp, seed=seed, width=res, height=res, backend=backend,
                                 defaults=defaults)

@@ -87,7 +87,7 @@ import mitsuba as mi
 
 from mcrt.film import RenderResult
 from mcrt.light import needs_mis
-from mcrt.mitsuba import _use, render_mitsuba
+from mcrt.mitsuba_scene import _use, render_mitsuba
 from mcrt.mutants import CATALOGUE, camera_jitter, check_mutants, mutate_scene, output_encoding
 from mcrt.plugins.host import MitsubaHost
 from mcrt.plugins.integrator import NAME, _on_variant_change, integrator_class, parse_mutants, register
@@ -115,7 +115,7 @@ def render_plugin(scene: Scene, settings: RenderSettings, *, backend: str = "llv
     """Render ``scene`` at ``settings`` with the ``mcrt`` integrator inside Mitsuba: mean and per-sample variance.
 
     Called through :func:`mcrt.render.render` (renderer ``plugin``). The
-    scene, sensor and passes are those of :func:`mcrt.mitsuba.render_mitsuba`;
+    scene, sensor and passes are those of :func:`mcrt.mitsuba_scene.render_mitsuba`;
     only the integrator differs. Every catalogued mutant runs: the
     estimator's inside the integrator, the camera's (jitter) in the passes,
     the output's on the image and the scene's on the scene. ``mis`` as in the

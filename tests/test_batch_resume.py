@@ -28,10 +28,10 @@ import pytest
 from mcrt.grade.assignment import load_assignment
 from mcrt.grade.batch import grade_class
 from mcrt.grade.expected import prepare_context
-from mcrt.grade.report import md_text, results_json, write_class
+from mcrt.grade.outputs import md_text, results_json, write_class
 from mcrt.grade.grader import StudentResult, grade_image
 from mcrt.grade.grader import TestResult as Criterion  # not collected as a test class
-from mcrt.imageio import write_pfm
+from mcrt.image_files import write_pfm
 
 ASSIGNMENT = """name = "resume32"
 title = "Resume test"

@@ -1,6 +1,6 @@
 """The benchmark on tiny cases: shapes of its results, not speeds (speed lives in reports/bench/), and its report.
 
-The report (mcrt.bench_report) is checked against recorded rows whose numbers
+The report (mcrt.bench_page) is checked against recorded rows whose numbers
 are chosen so that every derived figure is known exactly, and end to end from
 a tiny run of ``mcrt bench --report``.
 """
@@ -12,7 +12,7 @@ import re
 import statistics
 
 from mcrt.bench import BenchCase, bench_cases, bounded_rows, kernel_profile, run_bench
-from mcrt.bench_report import LOG_HEADING, format_profile, format_table, markdown, write_report
+from mcrt.bench_page import LOG_HEADING, format_profile, format_table, markdown, write_report
 from mcrt.cli import build_parser, main
 from mcrt.scene import load_scene
 
@@ -161,7 +161,7 @@ def test_report_goals_and_limits_from_recorded_rows(tmp_path):
     (3.2768e7 / 16) = 1953 cycles per packet iteration, 1000 / 1953 = 0.51
     instructions per cycle; 700 MiB is under 1 GB.
     """
-    from mcrt.bench_report import goals, pairs, speedup
+    from mcrt.bench_page import goals, pairs, speedup
 
     data = _recorded_run()
     lowest = min(speedup(a, b) for a, b in pairs(data["rows"]))
@@ -252,7 +252,7 @@ def test_every_bench_option_states_its_default():
 def test_flatness_interleaves_resolutions_and_sets_the_goal():
     """--flatness: every resolution timed once per round; the 4096x4096 goal reads those medians."""
     from mcrt.bench import flatness
-    from mcrt.bench_report import goals
+    from mcrt.bench_page import goals
 
     flat = flatness(load_scene(), cameras=["near"], resolutions=[16, 24], spp=2, max_depth=3, rounds=2, progress=False)
     assert [(r["width"], len(r["times"]), r["paths"]) for r in flat["rows"]] == [(16, 2, 16 * 16 * 2), (24, 2, 24 * 24 * 2)]

@@ -27,7 +27,7 @@ import numpy as np
 import pytest
 
 from mcrt.bidir import render_bidirectional
-from mcrt.reference import load_reference
+from mcrt.groundtruth import load_reference
 from mcrt.render import render
 from mcrt.scene import load_scene
 from mcrt.stats import compare, compare_images

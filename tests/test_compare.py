@@ -11,7 +11,7 @@ import mcrt  # noqa: F401  (before Mitsuba: libLLVM)
 from mcrt.cli import main
 from mcrt.compare import as_result, check_headers, compare_files, image
 from mcrt.film import RenderResult
-from mcrt.imageio import write_exr
+from mcrt.image_files import write_exr
 from mcrt.stats import StatsError
 
 import mitsuba as mi  # noqa: E402
@@ -68,7 +68,7 @@ def test_relative_difference_is_labelled_symmetric(capsys):
 
 def test_mitsuba_moment_integrator_output_against_render_with_variance(tmp_path, capsys):
     """The 'moment' integrator's EXR (no spp in it: --spp) against the same integrator through render_with_variance."""
-    from mcrt.mitsuba import render_with_variance
+    from mcrt.mitsuba_scene import render_with_variance
 
     mi.set_variant("llvm_ad_rgb")
     d = mi.cornell_box()

@@ -23,10 +23,10 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from mcrt import imageio
+from mcrt import image_files
 from mcrt.grade.assignment import load_assignment
 from mcrt.grade.submissions import choose_images, discover, read_manifest
-from mcrt.imageio import ImageError, read_image, srgb_eotf
+from mcrt.image_files import ImageError, read_image, srgb_eotf
 from mcrt.scene import DATA_DIR
 
 ROOT = Path(__file__).resolve().parent.parent

@@ -39,7 +39,7 @@ from mcrt.grade.batch import grade_class
 from mcrt.grade.cli import build_parser, main
 from mcrt.grade.expected import prepare_context
 from mcrt.grade.grader import grade_image
-from mcrt.imageio import (
+from mcrt.image_files import (
     srgb_eotf,
     srgb_oetf,
     write_exr,
@@ -593,7 +593,7 @@ def context64(workdir):
 
 def _mitsuba(scene, spp, seed, *, sampler="independent", sensor=None, drop=()):
     """A Mitsuba 3 render (path integrator) of ``scene`` seen by the near camera at 64x64, the sensor dict edited by ``sensor``."""
-    from mcrt.mitsuba import render_with_variance, scene_dict
+    from mcrt.mitsuba_scene import render_with_variance, scene_dict
 
     d = scene_dict(scene, "near", 64, 64, 8)
     d["sensor"] = dict(d["sensor"], sampler={"type": sampler, "sample_count": spp}, **(sensor or {}))

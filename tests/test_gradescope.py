@@ -35,7 +35,7 @@ from pathlib import Path
 
 import pytest
 
-from mcrt.imageio import write_exr
+from mcrt.image_files import write_exr
 from mcrt.llvm import find_llvm
 from mcrt.render import render
 from mcrt.scene import load_scene

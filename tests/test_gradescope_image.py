@@ -276,7 +276,7 @@ def test_student_code_runs_unprivileged_in_the_clean_image(image):
 
 
 def test_image_hand_ins_are_graded_in_the_clean_image(image, tmp_path):
-    from mcrt.imageio import write_exr
+    from mcrt.image_files import write_exr
 
     write_exr(tmp_path / "good.exr", _render(64, 11))
     write_exr(tmp_path / "biased.exr", _render(64, 12, mutants=("rr_no_divide",)))

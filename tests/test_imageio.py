@@ -11,8 +11,8 @@ import OpenEXR
 import pytest
 from PIL import Image
 
-from mcrt import imageio
-from mcrt.imageio import ImageError, read_exr, read_hdr, read_image, read_pfm, read_png, tonemap, write_exr, write_hdr, write_pfm
+from mcrt import image_files
+from mcrt.image_files import ImageError, read_exr, read_hdr, read_image, read_pfm, read_png, tonemap, write_exr, write_hdr, write_pfm
 from mcrt.film import RenderResult
 
 # Fixed seed: the test images are arbitrary but must be the same every run.
@@ -123,7 +123,7 @@ def test_y_only_exr_names_channels(tmp_path):
 
 def _moment_exr(path, m1, m2, header=None):
     """An EXR laid out as Mitsuba's 'moment' integrator writes it: R, G, B and the nested XYZ moments."""
-    rgb = m1 @ imageio.XYZ_TO_RGB.T
+    rgb = m1 @ image_files.XYZ_TO_RGB.T
     ch = {c: np.ascontiguousarray(rgb[..., i], np.float32) for i, c in enumerate("RGB")}
     for i, c in enumerate("XYZ"):
         ch[f"nested.{c}"] = np.ascontiguousarray(m1[..., i], np.float32)
@@ -140,7 +140,7 @@ def test_read_mitsuba_moment_exr(tmp_path):
     m2 = var_xyz * (n - 1) / n + m1 * m1  # what a film of n samples holds
     _moment_exr(tmp_path / "m.exr", m1, m2)
     r = read_exr(tmp_path / "m.exr", spp=n)
-    M = imageio.XYZ_TO_RGB
+    M = image_files.XYZ_TO_RGB
     assert np.allclose(M, [[3.240479, -1.537150, -0.498535], [-0.969256, 1.875991, 0.041556], [0.055648, -0.204043, 1.057311]])
     assert r.spp == n and np.allclose(r.mean, m1 @ M.T, rtol=1e-5, atol=1e-6)
     assert np.allclose(r.variance, (np.sqrt(var_xyz) @ np.abs(M).T) ** 2, rtol=1e-3)
@@ -170,7 +170,7 @@ def test_truncated_exr(tmp_path, fraction):
     assert "\n" not in str(e.value)
 
 
-@pytest.mark.parametrize("prefix", [b"", imageio.EXR_MAGIC])
+@pytest.mark.parametrize("prefix", [b"", image_files.EXR_MAGIC])
 def test_random_bytes_exr(tmp_path, prefix):
     path = tmp_path / "noise.exr"
     path.write_bytes(prefix + rng().integers(0, 256, 5000, dtype=np.uint8).tobytes())
@@ -198,7 +198,7 @@ def test_failed_write_keeps_good_file(tmp_path, monkeypatch):
             f.write(before[:100])
         raise RuntimeError("disk full")
 
-    monkeypatch.setattr(imageio, "_write_exr_file", half_write)
+    monkeypatch.setattr(image_files, "_write_exr_file", half_write)
     with pytest.raises(ImageError, match="disk full"):
         write_exr(path, make_result())
     assert path.read_bytes() == before
@@ -398,7 +398,7 @@ def write_png16(path, samples: np.ndarray, color_type: int, interlace: bool = Fa
         return struct.pack(">I", len(d)) + t + d + struct.pack(">I", zlib.crc32(t + d))
 
     ihdr = struct.pack(">IIBBBBB", w, h, 16, color_type, 0, 0, int(interlace))
-    path.write_bytes(imageio.PNG_MAGIC + chunk(b"IHDR", ihdr) + chunk(b"IDAT", zlib.compress(raw)) + chunk(b"IEND", b""))
+    path.write_bytes(image_files.PNG_MAGIC + chunk(b"IHDR", ihdr) + chunk(b"IDAT", zlib.compress(raw)) + chunk(b"IEND", b""))
 
 
 @pytest.mark.parametrize("color_type,channels,interlace", [(2, 3, False), (6, 4, False), (0, 1, False), (4, 2, False), (2, 3, True)])
@@ -411,7 +411,7 @@ def test_png16_keeps_16_bits(tmp_path, color_type, channels, interlace):
     lin = read_png(path, linear=True)
     np.testing.assert_array_equal(np.round(lin.astype(np.float64) * 65535).astype(np.int64), want)
     srgb = read_png(path)
-    np.testing.assert_allclose(srgb, imageio.srgb_eotf(want / 65535.0), rtol=1e-6, atol=1e-9)
+    np.testing.assert_allclose(srgb, image_files.srgb_eotf(want / 65535.0), rtol=1e-6, atol=1e-9)
     assert len(np.unique(srgb[0, :, 0])) == 13  # 8 bits would merge these
 
 
@@ -447,7 +447,7 @@ def test_read_image_dispatch(tmp_path):
     img = gradient() / 1000.0
     write_pfm(tmp_path / "a.pfm", img)
     write_hdr(tmp_path / "a.HDR", img)
-    imageio.write_png(tmp_path / "a.png", img)
+    image_files.write_png(tmp_path / "a.png", img)
     write_exr(tmp_path / "a.exr", make_result())
     for name in ("a.pfm", "a.HDR", "a.png"):
         r = read_image(tmp_path / name)
@@ -462,7 +462,7 @@ def test_png16_read_by_pypng_not_by_hand(tmp_path):
     """The hand-written 16-bit decoder is gone: pypng decodes, and a file pypng writes reads back exactly."""
     import png
 
-    assert not hasattr(imageio, "_png_unfilter") and not hasattr(imageio, "_ADAM7")
+    assert not hasattr(image_files, "_png_unfilter") and not hasattr(image_files, "_ADAM7")
     samples = rng().integers(0, 65536, (9, 7, 4)).astype(np.uint16)
     path = tmp_path / "p.png"
     png.from_array(samples.reshape(9, -1), "RGBA;16").save(str(path))
@@ -498,14 +498,14 @@ def test_tonemap_known_values():
 
 def test_srgb_curve_both_ways_and_its_slope():
     x = np.concatenate([np.linspace(0.0, 0.01, 101), np.linspace(0.01, 1.0, 1001)])
-    np.testing.assert_allclose(imageio.srgb_eotf(imageio.srgb_oetf(x)), x, rtol=1e-12, atol=1e-15)
-    assert imageio.srgb_oetf(0.5) == pytest.approx(1.055 * 0.5 ** (1 / 2.4) - 0.055)
-    assert imageio.srgb_eotf(0.04) == pytest.approx(0.04 / 12.92) and imageio.srgb_eotf(1.0) == pytest.approx(1.0)
+    np.testing.assert_allclose(image_files.srgb_eotf(image_files.srgb_oetf(x)), x, rtol=1e-12, atol=1e-15)
+    assert image_files.srgb_oetf(0.5) == pytest.approx(1.055 * 0.5 ** (1 / 2.4) - 0.055)
+    assert image_files.srgb_eotf(0.04) == pytest.approx(0.04 / 12.92) and image_files.srgb_eotf(1.0) == pytest.approx(1.0)
     v, h = np.linspace(0.001, 0.999, 500), 1e-6
-    numeric = (imageio.srgb_eotf(v + h) - imageio.srgb_eotf(v - h)) / (2 * h)
-    np.testing.assert_allclose(imageio.srgb_eotf_slope(v), numeric, rtol=1e-4)
+    numeric = (image_files.srgb_eotf(v + h) - image_files.srgb_eotf(v - h)) / (2 * h)
+    np.testing.assert_allclose(image_files.srgb_eotf_slope(v), numeric, rtol=1e-4)
     with np.errstate(all="raise"):  # negative and NaN inputs: the linear segment, NaN; never a warning
-        out = imageio.srgb_eotf(np.array([-0.5, np.nan])), imageio.srgb_oetf(np.array([-0.5, np.nan]))
+        out = image_files.srgb_eotf(np.array([-0.5, np.nan])), image_files.srgb_oetf(np.array([-0.5, np.nan]))
     assert out[0][0] == pytest.approx(-0.5 / 12.92) and out[1][0] == pytest.approx(-0.5 * 12.92)
     assert np.isnan(out[0][1]) and np.isnan(out[1][1])
 
@@ -514,7 +514,7 @@ def test_write_png_preview(tmp_path):
     img = gradient() / 600.0
     img[1, 1, 0] = np.nan
     path = tmp_path / "p.png"
-    imageio.write_png(path, img, exposure=1.0)
+    image_files.write_png(path, img, exposure=1.0)
     np.testing.assert_array_equal(np.asarray(Image.open(path)), tonemap(img, 1.0))
     assert tuple(np.asarray(Image.open(path))[1, 1]) == (255, 0, 255)
     assert os.listdir(tmp_path) == ["p.png"]
@@ -523,7 +523,7 @@ def test_write_png_preview(tmp_path):
 def test_side_by_side(tmp_path):
     a, b = gradient() / 600.0, np.full((4, 3, 3), 0.5, np.float32)
     path = tmp_path / "strip.png"
-    imageio.side_by_side(path, [a, b], ["mcrt", "mitsuba"])
+    image_files.side_by_side(path, [a, b], ["mcrt", "mitsuba"])
     strip = np.asarray(Image.open(path).convert("RGB"))
     assert strip.shape[0] > a.shape[0] and strip.shape[1] >= a.shape[1] + b.shape[1]
     top = strip[: strip.shape[0] - a.shape[0]]
@@ -534,4 +534,4 @@ def test_side_by_side(tmp_path):
     found = any(np.array_equal(rows[:, x: x + tile.shape[1]], tile) for x in range(rows.shape[1] - tile.shape[1] + 1))
     assert found
     with pytest.raises(ValueError, match="one label per image"):
-        imageio.side_by_side(path, [a, b], ["only one"])
+        image_files.side_by_side(path, [a, b], ["only one"])

@@ -1,7 +1,7 @@
 """Input that would take the machine down or crash a command (issue 29, items 2 and 6).
 
 * every image reader reads the image's dimensions before decoding it and refuses more than
-  :data:`mcrt.imageio.MAX_PIXELS` pixels (a 280 KB 16-bit PNG of 12000 x 12000 took ``mcrt check`` to 5.5 GB);
+  :data:`mcrt.image_files.MAX_PIXELS` pixels (a 280 KB 16-bit PNG of 12000 x 12000 took ``mcrt check`` to 5.5 GB);
 * scene and assignment files are read to a size cap, and only when regular files (``--scene /dev/zero``);
 * a flat tetrahedron is refused when the scene is loaded, not by a traceback of ``mcrt render``;
 * ``--exposure nan`` / ``inf`` are refused by the command line.
@@ -21,9 +21,9 @@ import numpy as np
 import OpenEXR
 import pytest
 
-from mcrt import imageio
+from mcrt import image_files
 from mcrt.grade.assignment import AssignmentError, load_assignment
-from mcrt.imageio import ImageError, read_image
+from mcrt.image_files import ImageError, read_image
 from mcrt.scene import CANONICAL, SceneError, load_scene
 
 W, H = 12000, 12000  # the size of the issue's PNG: 144 million pixels
@@ -39,7 +39,7 @@ def big_png(path: Path, bits: int, w: int = W, h: int = H) -> Path:
     z = zlib.compressobj(9)
     idat = b"".join(z.compress(row) for _ in range(h)) + z.flush()
     ihdr = struct.pack(">IIBBBBB", w, h, bits, 2, 0, 0, 0)
-    path.write_bytes(imageio.PNG_MAGIC + _png_chunk(b"IHDR", ihdr) + _png_chunk(b"IDAT", idat) + _png_chunk(b"IEND", b""))
+    path.write_bytes(image_files.PNG_MAGIC + _png_chunk(b"IHDR", ihdr) + _png_chunk(b"IDAT", idat) + _png_chunk(b"IEND", b""))
     return path
 
 
@@ -47,7 +47,7 @@ def test_a_16bit_png_of_12000x12000_is_refused_before_decoding(tmp_path):
     p = big_png(tmp_path / "bomb.png", 16)
     assert p.stat().st_size < 1_000_000  # the issue's was 280 KB
     # In a child with an address-space limit far below what decoding would take (12000^2 x 3 x 2 bytes and more).
-    code = ("import resource, sys; resource.setrlimit(resource.RLIMIT_AS, (1536 << 20, 1536 << 20)); import mcrt.imageio as m\n"
+    code = ("import resource, sys; resource.setrlimit(resource.RLIMIT_AS, (1536 << 20, 1536 << 20)); import mcrt.image_files as m\n"
             "try: m.read_image(sys.argv[1])\nexcept m.ImageError as e: print(e); sys.exit(3)\n")
     r = subprocess.run([sys.executable, "-c", code, str(p)], capture_output=True, text=True, timeout=120)
     assert r.returncode == 3, r.stderr[-2000:]

@@ -78,12 +78,12 @@ def cycles_through(graph: dict[str, set[str]], prefixes: tuple[str, ...]) -> lis
 def test_no_import_cycles():
     """No module of mcrt imports, directly or through others, a module that imports it (module or function level)."""
     graph = import_graph({"mcrt": PACKAGE, "mcrt.plugins": ROOT / "plugins"})
-    assert "mcrt.grade.batch" in graph and "mcrt.report.run" in graph and "mcrt.plugins.host" in graph
+    assert "mcrt.grade.batch" in graph and "mcrt.convergence.run" in graph and "mcrt.plugins.host" in graph
     assert cycles_through(graph, ("mcrt",)) == []
     # The check sees a cycle when there is one: a function-level import back from run to the package.
-    graph["mcrt.report.run"] = graph["mcrt.report.run"] | {"mcrt.report"}
-    graph["mcrt.report"] = graph["mcrt.report"] | {"mcrt.report.run"}
-    assert cycles_through(graph, ("mcrt.grade", "mcrt.report")) == [["mcrt.report", "mcrt.report.run"]]
+    graph["mcrt.convergence.run"] = graph["mcrt.convergence.run"] | {"mcrt.convergence"}
+    graph["mcrt.convergence"] = graph["mcrt.convergence"] | {"mcrt.convergence.run"}
+    assert cycles_through(graph, ("mcrt.grade", "mcrt.convergence")) == [["mcrt.convergence", "mcrt.convergence.run"]]
 
 
 #: The layers of mcrt, lowest first: (name, rank, module prefixes). A module may import modules of its own rank
@@ -94,13 +94,13 @@ LAYERS = (
     ("renderer core", 1, ("mcrt", "mcrt.scene", "mcrt.camera", "mcrt.geometry", "mcrt.bsdf", "mcrt.light",
                           "mcrt.sampling", "mcrt.rng", "mcrt.options", "mcrt.estimator", "mcrt.film", "mcrt.tracer",
                           "mcrt.host", "mcrt.mutants", "mcrt.precision", "mcrt.samplers")),
-    ("renderers", 2, ("mcrt.render", "mcrt.bidir", "mcrt.plugins", "mcrt.mitsuba", "mcrt.tricks.adaptive",
+    ("renderers", 2, ("mcrt.render", "mcrt.bidir", "mcrt.plugins", "mcrt.mitsuba_scene", "mcrt.tricks.adaptive",
                       "mcrt.tricks.aov", "mcrt.tricks.denoise", "mcrt.closed_form")),
-    ("statistics and I/O", 2, ("mcrt.stats", "mcrt.imageio", "mcrt.metrics", "mcrt.compare", "mcrt.reference",
+    ("statistics and I/O", 2, ("mcrt.stats", "mcrt.image_files", "mcrt.metrics", "mcrt.compare", "mcrt.groundtruth",
                                "mcrt.provenance")),
-    ("studies and reports", 3, ("mcrt.report", "mcrt.validate", "mcrt.hardcases", "mcrt.tricks", "mcrt.bench",
-                                "mcrt.bench_limits", "mcrt.bench_report", "mcrt.threeway", "mcrt.validate_integrator",
-                                "mcrt.reports", "mcrt.pytest_plugin", "mcrt.sampler_study", "mcrt.msuite")),
+    ("studies and reports", 3, ("mcrt.convergence", "mcrt.validate", "mcrt.hardcases", "mcrt.tricks", "mcrt.bench",
+                                "mcrt.bench_limits", "mcrt.bench_page", "mcrt.threeway", "mcrt.validate_integrator",
+                                "mcrt.rebuild_reports", "mcrt.pytest_plugin", "mcrt.sampler_study", "mcrt.msuite")),
     ("grading and command line", 4, ("mcrt.grade", "mcrt.cli")),
 )
 
@@ -207,8 +207,8 @@ def _recorded_commands() -> dict[str, str]:
 
 
 def test_mcrt_reports_rebuilds_every_committed_report_with_its_own_command():
-    """Every report folder's JSON records the command in mcrt.reports.REPORTS, and REPORTS has no other."""
-    from mcrt.reports import REPORTS
+    """Every report folder's JSON records the command in mcrt.rebuild_reports.REPORTS, and REPORTS has no other."""
+    from mcrt.rebuild_reports import REPORTS
 
     assert _recorded_commands() == {r.name: r.command for r in REPORTS}
 

@@ -70,7 +70,7 @@ def _mcrt_host(scene):
 def _mitsuba_host(scene):
     import mitsuba as mi
 
-    from mcrt.mitsuba import load_mitsuba_scene
+    from mcrt.mitsuba_scene import load_mitsuba_scene
     from mcrt.plugins import MitsubaHost
 
     host = MitsubaHost(load_mitsuba_scene(scene, "near", 8, 8))

@@ -10,7 +10,7 @@ import pytest
 
 import mcrt
 from mcrt.camera import primary_directions
-from mcrt.mitsuba import load_mitsuba_scene, scene_dict, sensor_rays, variant_for
+from mcrt.mitsuba_scene import load_mitsuba_scene, scene_dict, sensor_rays, variant_for
 from mcrt.render import render
 
 import drjit as dr  # noqa: E402  (after mcrt: it sets DRJIT_LIBLLVM_PATH)

@@ -16,10 +16,10 @@ import OpenEXR
 import pytest
 
 import mcrt  # noqa: F401  (before drjit / mitsuba)
-from mcrt import imageio
+from mcrt import image_files
 from mcrt.cli import main
 from mcrt.film import RenderResult
-from mcrt.imageio import ImageError, read_exr, read_mitsuba_reference, read_variance_exr, write_exr
+from mcrt.image_files import ImageError, read_exr, read_mitsuba_reference, read_variance_exr, write_exr
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -53,7 +53,7 @@ def _exr(path, planes: dict, header=None):
 
 def _mitsuba_var_file(path, var_xyz, version="Mitsuba version 3.9.1"):
     """A variance file as Mitsuba's reference generator writes it: the XYZ variance converted like a colour."""
-    rgb = var_xyz @ imageio.XYZ_TO_RGB.T
+    rgb = var_xyz @ image_files.XYZ_TO_RGB.T
     _exr(path, {c: rgb[..., i] for i, c in enumerate("RGB")}, {"generatedBy": version})
 
 
@@ -70,14 +70,14 @@ def test_mitsuba_variance_file_read_back_as_xyz(tmp_path):
     var_xyz[0, 0] = 0.0  # a noiseless pixel
     var_xyz[1, 1, 2] = 1e-6 * mean_xyz[1, 1, 2] ** 2  # rounding level: read as 0
     _mitsuba_var_file(tmp_path / "v.exr", var_xyz)
-    mean_rgb = mean_xyz @ imageio.XYZ_TO_RGB.T
-    assert np.any(var_xyz @ imageio.XYZ_TO_RGB.T < 0)  # the file itself holds negative "variances"
+    mean_rgb = mean_xyz @ image_files.XYZ_TO_RGB.T
+    assert np.any(var_xyz @ image_files.XYZ_TO_RGB.T < 0)  # the file itself holds negative "variances"
     v, note = read_variance_exr(tmp_path / "v.exr", mean=mean_rgb, space="xyz")
     expect = var_xyz.copy()
     expect[1, 1, 2] = 0.0
     assert np.allclose(v, expect, rtol=1e-4, atol=1e-7) and "turned back into XYZ" in note
     rgb, _ = read_variance_exr(tmp_path / "v.exr", mean=mean_rgb)
-    assert np.all(rgb >= 0) and np.allclose(rgb, (np.sqrt(expect) @ np.abs(imageio.XYZ_TO_RGB).T) ** 2, rtol=1e-3)
+    assert np.all(rgb >= 0) and np.allclose(rgb, (np.sqrt(expect) @ np.abs(image_files.XYZ_TO_RGB).T) ** 2, rtol=1e-3)
     # Read as a plain RGB variance, the negative entries are refused in one line naming the file.
     with pytest.raises(ImageError, match=r"v\.exr: \d+ negative entries in the variance .*--variance-kind mitsuba"):
         read_variance_exr(tmp_path / "v.exr", mean=mean_rgb, kind="rgb")
@@ -89,11 +89,11 @@ def test_mitsuba_variance_beyond_rounding_or_non_finite_is_refused(tmp_path):
     var_xyz[2, 3, 1] = -0.01  # 4 % of m^2: no rounding error does that
     _mitsuba_var_file(tmp_path / "neg.exr", var_xyz)
     with pytest.raises(ImageError, match=r"neg\.exr: 1 negative XYZ variances beyond float32 rounding .*row 2, column 3, channel Y"):
-        read_variance_exr(tmp_path / "neg.exr", mean=mean_xyz @ imageio.XYZ_TO_RGB.T)
+        read_variance_exr(tmp_path / "neg.exr", mean=mean_xyz @ image_files.XYZ_TO_RGB.T)
     var_xyz[2, 3, 1] = np.nan
     _mitsuba_var_file(tmp_path / "nan.exr", var_xyz)
     with pytest.raises(ImageError, match=r"nan\.exr: 3 non-finite values"):
-        read_variance_exr(tmp_path / "nan.exr", mean=mean_xyz @ imageio.XYZ_TO_RGB.T)
+        read_variance_exr(tmp_path / "nan.exr", mean=mean_xyz @ image_files.XYZ_TO_RGB.T)
 
 
 def test_negative_variance_channels_of_a_render_are_refused(tmp_path):
@@ -116,7 +116,7 @@ def test_moment_channels_under_the_names_mitsuba_3_9_gives_an_xml_scene(tmp_path
         planes[f"nested_other.{c}"] = m1[..., i]  # a plain AOV of that name is not a moment
     _exr(tmp_path / "m.exr", planes)
     r = read_exr(tmp_path / "m.exr", spp=16)
-    assert np.allclose(r.mean, m1 @ imageio.XYZ_TO_RGB.T, rtol=1e-5)
+    assert np.allclose(r.mean, m1 @ image_files.XYZ_TO_RGB.T, rtol=1e-5)
     assert "_arg_0" in r.extra["exr.moment"] and r.variance.min() > 0
     del planes["m2__arg_0.Z"]
     _exr(tmp_path / "i.exr", planes)
@@ -172,7 +172,7 @@ def test_compare_cli_variance_file_and_rtol_for_a_noiseless_offset(tmp_path, cap
 
 def test_scene_file_rendered_with_its_filter_in_batches_and_its_wrapped_integrator(suite):
     """A gaussian-filtered scene goes in independent batches (dof, tile factor in the header); moment is unwrapped."""
-    from mcrt.mitsuba import render_with_variance
+    from mcrt.mitsuba_scene import render_with_variance
 
     r = render_with_variance(suite / "tests/scenes/projector/test_projector_textured_direct.xml", spp=64, seed=1)
     assert r.renderer == "direct" and "moment" in r.extra["unwrapped"]
@@ -185,7 +185,7 @@ def test_scene_file_rendered_with_its_filter_in_batches_and_its_wrapped_integrat
 
 def test_integrator_replaced_takes_only_its_parameters_and_scene_defaults(suite, tmp_path, capsys):
     """--integrator direct on a scene that sets a depth renders (and says so); -D sets <default>s, refuses others."""
-    from mcrt.mitsuba import render_with_variance
+    from mcrt.mitsuba_scene import render_with_variance
 
     scene = suite / "tests/scenes/bsdf_spheres/test_arealight_path.xml"  # its path integrator has max_depth 2
     r = render_with_variance(scene, integrator="direct", spp=4, defaults={"spp": "4"})
@@ -210,7 +210,7 @@ def test_integrator_replaced_takes_only_its_parameters_and_scene_defaults(suite,
 
 def test_gaussian_filtered_renders_of_two_seeds_agree_and_a_brighter_one_does_not(suite):
     """The batch variance with its degrees of freedom and tile factor keeps a false alarm away and still detects."""
-    from mcrt.mitsuba import render_with_variance
+    from mcrt.mitsuba_scene import render_with_variance
     from mcrt.stats import compare
 
     scene = suite / "tests/scenes/projector/test_projector_textured_direct.xml"
@@ -312,14 +312,14 @@ _SCENE = """<scene version="3.0.0">
 
 def _mitsuba_style_suite(root: Path, ref_spp: int) -> Path:
     """A one-scene tests/scenes folder laid out as Mitsuba's, with a reference pair written as Mitsuba writes it."""
-    from mcrt.mitsuba import render_with_variance
+    from mcrt.mitsuba_scene import render_with_variance
 
     group = root / "tests" / "scenes" / "made"
     (group / "refs").mkdir(parents=True)
     xml = group / "test_made_path.xml"
     xml.write_text(_SCENE)
     r = render_with_variance(xml, spp=ref_spp, seed=99, space="xyz")
-    rgb = r.mean.astype(np.float64) @ imageio.XYZ_TO_RGB.T
+    rgb = r.mean.astype(np.float64) @ image_files.XYZ_TO_RGB.T
     by = {"generatedBy": "Mitsuba version 3.9.1"}
     _exr(group / "refs" / "test_made_ref_rgb.exr", {c: rgb[..., i] for i, c in enumerate("RGB")}, by)
     _mitsuba_var_file(group / "refs" / "test_made_ref_rgb_var.exr", r.variance.astype(np.float64))

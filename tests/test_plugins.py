@@ -16,7 +16,7 @@ import pytest
 
 import mcrt
 import mcrt.plugins as plugins
-from mcrt.mitsuba import load_mitsuba_scene, scene_dict, variant_for
+from mcrt.mitsuba_scene import load_mitsuba_scene, scene_dict, variant_for
 from mcrt.mutants import MUTANTS
 from mcrt.plugins import check_scene
 from mcrt.render import render

@@ -93,7 +93,7 @@ def test_arrays_files_and_headers(pytester):
 import dataclasses
 import pytest
 from mcrt.compare import HeaderMismatch, image
-from mcrt.imageio import write_exr
+from mcrt.image_files import write_exr
 from mcrt.stats import StatsError
 
 def test_arrays(assert_same_image):

@@ -16,12 +16,12 @@ import numpy as np
 import pytest
 
 import mcrt
-from mcrt import reference as ref
+from mcrt import groundtruth as ref
 from mcrt.exitcodes import EXIT_FAILED, EXIT_OK, EXIT_UNUSABLE
-from mcrt.reference import build as ref_build
-from mcrt.reference import manifest as ref_manifest
+from mcrt.groundtruth import build as ref_build
+from mcrt.groundtruth import manifest as ref_manifest
 from mcrt.film import RenderResult, merge
-from mcrt.imageio import ImageError, read_exr, write_exr
+from mcrt.image_files import ImageError, read_exr, write_exr
 
 RES = 8
 SPP, CHUNK = 48, 16  # three chunks
@@ -193,7 +193,7 @@ def test_stale_chunks_are_rendered_again(scene, built, tmp_path):
 
 
 def test_failed_write_leaves_previous_reference_untouched(scene, built, tmp_path, monkeypatch):
-    import mcrt.imageio as imageio
+    import mcrt.image_files as imageio
 
     d = _copy(built[0], tmp_path / "ref")
     path = d / built[1].path.name

@@ -21,11 +21,11 @@ import pytest
 
 import mcrt
 from mcrt import metrics as M
-from mcrt.report import REPORT_FILES, SCHEMA, preset_config, run_report
-from mcrt.report.config import RendererSpec, parse_ladder, render_seed
-from mcrt.report.data import MEASUREMENT_KEYS, TOP_KEYS
-from mcrt.report.run import run_ladder
-from mcrt.report.slopes import fit_slope
+from mcrt.convergence import REPORT_FILES, SCHEMA, preset_config, run_report
+from mcrt.convergence.config import RendererSpec, parse_ladder, render_seed
+from mcrt.convergence.data import MEASUREMENT_KEYS, TOP_KEYS
+from mcrt.convergence.run import run_ladder
+from mcrt.convergence.slopes import fit_slope
 
 # Fixed seed: the synthetic test data are arbitrary but must be the same every run.
 RNG_SEED = 20240611
@@ -164,7 +164,7 @@ def test_presets():
 def test_command_line_options():
     import argparse
 
-    from mcrt.report.cli import config_from_args, register
+    from mcrt.convergence.cli import config_from_args, register
 
     ap = argparse.ArgumentParser(prog="mcrt")
     register(ap.add_subparsers(dest="command", required=True))
@@ -350,7 +350,7 @@ def test_cached_renders_are_keyed_by_the_source(tmp_path, monkeypatch):
     """A change to mcrt's code changes the key of cached references and grading renders (not only a version bump)."""
     import mcrt.provenance
     from mcrt.grade.expected import _cache_key, grading_settings
-    from mcrt.report.run import _versions_key
+    from mcrt.convergence.run import _versions_key
     from mcrt.scene import load_scene
 
     (tmp_path / "a.py").write_text("x = 1\n")

@@ -30,7 +30,7 @@ from mcrt.grade.assignment import assignment_from_dict
 from mcrt.grade.batch import grade_class
 from mcrt.grade.expected import prepare_context
 from mcrt.grade.submissions import discover, read_manifest
-from mcrt.imageio import write_exr
+from mcrt.image_files import write_exr
 from mcrt.render import render
 from mcrt.scene import CANONICAL, DATA_DIR, SceneError, load_scene
 
@@ -185,7 +185,7 @@ def test_discovery_never_opens_a_fifo(tmp_path):
 
 
 def test_exr_header_negative_spp_rejected_like_the_manifest(tmp_path, good):
-    from mcrt.imageio import read_exr
+    from mcrt.image_files import read_exr
 
     r = read_exr(good)
     ch = {c: np.ascontiguousarray(r.mean[..., i]) for i, c in enumerate("RGB")}
@@ -276,7 +276,7 @@ def test_absurd_settings_have_a_message(capsys):
 
 
 def _pair(tmp_path):
-    from mcrt.reference import manifest as mf
+    from mcrt.groundtruth import manifest as mf
 
     d = tmp_path / "ref"
     d.mkdir()
@@ -336,8 +336,8 @@ def test_commit_crash_before_the_rename_keeps_the_old_pair(tmp_path, monkeypatch
 
 def test_build_killed_between_exr_and_manifest(tmp_path, monkeypatch):
     """The whole build: the committed pair loads after a crash between the two writes."""
-    import mcrt.reference as ref
-    from mcrt.reference import manifest as mf
+    import mcrt.groundtruth as ref
+    from mcrt.groundtruth import manifest as mf
 
     scene = load_scene()
     b = ref.build_reference(scene, "near", 8, 2, 8, chunk_spp=4, directory=tmp_path, workers=1, progress=False)

@@ -20,7 +20,7 @@ import drjit.llvm as m
 
 from mcrt.compare import compare_files
 from mcrt.film import RenderResult
-from mcrt.imageio import read_exr, write_exr
+from mcrt.image_files import read_exr, write_exr
 from mcrt.render import render
 from mcrt.rng import SampleStreams, mix32
 from mcrt.samplers import PixelSampler, owen_scramble, scrambled_jitter, sobol_02
@@ -272,7 +272,7 @@ def test_light_budget_from_the_pilot(scene):
     budget is refused.
     """
     from mcrt.bidir import AUTO_LIGHT_PATHS
-    from mcrt.reference import load_reference
+    from mcrt.groundtruth import load_reference
     from mcrt.stats import compare
 
     r = render(scene, _settings(scene, spp=256, res=64, seed=5), progress=False, bidirectional=True, light_paths="auto",

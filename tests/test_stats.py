@@ -426,9 +426,9 @@ def test_heatmap_and_to_dict(tmp_path):
 
 @pytest.fixture
 def fake_imageio(monkeypatch):
-    """Stand-in for mcrt.imageio: read_image looks paths up in a dict."""
+    """Stand-in for mcrt.image_files: read_image looks paths up in a dict."""
     images: dict[str, RenderResult] = {}
-    mod = types.ModuleType("mcrt.imageio")
+    mod = types.ModuleType("mcrt.image_files")
 
     class ImageError(Exception):
         pass
@@ -442,7 +442,7 @@ def fake_imageio(monkeypatch):
                             r.max_depth, r.renderer)
 
     mod.ImageError, mod.read_image = ImageError, read_image
-    monkeypatch.setitem(sys.modules, "mcrt.imageio", mod)
+    monkeypatch.setitem(sys.modules, "mcrt.image_files", mod)
     return images
 
 
@@ -529,9 +529,9 @@ def test_assert_same_image(tmp_path):
 
 
 def test_compare_files_with_real_exr_files(tmp_path, capsys):
-    # alpha = 0.01. Round trip through mcrt.imageio (EXR keeps variance and
+    # alpha = 0.01. Round trip through mcrt.image_files (EXR keeps variance and
     # spp); a file without spp gets a hint to pass it.
-    imageio = pytest.importorskip("mcrt.imageio")
+    imageio = pytest.importorskip("mcrt.image_files")
     mu = mean_image(32, 32)
     a, b = synth(121, mu, 512), synth(122, mu, 512, "gamma2")
     imageio.write_exr(tmp_path / "a.exr", a)

@@ -49,7 +49,7 @@ def scene():
 
 @pytest.fixture(scope="module")
 def reference(scene):
-    from mcrt.reference import load_reference
+    from mcrt.groundtruth import load_reference
 
     return load_reference(scene, "near", (RES, RES), 8)
 

@@ -14,7 +14,7 @@ import pytest
 
 import mcrt  # noqa: F401  (before Mitsuba: libLLVM)
 from mcrt.cli import main
-from mcrt.mitsuba import render_with_variance
+from mcrt.mitsuba_scene import render_with_variance
 from mcrt.validate_integrator import parse_integrator, validate_integrator
 
 import mitsuba as mi  # noqa: E402

@@ -46,7 +46,7 @@ from scipy import stats as sps
 from mcrt import validate
 from mcrt.exitcodes import EXIT_FAILED, EXIT_OK, EXIT_UNUSABLE
 from mcrt.mutants import MUTANTS
-from mcrt.reference import load_reference
+from mcrt.groundtruth import load_reference
 from mcrt.render import render
 from mcrt.scene import load_scene
 from mcrt.stats import compare, compare_images

@@ -19,7 +19,7 @@ from pathlib import Path
 
 from mcrt.grade.expected import Context
 from mcrt.grade.grader import STATUS_ERROR, StudentResult, error_result, format_exception, grade_submission
-from mcrt.grade.report import write_student
+from mcrt.grade.outputs import write_student
 from mcrt.grade.submissions import Submission
 
 

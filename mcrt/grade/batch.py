@@ -47,7 +47,7 @@ from mcrt.grade._worker import grade_and_write, read_message, write_message
 from mcrt.grade.assignment import Assignment
 from mcrt.grade.expected import Context, prepare_context
 from mcrt.grade.grader import STATUS_ERROR, STATUS_TIMEOUT, StudentResult, error_result
-from mcrt.grade.report import write_class, write_student
+from mcrt.grade.outputs import write_class, write_student
 from mcrt.grade.submissions import Submission, discover
 from mcrt.util.progress import log
 

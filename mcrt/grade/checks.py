@@ -20,7 +20,7 @@ import numpy as np
 from scipy import stats as _sps
 
 from mcrt.grade.score import LUMINANCE
-from mcrt.imageio import ImageError, read_image, srgb_eotf, srgb_oetf
+from mcrt.image_files import ImageError, read_image, srgb_eotf, srgb_oetf
 from mcrt.stats.tiles import block_means, tile_sums
 
 MAX_FILE_BYTES = 1 << 30

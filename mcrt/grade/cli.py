@@ -137,7 +137,7 @@ def run_check(args) -> int:
         print(f"mcrt check: {shown(str(e))}", file=sys.stderr)
         return EXIT_UNUSABLE
     if args.out:
-        from mcrt.grade.report import write_student
+        from mcrt.grade.outputs import write_student
 
         d = write_student(res, a, Path(args.out))
         log(f"wrote {d / 'results.json'} and {d / 'feedback.html'}")

@@ -1387,7 +1387,7 @@ def grade_code_class(submissions, a: Assignment, out, *, jobs: int = 1, timeout:
     """
     from mcrt.grade.batch import ClassResult
     from mcrt.grade.grader import error_result
-    from mcrt.grade.report import write_class, write_student
+    from mcrt.grade.outputs import write_class, write_student
 
     t0 = time.perf_counter()
     log = log or (lambda s: None)

@@ -7,7 +7,7 @@ that tells too few samples from a noisy bug, in
 :mod:`mcrt.grade.grader`).
 
 * References, one per camera of the scene, at the grade resolution: the
-  committed Mitsuba reference (:func:`mcrt.reference.load_reference`) when
+  committed Mitsuba reference (:func:`mcrt.groundtruth.load_reference`) when
   one exists at that resolution or at an integer multiple of it (box-filtered
   down: with a box reconstruction filter the expected image of a coarser
   render is the block mean of a finer one), otherwise a high-spp mcrt render.
@@ -132,7 +132,7 @@ def _cache_key(scene: Scene, s: RenderSettings, mutant: str) -> str:
 def cached_render(scene: Scene, camera: str, w: int, h: int, max_depth: int, spp: int, seed: int, mutant: str,
                   cache_dir: Path, log=None) -> RenderResult:
     """An mcrt render (:func:`grading_settings`) from the cache, rendered and stored on a miss (``mutant='none'``: no bug)."""
-    from mcrt.imageio import ImageError, read_exr, write_exr
+    from mcrt.image_files import ImageError, read_exr, write_exr
     from mcrt.render import render
 
     s = grading_settings(scene, camera, w, h, max_depth, spp, seed)
@@ -159,7 +159,7 @@ def cached_render(scene: Scene, camera: str, w: int, h: int, max_depth: int, spp
 
 def _committed(scene: Scene, camera: str, w: int, h: int, max_depth: int) -> RenderResult | None:
     """The committed Mitsuba reference at (w, h) or at an integer multiple, box-filtered down."""
-    from mcrt.reference import load_reference
+    from mcrt.groundtruth import load_reference
 
     for k in (1, 2, 3, 4, 5, 6, 8, 10, 12, 16):
         if w * k > 2048:

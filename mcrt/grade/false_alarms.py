@@ -87,7 +87,7 @@ def render_case(scene, c: Case) -> np.ndarray:
 
         s = scene.settings(camera="near", width=c.res, height=c.res, spp=c.spp, max_depth=8)
         return render(scene, s, seed=c.seed, progress=False).mean.astype(np.float64)
-    from mcrt.mitsuba import render_with_variance, scene_dict
+    from mcrt.mitsuba_scene import render_with_variance, scene_dict
 
     integrator, sampler = c.renderer.split("/")
     d = scene_dict(scene, "near", c.res, c.res, 8, integrator=integrator)
@@ -98,7 +98,7 @@ def render_case(scene, c: Case) -> np.ndarray:
 
 
 def _encode(img: np.ndarray, curve: str) -> np.ndarray:
-    from mcrt.imageio import srgb_oetf
+    from mcrt.image_files import srgb_oetf
 
     enc = {"srgb": srgb_oetf, "gamma2.2": lambda x: x ** (1 / 2.2), "gamma2": np.sqrt}[curve]
     return np.round(255 * enc(np.clip(img, 0.0, 1.0))).astype(np.uint8)

@@ -44,7 +44,7 @@ Order of work, and what each step does to the image:
 Steps 4, 5 and 9 correct the image for the later steps only when
 ``grading.grade_corrected`` is true; otherwise the later criteria score 0.
 The points are added up by :mod:`mcrt.grade.scoring`, the summary is worded
-by :mod:`mcrt.grade.feedback`, and :mod:`mcrt.grade.report` writes them out.
+by :mod:`mcrt.grade.feedback`, and :mod:`mcrt.grade.outputs` writes them out.
 """
 
 from __future__ import annotations

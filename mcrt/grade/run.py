@@ -32,9 +32,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from mcrt.grade.grader import StudentResult, TestResult
-from mcrt.grade.report import write_json_atomic
+from mcrt.grade.outputs import write_json_atomic
 from mcrt.grade.submissions import Submission, _walk, file_kind
-from mcrt.reference.manifest import sha256_file
+from mcrt.groundtruth.manifest import sha256_file
 
 SCHEMA = "mcrt.grade.run/1"
 RUN_FILE = "run.json"

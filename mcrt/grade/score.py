@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from mcrt import metrics as image_metrics
-from mcrt.imageio import srgb_eotf_slope, srgb_oetf
+from mcrt.image_files import srgb_eotf_slope, srgb_oetf
 from mcrt.stats import LUMINANCE_WEIGHTS
 from mcrt.stats.tiles import tile_expand, tile_sums
 

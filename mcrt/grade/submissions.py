@@ -41,7 +41,7 @@ from pathlib import Path
 
 HDR_EXTS = (".exr", ".pfm", ".hdr", ".pic", ".rgbe")
 LDR_EXTS = (".png", ".ppm", ".pnm", ".pgm", ".bmp", ".tga")  # 8 or 16 bit, sRGB unless declared linear
-JPEG_EXTS = (".jpg", ".jpeg", ".jpe", ".jfif")  # refused, with the reason (mcrt.imageio.JPEG_REASON)
+JPEG_EXTS = (".jpg", ".jpeg", ".jpe", ".jfif")  # refused, with the reason (mcrt.image_files.JPEG_REASON)
 IMAGE_EXTS = HDR_EXTS + LDR_EXTS
 SUPPORTED = ("OpenEXR (.exr), PFM (.pfm), Radiance HDR (.hdr), PNG (.png, 8 or 16 bit), PPM (.ppm, P3 or P6), "
              "BMP (.bmp) or TGA (.tga)")
@@ -198,7 +198,7 @@ def _sibling_manifest(p: Path) -> Path | None:
 def _no_image_problem(files: list[Path], found: str = "") -> str:
     jpegs = [f for f in files if f.suffix.lower() in JPEG_EXTS]
     if jpegs:
-        from mcrt.imageio import JPEG_REASON
+        from mcrt.image_files import JPEG_REASON
 
         return f"no image in a supported format: {shown(jpegs[0].name)}: {JPEG_REASON}"
     kinds = ", ".join(sorted({shown(f.suffix.lower()) or "(no extension)" for f in files}))

@@ -28,7 +28,7 @@ negative values or the renderers disagree.
 
 Mitsuba's perspective sensor clips camera rays to [0.01, 1e4] in absolute
 units (``near_clip``, ``far_clip``) by default, which cuts a scene scaled by
-1e-3 (the room 0.016 wide) or 1e3 (16000 wide); :mod:`mcrt.mitsuba` scales
+1e-3 (the room 0.016 wide) or 1e3 (16000 wide); :mod:`mcrt.mitsuba_scene` scales
 both clip planes with the scene. The sweep also shows what Mitsuba's
 defaults would do (:func:`mitsuba_clips`).
 

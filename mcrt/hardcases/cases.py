@@ -183,7 +183,7 @@ def run_case(hc: HardCase, *, res: int = 64, spp: int = 512, ref_spp: int = 4096
         result.comparisons[key] = compare(rendered["mcrt"], ref, reference=True)
     result.comparisons["mitsuba_vs_untransformed" if hc.transformed else "mitsuba_vs_reference"] = compare(rendered["mitsuba"], ref, reference=True)
     if images is not None:
-        from mcrt.imageio import side_by_side
+        from mcrt.image_files import side_by_side
 
         images.mkdir(parents=True, exist_ok=True)
         shown = [(k, rendered[k]) for k in ("mcrt", "mitsuba") if k in rendered] + [("reference", ref)]

@@ -19,13 +19,13 @@ def settings(scene: Scene, camera: str, res: int, spp: int, max_depth: int | Non
 
 @contextlib.contextmanager
 def mitsuba_clips(near: float, far: float) -> Iterator[None]:
-    """Within the block, Mitsuba sensors built by :mod:`mcrt.mitsuba` clip camera rays to [near, far].
+    """Within the block, Mitsuba sensors built by :mod:`mcrt.mitsuba_scene` clip camera rays to [near, far].
 
-    :func:`mcrt.mitsuba.sensor_dict` scales the clip planes with the scene;
+    :func:`mcrt.mitsuba_scene.sensor_dict` scales the clip planes with the scene;
     this wraps it for the block, so the float32 sweep can show what Mitsuba's
     absolute defaults (0.01, 1e4) would do (not thread-safe).
     """
-    import mcrt.mitsuba as mm
+    import mcrt.mitsuba_scene as mm
 
     original = mm.sensor_dict
 

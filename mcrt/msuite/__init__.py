@@ -5,7 +5,7 @@ reference pair (``refs/<name>_ref_rgb.exr`` and ``_var.exr``):
 
 * a correct render at Mitsuba's budget (2e6 samples over the image, scaled
   by ``--spp-scale``), as Mitsuba renders it
-  (:func:`mcrt.mitsuba.render_with_variance`, in CIE XYZ, the space of
+  (:func:`mcrt.mitsuba_scene.render_with_variance`, in CIE XYZ, the space of
   Mitsuba's test and of the references' exact variance);
 * mcrt's verdict against the reference: the multi-scale tile test
   (:func:`mcrt.stats.compare_multiscale`, variance floored at the

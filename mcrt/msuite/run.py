@@ -79,8 +79,8 @@ def run_case(case: Case, *, spp_scale: float = 1.0, seeds: int = 1, alpha: float
     """
     import mitsuba as mi
 
-    from mcrt import mitsuba as mm
-    from mcrt.imageio import RGB_TO_XYZ, read_exr, read_mitsuba_reference
+    from mcrt import mitsuba_scene as mm
+    from mcrt.image_files import RGB_TO_XYZ, read_exr, read_mitsuba_reference
     from mcrt.stats.twosample import EXACT_RTOL
 
     mm._use(backend)

@@ -342,7 +342,7 @@ def side_variance_terms(r: RenderResult, tile: int) -> tuple[int, float]:
     variance takes.
 
     A render whose pixels share samples through a film filter records ``extra['tile_variance_factor']``
-    (:func:`mcrt.mitsuba.filter_area`), applied to tiles of more than one
+    (:func:`mcrt.mitsuba_scene.filter_area`), applied to tiles of more than one
     pixel, whose pixels are then not independent.
     """
     factor = float((r.extra or {}).get("tile_variance_factor", 1.0)) if tile > 1 else 1.0

@@ -78,7 +78,7 @@ def _command(args) -> str:
 
 
 def cmd_tricks(args) -> int:
-    from mcrt.reference import ReferenceUnavailable
+    from mcrt.groundtruth import ReferenceUnavailable
     from mcrt.scene import CANONICAL, load_scene
     from mcrt.tricks.light_study import light_receiver_study
     from mcrt.tricks.report import write_report

@@ -1,4 +1,4 @@
-"""The tricks report's figures (matplotlib through :mod:`mcrt.report.plots`' setup and palette-PNG writer)."""
+"""The tricks report's figures (matplotlib through :mod:`mcrt.convergence.plots`' setup and palette-PNG writer)."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from mcrt.report.plots import COLORS, _plt, _save
+from mcrt.convergence.plots import COLORS, _plt, _save
 from mcrt.tricks.study import StudyData
 from mcrt.tricks.variants import PLAIN
 from mcrt.tricks.verdicts import TRICK_NAMES, rungs_of
@@ -79,7 +79,7 @@ def spp_maps(data: StudyData, out: Path, *, svg: bool) -> dict | None:
     """Samples traced per pixel by each adaptive scheme at the top rung (seed 0), beside the reference."""
     if not data.spp_maps:
         return None
-    from mcrt.imageio import srgb_oetf
+    from mcrt.image_files import srgb_oetf
 
     plt = _plt()
     n = len(data.spp_maps)
@@ -144,7 +144,7 @@ def variance_histogram(data: StudyData, labels: list[str], out: Path, *, svg: bo
 
 def image_strip(data: StudyData, labels: list[str], out: Path) -> dict:
     """The top-rung renders (seed 0) of ``labels`` beside the reference, sRGB, exposure 0."""
-    from mcrt.imageio import srgb_oetf
+    from mcrt.image_files import srgb_oetf
 
     plt = _plt()
     shown = ["reference", *labels]

@@ -6,8 +6,8 @@ import math
 from dataclasses import asdict
 from pathlib import Path
 
-from mcrt.report.content import fmt
-from mcrt.report.markdown import write as write_markdown
+from mcrt.convergence.content import fmt
+from mcrt.convergence.markdown import write as write_markdown
 from mcrt.tricks import plots
 from mcrt.tricks.study import StudyData, measurement_dicts, rung_dicts
 from mcrt.tricks.variants import PLAIN, TRICKS

@@ -15,7 +15,7 @@ probability at most alpha. Over the seeds of one (variant, spp):
 
 with ``variance`` the mean over pixels and channels of the variance of
 the image across seeds and ``floor`` the reference's own noise
-(:func:`mcrt.report.run.reference_floor`), so bias^2 = MSE - variance -
+(:func:`mcrt.convergence.run.reference_floor`), so bias^2 = MSE - variance -
 floor (it can come out negative by chance: then no bias is measurable).
 """
 
@@ -157,8 +157,8 @@ def _rung(v: Variant, spp: int, ms: list[Measurement], images: list[np.ndarray],
 
 def run_study(scene: Scene, variants: list[Variant], cfg: StudyConfig, *, progress: bool = True, log=print) -> StudyData:
     """Render every variant at every rung and seed; measure and aggregate (writes nothing)."""
-    from mcrt.reference import load_reference
-    from mcrt.report.run import reference_floor
+    from mcrt.groundtruth import load_reference
+    from mcrt.convergence.run import reference_floor
     from mcrt.tricks.aov import first_hit_buffers
 
     t_start = time.perf_counter()
@@ -212,7 +212,7 @@ def confirm_unbiased(data: StudyData, labels: list[str], spp: int, *, backend: s
     estimate, and the comparison rejects it on the dark side; the flag goes
     away with more samples, a bias's does not.
     """
-    from mcrt.reference import load_reference
+    from mcrt.groundtruth import load_reference
 
     cfg = data.config
     ref = load_reference(data.scene, cfg.camera, (cfg.res, cfg.res), cfg.max_depth)

@@ -3,7 +3,7 @@
 A reader sees the old file or the complete new one, never a part; with
 ``fsync`` (the default) so does the file system after a crash. The temporary files are hidden, ``.name.<pid>.<random>.tmp``, so a
 clean-up can find those of processes that died
-(:func:`mcrt.reference.manifest.remove_stale_temps`).
+(:func:`mcrt.groundtruth.manifest.remove_stale_temps`).
 """
 
 from __future__ import annotations

@@ -7,7 +7,7 @@ This package measures them on the canonical scene:
 False-alarm rate (:func:`false_alarm_study`)
     For each seed k, a correct mcrt render (seed k) is compared with an
     independent Mitsuba render (its own seed) at the same budget, or with the
-    committed high-spp reference (:func:`mcrt.reference.load_reference`),
+    committed high-spp reference (:func:`mcrt.groundtruth.load_reference`),
     optionally with the tested render's variance floored at the reference's.
     Against Mitsuba every trial is independent, so the number of false alarms
     is Binomial(n, alpha') with alpha' the true rate, and its Clopper-Pearson

@@ -160,7 +160,7 @@ def cmd_validate(args) -> int:
     """Run the studies selected by ``args`` and write the reports; exit code per the goals."""
     if args.readme_only:
         return cmd_readme(args)
-    from mcrt.reference import ReferenceUnavailable
+    from mcrt.groundtruth import ReferenceUnavailable
     from mcrt.scene import CANONICAL, SceneError, load_scene
     from mcrt.stats import StatsError
     from mcrt.validate.false_alarms import false_alarm_study

@@ -25,7 +25,7 @@ class Opponent:
     ``MITSUBA_SEED_BASE + k`` at the budget's spp, cached in memory, so the
     false-alarm and power studies of one process share them.
     ``kind='reference'``: every trial gets the committed reference of the
-    budget's (camera, res, max depth) (:func:`mcrt.reference.load_reference`).
+    budget's (camera, res, max depth) (:func:`mcrt.groundtruth.load_reference`).
     ``kind='reference-floor'``: the same reference, and the render under test
     takes the reference's per-sample variance where its own is lower
     (:func:`mcrt.stats.floor_variance`, the rule of ``mcrt reference verify``).
@@ -44,7 +44,7 @@ class Opponent:
         if self.kind != "mitsuba":
             key = ("reference", b.camera, b.res, b.max_depth)
             if key not in self._cache:
-                from mcrt.reference import load_reference
+                from mcrt.groundtruth import load_reference
 
                 self._cache[key] = load_reference(self.scene, b.camera, b.res, b.max_depth)
             return self._cache[key]
@@ -64,7 +64,7 @@ class Opponent:
             return {"kind": "mitsuba", "spp": b.spp, "seeds": f"{MITSUBA_SEED_BASE} + k (one fresh render per trial)",
                     "integrator": "path"}
         r = self.get(b, 0)
-        from mcrt.reference import reference_key
+        from mcrt.groundtruth import reference_key
 
         floor = self.kind == "reference-floor"
         return {"kind": self.kind, "key": reference_key(self.scene.name, b.camera, b.res, b.max_depth), "spp": int(r.spp),

@@ -30,7 +30,7 @@ from typing import Callable
 
 import numpy as np
 
-from mcrt.imageio import srgb_oetf
+from mcrt.image_files import srgb_oetf
 from mcrt.scene import Scene
 
 #: The causes a wrong render can have, as the report words them.
@@ -297,7 +297,7 @@ def _render_spec(spec: Spec, scene: Scene, *, width: int, height: int, max_depth
     s = scene.settings(camera="near", width=width, height=height, spp=spec.spp, max_depth=spec.max_depth or max_depth)
     if spec.renderer == "mcrt":
         return render(scene, s, seed=seed, progress=False)
-    from mcrt.mitsuba import render_with_variance, scene_dict
+    from mcrt.mitsuba_scene import render_with_variance, scene_dict
 
     d = scene_dict(scene, "near", width, height, s.max_depth, spec.integrator, rr_depth=s.rr_depth, spp=spec.spp)
     d["integrator"]["hide_emitters"] = spec.hide_emitters
@@ -389,7 +389,7 @@ def write_submission(case: Case, folder: str | Path) -> Path:
     from PIL import Image
 
     from mcrt.film import RenderResult
-    from mcrt.imageio import write_exr
+    from mcrt.image_files import write_exr
 
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)

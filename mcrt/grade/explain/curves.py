@@ -13,7 +13,7 @@ def curves(fit: Fit, inputs: Inputs) -> list[Candidate]:
     """Encoding curves on the reference: sRGB (and its inverse), power curves; a Gaussian blur."""
     from scipy.ndimage import gaussian_filter
 
-    from mcrt.imageio import srgb_eotf, srgb_oetf
+    from mcrt.image_files import srgb_eotf, srgb_oetf
 
     R = np.maximum(fit.R, 0.0)
     out = [Candidate("encoding", "sRGB curve", "the values sRGB-encoded (a display curve) instead of linear",

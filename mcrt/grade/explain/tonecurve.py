@@ -31,7 +31,7 @@ def _aces(x):
 
 
 def _named_curves() -> dict[str, tuple[str, callable]]:
-    from mcrt.imageio import srgb_oetf
+    from mcrt.image_files import srgb_oetf
 
     def q8(x):
         return np.floor(np.clip(x, 0.0, 1.0) * 255.0 + 0.5) / 255.0

@@ -9,5 +9,5 @@
 7. :mod:`.explanation`: which mistake explains the difference (:mod:`mcrt.grade.explain`);
 
 then scoring (:mod:`mcrt.grade.scoring`), the feedback text (:mod:`mcrt.grade.feedback`) and the outputs
-(:mod:`mcrt.grade.report`). Every stage reads and writes one :class:`.state.Grading`.
+(:mod:`mcrt.grade.outputs`). Every stage reads and writes one :class:`.state.Grading`.
 """

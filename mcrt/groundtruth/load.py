@@ -6,9 +6,9 @@ import os
 from pathlib import Path
 
 from mcrt.film import RenderResult
-from mcrt.reference.errors import CorruptReference, MissingReference, StaleReference
-from mcrt.reference.manifest import read_manifest, sha256_file
-from mcrt.reference.spec import MANIFEST_NAME, REFERENCE_DIR, display_path, rebuild_command, reference_key, resolve_scene, size_of
+from mcrt.groundtruth.errors import CorruptReference, MissingReference, StaleReference
+from mcrt.groundtruth.manifest import read_manifest, sha256_file
+from mcrt.groundtruth.spec import MANIFEST_NAME, REFERENCE_DIR, display_path, rebuild_command, reference_key, resolve_scene, size_of
 from mcrt.scene import Scene
 
 
@@ -36,7 +36,7 @@ def load_reference(
     Every message names the ``mcrt reference build`` command that rebuilds
     the reference.
     """
-    from mcrt.imageio import ImageError, read_exr
+    from mcrt.image_files import ImageError, read_exr
 
     scene = resolve_scene(scene)
     w, h = size_of(res)

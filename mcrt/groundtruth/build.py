@@ -15,8 +15,8 @@ from typing import Any, Iterator
 import numpy as np
 
 from mcrt.film import Progress, RenderResult, merge
-from mcrt.reference.manifest import commit_reference, remove_stale_temps, sha256_file
-from mcrt.reference.spec import (CHUNK_DIR_NAME, DEFAULT_BASE_SEED, DEFAULT_SPP, DEFAULT_WORKERS, REFERENCE_DIR, chunk_seed,
+from mcrt.groundtruth.manifest import commit_reference, remove_stale_temps, sha256_file
+from mcrt.groundtruth.spec import (CHUNK_DIR_NAME, DEFAULT_BASE_SEED, DEFAULT_SPP, DEFAULT_WORKERS, REFERENCE_DIR, chunk_seed,
                                  chunk_sizes, chunk_spp_for, display_path, rebuild_command, reference_key, resolve_scene,
                                  size_of)
 from mcrt.render import render
@@ -92,7 +92,7 @@ def installed_versions(backend: str) -> dict[str, str]:
     import drjit as dr
     import mitsuba as mi
 
-    from mcrt.mitsuba import variant_for
+    from mcrt.mitsuba_scene import variant_for
 
     return {"mitsuba_version": mi.__version__, "drjit_version": dr.__version__, "variant": variant_for(backend)}
 
@@ -169,7 +169,7 @@ def build_reference(
         With the chunk indices rendered by this call and those reused.
 
     The merged reference ``<directory>/<key>.exr`` and its manifest entry are
-    replaced together or not at all (:func:`mcrt.reference.manifest.commit_reference`:
+    replaced together or not at all (:func:`mcrt.groundtruth.manifest.commit_reference`:
     a crash between the two writes leaves the previous pair or the new one). Interrupting the build (KeyboardInterrupt, a killed
     process, a write error) keeps every finished chunk; calling it again
     renders only the missing ones.
@@ -197,7 +197,7 @@ def build_reference(
     tasks = [ChunkTask(scene, camera, w, h, s.max_depth, i, chunk_seed(base_seed, i), n, backend) for i, n in enumerate(sizes)]
     command = rebuild_command(scene, camera, (w, h), s.max_depth, spp, chunk_spp, base_seed)
 
-    from mcrt.imageio import ImageError, read_exr, write_exr
+    from mcrt.image_files import ImageError, read_exr, write_exr
 
     # -- reuse valid chunks ------------------------------------------------
     chunks: dict[int, RenderResult] = {}

@@ -5,7 +5,7 @@ next), so the progress bar's time left, which extrapolates from the spp done
 so far, stays honest while costs grow with spp.
 
 Timing: each renderer first renders once at 1 spp (seed
-:data:`~mcrt.report.config.WARMUP_SEED`) so that its kernels are compiled
+:data:`~mcrt.convergence.config.WARMUP_SEED`) so that its kernels are compiled
 before any timed render; every render's JIT compile time (Dr.Jit's kernel
 history) is recorded and subtracted, so ``time = wall_time - compile_time``
 is the render time. Renders synchronise before their clock stops.
@@ -27,7 +27,7 @@ import numpy as np
 import mcrt  # sets DRJIT_LIBLLVM_PATH before drjit loads
 from mcrt import metrics as M
 from mcrt.film import Progress, RenderResult
-from mcrt.report.config import WARMUP_SEED, RendererSpec, ReportConfig, default_cache_dir, render_seed
+from mcrt.convergence.config import WARMUP_SEED, RendererSpec, ReportConfig, default_cache_dir, render_seed
 from mcrt.scene import CANONICAL, Scene, load_scene
 
 #: The metrics stored for every render, with their plot labels.
@@ -123,7 +123,7 @@ def obtain_reference(cfg: ReportConfig, scene: Scene, *, progress: bool = True, 
     """The reference image and a description of where it came from.
 
     With ``cfg.reference`` 'auto' or 'committed', the committed Mitsuba ground
-    truth (:func:`mcrt.reference.load_reference`) for this scene, camera,
+    truth (:func:`mcrt.groundtruth.load_reference`) for this scene, camera,
     size and depth. Otherwise (or when there is none and the mode is 'auto')
     a render by ``cfg.reference_renderer`` at ``cfg.ref_spp()`` spp, cached as
     an EXR in ``cfg.cache_dir`` (default :func:`default_cache_dir`) under a
@@ -132,7 +132,7 @@ def obtain_reference(cfg: ReportConfig, scene: Scene, *, progress: bool = True, 
     size = (cfg.width, cfg.height)
     note = ""
     if cfg.reference in ("auto", "committed"):
-        from mcrt.reference import ReferenceUnavailable, load_reference, read_manifest, reference_key
+        from mcrt.groundtruth import ReferenceUnavailable, load_reference, read_manifest, reference_key
 
         try:
             ref = load_reference(scene, cfg.camera, size, cfg.max_depth)
@@ -159,7 +159,7 @@ def obtain_reference(cfg: ReportConfig, scene: Scene, *, progress: bool = True, 
     key = (f"{scene.name}_{cfg.camera}_{cfg.width}x{cfg.height}_d{cfg.max_depth}_{spec.kind}{'' if k is None else f'_k{k}'}"
            f"_{spp}spp_s{seed}_{scene.content_hash()[:12]}_{cfg.backend}_{_versions_key()}")
     path = cache / f"{key}.exr"
-    from mcrt.imageio import ImageError, read_exr, write_exr
+    from mcrt.image_files import ImageError, read_exr, write_exr
 
     ref = None
     if path.exists():

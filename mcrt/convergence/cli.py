@@ -1,4 +1,4 @@
-"""``mcrt report``: a thin command line over :func:`mcrt.report.build.run_report`.
+"""``mcrt report``: a thin command line over :func:`mcrt.convergence.build.run_report`.
 
 Exit codes (those of every mcrt command, :mod:`mcrt.exitcodes`): 0 report
 written, 2 unusable input (bad option, scene or missing reference with
@@ -15,7 +15,7 @@ from dataclasses import replace
 from pathlib import Path
 
 from mcrt.exitcodes import EXIT_OK, EXIT_UNUSABLE
-from mcrt.report.config import PRESET_HELP, PRESETS, parse_ladder, preset_config
+from mcrt.convergence.config import PRESET_HELP, PRESETS, parse_ladder, preset_config
 
 
 def _positive(text: str) -> int:
@@ -124,7 +124,7 @@ _OPTION_OF = {"scene": "--scene", "camera": "--camera", "width": "--res", "heigh
 
 
 def cmd_report(args) -> int:
-    from mcrt.report.build import run_report
+    from mcrt.convergence.build import run_report
     from mcrt.scene import SceneError
 
     try:
@@ -133,7 +133,7 @@ def cmd_report(args) -> int:
         print(f"mcrt report: {e}", file=sys.stderr)
         return EXIT_UNUSABLE
     out = Path(args.out) if args.out else Path("reports") / cfg.name
-    # The same subcommand whether it came through `mcrt` or `python -m mcrt.report.cli`.
+    # The same subcommand whether it came through `mcrt` or `python -m mcrt.convergence.cli`.
     command = "mcrt " + " ".join(shlex.quote(a) for a in sys.argv[1:])
     t0 = time.perf_counter()
     try:
@@ -166,7 +166,7 @@ def register(subparsers) -> None:
 
 
 def main(argv=None) -> int:
-    """``python -m mcrt.report.cli ...``: the report command alone."""
+    """``python -m mcrt.convergence.cli ...``: the report command alone."""
     ap = argparse.ArgumentParser(prog="mcrt")
     register(ap.add_subparsers(dest="command", required=True))
     args = ap.parse_args(argv)

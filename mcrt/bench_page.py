@@ -146,7 +146,7 @@ def _case_text(c: dict, skip: str = "") -> str:
 
 
 def _machine(data: dict) -> list[str]:
-    from mcrt.mitsuba import VARIANTS
+    from mcrt.mitsuba_scene import VARIANTS
 
     p = data["provenance"]
     m, v = p["machine"], p["versions"]

@@ -21,9 +21,9 @@ import os
 from pathlib import Path
 from typing import Any, Iterator
 
-from mcrt.reference.errors import CorruptReference
+from mcrt.groundtruth.errors import CorruptReference
 from mcrt.util import atomic
-from mcrt.reference.spec import CHUNK_DIR_NAME, MANIFEST_NAME, REFERENCE_DIR, SCHEMA, display_path
+from mcrt.groundtruth.spec import CHUNK_DIR_NAME, MANIFEST_NAME, REFERENCE_DIR, SCHEMA, display_path
 
 
 def sha256_file(path: str | os.PathLike) -> str:

@@ -49,15 +49,15 @@ Modules: :mod:`.spec` (names, seeds, rebuild commands, the standard set),
 
 from __future__ import annotations
 
-from mcrt.reference.build import BuildResult, build_reference
-from mcrt.reference.cli import register
-from mcrt.reference.errors import CorruptReference, MissingReference, ReferenceUnavailable, StaleReference
-from mcrt.reference.load import load_reference
-from mcrt.reference.manifest import read_manifest, sha256_file
-from mcrt.reference.spec import (CHUNK_DIR_NAME, DEFAULT_WORKERS, MANIFEST_NAME, REFERENCE_DIR, SCHEMA, STANDARD,
+from mcrt.groundtruth.build import BuildResult, build_reference
+from mcrt.groundtruth.cli import register
+from mcrt.groundtruth.errors import CorruptReference, MissingReference, ReferenceUnavailable, StaleReference
+from mcrt.groundtruth.load import load_reference
+from mcrt.groundtruth.manifest import read_manifest, sha256_file
+from mcrt.groundtruth.spec import (CHUNK_DIR_NAME, DEFAULT_WORKERS, MANIFEST_NAME, REFERENCE_DIR, SCHEMA, STANDARD,
                                  VERIFY_BASE_SEED, ReferenceSpec, chunk_seed, rebuild_command, reference_key)
-from mcrt.reference.text import format_table, format_verify
-from mcrt.reference.verify import VerifyResult, list_references, verify_references
+from mcrt.groundtruth.text import format_table, format_verify
+from mcrt.groundtruth.verify import VerifyResult, list_references, verify_references
 
 __all__ = [
     "REFERENCE_DIR",

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from mcrt.report.content import Block
+from mcrt.convergence.content import Block
 
 
 def _text(t: str) -> str:

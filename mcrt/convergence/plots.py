@@ -15,8 +15,8 @@ from pathlib import Path
 
 import numpy as np
 
-from mcrt.report.run import METRICS, ReportData
-from mcrt.report.summary import Summary
+from mcrt.convergence.run import METRICS, ReportData
+from mcrt.convergence.summary import Summary
 
 COLORS = ("#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b")
 

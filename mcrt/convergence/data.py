@@ -8,8 +8,8 @@ from pathlib import Path
 from typing import Any
 
 from mcrt import metrics
-from mcrt.report.run import Measurement, ReportData
-from mcrt.report.summary import Summary
+from mcrt.convergence.run import Measurement, ReportData
+from mcrt.convergence.summary import Summary
 from mcrt.util.jsonsafe import json_safe
 
 #: Schema tag of data.json; bump the number when a field changes meaning or goes away.

@@ -98,7 +98,7 @@ def png_base64(img: np.ndarray) -> str:
 
 def render_figures(fig: dict) -> list[tuple[str, str, str]]:
     """(title, caption, base64 PNG) for the feedback page."""
-    from mcrt.imageio import tonemap
+    from mcrt.image_files import tonemap
 
     out = []
     if "submission" not in fig:

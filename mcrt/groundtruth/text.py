@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from typing import Any
 
-from mcrt.reference.spec import depth_label
-from mcrt.reference.verify import VerifyResult
+from mcrt.groundtruth.spec import depth_label
+from mcrt.groundtruth.verify import VerifyResult
 
 
 def format_table(rows: list[dict[str, Any]]) -> str:

@@ -110,7 +110,7 @@ class ReportConfig:
     calibration_spp: int | None = None  # None: max(2, largest rung // 16)
     #: Efficiency ratios are taken against this renderer (its text, e.g. 'mitsuba').
     baseline: str | None = None
-    #: 'auto': the committed Mitsuba reference (mcrt.reference) when there is
+    #: 'auto': the committed Mitsuba reference (mcrt.groundtruth) when there is
     #: one, else a render; 'committed': only that; 'render': always render.
     reference: str = "auto"
     reference_renderer: str = "mitsuba"

@@ -3,7 +3,7 @@
 Cells are shown at native resolution, enlarged by an integer factor (nearest
 neighbour) when small; of a large image (over :data:`CELL_MAX` pixels) a
 central crop is shown at native resolution, so that noise stays visible. Colours: images use
-:func:`mcrt.imageio.tonemap` (exposure 0, sRGB); FLIP maps use magma on
+:func:`mcrt.image_files.tonemap` (exposure 0, sRGB); FLIP maps use magma on
 [0, 1]; relative-error maps use viridis on log10 of the per-pixel relative
 squared error (mean over channels of (x - ref)^2 / (ref^2 + eps)).
 """
@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 from PIL import Image, ImageDraw, ImageFont
 
-from mcrt.imageio import tonemap
+from mcrt.image_files import tonemap
 
 #: Small images are enlarged to at least CELL_MIN pixels wide; of images wider than
 #: CELL_MAX a central CROP x CROP crop is shown.

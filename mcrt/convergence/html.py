@@ -10,7 +10,7 @@ import base64
 from html import escape
 from pathlib import Path
 
-from mcrt.report.content import Block
+from mcrt.convergence.content import Block
 
 STYLE = """
 body { font-family: system-ui, -apple-system, "Segoe UI", Helvetica, Arial, sans-serif; margin: 2em auto; max-width: 1150px;

@@ -8,10 +8,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Sequence
 
-from mcrt.reference.build import installed_versions
-from mcrt.reference.errors import MissingReference
-from mcrt.reference.manifest import read_manifest, sha256_file
-from mcrt.reference.spec import (MANIFEST_NAME, REFERENCE_DIR, VERIFY_BASE_SEED, VERIFY_MIN_SPP, VERIFY_PATHS,
+from mcrt.groundtruth.build import installed_versions
+from mcrt.groundtruth.errors import MissingReference
+from mcrt.groundtruth.manifest import read_manifest, sha256_file
+from mcrt.groundtruth.spec import (MANIFEST_NAME, REFERENCE_DIR, VERIFY_BASE_SEED, VERIFY_MIN_SPP, VERIFY_PATHS,
                                  chunk_seed, data_path, display_path, rebuild_command)
 from mcrt.scene import Scene, load_scene
 from mcrt.util.progress import log
@@ -116,7 +116,7 @@ def verify_references(
     ``seed`` the verdict is reproducible, and a failing reference can be
     re-checked with other seeds.
     """
-    from mcrt.imageio import ImageError, read_exr
+    from mcrt.image_files import ImageError, read_exr
     from mcrt.scene import SceneError
 
     directory = Path(directory)

@@ -12,9 +12,9 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from mcrt.report.data import CONVENTIONS
-from mcrt.report.run import ReportData
-from mcrt.report.summary import Summary
+from mcrt.convergence.data import CONVENTIONS
+from mcrt.convergence.run import ReportData
+from mcrt.convergence.summary import Summary
 
 Block = tuple
 
@@ -141,7 +141,7 @@ def build_document(data: ReportData, s: Summary, files: dict[str, Any]) -> list[
     conv = [f"{k}: {v}" for k, v in CONVENTIONS.items()]
     conv.append(f"FLIP settings used here: HDR mode, tone mapper {fp['tonemapper']}, {fp['ppd']:g} pixels per degree, "
                 f"exposures {fp['startExposure']:.4f} to {fp['stopExposure']:.4f} stops in {fp['numExposures']} steps (from the reference).")
-    conv.append("Image previews: linear RGB x 2^0, clipped to [0, 1], sRGB-encoded, 8 bits (mcrt.imageio.tonemap).")
+    conv.append("Image previews: linear RGB x 2^0, clipped to [0, 1], sRGB-encoded, 8 bits (mcrt.image_files.tonemap).")
     conv.append(f"Reference noise floor: MSE {fmt(data.floor['mse'])}, relMSE {fmt(data.floor['relmse'])}"
                 + ("" if data.floor.get("known") else " (unknown: the reference has no variance; taken as 0)") + ".")
     conv.append("Render seeds: each (renderer, seed, spp) renders with its own seed, a hash of the three (column render_seed "

@@ -12,13 +12,13 @@ import sys
 from pathlib import Path
 
 from mcrt.exitcodes import EXIT_FAILED, EXIT_OK, EXIT_UNUSABLE
-from mcrt.reference.build import build_reference
-from mcrt.reference.errors import ReferenceUnavailable
-from mcrt.reference.spec import (CHUNK_DIR_NAME, DEFAULT_BASE_SEED, DEFAULT_SPP, DEFAULT_WORKERS, MANIFEST_NAME, REFERENCE_DIR,
+from mcrt.groundtruth.build import build_reference
+from mcrt.groundtruth.errors import ReferenceUnavailable
+from mcrt.groundtruth.spec import (CHUNK_DIR_NAME, DEFAULT_BASE_SEED, DEFAULT_SPP, DEFAULT_WORKERS, MANIFEST_NAME, REFERENCE_DIR,
                                  STANDARD, VERIFY_BASE_SEED, VERIFY_MIN_SPP, VERIFY_PATHS, display_path, reference_key,
                                  resolve_scene, size_of, standard_spp)
-from mcrt.reference.text import format_table, format_verify
-from mcrt.reference.verify import list_references, verify_references
+from mcrt.groundtruth.text import format_table, format_verify
+from mcrt.groundtruth.verify import list_references, verify_references
 from mcrt.scene import Scene
 
 

@@ -3,7 +3,7 @@
 Efficiency is 1 / (MSE x time): the inverse of the work needed for a given
 error (an unbiased estimator's MSE x time is constant once overheads are
 amortised). MSE here is the excess over the reference's own noise floor
-(see :data:`mcrt.report.data.CONVENTIONS`); time is render time (wall
+(see :data:`mcrt.convergence.data.CONVENTIONS`); time is render time (wall
 minus JIT compile). A renderer's summary efficiency pools the upper half of
 its ladder, where fixed costs per render matter least:
 
@@ -23,8 +23,8 @@ from typing import Any
 
 import numpy as np
 
-from mcrt.report.slopes import SlopeFit, fit_slope
-from mcrt.report.run import METRICS, Measurement, ReportData
+from mcrt.convergence.slopes import SlopeFit, fit_slope
+from mcrt.convergence.run import METRICS, Measurement, ReportData
 
 #: Metrics whose slopes are fitted (against spp and against time).
 FIT_METRICS = ("rmse", "relmse", "dssim", "flip")

@@ -27,10 +27,10 @@ CHUNK_PATHS = 1 << 24
 DEFAULT_SPP = 16384
 #: Base seed of builds; chunk seeds are hashes of (base seed, chunk index).
 DEFAULT_BASE_SEED = 0
-#: Base seed of the fresh renders of :func:`mcrt.reference.verify_references` (never used
+#: Base seed of the fresh renders of :func:`mcrt.groundtruth.verify_references` (never used
 #: by a build with the default base seed).
 VERIFY_BASE_SEED = 1_000_003
-#: Paths per reference that :func:`mcrt.reference.verify_references` renders by default
+#: Paths per reference that :func:`mcrt.groundtruth.verify_references` renders by default
 #: (at least :data:`VERIFY_MIN_SPP` samples per pixel).
 VERIFY_PATHS = 1 << 22
 VERIFY_MIN_SPP = 256

@@ -40,5 +40,5 @@ __all__ = ["SCHEMA", "PRESETS", "ReportConfig", "RendererSpec", "ReportOutput", 
 
 def __getattr__(name: str):
     if name in _API:
-        return getattr(importlib.import_module(f"mcrt.report.{_API[name]}"), name)
-    raise AttributeError(f"module 'mcrt.report' has no attribute {name!r}")
+        return getattr(importlib.import_module(f"mcrt.convergence.{_API[name]}"), name)
+    raise AttributeError(f"module 'mcrt.convergence' has no attribute {name!r}")

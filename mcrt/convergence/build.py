@@ -1,6 +1,6 @@
 """A report folder: run the ladder, then write every file of ``reports/<name>/``.
 
-:func:`run_report` renders and measures (:func:`mcrt.report.run.run_ladder`)
+:func:`run_report` renders and measures (:func:`mcrt.convergence.run.run_ladder`)
 and :func:`write_report` writes the plots, image strips, tables, data.json,
 index.md and index.html from the measurements; :func:`main_report` is the
 project's main job (the ``canonical`` preset).
@@ -11,7 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 from pathlib import Path
 
-from mcrt.report.config import ReportConfig, preset_config
+from mcrt.convergence.config import ReportConfig, preset_config
 
 #: Files a report folder holds (SVGs only when asked for).
 REPORT_FILES = ("index.html", "index.md", "data.json", "table.csv", "error_vs_spp.png", "error_vs_time.png",
@@ -22,21 +22,21 @@ REPORT_FILES = ("index.html", "index.md", "data.json", "table.csv", "error_vs_sp
 @dataclass
 class ReportOutput:
     folder: Path
-    data: "object"  # mcrt.report.run.ReportData
-    summary: "object"  # mcrt.report.summary.Summary
+    data: "object"  # mcrt.convergence.run.ReportData
+    summary: "object"  # mcrt.convergence.summary.Summary
     files: list[Path]
 
 
 def write_report(data, out: str | Path, *, clean: bool = True) -> ReportOutput:
     """Write every file of a report for measured ``data`` into ``out``."""
-    from mcrt.report.content import build_document
-    from mcrt.report.data import data_dict, write_csv
+    from mcrt.convergence.content import build_document
+    from mcrt.convergence.data import data_dict, write_csv
     from mcrt.util.jsonsafe import write_json
-    from mcrt.report.html import write as write_html
-    from mcrt.report.images import write_strips
-    from mcrt.report.markdown import write as write_markdown
-    from mcrt.report.plots import write_plots
-    from mcrt.report.summary import summarize
+    from mcrt.convergence.html import write as write_html
+    from mcrt.convergence.images import write_strips
+    from mcrt.convergence.markdown import write as write_markdown
+    from mcrt.convergence.plots import write_plots
+    from mcrt.convergence.summary import summarize
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
@@ -59,7 +59,7 @@ def write_report(data, out: str | Path, *, clean: bool = True) -> ReportOutput:
 
 def run_report(cfg: ReportConfig, out: str | Path | None = None, *, progress: bool = True, command: str | None = None) -> ReportOutput:
     """Render the ladder of ``cfg``, then write the report to ``out`` (default reports/<name>)."""
-    from mcrt.report.run import run_ladder
+    from mcrt.convergence.run import run_ladder
 
     data = run_ladder(cfg, progress=progress, command=command)
     return write_report(data, out if out is not None else Path("reports") / cfg.name)
