@@ -1,5 +1,14 @@
 """Grading a class: discover submissions, prepare once, grade in parallel, summarise.
 
+One class runner for both modes: image mode (:func:`image_plan`) and code mode
+(:func:`mcrt.grade.codemode.code_plan`) differ only in the :class:`~mcrt.grade.run.Plan` they hand
+:func:`grade_class` (the submissions, what a worker grades them with, the limits, the summary's note);
+everything below holds for both. In code mode a worker runs each check of a student's module in a
+sandboxed process of its own (bubblewrap ``--die-with-parent``, or the fallback's runner with its own
+parent-death signal), so a ``kill -9`` of ``mcrt grade`` takes the workers and with them every sandbox.
+Processes rather than threads for code mode too: one supervisor that can time out, replace and outlive a
+worker (a thread can be neither killed nor bounded in memory), and the chain of parent-death signals.
+
 Students are graded by a small supervised pool of worker processes
 (``python -m mcrt.grade._worker``: fresh interpreters, so no Dr.Jit or thread
 state is inherited, and unlike ``multiprocessing``'s spawn method the

@@ -69,7 +69,9 @@ Without bubblewrap, or where namespaces are forbidden (probed by running
 falls back to Landlock (read-only file system, nothing made even in the
 work folder, readable only the Python installation without mcrt, Mitsuba
 and Dr.Jit and system folders), the same seccomp filter, rlimits, the
-unprivileged uid and a new session; the call's folders then go where that
+unprivileged uid and a new session (the runner, in a session of its own, still
+dies with the process that started it: ``PR_SET_PDEATHSIG``, set after the switch
+of user, which clears it); the call's folders then go where that
 uid can reach them. Where neither is possible code mode is refused
 (:class:`SandboxError`) unless the instructor passes
 ``--allow-unisolated-code`` (:func:`allow_unisolated`). ``MCRT_SANDBOX``:
@@ -93,6 +95,11 @@ they are decoded, and a submission folder is copied without following links
 
 A crash, a hang, a memory blow-up or a refused operation is a graded failure
 of that check, with the student's traceback.
+
+A class is graded by image mode's class runner (:func:`mcrt.grade.batch.grade_class`, given
+:func:`code_plan`): worker processes, run.json, resume; a worker grades a student by
+:meth:`CodeContext.grade`. The shared-import warning (:func:`shared_import_failure`) looks at the
+students graded by this run, not those kept from an earlier one.
 """
 
 from __future__ import annotations
@@ -860,7 +867,7 @@ def _fallback_work(tmp: Path, uid: int | None) -> Path:
 def _start_runner(argv: list[str], cwd: Path, env: dict, out, fds: list[int], mon: "_Monitor",
                   args_r: int | None) -> subprocess.Popen:
     """Start the runner in a new session, its stdout and stderr to ``out``, passing it only ``fds``."""
-    # No preexec_fn (unsafe with the threads that grade students in parallel): a new session for
+    # No preexec_fn (unsafe in a process with threads, such as the monitor's): a new session for
     # killing the whole group is done by Popen itself; the runner sets its own resource limits,
     # then switches to uid, before anything of the student's loads.
     try:
