@@ -92,6 +92,16 @@ def running(pid: int) -> bool:
         return False
 
 
+def assert_all_die(pids: set[int], *, within: float = 10.0) -> None:
+    """Every process of ``pids`` ends within ``within`` seconds (the kernel's moment to deliver a parent-death signal)."""
+    t = time.monotonic()
+    alive = set(pids)
+    while alive and time.monotonic() - t < within:
+        alive = {p for p in alive if running(p)}
+        time.sleep(0.05)
+    assert not alive, f"still running after the batch was killed: {alive}"
+
+
 def assert_consistent(out: Path) -> list[dict]:
     """Every row of grades.csv agrees with that student's results.json and with run.json; returns the rows.
 
@@ -131,13 +141,8 @@ def test_a_killed_batch_stops_its_workers_says_it_is_incomplete_and_resumes(work
         if proc.poll() is None:
             proc.kill()
     assert len(workers) >= 2
-    # No worker outlives the batch (PR_SET_PDEATHSIG): give the kernel a moment to deliver the signal.
-    t = time.monotonic()
-    alive = workers
-    while alive and time.monotonic() - t < 10:
-        alive = {p for p in alive if running(p)}
-        time.sleep(0.05)
-    assert not alive, f"workers still running after the batch was killed: {alive}"
+    # No worker outlives the batch (PR_SET_PDEATHSIG).
+    assert_all_die(workers)
 
     run = read_run(out)
     assert run["complete"] is False and run["finished"] is None and run["pending"]

@@ -524,7 +524,7 @@ def code_class(scene, workdir):
 
 @pytest.fixture(scope="session")
 def code_graded(code_class, assignment, context, workdir):
-    from mcrt.grade.codemode import grade_code_class
+    from mcrt.grade.batch import grade_code_class
 
     d, target = code_class
     res = grade_code_class(d, assignment, workdir / "code_out", jobs=2, timeout=5, context=context)

@@ -374,7 +374,7 @@ BATCH = """
 import sys
 from pathlib import Path
 from mcrt.grade.assignment import assignment_from_dict
-from mcrt.grade.codemode import grade_code_class
+from mcrt.grade.batch import grade_code_class
 a = assignment_from_dict({"name": "sbx", "title": "sandbox", "scene": {"camera": "near", "width": 32, "height": 32, "spp": 64},
                           "code": {"timeout": 20, "memory_mb": 1024, "checks": {"sample_cosine_hemisphere": {"points": 10}}}})
 grade_code_class(Path(sys.argv[1]), a, Path(sys.argv[2]), jobs=2)

@@ -28,6 +28,7 @@ import pytest
 from test_sandbox import _find_comm  # tests/ is on sys.path (pytest's default import mode)
 
 from mcrt.grade import codemode
+from mcrt.grade.batch import grade_code_class
 
 REPO = Path(__file__).resolve().parent.parent
 MCRT = [sys.executable, "-c", "import sys; from mcrt.cli import main; sys.exit(main(sys.argv[1:]))"]
@@ -424,7 +425,7 @@ def test_a_module_every_student_fails_to_import_is_reported_as_the_graders_probl
         (cls / f"{sid}.py").write_text("from scipy import stats\n\ndef sample_cosine_hemisphere(u1, u2):\n    return None\n")
     a = assignment_from_dict({"name": "sbx", "title": "sandbox", "scene": {"camera": "near", "width": 32, "height": 32, "spp": 64},
                               "code": {"timeout": 20, "memory_mb": 1024, "checks": {"sample_cosine_hemisphere": {"points": 10}}}})
-    codemode.grade_code_class(cls, a, tmp_path / "out", jobs=1)
+    grade_code_class(cls, a, tmp_path / "out", jobs=0)  # in this process: the monkeypatches hold there
     err = capsys.readouterr().err
     assert "every student's module failed to import scipy" in err and "grader's installation" in err, err
     assert "failed to import scipy" in (tmp_path / "out" / "summary.md").read_text()

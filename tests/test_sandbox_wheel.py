@@ -39,7 +39,7 @@ import sys
 from pathlib import Path
 import mcrt
 from mcrt.grade.assignment import assignment_from_dict
-from mcrt.grade.codemode import grade_code_class
+from mcrt.grade.batch import grade_code_class
 print("mcrt from", Path(mcrt.__file__).resolve())
 a = assignment_from_dict({"name": "sbx", "title": "sandbox", "scene": {"camera": "near", "width": 32, "height": 32, "spp": 64},
                           "code": {"timeout": 30, "memory_mb": 1024, "checks": {"sample_cosine_hemisphere": {"points": 10}}}})

@@ -16,7 +16,7 @@ API (imported lazily, so ``mcrt --help`` stays fast):
 * :func:`grade_submission`, :func:`grade_image` -> :class:`StudentResult` (``mcrt.grade.grader``, which runs
   the stages of ``mcrt.grade.stages``; results and points: ``mcrt.grade.scoring``)
 * :func:`discover` (``mcrt.grade.submissions``)
-* :func:`grade_code`, :func:`grade_code_class` (``mcrt.grade.codemode``)
+* :func:`grade_code` (``mcrt.grade.codemode``), :func:`grade_code_class` (``mcrt.grade.batch``)
 * :func:`register` adds ``grade`` to the ``mcrt`` command line (``mcrt.grade.cli``)
 """
 
@@ -30,7 +30,7 @@ _API = {
     "grade_class": "batch", "ClassResult": "batch",
     "grade_submission": "grader", "grade_image": "grader", "StudentResult": "scoring", "TestResult": "scoring",
     "discover": "submissions", "Submission": "submissions",
-    "grade_code": "codemode", "grade_code_class": "codemode",
+    "grade_code": "codemode", "grade_code_class": "batch",
     "register": "cli", "main": "cli",
 }
 

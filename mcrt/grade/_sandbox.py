@@ -267,6 +267,18 @@ def _drop_to(uid: int) -> str:
     return f"uid {os.getuid()} (unprivileged)"
 
 
+def _die_with(parent: int | None) -> None:
+    """Be killed when the grader (pid ``parent``) dies: ``prctl(PR_SET_PDEATHSIG, SIGKILL)``, set after the switch
+    of user, which clears it; if the grader is gone already, stop. Never left running after a ``kill -9`` of the
+    grader, although the runner is in a session of its own."""
+    if parent is None:
+        return
+    if ctypes.CDLL(None, use_errno=True).prctl(1, 9, 0, 0, 0) != 0:  # 1: PR_SET_PDEATHSIG, 9: SIGKILL
+        raise OSError(ctypes.get_errno(), "prctl(PR_SET_PDEATHSIG) failed")
+    if os.getppid() != int(parent):
+        os._exit(1)
+
+
 def _mount_work(uid: int | None, size: int, nr_inodes: int) -> str:
     """A fresh tmpfs on WORKDIR, owned by ``uid``, of ``size`` bytes and ``nr_inodes`` files and folders at most."""
     libc = ctypes.CDLL(None, use_errno=True)
@@ -436,6 +448,7 @@ def _lock_down(task: dict) -> dict:
     os.chdir(WORKDIR)  # after the mount, which the current folder would otherwise hide
     if uid is not None or os.geteuid() == 0:
         info["user"] = _drop_to(int(uid) if uid is not None else -1)
+    _die_with(task.get("parent"))
     require = set(task.get("require", []))
     rules = task.get("landlock")
     info["landlock"] = _landlock(rules) if rules is not None else "off (bubblewrap)"

@@ -41,15 +41,27 @@ def write_message(f, obj) -> None:
     f.flush()
 
 
-def grade_and_write(sub: Submission, ctx: Context, out: Path) -> StudentResult:
-    """Grade one student and write their results.json and feedback.html; a crash of the grader is a graded failure."""
+def criteria_of(ctx) -> list | None:
+    """The rubric's criteria for a failure's zero result: the image rubric (None) or the code checks."""
+    return None if isinstance(ctx, Context) else ctx.criteria
+
+
+def grade_and_write(sub: Submission, ctx, out: Path) -> StudentResult:
+    """Grade one student and write their results.json and feedback.html; a crash of the grader is a graded failure.
+
+    ``ctx``: a :class:`~mcrt.grade.expected.Context` grades images, a :class:`~mcrt.grade.codemode.CodeContext`
+    a module (the one class runner serves both modes).
+    """
     try:
-        res = grade_submission(sub, ctx)
-        res.details.setdefault("reference_source", ctx.references[res.details.get("orientation", {}).get("camera", ctx.assignment.camera)].source)
+        if isinstance(ctx, Context):
+            res = grade_submission(sub, ctx)
+            res.details.setdefault("reference_source", ctx.references[res.details.get("orientation", {}).get("camera", ctx.assignment.camera)].source)
+        else:
+            res = ctx.grade(sub)
     except Exception as e:  # noqa: BLE001 - a bug in the grader: graded failure, never a crash of the batch
         res = error_result(sub.student, ctx.assignment, STATUS_ERROR,
                            f"the grader failed on this submission ({type(e).__name__}: {' '.join(str(e).split())[:200]})",
-                           format_exception())
+                           format_exception(), criteria=criteria_of(ctx))
     try:
         write_student(res, ctx.assignment, out)
     except Exception as e:  # noqa: BLE001 - the result still reaches grades.csv

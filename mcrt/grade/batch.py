@@ -1,5 +1,14 @@
 """Grading a class: discover submissions, prepare once, grade in parallel, summarise.
 
+One class runner for both modes: image mode (:func:`image_plan`) and code mode
+(:func:`mcrt.grade.codemode.code_plan`) differ only in the :class:`~mcrt.grade.run.Plan` they hand
+:func:`grade_class` (the submissions, what a worker grades them with, the limits, the summary's note);
+everything below holds for both. In code mode a worker runs each check of a student's module in a
+sandboxed process of its own (bubblewrap ``--die-with-parent``, or the fallback's runner with its own
+parent-death signal), so a ``kill -9`` of ``mcrt grade`` takes the workers and with them every sandbox.
+Processes rather than threads for code mode too: one supervisor that can time out, replace and outlive a
+worker (a thread can be neither killed nor bounded in memory), and the chain of parent-death signals.
+
 Students are graded by a small supervised pool of worker processes
 (``python -m mcrt.grade._worker``: fresh interpreters, so no Dr.Jit or thread
 state is inherited, and unlike ``multiprocessing``'s spawn method the
@@ -43,7 +52,8 @@ from multiprocessing.connection import wait
 from pathlib import Path
 
 from mcrt.grade import run as run_record
-from mcrt.grade._worker import grade_and_write, read_message, write_message
+from mcrt.grade.run import DEFAULT_MEMORY_MB, Plan
+from mcrt.grade._worker import criteria_of, grade_and_write, read_message, write_message
 from mcrt.grade.assignment import Assignment
 from mcrt.grade.expected import Context, prepare_context
 from mcrt.grade.grader import STATUS_ERROR, STATUS_TIMEOUT, StudentResult, error_result
@@ -51,7 +61,6 @@ from mcrt.grade.outputs import write_class, write_student
 from mcrt.grade.submissions import Submission, discover
 from mcrt.util.progress import log
 
-DEFAULT_MEMORY_MB = 4096
 STARTUP_TIMEOUT = 300.0
 _THREAD_ENV = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1", "NUMEXPR_NUM_THREADS": "1"}
 
@@ -70,32 +79,58 @@ class ClassResult:
         return all(r.status == "graded" for r in self.results)
 
 
+def image_plan(submissions, assignment: Assignment, *, timeout, cache_dir, single, student, context, memory_mb,
+               log) -> Plan:
+    """Image mode: the submissions' images, the prepared references, and the catalogue's power at the end."""
+    subs = discover(submissions, single=single, student=student)
+    log(f"mcrt grade: {len(subs)} submission(s) in {submissions}")
+    ctx = context or prepare_context(assignment, cache_dir, log=log)
+    src = ctx.references[assignment.camera].source
+    log(f"reference: {src}; catalogue of {len(ctx.mutants)} bugs ready ({ctx.prepare_time:.1f} s)")
+
+    def finish(results):
+        from mcrt.grade.explain.catalogue import catalogue_power
+
+        try:
+            return "", catalogue_power(ctx)
+        except Exception:  # noqa: BLE001 - a courtesy table; never stop the batch for it
+            return "", None
+
+    return Plan(subs, ctx, src, f"Reference: {src}.", timeout or assignment.timeout, memory_mb or DEFAULT_MEMORY_MB,
+                image_context=ctx, finish=finish)
+
+
 def grade_class(submissions: str | os.PathLike, assignment: Assignment, out: str | os.PathLike, *, jobs: int = 1,
                 timeout: float | None = None, cache_dir=None, single: bool = False, student: str | None = None,
-                context: Context | None = None, memory_mb: int = DEFAULT_MEMORY_MB, fresh: bool = False,
-                log=log) -> ClassResult:
+                context: Context | None = None, memory_mb: int | None = None, fresh: bool = False,
+                mode: str = "image", allow_unisolated_code: bool = False, log=log) -> ClassResult:
     """Grade every submission under ``submissions`` into ``out`` (see the module docstring).
 
     ``jobs`` worker processes (0: grade in this process, without timeouts);
-    ``timeout`` seconds per student (default: the assignment's); ``context``
-    reuses a prepared :class:`~mcrt.grade.expected.Context`; ``fresh``
-    grades everyone again instead of keeping the unchanged results of an
-    earlier run into ``out``.
+    ``timeout`` seconds per student (default: the assignment's; code mode: per check, default ``code.timeout``);
+    ``memory_mb`` per worker (code mode: per student process, default ``code.memory_mb``); ``context``
+    reuses a prepared :class:`~mcrt.grade.expected.Context`; ``fresh`` grades everyone again instead of keeping
+    the unchanged results of an earlier run into ``out``; ``mode`` "code" grades Python modules in the sandbox
+    (:mod:`mcrt.grade.codemode`; ``allow_unisolated_code``: even where nothing isolates them).
     """
     t0 = time.perf_counter()
     out = Path(out)
     log = log or (lambda s: None)
     with run_record.locked(out):
-        subs = discover(submissions, single=single, student=student)
-        log(f"mcrt grade: {len(subs)} submission(s) in {submissions}")
-        ctx = context or prepare_context(assignment, cache_dir, log=log)
-        src = ctx.references[assignment.camera].source
-        log(f"reference: {src}; catalogue of {len(ctx.mutants)} bugs ready ({ctx.prepare_time:.1f} s)")
-        timeout = timeout or assignment.timeout
-        digest = run_record.grader_digest(assignment, reference_source=src, timeout=timeout, memory_mb=memory_mb)
+        opts = dict(timeout=timeout, cache_dir=cache_dir, single=single, student=student, context=context,
+                    memory_mb=memory_mb, log=log)
+        if mode == "code":
+            from mcrt.grade.codemode import code_plan
+
+            plan = code_plan(submissions, assignment, allow_unisolated_code=allow_unisolated_code, **opts)
+        else:
+            plan = image_plan(submissions, assignment, **opts)
+        subs = plan.subs
+        digest = run_record.grader_digest(assignment, reference_source=plan.source, timeout=plan.timeout,
+                                          memory_mb=plan.memory_mb, **plan.digest)
         keys = {s.student: run_record.submission_key(s, digest) for s in subs}
         run, kept = run_record.start(out, assignment.name, digest, keys, fresh=fresh)
-        note = f"Reference: {src}."
+        note = plan.note
         odd = [f"{s.student} ({s.special})" for s in subs if getattr(s, "special", None)]
         if odd:  # links, FIFOs, devices where a hand-in should be: never opened, graded 0, and said here
             note += " Not regular files, never followed or opened (graded 0): " + ", ".join(odd) + "."
@@ -103,9 +138,10 @@ def grade_class(submissions: str | os.PathLike, assignment: Assignment, out: str
             log(f"kept {len(kept)} result(s) of an earlier run of {assignment.name} in {out} (unchanged submissions; "
                 f"--fresh grades them again); grading the other {len(subs) - len(kept)}")
 
-        def summarise(*, final: bool = False, power=None) -> dict:
-            return write_class(run.results(), assignment, out, elapsed=time.perf_counter() - t0, context_note=note,
-                               power=power, pending=[] if final else sorted(run.pending) or None)
+        def summarise(*, final: bool = False, power=None, extra: str = "") -> dict:
+            return write_class(run.results(), assignment, out, elapsed=time.perf_counter() - t0,
+                               context_note=f"{extra}{note}", criteria=plan.criteria, power=power,
+                               pending=[] if final else sorted(run.pending) or None)
 
         summarise()
 
@@ -117,21 +153,16 @@ def grade_class(submissions: str | os.PathLike, assignment: Assignment, out: str
         staging = out / run_record.STAGING
         shutil.rmtree(staging, ignore_errors=True)  # what a killed run left half-written
         todo = [s for s in subs if s.student not in kept]
-        graded = run_pool(todo, ctx, staging, jobs=jobs, timeout=timeout, memory_mb=memory_mb, log=log, on_done=done,
-                          log_dir=out, already=len(kept), total=len(subs))
+        graded = run_pool(todo, plan.ctx, staging, jobs=jobs, timeout=plan.timeout, memory_mb=plan.memory_mb, log=log,
+                          on_done=done, log_dir=out, already=len(kept), total=len(subs))
         shutil.rmtree(staging, ignore_errors=True)
-        from mcrt.grade.explain.catalogue import catalogue_power
-
-        try:
-            power = catalogue_power(ctx)
-        except Exception:  # noqa: BLE001 - a courtesy table; never stop the batch for it
-            power = None
-        summary = summarise(final=True, power=power)
+        extra, power = plan.finish(graded)
+        summary = summarise(final=True, power=power, extra=extra)
         run.finished = run_record.utc_now()  # last: a run killed before this line is resumed (with nothing left to do)
         run.save()
     by_id = {r.student: r for r in run.results()}  # the kept ones: what grades.csv holds of them
     by_id.update((r.student, r) for r in graded)  # this run's: everything
-    return ClassResult([by_id[s.student] for s in subs], summary, out, time.perf_counter() - t0, ctx)
+    return ClassResult([by_id[s.student] for s in subs], summary, out, time.perf_counter() - t0, plan.image_context)
 
 
 # --------------------------------------------------------------------------
@@ -329,7 +360,12 @@ class _Pool:
         """A zero result for ``w``'s student, saying why, written like any other."""
         idx, sub = w.task
         a = self.ctx.assignment
-        res = error_result(sub.student, a, status, message)
+        res = error_result(sub.student, a, status, message, criteria=criteria_of(self.ctx))
         res.elapsed = time.monotonic() - w.started
         write_student(res, a, self.out)
         self.tally.done(idx, res)
+
+
+def grade_code_class(submissions, a: Assignment, out, **options) -> ClassResult:
+    """Grade every student's module into ``out``: :func:`grade_class` in code mode (:mod:`mcrt.grade.codemode`)."""
+    return grade_class(submissions, a, out, mode="code", **options)

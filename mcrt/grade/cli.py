@@ -44,7 +44,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--allow-unisolated-code", action="store_true", help="in code mode, run student code even where "
                    "neither bubblewrap nor Landlock and seccomp can isolate it (still as an unprivileged user, with "
                    "resource limits; default: off, code mode is then refused)")
-    p.add_argument("--fresh", action="store_true", help="grade every student again; by default (image mode) a run into "
+    p.add_argument("--fresh", action="store_true", help="grade every student again; by default a run into "
                    "an --out folder that holds an earlier or killed run of the same assignment keeps the results of "
                    "unchanged submissions (DIR/run.json) and grades only the missing, changed or not graded ones (default: off)")
     p.add_argument("--quiet", "-q", action="store_true", help="no progress lines (default: off)")
@@ -185,21 +185,16 @@ def run(args) -> int:
         print(f"mcrt grade: {args.submissions}: no such file or folder", file=sys.stderr)
         return EXIT_UNUSABLE
     try:
-        if args.mode == "code":
-            from mcrt.grade.codemode import grade_code_class
+        if args.mode == "code" and a.code is None:
+            print(f"mcrt grade: {a.path}: no [code] table, so --mode code has nothing to check", file=sys.stderr)
+            return EXIT_UNUSABLE
+        from mcrt.grade.batch import grade_class
 
-            if a.code is None:
-                print(f"mcrt grade: {a.path}: no [code] table, so --mode code has nothing to check", file=sys.stderr)
-                return EXIT_UNUSABLE
-            res = grade_code_class(args.submissions, a, args.out, jobs=max(args.jobs, 1), timeout=args.timeout,
-                                   memory_mb=args.memory, cache_dir=args.cache, single=args.single, student=args.student, log=log,
-                                   allow_unisolated_code=args.allow_unisolated_code)
-        else:
-            from mcrt.grade.batch import DEFAULT_MEMORY_MB, grade_class
-
-            res = grade_class(args.submissions, a, args.out, jobs=args.jobs, timeout=args.timeout, cache_dir=args.cache,
-                              single=args.single, student=args.student, memory_mb=args.memory or DEFAULT_MEMORY_MB,
-                              fresh=args.fresh, log=log)
+        # One class runner for both modes: workers, run.json, resume (--fresh), the lock on the folder.
+        res = grade_class(args.submissions, a, args.out, jobs=args.jobs,
+                          timeout=args.timeout, cache_dir=args.cache, single=args.single, student=args.student,
+                          memory_mb=args.memory, fresh=args.fresh, mode=args.mode,
+                          allow_unisolated_code=args.allow_unisolated_code, log=log)
     except (OSError, RuntimeError, ValueError) as e:
         print(f"mcrt grade: {e}", file=sys.stderr)
         return EXIT_UNUSABLE

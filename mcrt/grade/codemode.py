@@ -69,7 +69,9 @@ Without bubblewrap, or where namespaces are forbidden (probed by running
 falls back to Landlock (read-only file system, nothing made even in the
 work folder, readable only the Python installation without mcrt, Mitsuba
 and Dr.Jit and system folders), the same seccomp filter, rlimits, the
-unprivileged uid and a new session; the call's folders then go where that
+unprivileged uid and a new session (the runner, in a session of its own, still
+dies with the process that started it: ``PR_SET_PDEATHSIG``, set after the switch
+of user, which clears it); the call's folders then go where that
 uid can reach them. Where neither is possible code mode is refused
 (:class:`SandboxError`) unless the instructor passes
 ``--allow-unisolated-code`` (:func:`allow_unisolated`). ``MCRT_SANDBOX``:
@@ -93,6 +95,11 @@ they are decoded, and a submission folder is copied without following links
 
 A crash, a hang, a memory blow-up or a refused operation is a graded failure
 of that check, with the student's traceback.
+
+A class is graded by image mode's class runner (:func:`mcrt.grade.batch.grade_class`, given
+:func:`code_plan`): worker processes, run.json, resume; a worker grades a student by
+:meth:`CodeContext.grade`. The shared-import warning (:func:`shared_import_failure`) looks at the
+students graded by this run, not those kept from an earlier one.
 """
 
 from __future__ import annotations
@@ -111,7 +118,6 @@ import sys
 import tempfile
 import threading
 import time
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -774,6 +780,8 @@ def _task(iso: Isolation, module_name: str, function: str, calls: list[dict], *,
         landlock = _landlock_rules(roots, _hidden_paths(roots))
     return {"module": f"student/{module_name}", "function": function, "calls": calls, "first_of_tuple": first_of_tuple,
             "limits": _limits(timeout, memory_mb), "uid": uid, "landlock": landlock,
+            # Without bubblewrap (whose --die-with-parent does it) the runner ties its life to this process itself.
+            "parent": None if bwrap else os.getpid(),
             "mount_work": {"size": DISK_LIMIT, "nr_inodes": INODE_LIMIT} if bwrap and os.geteuid() == 0 else None,
             "require": ["landlock", "seccomp"] if iso.kind == "fallback" else ["seccomp"] if bwrap else [],
             "output_limit": OUTPUT_LIMIT}
@@ -859,7 +867,7 @@ def _fallback_work(tmp: Path, uid: int | None) -> Path:
 def _start_runner(argv: list[str], cwd: Path, env: dict, out, fds: list[int], mon: "_Monitor",
                   args_r: int | None) -> subprocess.Popen:
     """Start the runner in a new session, its stdout and stderr to ``out``, passing it only ``fds``."""
-    # No preexec_fn (unsafe with the threads that grade students in parallel): a new session for
+    # No preexec_fn (unsafe in a process with threads, such as the monitor's): a new session for
     # killing the whole group is done by Popen itself; the runner sets its own resource limits,
     # then switches to uid, before anything of the student's loads.
     try:
@@ -1374,25 +1382,52 @@ def discover_code(path, *, single: bool = False, student: str | None = None) -> 
     return list(zip(ids, entries))
 
 
-def grade_code_class(submissions, a: Assignment, out, *, jobs: int = 1, timeout: float | None = None, memory_mb: int | None = None,
-                     cache_dir=None, single: bool = False, student: str | None = None, context=None, log=None,
-                     allow_unisolated_code: bool = False):
-    """Grade every student's module; writes the same files as image mode.
+@dataclass
+class CodeContext:
+    """What a grading worker needs to grade one student's module (pickled to it like image mode's Context).
 
-    ``jobs`` students at a time (each check is its own sandboxed process);
-    ``context`` reuses a prepared image-mode context for the ``render`` check.
-    Raises :class:`SandboxError` before grading anyone where student code
-    cannot be isolated (unless ``allow_unisolated_code``) or the sandbox
-    fails on a correct module.
+    The isolation probed and self-tested by the parent is handed on, so a worker neither probes again nor decides
+    differently (and the instructor's ``--allow-unisolated-code`` reaches it).
     """
-    from mcrt.grade.batch import ClassResult
-    from mcrt.grade.grader import error_result
-    from mcrt.grade.outputs import write_class, write_student
 
-    t0 = time.perf_counter()
-    log = log or (lambda s: None)
-    out = Path(out)
-    subs = discover_code(submissions, single=single, student=student)
+    assignment: Assignment
+    isolation: Isolation
+    allow_unisolated: bool = False
+    image: object = None  # the prepared image-mode Context, for the render check
+    timeout: float | None = None  # per check (default: code.timeout)
+    memory_mb: int | None = None  # per student process (default: code.memory_mb)
+
+    @property
+    def criteria(self) -> list[tuple[str, float, str]]:
+        return [(c.name, c.points, CHECK_TITLES.get(c.name, c.name)) for c in self.assignment.code.checks]
+
+    def grade(self, sub) -> StudentResult:
+        global _ISOLATION
+        with _ISOLATION_LOCK:
+            if _ISOLATION is None:
+                _ISOLATION = self.isolation
+        allow_unisolated(self.allow_unisolated)
+        return grade_code(sub.student, Path(sub.source), self.assignment, ctx=self.image, timeout=self.timeout,
+                          memory_mb=self.memory_mb)
+
+
+def code_submission(student: str, path: Path):
+    """A code hand-in as the class runner's :class:`~mcrt.grade.submissions.Submission`: its key hashes the module
+    file (or the folder's files); a link or special file is named, never opened (find_module refuses it)."""
+    from mcrt.grade.submissions import Submission, file_kind
+
+    special = file_kind(path)
+    regular_file = special is None and not path.is_dir()
+    return Submission(student, str(path), images=[str(path)] if regular_file else [], special=special)
+
+
+def code_plan(submissions, a: Assignment, *, timeout, cache_dir, single, student, context, memory_mb, log,
+              allow_unisolated_code: bool = False):
+    """Code mode for :func:`mcrt.grade.batch.grade_class`: the modules, the sandbox (probed and self-tested before
+    anyone is graded; :class:`SandboxError` where it cannot isolate), and the shared-import warning at the end."""
+    from mcrt.grade.run import DEFAULT_MEMORY_MB, Plan
+
+    subs = [code_submission(sid, p) for sid, p in discover_code(submissions, single=single, student=student)]
     log(f"mcrt grade (code): {len(subs)} submission(s)")
     if allow_unisolated_code:
         allow_unisolated(True)
@@ -1403,30 +1438,22 @@ def grade_code_class(submissions, a: Assignment, out, *, jobs: int = 1, timeout:
         from mcrt.grade.expected import prepare_context
 
         ctx = prepare_context(a, cache_dir, log=log)
-    crit = [(c.name, c.points, CHECK_TITLES.get(c.name, c.name)) for c in a.code.checks]
+    cc = CodeContext(a, iso, _ALLOW_UNISOLATED, ctx, timeout, memory_mb)
+    per_check, mem = timeout or a.code.timeout, memory_mb or a.code.memory_mb
+    # A backstop over the sandbox's own per-call limits: every check's time, and the render check's image grading.
+    student_timeout = len(a.code.checks) * (per_check + 10) + (a.timeout if ctx is not None else 0) + 30
 
-    def one(item):
-        sid, src = item
-        try:
-            r = grade_code(sid, src, a, ctx=ctx, timeout=timeout, memory_mb=memory_mb)
-        except Exception as e:  # noqa: BLE001 - one student never stops the class
-            from mcrt.grade.grader import format_exception
-
-            r = error_result(sid, a, "error", f"the grader failed ({type(e).__name__}: {e})", format_exception(), criteria=crit)
-        write_student(r, a, out)
-        log(f"  {sid}: {r.score:g}/{r.max_score:g} ({r.elapsed:.1f} s)")
-        r.figures = {}
-        return r
-
-    with ThreadPoolExecutor(max_workers=max(1, jobs)) as ex:
-        results = list(ex.map(one, subs))
-    elapsed = time.perf_counter() - t0
-    note = f"Sandbox: {iso.detail}."
-    shared = shared_import_failure(results)
-    if shared:
+    def finish(results):
+        shared = shared_import_failure(results)
+        if not shared:
+            return "", None
         warning = (f"WARNING: every student's module failed to import {shared}, which the grader itself has: the sandbox "
                    "does not show it to graded code, a problem of the grader's installation, not the students'")
         print(f"mcrt grade: {warning}", file=sys.stderr, flush=True)
-        note = f"{warning}. {note}"
-    summary = write_class(results, a, out, elapsed=elapsed, criteria=crit, context_note=note)
-    return ClassResult(results, summary, out, elapsed, ctx)
+        return f"{warning}. ", None
+
+    src = ctx.references[a.camera].source if ctx is not None else "none (no render check)"
+    # The worker's own limit stays above the student process's, which the runner sets below it.
+    return Plan(subs, cc, src, f"Sandbox: {iso.detail}.", student_timeout, max(DEFAULT_MEMORY_MB, mem + 1024),
+                digest={"mode": "code", "sandbox": iso.kind, "check_timeout": per_check, "student_memory_mb": mem},
+                criteria=cc.criteria, image_context=ctx, finish=finish)

@@ -40,11 +40,34 @@ SCHEMA = "mcrt.grade.run/1"
 RUN_FILE = "run.json"
 STAGING = ".staging"  # hidden: a student id never starts with a dot (mcrt.grade.submissions.safe_id)
 LOCK_FILE = ".lock"
+DEFAULT_MEMORY_MB = 4096  # per grading worker
 _BLOCK = 1 << 20
 
 
-def grader_digest(assignment, *, reference_source: str, timeout: float, memory_mb: int) -> dict:
-    """What every student's result depends on besides their own files."""
+@dataclass
+class Plan:
+    """What :func:`mcrt.grade.batch.grade_class` needs of a mode (image: :func:`mcrt.grade.batch.image_plan`; code: :func:`mcrt.grade.codemode.code_plan`).
+
+    ``ctx`` is what a worker grades each student with (:func:`mcrt.grade._worker.grade_and_write`); ``timeout``
+    and ``memory_mb`` bound one student and one worker; ``digest`` is what the results depend on besides the
+    submissions and the assignment; ``finish(results)`` returns (a note for the summary, the catalogue's power
+    table) once the students of this run are graded.
+    """
+
+    subs: list[Submission]
+    ctx: object
+    source: str
+    note: str
+    timeout: float
+    memory_mb: int
+    digest: dict = field(default_factory=dict)
+    criteria: list | None = None
+    image_context: object = None  # the image-mode Context (references), when the mode prepared one
+    finish: object = None
+
+
+def grader_digest(assignment, *, reference_source: str, timeout: float, memory_mb: int, **mode) -> dict:
+    """What every student's result depends on besides their own files (``mode``: what the mode adds, e.g. the sandbox)."""
     from importlib import metadata
 
     from mcrt.provenance import source_hash
@@ -54,7 +77,7 @@ def grader_digest(assignment, *, reference_source: str, timeout: float, memory_m
     except metadata.PackageNotFoundError:
         version = "unknown"
     return {"assignment": hashlib.sha256(repr(assignment).encode()).hexdigest(), "mcrt": version,
-            "sources": source_hash(), "reference": reference_source, "timeout": timeout, "memory_mb": memory_mb}
+            "sources": source_hash(), "reference": reference_source, "timeout": timeout, "memory_mb": memory_mb, **mode}
 
 
 def _hash_file(h, path: Path) -> None:
