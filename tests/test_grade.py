@@ -516,6 +516,8 @@ def code_class(scene, workdir):
                                             f"def sample_cosine_hemisphere(u1, u2):\n    open({str(target)!r}, 'w').write('x')"))
     (d / "hog.py").write_text(good.replace("def estimate_direct(points, normals, light, u):",
                                            "def estimate_direct(points, normals, light, u):\n    junk = np.ones((40000, 40000))"))
+    (d / "huge.py").write_text(good.replace("def estimate_direct(points, normals, light, u):",  # sums overflow to inf
+                                            "def estimate_direct(points, normals, light, u):\n    return np.full(len(points), 1e308)"))
     (d / "uniform.py").write_text(good.replace("r, phi = np.sqrt(u1), 2 * np.pi * u2\n    return np.stack([r * np.cos(phi), r * np.sin(phi), np.sqrt(np.maximum(0.0, 1 - u1))], axis=1)",
                                                "z, phi = u1, 2 * np.pi * u2\n    r = np.sqrt(1 - z * z)\n    return np.stack([r * np.cos(phi), r * np.sin(phi), z], axis=1)")
                                    .replace("/ d2 * area", "/ d2"))
@@ -553,6 +555,8 @@ def test_code_mode_failures_are_graded_with_their_cause(code_graded):
     assert evil.score == 0 and "sandbox" in evil.output and not target.exists()
     hog = _test(results["hog"], "estimate_direct")
     assert hog.score == 0 and ("MemoryError" in hog.output or "memory" in hog.output)
+    huge = _test(results["huge"], "estimate_direct")
+    assert huge.score == 0 and "overflows" in huge.output, huge.output
     uni = results["uniform"]
     assert _test(uni, "sample_cosine_hemisphere").score == 0 and "uniform hemisphere" in _test(uni, "sample_cosine_hemisphere").output
     assert _test(uni, "estimate_direct").score == 0 and "constant factor" in _test(uni, "estimate_direct").output

@@ -1172,7 +1172,11 @@ def check_direct(run, params: dict, scene) -> CheckOutcome:
     if not np.isfinite(e).all():
         return CheckOutcome(0.0, f"{int((~np.isfinite(e)).sum())} estimates are NaN or inf")
     e = e.reshape(npts, k)
-    m, sd = e.mean(axis=1), e.std(axis=1, ddof=1)
+    with np.errstate(over="ignore", invalid="ignore"):
+        m, sd = e.mean(axis=1), e.std(axis=1, ddof=1)
+    if not (np.isfinite(m).all() and np.isfinite(sd).all()):  # finite estimates whose sums overflow (1e308, say)
+        return CheckOutcome(0.0, f"the estimates are too large to average (largest {np.max(np.abs(e)):.3g}): their mean "
+                                 "or spread overflows")
     se = np.sqrt(sd**2 / k + (1e-9 * expected) ** 2)
     z = (m - expected) / np.where(se > 0, se, 1e-30)
     p = 2 * sps.norm.sf(np.abs(z))
