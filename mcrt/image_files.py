@@ -37,6 +37,7 @@ import re
 import sys
 import tempfile
 import threading
+import warnings
 from pathlib import Path
 from typing import Callable
 
@@ -887,10 +888,17 @@ def _png_codes(path: str) -> tuple[np.ndarray, int]:
     return _pillow_rgb8(path, data, "PNG", ("1", "L", "LA", "P", "PA", "RGB", "RGBA")), 255
 
 
+def _pillow_open(data: bytes, kind: str) -> Image.Image:
+    """Pillow's header read. Its decompression-bomb warning is left out: :func:`_check_pixels` decides right after."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", Image.DecompressionBombWarning)
+        return Image.open(io.BytesIO(data), formats=[kind])
+
+
 def _pillow_rgb8(path: str, data: bytes, kind: str, modes: tuple[str, ...]) -> np.ndarray:
     """Decode an 8-bit image with Pillow to (H, W, 3) uint8 (grey replicated, palette expanded, alpha dropped)."""
     try:
-        with Image.open(io.BytesIO(data), formats=[kind]) as im:
+        with _pillow_open(data, kind) as im:
             _check_pixels(path, *im.size)
             im.load()
             if im.mode not in modes:
@@ -960,7 +968,7 @@ def read_netpbm(path: PathLike, linear: bool = False) -> tuple[np.ndarray, int]:
     path = os.fspath(path)
     data = _read_bytes(path)
     try:
-        with Image.open(io.BytesIO(data), formats=["PPM"]) as im:
+        with _pillow_open(data, "PPM") as im:
             tile = im.tile[0] if im.tile else None
             mode, (w, h) = im.mode, im.size
             _check_pixels(path, w, h)
