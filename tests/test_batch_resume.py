@@ -300,7 +300,7 @@ def _outside_fences(md: str) -> list[str]:
     return outside
 
 
-def _assert_inert(md: str) -> None:
+def assert_inert(md: str) -> None:
     for ln in _outside_fences(md):
         assert not ln.lstrip().startswith("#"), ln
         assert "](" not in ln.replace("\\]", ""), ln
@@ -312,15 +312,15 @@ def test_student_text_cannot_break_out_of_the_markdown_fence(assignment):
     res = StudentResult("mallory", "graded", 0.0, 5.0, [t], "Graded: " + HOSTILE.replace("\n", " "),
                         notes=[HOSTILE, "one line # [x](http://evil.example) ![i](http://e/i.png) <b>bold</b> &amp;"])
     data = results_json(res, assignment)
-    _assert_inert(data["output"])
+    assert_inert(data["output"])
     for test in data["tests"]:
-        _assert_inert(test["output"])
+        assert_inert(test["output"])
     assert "# Live heading" in data["output"]  # still shown, as text in the block
 
 
 def test_md_text_fences_any_backtick_run():
     for text in (HOSTILE, "a\n`````\n# h", "a\r~~~~\r# h\r[x](http://e)"):
-        _assert_inert(md_text(text))
+        assert_inert(md_text(text))
 
 
 def test_summary_md_escapes_the_reasons(assignment, tmp_path):
@@ -328,7 +328,7 @@ def test_summary_md_escapes_the_reasons(assignment, tmp_path):
     write_class([res], assignment, tmp_path)
     line = [ln for ln in (tmp_path / "summary.md").read_text().splitlines() if "mallory" in ln]
     assert len(line) == 1  # one line, whatever the reason holds
-    _assert_inert(line[0])
+    assert_inert(line[0])
 
 
 def test_an_empty_image_is_the_hand_ins_problem_not_the_graders(context):
