@@ -117,3 +117,14 @@ def test_scene_mistakes_change_the_render(name):
     plain = build_class(width=W, height=H, specs=(replace(spec, edit=None, mitsuba_edit=None, max_depth=None),))[0]
     assert np.abs(case.image - plain.image).mean() > 0.05 * plain.image.mean()
 
+
+def test_report_words_this_class(tmp_path):
+    """The report of --class programs names this class and its own causes (outcomes made up: nothing graded)."""
+    from mcrt.grade.accuracy.markdown import write_report
+    from mcrt.grade.accuracy.run import Outcome
+
+    s = _by_name("pfm_top_down")
+    o = Outcome(s.name, s.truth, s.cause, s.major, s.held_out, 16, s.file, 1.0, 2.0, [], False, False, False, "", 0.1)
+    text = write_report(tmp_path, [o], command="test", meta={}, gradescope=[], klass="programs").read_text()
+    assert "mistakes of students' programs" in text and "mcrt.grade.accuracy.programs" in text
+    assert f"`orientation` {programs.NEW_CAUSES['orientation']}" in text
