@@ -2,8 +2,8 @@ r"""A third class of hand-ins: mistakes of students' programs, written apart fro
 
 How it was written: from what goes wrong in students' ray tracers and in the
 few lines that save their image, not from the grader. Its author did not
-grade any of it, nor read the grader's explanation families to fit cases to
-them. The mistakes were chosen to differ from the two other classes
+grade any of it nor read the grader's rules (only the cause words of the other
+classes and of :data:`~mcrt.grade.accuracy.run.CAUSE_OF`, to reuse them). The mistakes were chosen to differ from the two other classes
 (:mod:`~mcrt.grade.accuracy.cases`, :mod:`~mcrt.grade.accuracy.outside`):
 
 * the array written in the wrong **orientation** (a PFM's rows written top
