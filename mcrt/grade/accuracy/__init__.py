@@ -5,6 +5,9 @@
   geometry, materials, light, post-processing, encoding, path depth), never
   mcrt's catalogued mutants; correct renders come from several estimators and
   samplers at the course's range of spp and in the file encodings students use.
+* :mod:`~mcrt.grade.accuracy.outside` and :mod:`~mcrt.grade.accuracy.programs`:
+  two more classes, mistakes outside the scene file and mistakes of students'
+  programs (the latter written apart from the grader's rules).
 * :mod:`~mcrt.grade.accuracy.run`: every case graded with the course
   assignment; score, points lost, and whether the feedback named the cause.
 * :mod:`~mcrt.grade.accuracy.markdown` and :mod:`~mcrt.grade.accuracy.cli`:

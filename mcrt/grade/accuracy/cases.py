@@ -75,6 +75,7 @@ class Spec:
     mitsuba_edit: Callable[[dict], dict] | None = None  # a change of the Mitsuba scene dict (a material, a light)
     render_scale: int = 1  # rendered at 1/render_scale of the resolution (a post then enlarges it)
     declared_spp: int | None = None  # the spp the manifest claims, when not the rendered one
+    writer: Callable[[np.ndarray, Path], Path] | None = None  # writes the image file as a student's program does
 
 
 @dataclass
@@ -393,14 +394,15 @@ def write_submission(case: Case, folder: str | Path) -> Path:
 
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
-    v = encoded(case)
-    if case.spec.file.startswith("png"):
-        codes = np.floor(np.clip(np.nan_to_num(v), 0.0, 1.0) * 255.0 + 0.5).astype(np.uint8)
+    if case.spec.writer is not None:  # the program's own writer: its file name, format and encoding
+        path = case.spec.writer(case.image, folder)
+    elif case.spec.file.startswith("png"):
+        codes = np.floor(np.clip(np.nan_to_num(encoded(case)), 0.0, 1.0) * 255.0 + 0.5).astype(np.uint8)
         path = folder / "render.png"
         Image.fromarray(codes, "RGB").save(path, format="PNG")
     else:
         path = folder / "render.exr"
-        write_exr(path, RenderResult(mean=v.astype(np.float32), variance=None, spp=case.spp, seed=case.seed, max_depth=-1,
+        write_exr(path, RenderResult(mean=encoded(case).astype(np.float32), variance=None, spp=case.spp, seed=case.seed, max_depth=-1,
                                      renderer="student", scene_hash="", camera="near"))
     (folder / "manifest.toml").write_text(f"spp = {case.spec.declared_spp or case.spp}\n")
     return path

@@ -10,19 +10,22 @@ from mcrt.util import progress
 
 DEFAULT_OUT = "reports/grading_accuracy"
 DEFAULT_ASSIGNMENT = "course2023"
+#: The classes by --class name: the module (under mcrt.grade.accuracy) holding its SPECS and CAUSES.
+CLASSES = {"scene": "cases", "outside": "outside", "programs": "programs"}
 
 
 def register(sub) -> None:
     p = sub.add_parser("grade-accuracy", help="grade a class of realistic hand-ins (Mitsuba scene edits, correct renders "
                        "of several estimators) and report scores, detection, naming and false-alarm rates",
                        description=__doc__)
-    p.add_argument("--class", dest="klass", choices=("scene", "outside"), default="scene",
-                   help="the class graded: 'scene' (scene edits, mcrt.grade.accuracy.cases) or 'outside' (mistakes "
-                   "outside the scene file, mcrt.grade.accuracy.outside) (default: scene)")
+    p.add_argument("--class", dest="klass", choices=tuple(CLASSES), default="scene",
+                   help="the class graded: 'scene' (scene edits, mcrt.grade.accuracy.cases), 'outside' (mistakes "
+                   "outside the scene file, mcrt.grade.accuracy.outside) or 'programs' (mistakes of students' "
+                   "programs, written apart from the grader's rules, mcrt.grade.accuracy.programs) (default: scene)")
     p.add_argument("--held-out", choices=("all", "only", "none"), default="all",
                    help="grade all cases, only the held-out ones, or none of them (default: all)")
-    p.add_argument("--out", default=None, help=f"report folder (default: {DEFAULT_OUT}, or {DEFAULT_OUT}/outside "
-                   "for --class outside)")
+    p.add_argument("--out", default=None, help=f"report folder (default: {DEFAULT_OUT}, or {DEFAULT_OUT}/CLASS "
+                   "for another --class)")
     p.add_argument("--assignment", default=DEFAULT_ASSIGNMENT,
                    help=f"assignment: a name of the package's assignments or a file (default: {DEFAULT_ASSIGNMENT})")
     p.add_argument("--cache", default=None, help="grading cache folder (default: $MCRT_CACHE/grade or ~/.cache/mcrt/grade)")
@@ -56,18 +59,17 @@ def cmd_grade_accuracy(args) -> int:
     def log(line: str) -> None:
         progress.log(f"mcrt grade-accuracy: {line}", not args.quiet)
 
-    from mcrt.grade.accuracy import cases as scene_class
-    from mcrt.grade.accuracy import outside
+    import importlib
 
     if args.out is None:
-        args.out = DEFAULT_OUT + ("/outside" if args.klass == "outside" else "")
+        args.out = DEFAULT_OUT + (f"/{args.klass}" if args.klass != "scene" else "")
     t0 = time.perf_counter()
     a = load_assignment(args.assignment)
     cache = args.cache or default_cache_dir()
     log(f"preparing {a.name} (cache {cache})")
     ctx = prepare_context(a, cache, log=log)
     prep = time.perf_counter() - t0
-    specs = outside.SPECS if args.klass == "outside" else scene_class.SPECS
+    specs = importlib.import_module(f"mcrt.grade.accuracy.{CLASSES[args.klass]}").SPECS
     held = {"all": None, "only": True, "none": False}[args.held_out]
     cases = build_class(width=a.grade_width, height=a.grade_height, max_depth=a.max_depth,
                         names=tuple(args.only) or None, held_out=held, log=log, specs=specs)

@@ -33,12 +33,23 @@ _OUTSIDE = ("The wrong renders are mistakes made **outside the scene file** (mcr
             "cause (one held-out case, the radiance divided by pi, had a monotone curve named beside the constant "
             "factor); no held-out case changed its verdict.")
 
+_PROGRAMS = ("The wrong renders are mistakes of **students' programs** (mcrt.grade.accuracy.programs), written apart "
+             "from the grader's rules and not graded by their author: images written flipped, mirrored or transposed, "
+             "wrong encodings, colour lost, a constant factor, direct light counted twice, the path depth, the walls' "
+             "colours, pixels not computed, a per-sample clamp, fewer samples than declared, and single scene "
+             "mistakes, from Mitsuba renders of edited scenes, Mitsuba renders combined, or correct renders written "
+             "as students' programs write files; the correct ones come from Mitsuba and mcrt. Each is written as a "
+             "student's folder and graded with the course assignment. *Named right*, *confidently wrong*, *partial "
+             "or none*: as for the other classes. **Held-out** cases (marked H) were fixed by the rule stated in the "
+             "module before any case was graded.")
+
 
 def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta: dict, gradescope: list[dict],
                  klass: str = "scene") -> Path:
     """Write index.md and data.json under ``out``; returns the Markdown's path. ``klass`` is the class graded:
-    'scene' (mcrt.grade.accuracy.cases) or 'outside' (mcrt.grade.accuracy.outside)."""
-    from mcrt.grade.accuracy import outside
+    'scene' (mcrt.grade.accuracy.cases), 'outside' (mcrt.grade.accuracy.outside) or 'programs'
+    (mcrt.grade.accuracy.programs)."""
+    from mcrt.grade.accuracy import outside, programs
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     tuned = [o for o in outcomes if not o.held_out]
@@ -47,8 +58,8 @@ def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta
     data = {"command": command, "meta": meta, "rates": groups, "gradescope": gradescope,
             "cases": [o.to_dict() for o in outcomes]}
     (out / "data.json").write_text(json.dumps(data, indent=1, default=str) + "\n", encoding="utf-8")
-    title = "Grading accuracy on a class of realistic hand-ins" + (": mistakes outside the scene file"
-                                                                    if klass == "outside" else "")
+    title = "Grading accuracy on a class of realistic hand-ins" + {
+        "outside": ": mistakes outside the scene file", "programs": ": mistakes of students' programs"}.get(klass, "")
     L = [f"# {title}", "",
          f"Written by `{command}` ({meta.get('date', '')}, {meta.get('seconds', 0):.0f} s). "
          f"Assignment: `{meta.get('assignment')}`; reference: {meta.get('reference')}.", "",
@@ -59,7 +70,7 @@ def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta
          "the mistake's cause (the explanation's family, or a criterion that names it: `linear` for an encoding, "
          "`exposure` for a constant factor, `camera` for misregistration). *Confidently wrong*: it names a cause, and "
          "not the right one; *also wrong*: it names the right cause and a wrong one beside it. **Held-out** cases (marked H) were not looked at while the diagnosis was tuned, with one exception: the last two rules of the grader (the camera not blamed beside a cause outside it; an explained wrong geometry, light placement, colour or camera scored as a major mistake) were added after the held-out results had been seen."
-         if klass != "outside" else _OUTSIDE, "",
+         if klass not in ("outside", "programs") else {"outside": _OUTSIDE, "programs": _PROGRAMS}[klass], "",
          "## Rates", "",
          "| | mistakes | detected (lost points) | named right | confidently wrong | partial or none | also wrong | "
          "major mistakes losing >= 25 % | correct renders | false alarms | correct named a bug |",
@@ -86,7 +97,7 @@ def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta
             continue
         L.append(f"| {o.name} | {'H' if o.held_out else ''} | {_cell(o.truth, 90)} | {o.spp} | {o.file} | "
                  f"{o.score:g}/{o.max_score:g} | {'yes' if o.wrong else 'no'} | {_cell(o.said) or '-'} | {o.seconds:.1f} |")
-    causes = outside.CAUSES if klass == "outside" else CAUSES
+    causes = {"outside": outside.CAUSES, "programs": programs.CAUSES}.get(klass, CAUSES)
     L += ["", "Causes: " + "; ".join(f"`{k}` {v}" for k, v in causes.items()) + "."]
     if gradescope:
         L += ["", "## One student as Gradescope grades it", "",
