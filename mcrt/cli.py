@@ -242,7 +242,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--intersector", choices=("convex", "triangles"), default="convex", help="mcrt's intersection code (triangles: brute-force cross-check; default: convex)")
     _add_trick_flags(p)
     p.add_argument("--pixel-sampler", choices=("independent", "sobol"), default="independent",
-                   help="where samples land in their pixel (renderer mcrt): independent jitter, or Owen-scrambled "
+                   help="where samples land in their pixel (every renderer; not with --adaptive): independent jitter, or Owen-scrambled "
                         "Sobol points in --replicates independent replicates whose spread is the variance "
                         "(mcrt.samplers; default: independent)")
     p.add_argument("--replicates", type=int, default=None, metavar="R",
