@@ -91,7 +91,8 @@ def _render_mitsuba_scene(args) -> int:
         result = render_with_variance(scene, integrator=spec, spp=args.spp, seed=args.seed or 0,
                                       width=args.width or args.res, height=args.height or args.res,
                                       max_depth=args.max_depth, backend=args.backend, progress=True,
-                                      defaults=parse_defines(args.define))
+                                      defaults=parse_defines(args.define), pixel_sampler=args.pixel_sampler,
+                                      replicates=args.replicates)
     except (ValueError, RuntimeError) as e:
         msg = " ".join(str(e).split())
         where = "" if msg.startswith(str(args.mitsuba_scene)) else f"{args.mitsuba_scene}: "

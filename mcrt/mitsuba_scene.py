@@ -821,7 +821,8 @@ def render_with_variance(scene: "dict[str, Any] | mi.Scene | str | os.PathLike",
                          spp: int | None = None, seed: int = 0, width: int | None = None, height: int | None = None,
                          max_depth: int | None = None, backend: str = "llvm", progress: bool = False,
                          spp_per_pass: int | None = None, batches: int = 32, defaults: dict[str, Any] | None = None,
-                         space: str = "rgb") -> RenderResult:
+                         space: str = "rgb", pixel_sampler: str = "independent",
+                         replicates: int | None = None) -> RenderResult:
     """Render any Mitsuba scene with any of its integrators: mean and per-sample variance, reproducible from ``seed``.
 
     ``scene`` is a scene dictionary (``mi.cornell_box()``), a loaded
@@ -850,7 +851,11 @@ def render_with_variance(scene: "dict[str, Any] | mi.Scene | str | os.PathLike",
     says how the variance was estimated (``variance_method``), its degrees
     of freedom (``variance_dof``) and the tile variance factor of the
     filter (``tile_variance_factor``). ``space='xyz'`` renders CIE X, Y, Z
-    instead of linear RGB (``extra['channels'] = 'XYZ'``).
+    instead of linear RGB (``extra['channels'] = 'XYZ'``). ``pixel_sampler``
+    ``sobol`` (and ``replicates``) places the camera samples at
+    :mod:`mcrt.samplers`' points, variance from the replicates; it needs the
+    per-sample passes (a box filter, the ``independent`` sampler, an
+    integrator that samples camera rays) and says so otherwise.
 
     The result records ``renderer`` = the integrator's plugin name,
     ``max_depth`` = :func:`integrator_max_depth` (-1 unbounded or none),
@@ -904,7 +909,8 @@ def render_with_variance(scene: "dict[str, Any] | mi.Scene | str | os.PathLike",
         spp = int(sensor.sampler().sample_count())
     name = _integrator_name_of(integ)
     totals, per_pass, method, notes = _run(mscene, integ, seed=seed, spp=int(spp), spp_per_pass=spp_per_pass,
-                                           progress=progress, label=name, batches=batches, space=space)
+                                           progress=progress, label=name, batches=batches, space=space,
+                                           pixel_sampler=PixelSampler.of(pixel_sampler, replicates))
     film = sensor.film()
     extra.update(notes)
     extra.update({
