@@ -373,6 +373,61 @@ def flatness(scene, *, cameras, resolutions, spp: int = 16, max_depth: int = 8, 
     return {"spp": spp, "max_depth": max_depth, "rounds": rounds, "rows": rows}
 
 
+#: The cases ``--sampler-cost`` times, (camera, resolution, spp) at depth 8: spp multiples of the replicates.
+SAMPLER_COST_CASES = (("near", 64, 1024), ("near", 256, 64))
+
+
+def sampler_cost(scene, *, cases=SAMPLER_COST_CASES, max_depth: int = 8, rounds: int = 5, backend: str = "llvm",
+                 intersector: str = "convex", progress: bool = True) -> dict:
+    """mcrt's time with the ``sobol`` pixel sampler (mcrt.samplers, its default replicates) against ``independent``.
+
+    Per case one warm-up render each, then ``rounds`` rounds that render
+    independent then sobol (seed = round), so drift slows both alike; the
+    cost is the ratio of the medians. Whole renders, replicate sums and
+    variance included.
+    """
+    from mcrt.render import render
+    from mcrt.samplers import DEFAULT_REPLICATES
+
+    rows = []
+    for camera, res, spp in cases:
+        s = scene.settings(camera=camera, width=res, height=res, spp=spp, max_depth=max_depth)
+        times = {"independent": [], "sobol": []}
+
+        def one(sampler: str, seed: int) -> float:
+            t0 = time.perf_counter()
+            render(scene, replace(s, seed=seed), backend=backend, intersector=intersector, progress=False,
+                   pixel_sampler=sampler)
+            return time.perf_counter() - t0
+
+        for sampler in times:
+            one(sampler, 1000)
+        for k in range(rounds):
+            for sampler in times:
+                times[sampler].append(one(sampler, k))
+        if progress:
+            print(f"  sampler cost: {camera} {res}x{res} {spp} spp done", file=sys.stderr, flush=True)
+        med = {k: statistics.median(v) for k, v in times.items()}
+        rows.append({"camera": camera, "width": res, "height": res, "spp": spp, "paths": res * res * spp, "times": times,
+                     "ratio": med["sobol"] / med["independent"]})
+    return {"max_depth": max_depth, "rounds": rounds, "replicates": DEFAULT_REPLICATES, "rows": rows}
+
+
+def previous_run(json_path: Path | None) -> dict | None:
+    """The speed-ups of the run whose JSON this run replaces (its commit, date and each case's), or None."""
+    from mcrt.bench_page import pairs, speedup
+
+    if json_path is None or not json_path.is_file():
+        return None
+    try:
+        old = json.loads(json_path.read_text())
+        prov = old["provenance"]
+        return {"commit": prov.get("git_commit"), "date": prov.get("date"),
+                "speedups": [{"case": a["case"], "speedup": speedup(a, b)} for a, b in pairs(old["rows"])]}
+    except (ValueError, KeyError, TypeError):
+        return None  # unreadable or another format: nothing to compare with, the run goes on
+
+
 def peak_memory_mib() -> float:
     """Peak resident memory of this process (Linux reports KiB)."""
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
@@ -421,7 +476,8 @@ def simd_extension() -> str | None:
 def bench_data(rows: list[BenchRow], *, command: str, backend: str, intersector: str, repeats: int,
                profile: list[ProfileRow] = (), profile_case: dict | None = None, memory: list[dict] = (),
                limits: dict | None = None, max_paths: int = MAX_PATHS, mse_renders: int = MSE_RENDERS,
-               flat: dict | None = None, seconds: float | None = None) -> dict:
+               flat: dict | None = None, seconds: float | None = None, sampler: dict | None = None,
+               previous: dict | None = None) -> dict:
     """The run as one JSON-ready dictionary: what ``--json`` writes and :mod:`mcrt.bench_page` reads.
 
     Machine and versions come from :func:`mcrt.provenance.provenance`, with
@@ -441,6 +497,7 @@ def bench_data(rows: list[BenchRow], *, command: str, backend: str, intersector:
             "peak_memory_mib": peak_memory_mib(),
             "kernel_profile": [asdict(r) for r in profile], "kernel_profile_case": profile_case,
             "max_paths": max_paths, "bands": BANDS, "mse_renders": mse_renders, "flatness": flat,
+            "sampler_cost": sampler, "previous": previous,
             "memory_runs": list(memory), "limits": limits,
             "load_end": list(os.getloadavg()), "seconds": seconds, "gpu": gpu_note(backend)}
 
@@ -499,6 +556,9 @@ def register(sub) -> None:
                    help="also time mcrt alone at every --res and camera (the first --spp, the last --max-depth) in "
                         "ROUNDS interleaved rounds, one render per resolution each: its throughput against "
                         "resolution without the machine's drift between cases (default: 0, off)")
+    p.add_argument("--sampler-cost", type=int, default=5, metavar="ROUNDS",
+                   help="also time mcrt with the sobol pixel sampler against independent samples, alternating, in "
+                        "ROUNDS rounds (near camera, 64x64 at 1024 spp and 256x256 at 64 spp, depth 8; 0: off; default: 5)")
     p.add_argument("--memory", action="store_true",
                    help="also measure the peak memory of whole mcrt renders up to 4096x4096 at 1024 spp, each in a fresh "
                         "process (default: off)")
@@ -555,6 +615,8 @@ def cmd_bench(args) -> int:
     cases = bench_cases(cameras, resolutions, spps, depths, args.light_samples, args.spp_sweep or (),
                         sweep_res=args.sweep_res, depth_sweep=args.depth_sweep or (), course_light_samples=args.course or ())
     max_paths = args.max_paths
+    json_path = Path(args.json) if args.json else Path(args.report) / "bench.json" if args.report else None
+    previous = previous_run(json_path)  # read before this run overwrites it
     t0 = time.perf_counter()
     rows = run_bench(scene, cases, renderers=args.renderers.split(","), repeats=args.repeats, backend=args.backend,
                      intersector=args.intersector, max_paths=max_paths, mse_renders=args.mse_renders)
@@ -574,11 +636,13 @@ def cmd_bench(args) -> int:
     if args.flatness:
         flat = flatness(scene, cameras=cameras, resolutions=resolutions, spp=spps[0], max_depth=depths[-1],
                         rounds=args.flatness, max_paths=max_paths, backend=args.backend, intersector=args.intersector)
+    sampler = sampler_cost(scene, rounds=args.sampler_cost, backend=args.backend,
+                           intersector=args.intersector) if args.sampler_cost > 0 else None
     memory = memory_runs() if args.memory else []
     data = bench_data(rows, command=command_line(args.bench_parser, args), backend=args.backend,
                       intersector=args.intersector, repeats=args.repeats, profile=profile, profile_case=profile_case,
                       memory=memory, limits=limits, max_paths=max_paths, mse_renders=args.mse_renders, flat=flat,
-                      seconds=time.perf_counter() - t0)
+                      seconds=time.perf_counter() - t0, sampler=sampler, previous=previous)
     prov, v = data["provenance"], data["provenance"]["versions"]
     print(f"mcrt {v['mcrt']}, Mitsuba {v['mitsuba']}, Dr.Jit {v['drjit']}, {prov['drjit_threads']} threads, "
           f"{prov['machine']['cpu']}")
@@ -586,7 +650,6 @@ def cmd_bench(args) -> int:
     print(f"peak memory of this process: {data['peak_memory_mib']:.0f} MiB")
     if profile:
         print(format_profile(data["kernel_profile"], args.profile_res ** 2 * spps[-1]))
-    json_path = Path(args.json) if args.json else Path(args.report) / "bench.json" if args.report else None
     if json_path is not None:
         json_path.parent.mkdir(parents=True, exist_ok=True)
         json_path.write_text(json.dumps(data, indent=2))

@@ -358,6 +358,45 @@ def _flatness_section(data: dict) -> list[str]:
     return out
 
 
+def _sampler_section(data: dict) -> list[str]:
+    cost = data.get("sampler_cost")
+    if not cost:
+        return []
+    ratios = [r["ratio"] for r in cost["rows"]]
+    out = ["", "## Cost of the sobol pixel sampler", "",
+           f"mcrt with `--pixel-sampler sobol` ({cost['replicates']} replicates; mcrt.samplers) against independent "
+           f"samples, whole renders at max depth {cost['max_depth']}: {cost['rounds']} rounds, each rendering "
+           f"independent then sobol after one warm-up render each (`--sampler-cost`); medians of the rounds. The sobol "
+           f"render takes {min(ratios):.2f} to {max(ratios):.2f} times the independent render's time.", "",
+           "| camera | resolution | spp | paths | independent s | sobol s | independent M paths/s | sobol M paths/s | "
+           "time ratio |", "|---|---|---|---|---|---|---|---|---|"]
+    for r in cost["rows"]:
+        t_i, t_s = (statistics.median(r["times"][k]) for k in ("independent", "sobol"))
+        out.append(f"| {r['camera']} | {r['width']}x{r['height']} | {r['spp']} | {r['paths']:,} | {t_i:.4f} | {t_s:.4f} | "
+                   f"{r['paths'] / t_i / 1e6:.2f} | {r['paths'] / t_s / 1e6:.2f} | {r['ratio']:.2f} |")
+    return out
+
+
+def _previous_section(data: dict) -> list[str]:
+    prev = data.get("previous")
+    if not prev:
+        return []
+    old = {_key(p["case"]): p["speedup"] for p in prev["speedups"]}
+    both = [(a["case"], old[_key(a["case"])], speedup(a, b)) for a, b in pairs(data["rows"]) if _key(a["case"]) in old]
+    if not both:
+        return []
+    ratios = [new / was for _, was, new in both]
+    q1, med, q3 = (float(np.quantile(ratios, q)) for q in (0.25, 0.5, 0.75))
+    lo, hi = min(range(len(both)), key=ratios.__getitem__), max(range(len(both)), key=ratios.__getitem__)
+    return ["", "## Against the previous run", "",
+            f"The speed-up over Mitsuba of the {len(both)} cases this run shares with the run whose bench.json it "
+            f"replaced (commit {prev.get('commit') or '-'}, {prev.get('date') or '-'}), this run's over that run's: "
+            f"median {med:.2f}, quartiles {q1:.2f} and {q3:.2f}, lowest {ratios[lo]:.2f} ({_case_text(both[lo][0])}: "
+            f"{both[lo][1]:.1f}x then, {both[lo][2]:.1f}x now), highest {ratios[hi]:.2f} ({_case_text(both[hi][0])}: "
+            f"{both[hi][1]:.1f}x then, {both[hi][2]:.1f}x now). Both runs share the machine with other work "
+            f"(load averages above and in that run's page)."]
+
+
 def _goals_section(data: dict) -> list[str]:
     g = goals(data)
     if not g:
@@ -570,7 +609,7 @@ def markdown(data: dict, out_dir: Path, *, json_path: Path | None = None, tried:
              "## Paths per second", "", format_table(data["rows"]), "",
              f"Peak memory of the benchmark process: {data['peak_memory_mib']:.0f} MiB.",
              *_efficiency(data), *_goals_section(data), *_plots_section(data, out_dir), *_spp_section(data),
-             *_flatness_section(data), *_memory_section(data), *_profile_section(data), *_limits_section(data), *_gpu_section(data),
+             *_flatness_section(data), *_sampler_section(data), *_previous_section(data), *_memory_section(data), *_profile_section(data), *_limits_section(data), *_gpu_section(data),
              *_reading(data, out_dir)]
     if tried:
         lines += _log_section(Path(tried), out_dir)

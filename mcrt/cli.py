@@ -91,7 +91,8 @@ def _render_mitsuba_scene(args) -> int:
         result = render_with_variance(scene, integrator=spec, spp=args.spp, seed=args.seed or 0,
                                       width=args.width or args.res, height=args.height or args.res,
                                       max_depth=args.max_depth, backend=args.backend, progress=True,
-                                      defaults=parse_defines(args.define))
+                                      defaults=parse_defines(args.define), pixel_sampler=args.pixel_sampler,
+                                      replicates=args.replicates)
     except (ValueError, RuntimeError) as e:
         msg = " ".join(str(e).split())
         where = "" if msg.startswith(str(args.mitsuba_scene)) else f"{args.mitsuba_scene}: "
@@ -242,7 +243,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--intersector", choices=("convex", "triangles"), default="convex", help="mcrt's intersection code (triangles: brute-force cross-check; default: convex)")
     _add_trick_flags(p)
     p.add_argument("--pixel-sampler", choices=("independent", "sobol"), default="independent",
-                   help="where samples land in their pixel (renderer mcrt): independent jitter, or Owen-scrambled "
+                   help="where samples land in their pixel (every renderer; not with --adaptive): independent jitter, or Owen-scrambled "
                         "Sobol points in --replicates independent replicates whose spread is the variance "
                         "(mcrt.samplers; default: independent)")
     p.add_argument("--replicates", type=int, default=None, metavar="R",

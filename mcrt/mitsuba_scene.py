@@ -53,6 +53,7 @@ import drjit as dr
 import mitsuba as mi
 
 from mcrt.film import Progress, RenderResult, run_passes, samples_per_pass
+from mcrt.samplers import PixelSampler, replicate_pass_size, replicate_passes, replicate_variance_scale
 from mcrt.scene import Camera, Lambertian, Mirror, RenderSettings, Scene, Surface
 
 VARIANTS = {"llvm": "llvm_ad_rgb", "cuda": "cuda_ad_rgb"}
@@ -364,7 +365,23 @@ def batch_image(mscene, integrator, seed: int, k: int, n: int, space: str = "rgb
     return mi.TensorXf(out, (H, W, 3))
 
 
-def _pass_function(mscene, integrator, seed: int, *, jitter: bool = True, space: str = "rgb"):
+def _sobol_jitter(seed: int, pixel, sample, samples_per_replicate: int):
+    """The ``sobol`` pixel sampler's jitter (u, v) of ``sample`` of film pixel ``pixel`` (row-major), as mi.Float.
+
+    The standalone tracer's points (:func:`mcrt.tracer.pixel_jitter`): keyed
+    by the pixel's stream key under ``seed``, so a render at the same seed
+    puts its camera samples where the tracer's sobol render does.
+    """
+    from mcrt.rng import mix32
+    from mcrt.samplers import scrambled_jitter
+    from mcrt.tracer import stream_keys
+
+    key = mix32(pixel ^ dr.opaque(mi.UInt32, stream_keys(seed)[1]))  # SampleStreams' h1
+    return scrambled_jitter(key, sample, samples_per_replicate)
+
+
+def _pass_function(mscene, integrator, seed: int, *, jitter: bool = True, space: str = "rgb",
+                   samples_per_replicate: int | None = None):
     """The pass of :func:`mcrt.film.run_passes` for ``integrator`` on a loaded Mitsuba scene (its first sensor).
 
     Returns ``(pass_sums, width, height, method)``. ``method`` is
@@ -372,7 +389,10 @@ def _pass_function(mscene, integrator, seed: int, *, jitter: bool = True, space:
     W H n lanes, lane = pixel n + s, film position ((i + u) / W, (j + v) / H)
     (a box pixel), the sampler seeded with :func:`pass_seed` (seed, k), and
     reduces each pixel's n samples with ``dr.block_sum`` into sums of x and
-    x^2. ``method`` is ``'batches'`` otherwise (an adjoint integrator such
+    x^2; with ``samples_per_replicate`` (N) the jitter is the ``sobol`` pixel
+    sampler's (:func:`_sobol_jitter`, pass k of n samples holding samples
+    k n .. k n + n - 1) instead of the sampler's first two numbers.
+    ``method`` is ``'batches'`` otherwise (an adjoint integrator such
     as ``ptracer``, a filter wider than a pixel, a sampler other than
     ``independent``): pass k is :func:`batch_image` (k, n), and the image of
     the pass counts as one sample of weight n (sums n x and n x^2; see
@@ -412,7 +432,11 @@ def _pass_function(mscene, integrator, seed: int, *, jitter: bool = True, space:
         col = pixel - row * W
         if ox or oy:
             col, row = col + ox, row + oy
-        uv = sampler.next_2d()
+        if samples_per_replicate is None:
+            uv = sampler.next_2d()
+        else:
+            nth = dr.opaque(mi.UInt32, k * n) + (idx - pixel * dr.opaque(mi.UInt32, n))  # the pixel's sample
+            uv = mi.Point2f(*_sobol_jitter(seed, row * FW + col, nth, samples_per_replicate))
         if not jitter:
             uv = mi.Point2f(0.5)  # the catalogued no-jitter bug: every sample through the pixel centre
         pos = _film_positions(FW, FH, col, row, uv.x, uv.y)
@@ -435,7 +459,7 @@ def _pass_function(mscene, integrator, seed: int, *, jitter: bool = True, space:
 
 
 def _run(mscene, integrator, *, seed: int, spp: int, spp_per_pass: int | None, progress: bool, label: str,
-         jitter: bool = True, batches: int = 32, space: str = "rgb"):
+         jitter: bool = True, batches: int = 32, space: str = "rgb", pixel_sampler: PixelSampler = PixelSampler()):
     """Render a loaded Mitsuba scene with ``integrator`` in passes: the pass loop of every Mitsuba render here.
 
     Returns ``(totals, spp_per_pass, method, notes)`` (:class:`mcrt.film.PassTotals`;
@@ -460,19 +484,38 @@ def _run(mscene, integrator, *, seed: int, spp: int, spp_per_pass: int | None, p
     (for tiles of many pixels), which :func:`mcrt.stats.compare` applies to
     tiles larger than one pixel. A particle path's vertices in several
     pixels are a correlation it does not bound.
+
+    ``pixel_sampler`` ``sobol`` (:mod:`mcrt.samplers`) needs per-sample
+    passes: the jitter is its Owen-scrambled Sobol points in R replicates of
+    N = spp / R, no pass straddles two replicates, and the variance is the
+    replicates' spread (``variance_method`` 'replicates:R', R - 1 df), as
+    in the standalone tracer.
     """
     why = per_sample_method(mscene, integrator)
-    pass_sums, W, H, method = _pass_function(mscene, integrator, seed, jitter=jitter, space=space)
+    n_rep = None if pixel_sampler.default else pixel_sampler.samples_per_replicate(spp)
+    if n_rep and why is not None:
+        raise ValueError(f"pixel sampler {pixel_sampler.name!r} needs each pixel's samples summed apart, "
+                         f"and here {why}")
+    pass_sums, W, H, method = _pass_function(mscene, integrator, seed, jitter=jitter, space=space,
+                                             samples_per_replicate=n_rep)
     if method == "batches":
         if spp_per_pass is None:
             spp_per_pass = max(1, spp // max(1, min(batches, spp)))
         spp = max(2, spp // spp_per_pass) * spp_per_pass
     per_pass = spp_per_pass if spp_per_pass is not None else samples_per_pass(W, H, spp)
+    if n_rep:
+        per_pass = replicate_pass_size(per_pass, n_rep)
+        pass_sums = replicate_passes(pass_sums, n_rep)
     if method == "samples" and W * H * per_pass >= 2**32:
         raise ValueError(f"one pass of {W}x{H}x{per_pass} samples exceeds 2^32 lanes: lower spp_per_pass")
     totals = run_passes(pass_sums, width=W, height=H, spp=spp, spp_per_pass=per_pass,
                         progress=Progress(spp, label=label, enabled=progress))
     notes = {"variance_method": "samples", "variance_note": "per-sample moments of each pixel's own samples"}
+    if n_rep:
+        R = pixel_sampler.replicates
+        totals.variance = (totals.variance.astype(np.float64) * replicate_variance_scale(spp, R)).astype(np.float32)
+        notes = {"pixel_sampler": pixel_sampler.name, "variance_method": pixel_sampler.variance_method,
+                 "variance_note": f"spp times the variance of the mean from {R} independently scrambled replicates"}
     if method == "batches":
         P = totals.spp // per_pass
         totals.variance = (totals.variance.astype(np.float64) * (totals.spp - 1) / (P - 1)).astype(np.float32)
@@ -486,14 +529,17 @@ def _run(mscene, integrator, *, seed: int, spp: int, spp_per_pass: int | None, p
 
 def render_mitsuba(scene: Scene, settings: RenderSettings, *, backend: str = "llvm", progress: bool = True,
                    spp_per_pass: int | None = None, integrator: str | dict[str, Any] = "path",
-                   jitter: bool = True) -> RenderResult:
+                   jitter: bool = True, pixel_sampler: str = "independent", replicates: int | None = None) -> RenderResult:
     """Render ``scene`` at ``settings`` with Mitsuba's ``path`` integrator: mean and per-sample variance images.
 
     Called through :func:`mcrt.render.render` (renderer ``mitsuba``).
     ``integrator`` replaces ``path`` by another plugin (a name, or a
     dictionary as in :func:`scene_dict`; :func:`mcrt.plugins.render_plugin`
     uses it for mcrt's estimator); ``jitter=False`` sends every sample through
-    its pixel's centre (the plugin's no-jitter mutant). The result is identical bit for bit for
+    its pixel's centre (the plugin's no-jitter mutant); ``pixel_sampler``
+    and ``replicates`` place the camera samples as in
+    :func:`mcrt.tracer.render_tracer` (:mod:`mcrt.samplers`; ``sobol``: the
+    tracer's points, variance from the replicates). The result is identical bit for bit for
     the same arguments on the same machine and backend. The passes are
     :func:`_run`'s, shared with :func:`render_with_variance`.
 
@@ -509,8 +555,9 @@ def render_mitsuba(scene: Scene, settings: RenderSettings, *, backend: str = "ll
     mscene = mi.load_dict(scene_dict(scene, s.camera, s.width, s.height, s.max_depth, integrator, rr_depth=s.rr_depth,
                                      spp=s.spp, backend=backend))
     load_time = time.perf_counter() - t_load
-    totals, per_pass, _, _ = _run(mscene, mscene.integrator(), seed=s.seed, spp=s.spp, spp_per_pass=spp_per_pass,
-                               progress=progress, label="mitsuba", jitter=jitter)
+    sampler = PixelSampler.of(pixel_sampler, replicates)
+    totals, per_pass, _, notes = _run(mscene, mscene.integrator(), seed=s.seed, spp=s.spp, spp_per_pass=spp_per_pass,
+                                      progress=progress, label="mitsuba", jitter=jitter, pixel_sampler=sampler)
     return RenderResult(
         mean=totals.mean,
         variance=totals.variance,
@@ -530,6 +577,7 @@ def render_mitsuba(scene: Scene, settings: RenderSettings, *, backend: str = "ll
             "rr_depth": str(s.rr_depth),
             "spp_per_pass": str(per_pass),
             "load_time": f"{load_time:.3f}",
+            **({} if sampler.default else {k: notes[k] for k in ("pixel_sampler", "variance_method")}),
         },
     )
 
@@ -773,7 +821,8 @@ def render_with_variance(scene: "dict[str, Any] | mi.Scene | str | os.PathLike",
                          spp: int | None = None, seed: int = 0, width: int | None = None, height: int | None = None,
                          max_depth: int | None = None, backend: str = "llvm", progress: bool = False,
                          spp_per_pass: int | None = None, batches: int = 32, defaults: dict[str, Any] | None = None,
-                         space: str = "rgb") -> RenderResult:
+                         space: str = "rgb", pixel_sampler: str = "independent",
+                         replicates: int | None = None) -> RenderResult:
     """Render any Mitsuba scene with any of its integrators: mean and per-sample variance, reproducible from ``seed``.
 
     ``scene`` is a scene dictionary (``mi.cornell_box()``), a loaded
@@ -802,7 +851,11 @@ def render_with_variance(scene: "dict[str, Any] | mi.Scene | str | os.PathLike",
     says how the variance was estimated (``variance_method``), its degrees
     of freedom (``variance_dof``) and the tile variance factor of the
     filter (``tile_variance_factor``). ``space='xyz'`` renders CIE X, Y, Z
-    instead of linear RGB (``extra['channels'] = 'XYZ'``).
+    instead of linear RGB (``extra['channels'] = 'XYZ'``). ``pixel_sampler``
+    ``sobol`` (and ``replicates``) places the camera samples at
+    :mod:`mcrt.samplers`' points, variance from the replicates; it needs the
+    per-sample passes (a box filter, the ``independent`` sampler, an
+    integrator that samples camera rays) and says so otherwise.
 
     The result records ``renderer`` = the integrator's plugin name,
     ``max_depth`` = :func:`integrator_max_depth` (-1 unbounded or none),
@@ -856,7 +909,8 @@ def render_with_variance(scene: "dict[str, Any] | mi.Scene | str | os.PathLike",
         spp = int(sensor.sampler().sample_count())
     name = _integrator_name_of(integ)
     totals, per_pass, method, notes = _run(mscene, integ, seed=seed, spp=int(spp), spp_per_pass=spp_per_pass,
-                                           progress=progress, label=name, batches=batches, space=space)
+                                           progress=progress, label=name, batches=batches, space=space,
+                                           pixel_sampler=PixelSampler.of(pixel_sampler, replicates))
     film = sensor.film()
     extra.update(notes)
     extra.update({

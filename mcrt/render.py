@@ -14,7 +14,9 @@ mitsuba    Mitsuba's ``path`` integrator Mitsuba             Mitsuba
 
 Each takes the options every renderer has (``backend``, ``progress``,
 ``spp_per_pass``) and its own, keyword-only; an option a renderer does not
-have is refused with a one-line ``ValueError`` naming both::
+have is refused with a one-line ``ValueError`` naming both. Every renderer
+has the pixel sampler (``pixel_sampler``, ``replicates``: :mod:`mcrt.samplers`),
+the same points and variance on each; adaptive sampling refuses ``sobol``::
 
     from mcrt.render import render
     s = scene.settings(camera="near", width=64, height=64, spp=256)
@@ -122,6 +124,9 @@ def _adaptive(scene: Scene, settings: RenderSettings, scheme: str, options: dict
     from mcrt.tricks.adaptive import render_adaptive
 
     other = sorted(k for k, d in ADAPTIVE_FIXED.items() if k in options and options[k] != d and (d != () or options[k]))
+    if "pixel_sampler" in other or "replicates" in other:
+        raise ValueError("adaptive sampling takes no pixel_sampler 'sobol': it gives each pixel its own sample count "
+                         "by the per-sample spread, and sobol's variance needs R equal replicates in every pixel")
     if other:
         raise ValueError(f"adaptive sampling renders with the default estimator: it takes no option {other[0]!r}")
     return render_adaptive(scene, settings, scheme=scheme, backend=options.get("backend", "llvm")).result
@@ -151,8 +156,9 @@ RENDERERS: dict[str, Renderer] = {
                   "bidirectional": False, "mirror_caustics": "all", **RENDER_TRICKS,
                   "pixel_sampler": "independent", "replicates": None, "light_paths": None}, _mcrt),
         Renderer("plugin", "mcrt's estimator as the Mitsuba integrator 'mcrt'", "mitsuba", "mcrt",
-                 {"mutants": (), "mis": None}, _plugin),
-        Renderer("mitsuba", "Mitsuba 3's path integrator", "mitsuba", "mitsuba", {"integrator": "path"}, _mitsuba),
+                 {"mutants": (), "mis": None, "pixel_sampler": "independent", "replicates": None}, _plugin),
+        Renderer("mitsuba", "Mitsuba 3's path integrator", "mitsuba", "mitsuba",
+                 {"integrator": "path", "pixel_sampler": "independent", "replicates": None}, _mitsuba),
     )
 }
 

@@ -30,6 +30,11 @@ variance / spp is Var(M) as for every other render, and says so in
 ``mcrt.variance_method``); :func:`mcrt.stats.variance_dof` reads it and the
 two-sample test gives that side R - 1 degrees of freedom per pixel.
 
+Every renderer takes it: the standalone tracer sums replicates per tile
+(:func:`replicate_launch`), the Mitsuba hosts (renderers ``plugin`` and
+``mitsuba``) per whole-image pass (:func:`replicate_passes`), with the same
+points at the same seed (:func:`mcrt.mitsuba_scene._sobol_jitter`).
+
 The path's own dimensions (light samples, directions, roulette) stay on the
 sample's random stream: only the pixel is stratified, which is where the
 error of pixels partly covering the light sits (an edge's error falls as
@@ -229,6 +234,43 @@ def replicate_launch(launch, samples_per_replicate: int):
 
         dr.eval(s1, s2)
         return s1, s2
+
+    return wrapped
+
+
+def replicate_passes(pass_sums, samples_per_replicate: int):
+    """A pass function (mcrt.film.run_passes) whose sums are (sum of x, sum over replicates of S_r^2 / N).
+
+    The whole-image twin of :func:`replicate_launch`, for the Mitsuba hosts'
+    passes: ``pass_sums(k, n)`` returns a Float64 array laid out (moment,
+    pixel, channel), and every pass has the same n, a divisor of N
+    (:func:`replicate_pass_size`), so pass k holds samples k n .. k n + n - 1.
+    A replicate's sums are held until its last pass; the passes before it
+    add nothing.
+    """
+    import drjit as dr
+
+    n_rep = int(samples_per_replicate)
+    held = {}
+
+    def wrapped(k: int, n: int):
+        first = k * n
+        if n_rep % n:
+            raise ValueError(f"a pass of {n} samples does not divide replicates of {n_rep}")
+        sums = pass_sums(k, n)
+        part = sums if first % n_rep == 0 else held.pop("part") + sums
+        Float64 = type(part)
+        half = dr.width(part) // 2
+        if (first + n) % n_rep:
+            held["part"] = part
+            return dr.zeros(Float64, 2 * half)
+        idx = dr.arange(dr.uint32_array_t(Float64), half)
+        s1 = dr.gather(Float64, part, idx)
+        out = dr.zeros(Float64, 2 * half)
+        dr.scatter(out, s1, idx)
+        dr.scatter(out, s1 * s1 * (1.0 / n_rep), idx + half)
+        dr.eval(out)
+        return out
 
     return wrapped
 

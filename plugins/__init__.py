@@ -111,7 +111,8 @@ if mi.variant() is not None:
 
 
 def render_plugin(scene: Scene, settings: RenderSettings, *, backend: str = "llvm", progress: bool = True,
-                  spp_per_pass: int | None = None, mutants=(), mis: bool | None = None) -> RenderResult:
+                  spp_per_pass: int | None = None, mutants=(), mis: bool | None = None,
+                  pixel_sampler: str = "independent", replicates: int | None = None) -> RenderResult:
     """Render ``scene`` at ``settings`` with the ``mcrt`` integrator inside Mitsuba: mean and per-sample variance.
 
     Called through :func:`mcrt.render.render` (renderer ``plugin``). The
@@ -119,8 +120,12 @@ def render_plugin(scene: Scene, settings: RenderSettings, *, backend: str = "llv
     only the integrator differs. Every catalogued mutant runs: the
     estimator's inside the integrator, the camera's (jitter) in the passes,
     the output's on the image and the scene's on the scene. ``mis`` as in the
-    standalone tracer (default: where the scene needs it). The result has
-    ``renderer='mitsuba-mcrt'``.
+    standalone tracer (default: where the scene needs it). ``pixel_sampler``
+    and ``replicates`` as in the standalone tracer (:mod:`mcrt.samplers`):
+    ``sobol`` places the camera samples at the tracer's Owen-scrambled Sobol
+    points in R replicates, the variance is the replicates' spread and the
+    header says ``variance_method`` 'replicates:R' (R - 1 df). The result
+    has ``renderer='mitsuba-mcrt'``.
     """
     names = check_mutants(mutants)
     mutated = mutate_scene(scene, names)
@@ -130,7 +135,8 @@ def render_plugin(scene: Scene, settings: RenderSettings, *, backend: str = "llv
     integrator = {"type": NAME, "light_samples": int(settings.light_samples), "mis": use_mis,
                   "mutant": ",".join(sorted(n for n in names if CATALOGUE[n].mutations))}
     r = render_mitsuba(mutated, settings, backend=backend, progress=progress, spp_per_pass=spp_per_pass,
-                       integrator=integrator, jitter=camera_jitter(names))
+                       integrator=integrator, jitter=camera_jitter(names), pixel_sampler=pixel_sampler,
+                       replicates=replicates)
     mean, var = encode_output(r.mean, r.variance, output_encoding(names))
     extra = dict(r.extra, light_samples=str(settings.light_samples), mis=str(use_mis).lower(), mutants=",".join(sorted(names)))
     return dataclasses.replace(r, mean=mean, variance=var, renderer="mitsuba-mcrt", scene_hash=scene.content_hash(), extra=extra)

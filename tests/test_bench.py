@@ -10,6 +10,7 @@ from __future__ import annotations
 import json
 import re
 import statistics
+from pathlib import Path
 
 from mcrt.bench import BenchCase, bench_cases, bounded_rows, kernel_profile, run_bench
 from mcrt.bench_page import LOG_HEADING, format_profile, format_table, markdown, write_report
@@ -49,7 +50,7 @@ def test_kernel_profile_names_every_part():
 def test_bench_command_writes_json(tmp_path, capsys):
     out = tmp_path / "b.json"
     assert main(["bench", "--res", "16", "--spp", "2", "--spp", "4", "--max-depth", "2", "--camera", "near", "--repeats", "1",
-                 "--json", str(out)]) == 0
+                 "--sampler-cost", "0", "--json", str(out)]) == 0
     data = json.loads(out.read_text())
     assert {r["renderer"] for r in data["rows"]} == {"mcrt", "mitsuba"} and data["kernel_profile"] == []
     assert sorted({r["case"]["spp"] for r in data["rows"]}) == [2, 4] and len(data["rows"]) == 4
@@ -219,15 +220,25 @@ def test_spp_sweep_cases_are_not_timed_twice():
 
 
 def test_bench_command_writes_report(tmp_path, capsys):
-    """A tiny run of ``mcrt bench --report``: the page, its JSON, and the table's numbers those of the JSON."""
+    """A tiny run of ``mcrt bench --report``: the page, its JSON, and the table's numbers those of the JSON.
+
+    Run twice: the second compares its speed-ups with the bench.json of the first, which it replaces.
+    """
     out = tmp_path / "bench"
     tried = tmp_path / "log.md"
     tried.write_text("### Hand-kept\n\nkept 1.23x\n")
-    assert main(["bench", "--res", "16", "--spp", "2", "--spp-sweep", "1", "--max-depth", "3", "--camera", "near",
-                 "--repeats", "1", "--profile", "--report", str(out), "--tried", str(tried)]) == 0
+    args = ["bench", "--res", "16", "--spp", "2", "--spp-sweep", "1", "--max-depth", "3", "--camera", "near",
+            "--repeats", "1", "--sampler-cost", "1", "--profile", "--report", str(out), "--tried", str(tried)]
+    assert main(args) == 0
+    first = json.loads((out / "bench.json").read_text())
+    assert first["previous"] is None and "## Against the previous run" not in (out / "index.md").read_text()
+    assert main(args) == 0
     page, data = (out / "index.md").read_text(), json.loads((out / "bench.json").read_text())
-    assert data["command"] == ("mcrt bench --camera near --res 16 --spp 2 --max-depth 3 --spp-sweep 1 --repeats 1 --profile "
-                               f"--report {out} --tried {tried}")
+    assert data["command"] == ("mcrt bench --camera near --res 16 --spp 2 --max-depth 3 --spp-sweep 1 --sampler-cost 1 "
+                               f"--repeats 1 --profile --report {out} --tried {tried}")
+    assert data["previous"]["date"] == first["provenance"]["date"] and len(data["previous"]["speedups"]) == 2
+    assert {"Cost of the sobol pixel sampler", "Against the previous run"} <= {s[3:] for s in _sections(page)}
+    assert [(r["width"], r["spp"], len(r["times"]["sobol"])) for r in data["sampler_cost"]["rows"]] == [(64, 1024, 1), (256, 64, 1)]
     assert f"    {data['command']}\n" in page and page.rstrip().endswith("kept 1.23x")
     assert {"Where mcrt's time goes", "Against samples per render", "Machine"} <= {s[3:] for s in _sections(page)}
     assert len(data["rows"]) == 4 and data["provenance"]["versions"]["mitsuba"]
@@ -263,3 +274,25 @@ def test_flatness_interleaves_resolutions_and_sets_the_goal():
     got = {g[0]: g[1:] for g in goals(data) if "within 15 %" in g[0]}
     assert got == {"mcrt's throughput at 4096x4096 within 15 % of its best (far camera, depth 8, 16 spp, renders interleaved)":
                    (False, "84 % of its best: 21.0 M paths/s against 25.0 at 1024x1024 (medians of 5 interleaved rounds)")}
+
+
+def test_report_states_the_sampler_cost_and_the_previous_run():
+    """The sampler-cost table and the comparison with the previous run, each figure from recorded numbers.
+
+    The previous run's speed-ups are this run's times 0.9, 1.0, 1.1 and 1.2 (in the order of the cases): the
+    ratios this run over that are 1/0.9 .. 1/1.2, median (1/1.0 + 1/1.1) / 2.
+    """
+    data = _recorded_run()
+    data["sampler_cost"] = {"max_depth": 8, "rounds": 3, "replicates": 8, "rows": [
+        {"camera": "near", "width": 64, "height": 64, "spp": 1024, "paths": 64 * 64 * 1024,
+         "times": {"independent": [0.2, 0.25, 0.3], "sobol": [0.21, 0.3, 0.33]}, "ratio": 0.3 / 0.25}]}
+    from mcrt.bench_page import pairs, speedup
+
+    now = [(a["case"], speedup(a, b)) for a, b in pairs(data["rows"])]
+    data["previous"] = {"commit": "old1", "date": "1999", "speedups": [
+        {"case": c, "speedup": v * f} for (c, v), f in zip(now, (0.9, 1.0, 1.1, 1.2))]}
+    page = markdown(data, Path("."))
+    assert "| near | 64x64 | 1024 | 4,194,304 | 0.2500 | 0.3000 | 16.78 | 13.98 | 1.20 |" in page
+    assert "takes 1.20 to 1.20 times the independent render's time" in page
+    assert "commit old1, 1999" in page and f"median {(1 / 1.0 + 1 / 1.1) / 2:.2f}" in page
+    assert f"lowest {1 / 1.2:.2f} (near camera, 64x64, 16 spp, max depth 8" in page and f"highest {1 / 0.9:.2f}" in page

@@ -286,3 +286,83 @@ def test_light_budget_from_the_pilot(scene):
     assert compare(r, load_reference(scene, "near", 64, 8), policy="reference-floor", alpha=ALPHA).passed
     with pytest.raises(ValueError, match="needs bidirectional"):
         render(scene, _settings(scene), progress=False, light_paths="auto")
+
+
+# -- the sobol sampler on the Mitsuba hosts (renderers plugin and mitsuba) ---------------------------------------
+
+
+@pytest.mark.parametrize("renderer", ["plugin", "mitsuba"])
+def test_mitsuba_hosts_take_the_tracers_points_and_replicate_variance(scene, renderer):
+    """At max depth 1 a sample's value is a function of its camera ray, so a sobol render on a Mitsuba host at the
+    standalone tracer's seed is the tracer's sobol render bit for bit, mean and replicate variance (64x64, 64 spp,
+    4 replicates, seed 4): the same points in the same pixels and the same arithmetic, here in 16 passes of 4
+    samples whose replicate sums are held across passes (mcrt.samplers.replicate_passes).
+
+    Power: another seed's points differ.
+    """
+    s = replace(scene.settings(camera="near", width=64, height=64, spp=64, max_depth=1), seed=4)
+    tracer = render(scene, s, progress=False, pixel_sampler="sobol", replicates=4)
+    host = render(scene, s, renderer=renderer, progress=False, pixel_sampler="sobol", replicates=4, spp_per_pass=4)
+    assert (host.variance > 0).sum() > 40  # the light's edge: pixels whose replicates differ
+    assert np.array_equal(host.mean, tracer.mean) and np.array_equal(host.variance, tracer.variance)
+    assert host.extra["pixel_sampler"] == "sobol" and host.extra["variance_method"] == "replicates:4"
+    other = render(scene, replace(s, seed=5), renderer=renderer, progress=False, pixel_sampler="sobol", replicates=4)
+    assert not np.array_equal(other.mean, tracer.mean)
+
+
+def test_plugin_sobol_agrees_with_mitsuba_and_the_standalone_tracer(scene, tmp_path):
+    """64x64, 1024 spp, near, depth 8, 8x8 tiles, Holm at ALPHA: the plugin's sobol render (seed 31, 8 replicates)
+    against Mitsuba's path (seed 32, independent) and against the standalone tracer's sobol render (seed 33).
+
+    The header says replicates:8 (through an EXR) and the comparison takes 7 df per pixel: against the tracer's
+    sobol render, both sides 64 pixels x 7 df, a tile's Welch df is at most 2 x 64 x 7 (per-sample df would give
+    up to 2 x 64 x 1023).
+    """
+    s = scene.settings(camera="near", width=64, height=64, spp=1024, max_depth=8)
+    path = tmp_path / "plugin.exr"
+    write_exr(path, render(scene, replace(s, seed=31), renderer="plugin", progress=False, pixel_sampler="sobol"))
+    plugin = read_exr(path)
+    assert plugin.extra["variance_method"] == "replicates:8" and variance_dof(plugin) == 7
+    mitsuba = render(scene, replace(s, seed=32), renderer="mitsuba", progress=False)
+    tracer = render(scene, replace(s, seed=33), progress=False, pixel_sampler="sobol")
+    against_path, against_tracer = (compare_images(plugin, b, alpha=ALPHA, tile=8) for b in (mitsuba, tracer))
+    assert against_path.passed, against_path.summary()
+    assert against_tracer.passed, against_tracer.summary()
+    assert np.nanmax(against_tracer.df) <= 2 * 64 * 7 * (1 + 1e-6)
+
+
+def test_mitsuba_hosts_refuse_what_the_tracer_refuses(scene):
+    with pytest.raises(ValueError, match="multiple of 8"):
+        render(scene, _settings(scene, spp=60), renderer="plugin", progress=False, pixel_sampler="sobol")
+    with pytest.raises(ValueError, match="at least 2 replicates"):
+        render(scene, _settings(scene), renderer="mitsuba", progress=False, pixel_sampler="sobol", replicates=1)
+    with pytest.raises(ValueError, match="summed apart, and here ParticleTracerIntegrator splats"):
+        render(scene, _settings(scene), renderer="mitsuba", progress=False, pixel_sampler="sobol", integrator="ptracer")
+
+
+def test_any_mitsuba_scene_takes_the_sampler(tmp_path, capsys):
+    """Mitsuba's Cornell box (mi.cornell_box(), its path integrator), 32x32, 256 spp: sobol (seed 41, 8 replicates)
+    agrees with independent samples (seed 42), 8x8 tiles, Holm at ALPHA, and says replicates:8.
+
+    `mcrt render --mitsuba-scene` takes --pixel-sampler, and refuses it with Mitsuba's particle tracer (exit 2, one
+    line saying why).
+    """
+    import mitsuba as mi
+
+    from mcrt.cli import main
+    from mcrt.mitsuba_scene import render_with_variance
+
+    mi.set_variant("llvm_ad_rgb")
+    kw = dict(spp=256, width=32, height=32)
+    a = render_with_variance(mi.cornell_box(), seed=41, pixel_sampler="sobol", **kw)
+    b = render_with_variance(mi.cornell_box(), seed=42, **kw)
+    assert a.extra["variance_method"] == "replicates:8" and variance_dof(a) == 7
+    c = compare_images(a, b, alpha=ALPHA, tile=8)
+    assert c.passed, c.summary()
+    out = tmp_path / "cb.exr"
+    args = ["render", "--mitsuba-scene", "cornell-box", "--res", "16", "--spp", "16", "--pixel-sampler", "sobol", "-o", str(out)]
+    assert main(args) == 0 and read_exr(out).extra["variance_method"] == "replicates:8"
+    capsys.readouterr()
+    assert main([*args, "--integrator", "ptracer"]) == 2
+    (line,) = capsys.readouterr().err.strip().splitlines()
+    assert "pixel sampler 'sobol' needs each pixel's samples summed apart" in line
