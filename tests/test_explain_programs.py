@@ -53,16 +53,18 @@ def _claimed(res) -> tuple[str | None, str]:
     return (ex.get("family") if ex.get("verdict") == "claimed" else None), ex.get("sentence", res.summary)
 
 
-@pytest.mark.parametrize("name, post, what", [
-    ("grey", lambda x: np.repeat((x @ np.array([0.2126, 0.7152, 0.0722]))[..., None], 3, axis=2), "grey Rec. 709"),
-    ("blue_zeroed", lambda x: x * np.array([1.0, 1.0, 0.0]), "blue zeroed"),
+@pytest.mark.parametrize("name, post, family, what", [
+    ("grey", lambda x: np.repeat((x @ np.array([0.2126, 0.7152, 0.0722]))[..., None], 3, axis=2), "colour_lost",
+     "grey Rec. 709"),
+    ("blue_zeroed", lambda x: x * np.array([1.0, 1.0, 0.0]), "colour_lost", "blue zeroed"),
+    ("bgr", lambda x: x[..., ::-1], "channels", "channels BGR"),
 ])
-def test_colour_lost_is_named_with_its_matrix(ctx, name, post, what):
-    """A Mitsuba render (seed 61) written as luminance in every channel, and with blue written as 0: claimed as
-    colour lost, by the matrix that was applied, with a scale of about 1; the image loses points."""
+def test_a_colour_matrix_is_named(ctx, name, post, family, what):
+    """A Mitsuba render (seed 61) written as luminance in every channel, with blue written as 0, and in BGR order:
+    claimed by the matrix that was applied, with a scale of about 1; the image loses points."""
     res = grade_image(name, ctx, [post(_mitsuba(61))], spp=1024)
     fam, said = _claimed(res)
-    assert fam == "colour_lost" and res.details["explanation"]["named"] == what, said
+    assert fam == family and res.details["explanation"]["named"] == what, said
     assert res.details["explanation"]["candidates"][0]["value"]["scale"] == pytest.approx(1.0, abs=0.03)
     assert res.score < res.max_score
 

@@ -90,6 +90,15 @@ def _free_matrix(fit: Fit, top: float) -> np.ndarray:
     return M
 
 
+def _terms(row: np.ndarray) -> str:
+    """One row of a colour matrix in words: '0.08 R - 0.01 G + 0.93 B'."""
+    out = ""
+    for j, m in enumerate(row):
+        sign = ("-" if m < 0 else "") if not out else (" - " if m < 0 else " + ")
+        out += f"{sign}{_num(abs(float(m)))} {'RGB'[j]}"
+    return out
+
+
 def colour(fit: Fit, inputs: Inputs) -> list[Candidate]:
     """The common colour matrices, each with a fitted scale, and the best free 3x3 matrix."""
     R, top = fit.R, stored_top(fit)
@@ -105,7 +114,7 @@ def colour(fit: Fit, inputs: Inputs) -> list[Candidate]:
     if not np.all((M.sum(axis=1) >= 1 / GAIN) & (M.sum(axis=1) <= GAIN)):
         return out
     model = np.minimum(R @ M.T, top)
-    rows = "; ".join(f"{_RGB[c]} = " + " + ".join(f"{_num(M[c, j])} {'RGB'[j]}" for j in range(3)) for c in range(3))
+    rows = "; ".join(f"{_RGB[c]} = " + _terms(M[c]) for c in range(3))
     out.append(Candidate("colour_matrix", "colour matrix", f"the colours mixed by a 3x3 matrix ({rows})",
                          fit.model(model), 9, value={"matrix": M.round(4).tolist()}, change=model - R))
     return out
