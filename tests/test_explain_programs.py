@@ -1,5 +1,6 @@
 """Families of mistakes a student's program makes beyond the scene file (issue 27): colour lost or mixed, light
-counted twice, the light facing the wrong way, black pixels, and the image's orientation.
+counted twice, the light facing the wrong way, black pixels, a surface of the room black, and the image's
+orientation.
 
 Every hand-in is a **Mitsuba** render (an edited scene, or a render post-processed with NumPy as a student's program
 would), never the grader's own model image nor a case of mcrt.grade.accuracy.programs. The context is the 32x32
@@ -23,8 +24,8 @@ from mcrt.grade.expected import prepare_context
 from mcrt.grade.grader import grade_image
 from mcrt.scene import load_scene
 
-#: The families added for students' programs, and the causes they name (mcrt.grade.accuracy.run.CAUSE_OF).
-NEW = ("colour_lost", "colour_matrix", "direct_twice", "light_facing", "bad_pixels")
+#: The causes the families added here name (mcrt.grade.accuracy.run.CAUSE_OF), besides albedo.
+NEW = ("colour_lost", "channels", "direct_twice", "light_facing", "bad_pixels", "object_missing", "orientation")
 
 
 @pytest.fixture(scope="module")
@@ -125,6 +126,17 @@ def test_black_pixels_are_named_and_lose_points(ctx, name):
     value = res.details["explanation"]["candidates"][0]["value"]
     assert value["pixels"] == (30 if name == "block" else 12)
     assert value["block"] == ([10, 15, 20, 24] if name == "block" else None)
+    assert res.score < res.max_score
+
+
+def test_a_wall_left_out_is_named_as_a_black_surface(ctx):
+    """Wall CD left out of the Mitsuba scene (seed 71): in the closed room it is black, which is what a wall of
+    albedo 0 looks like; the feedback claims that surface black and names both causes."""
+    res = grade_image("no_wall", ctx, [_mitsuba(71, mitsuba_edit=lambda d: {k: v for k, v in d.items()
+                                                                          if k != "wall_CD"})], spp=1024)
+    fam, said = _claimed(res)
+    assert fam == "surface_black" and res.details["explanation"]["named"] == "wall CD black", said
+    assert set(named_causes(res)[0]) == {"object_missing", "albedo"}
     assert res.score < res.max_score
 
 
