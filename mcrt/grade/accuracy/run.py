@@ -42,10 +42,17 @@ CAUSE_OF: dict[str, tuple[str, ...]] = {
     "pixel_offset": ("pixel_offset", "camera_rotation"), "depth": ("depth",), "emitter_hidden": ("light_hidden",),
     "encoding": ("encoding",), "blur": ("blur",),
     "gamma_output": ("encoding",), "depth_off_by_one": ("depth",), "albedo_1pct": ("albedo",),
-    "mirror_wrong_sign": ("albedo",), "no_jitter": ("blur",),
+    "mirror_wrong_sign": ("albedo",), "no_jitter": ("blur",), "double_count": ("direct_twice",),
     # Families beyond the scene file (mcrt.grade.families).
     "tone_curve": ("tone_map", "encoding"), "falloff": ("falloff",), "resampling": ("resampling", "blur"),
     "material": ("material",), "object_size": ("object_size",),
+    # Mistakes of students' programs (mcrt.grade.accuracy.programs): a colour matrix that loses colour (grey, a
+    # channel zeroed) and one that mixes the channels otherwise, light counted twice, the light facing the wrong
+    # way, black pixels.
+    "colour_lost": ("colour_lost",), "colour_matrix": ("channels", "colour_lost"), "direct_twice": ("direct_twice",),
+    "light_facing": ("light_facing",), "bad_pixels": ("bad_pixels",),
+    # A surface of the closed room missing looks exactly like it black: the words name both.
+    "surface_black": ("object_missing", "albedo"),
 }
 
 
@@ -57,7 +64,8 @@ _ACCEPTED = {**{c: _CAMERA_CAUSES for c in _CAMERA_CAUSES},
              "light_size": ("light_size", "light_radiance"),
              # The same mistake in other words: a curve on the values is an encoding, BGR is a colour mistake,
              # enlarging a small render blurs it.
-             "tone_map": ("tone_map", "encoding"), "channels": ("channels", "albedo"),
+             "tone_map": ("tone_map", "encoding"), "channels": ("channels", "albedo", "colour_lost"),
+             "colour_lost": ("colour_lost", "channels"),
              "resampling": ("resampling", "blur")}
 
 
@@ -108,7 +116,8 @@ def named_causes(res) -> tuple[list[str], str]:
         causes += CAUSE_OF.get(m, (f"catalogue:{m}",))
         said.append(f"consistent with {m}")
     tests = {t.name: t for t in res.tests}
-    for crit, cause in (("linear", "encoding"), ("exposure", "light_radiance")):
+    for crit, cause in (("linear", "encoding"), ("exposure", "light_radiance"), ("orientation", "orientation"),
+                        ("finite", "bad_pixels")):
         t = tests.get(crit)
         # The exposure criterion claims a constant factor only where dividing by it passes the bias test; a
         # brightness off by more than it allows, which no constant explains, names no cause.

@@ -10,7 +10,8 @@ family         model image                                  how it is made
 ============== ============================================ ===================================
 scale          k R (one k, or one per channel: the light's  closed form
                radiance, an exposure, a white balance)
-channels       R with its channels reordered                closed form
+colour         k M R: channels reordered, colour lost to    closed form; weighted least
+               grey, a channel zeroed, any 3x3 matrix M     squares
 albedo         each surface's albedo per channel            mcrt renders at albedo 0, 1/2, 1
                                                             and the scene's, Lagrange
                                                             interpolation per channel
@@ -30,6 +31,10 @@ falloff        a smooth fall-off, cos^k of the ray's angle  weighted least squar
 resampling     rendered at 1/k the resolution and enlarged  closed form on R
 material       an object rendered with the other material   mcrt renders at 0, 1/2, 1
 object_size    an object's size                             mcrt renders at a few scales
+surface_black  a surface of the room black (missing)        the albedo renders at 0
+light_twice    direct light, or all light, counted twice    the path-depth renders 1 and 2
+light_facing   the light emitting on its other side         one mcrt render
+bad_pixels     pixels (or a block) written as 0             closed form on R
 ============== ============================================ ===================================
 
 Every rendered family changes the reference by what mcrt says the mistake
@@ -74,8 +79,10 @@ the claim rule :mod:`.claim` (the grader's is :func:`mcrt.grade.adequacy.claim_r
 a cause is claimed only when what it leaves is noise); the families
 :mod:`.scene`, :mod:`.curves`, :mod:`.camera` and :mod:`.catalogue` (the
 catalogued bugs among them, and their rankings by tiles, pixels and noise),
-and beyond the scene file :mod:`.tonecurve`, :mod:`.falloff`,
-:mod:`.resampling` and :mod:`.objects`, in the order of :data:`FAMILIES`.
+:mod:`.colour` and :mod:`.surface_black`, and beyond the scene file
+:mod:`.tonecurve`, :mod:`.falloff`, :mod:`.resampling`, :mod:`.objects`,
+:mod:`.light_twice`, :mod:`.light_facing` and :mod:`.pixels`, in the order of
+:data:`FAMILIES`.
 """
 
 from __future__ import annotations

@@ -5,24 +5,31 @@ from __future__ import annotations
 from mcrt.grade.explain.basis import Basis, prepare_basis
 from mcrt.grade.explain.camera import camera
 from mcrt.grade.explain.catalogue import catalogue
+from mcrt.grade.explain.colour import colour
 from mcrt.grade.explain.curves import curves
 from mcrt.grade.explain.falloff import falloff
+from mcrt.grade.explain.light_facing import light_facing
+from mcrt.grade.explain.light_twice import light_twice
 from mcrt.grade.explain.objects import material, object_size
+from mcrt.grade.explain.pixels import bad_pixels
 from mcrt.grade.explain.resampling import resampling
 from mcrt.grade.explain.scene import albedo, rendered, scale
+from mcrt.grade.explain.surface_black import surface_black
 from mcrt.grade.explain.tonecurve import tone_curve
 
-#: Every family the engine fits, in this order (ties keep it). The scene file's parameters and the catalogue; then
-#: what a student's program gets wrong beyond the scene file (a tone curve, a fall-off, resampling, an object's
-#: material or size).
-FAMILIES = (scale, curves, albedo, rendered, camera, catalogue, tone_curve, falloff, resampling, material, object_size)
+#: Every family the engine fits, in this order (ties keep it). The scene file's parameters (and the colours mixed by
+#: a matrix, a surface of the room black) and the catalogue; then what a student's program gets wrong beyond the
+#: scene file (a tone curve, a fall-off, resampling, an object's material or size, light counted twice, the light
+#: facing the wrong way, black pixels).
+FAMILIES = (scale, colour, curves, albedo, surface_black, rendered, camera, catalogue, tone_curve, falloff, resampling,
+            material, object_size, light_twice, light_facing, bad_pixels)
 
 #: The families that are mistakes of the camera (what the misregistration test of mcrt.grade.structure also sees).
 CAMERA_FAMILIES = frozenset({"fov", "pixel_offset", "rotation", "eye"})
 #: The families a TA counts as major mistakes whatever their share of the image: the camera, the scene's geometry
 #: (an object or the light missing, moved or resized) and its colours (mcrt.grade.scoring.unbiased_loss).
 MAJOR_FAMILIES = CAMERA_FAMILIES | {"object_missing", "object_moved", "light_position", "light_size", "albedo", "channels",
-                                    "material", "object_size"}
+                                    "material", "object_size", "colour_lost", "light_facing", "surface_black"}
 
 
 def prepare(a, scene, render) -> Basis:

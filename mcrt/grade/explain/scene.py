@@ -1,4 +1,4 @@
-"""The scene's parameters as families: an overall scale, the light's radiance, the channels' order, each
+"""The scene's parameters as families: an overall scale, the light's radiance, each
 surface's albedo, and the rendered variations (the light, the objects, the eye, the path depth, the emitter)."""
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ from mcrt.grade.feedback import num as _num
 
 
 def scale(fit: Fit, inputs: Inputs) -> list[Candidate]:
-    """An overall scale, the light's radiance (a scale per channel), the channels in another order."""
+    """An overall scale, and the light's radiance (a scale per channel); other colour mistakes are :mod:`.colour`'s."""
     values = inputs.basis.values
     S, R, w = fit.S, fit.R, fit.w
     ok = fit.ok
@@ -29,13 +29,6 @@ def scale(fit: Fit, inputs: Inputs) -> list[Candidate]:
                          f"the light's radiance {_fmt(Le * kc, 1)} where the scene says {_fmt(Le, 1)} (every channel of "
                          f"the image scaled by {_fmt(kc)})", fit.model(kc * R), 3, value=tuple(Le * kc),
                          change=(kc - 1) * R))
-    names = "RGB"
-    for perm in ((0, 2, 1), (1, 0, 2), (1, 2, 0), (2, 0, 1), (2, 1, 0)):
-        Rp = R[..., perm]
-        k = float(np.sum(np.where(ok, S * Rp * w, 0.0)) / max(np.sum(np.where(ok, Rp * Rp * w, 0.0)), 1e-300))
-        order = "".join(names[i] for i in perm)
-        out.append(Candidate("channels", f"channels {order}", f"the colour channels written in the order {order} "
-                             "instead of RGB", fit.model(k * Rp), 1, value=order, change=k * Rp - R))
     return out
 
 

@@ -1,0 +1,53 @@
+r"""Light counted twice: a direct-lighting pass added to a path tracer that has one, or light sampling and
+emitter hits both counted at every bounce (no MIS).
+
+With :math:`D_k` mcrt's render cut at depth k (the basis's path-depth
+renders, Mitsuba's convention: :math:`D_1` is the light seen directly,
+:math:`D_2 - D_1` the direct light on surfaces) and R the reference, the
+model images are
+
+* direct light counted again: :math:`R + (D_2 - D_1)`;
+* light counted twice at every bounce: :math:`R + (R - D_1)`, every
+  path's light doubled but the light seen directly (it has no light sample).
+
+Neither has a free parameter: a free weight k of the added part would fit
+any change of the indirect light (a path depth off by one is k = -1 %),
+which is no light counted twice. Neither renders anything: the depth renders
+are the basis's (:data:`mcrt.grade.explain.basis.DEPTHS`), with the basis's
+seed, so that :math:`D_2 - D_1` shares its random numbers.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from mcrt.grade.candidates import Candidate, Inputs
+from mcrt.grade.explain.fit import Fit
+
+
+def _depth(basis, k: int) -> np.ndarray | None:
+    """The basis's render cut at depth k (the base where k is the assignment's depth), None without one."""
+    if k == basis.max_depth:
+        return basis.base.astype(np.float64)
+    img = dict(basis.nodes.get("depth", [])).get(k)
+    return None if img is None else img.astype(np.float64)
+
+
+def light_twice(fit: Fit, inputs: Inputs) -> list[Candidate]:
+    """The direct light counted again, and the light counted twice at every bounce (the module docstring)."""
+    b = inputs.basis
+    d1, d2 = _depth(b, 1), _depth(b, 2)
+    if d1 is None or d2 is None:
+        return []
+    base = b.base.astype(np.float64)
+    out = []
+    for name, change, what in (
+            ("direct light twice", d2 - d1, "the direct light (from the light to the first surface seen) counted "
+             "twice (a direct-lighting pass added to a path tracer that samples the light already)"),
+            ("light twice every bounce", base - d1, "the light counted twice at every bounce (light sampling and "
+             "paths that hit the light both counted, with no MIS weights), all but the light seen directly")):
+        out.append(Candidate("direct_twice", name, what, fit.delta(change), 0, value={"counted": 2}, change=change))
+    return out
+
+
+light_twice.name = "light_twice"

@@ -1,0 +1,71 @@
+r"""Bad pixels: a few pixels, or a block of them, black (0 in every channel) where the scene is not.
+
+A pixel a path tracer computed is exactly 0 in every channel only where
+every one of its samples found no light, which does not happen where the
+reference is brighter than :data:`DARK` of the image's median luminance
+(every surface of the closed room sees light; a pixel's noise, heavy-tailed,
+says less about a single value than this does). A student's program writes
+0 where a sample was NaN (``np.nan_to_num``), where a worker's tile was
+never rendered, or where a pixel was skipped. The
+model image is R with those pixels 0: it changes nothing else, so the
+remainder test says whether the rest of the image is right. The pixels are
+chosen by that property of the hand-in, not fitted (one parameter, the
+rule); a set covering more than :data:`MOST` of the image is no longer a
+few bad pixels. Pixels that are NaN or infinite are the ``finite``
+criterion's (they are left out of every test, this one included).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from mcrt.grade.candidates import Candidate, Inputs
+from mcrt.grade.explain.fit import Fit
+from mcrt.stats import LUMINANCE_WEIGHTS
+
+#: A black pixel is bad where the reference's luminance is at least this share of the image's median.
+DARK = 0.05
+#: Largest share of the image's pixels the family explains as bad pixels.
+MOST = 0.25
+
+
+def black_pixels(fit: Fit) -> np.ndarray:
+    """(H, W) pixels 0 in every channel of the hand-in where the reference is clearly not."""
+    used = fit.ok.all(axis=-1)
+    black = used & np.all(fit.S == 0.0, axis=-1)
+    lum = fit.R @ np.asarray(LUMINANCE_WEIGHTS)
+    return black & (lum >= DARK * float(np.median(lum[used]))) if used.any() else black
+
+
+def _block(bad: np.ndarray) -> tuple[int, int, int, int] | None:
+    """(top, bottom, left, right) when the bad pixels fill their bounding box of at least 2 x 2, else None."""
+    rows, cols = np.nonzero(bad)
+    t, b, l, r = rows.min(), rows.max(), cols.min(), cols.max()
+    if b > t and r > l and bad[t:b + 1, l:r + 1].all() and int(bad.sum()) == (b - t + 1) * (r - l + 1):
+        return int(t), int(b), int(l), int(r)
+    return None
+
+
+def bad_pixels(fit: Fit, inputs: Inputs) -> list[Candidate]:
+    """The hand-in's black pixels where the scene is not, as written 0 (the module docstring)."""
+    bad = black_pixels(fit)
+    n = int(bad.sum())
+    if n == 0 or n > MOST * max(int(fit.ok.all(axis=-1).sum()), 1):
+        return []
+    change = np.where(bad[..., None], -fit.R, 0.0)
+    box = _block(bad)
+    if box is not None:
+        t, b, l, r = box
+        text = (f"a block of {b - t + 1} x {r - l + 1} pixels (rows {t} to {b}, columns {l} to {r}) left black: "
+                "a tile or part of the image never rendered or never written")
+    else:
+        first = np.argwhere(bad)[0]
+        text = (f"{n} pixels ({100 * n / bad.size:.2g} % of the image) black where the scene is not, the first at row "
+                f"{int(first[0])}, column {int(first[1])}: a NaN or infinite sample written as 0, or pixels "
+                "skipped; check for a division by a zero pdf or cosine")
+    rows, cols = np.nonzero(bad)
+    return [Candidate("bad_pixels", "black pixels", text, fit.delta(change), 1,
+                      value={"pixels": n, "block": box, "first": [int(rows[0]), int(cols[0])]}, change=change)]
+
+
+bad_pixels.name = "bad_pixels"

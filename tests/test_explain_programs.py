@@ -1,0 +1,162 @@
+"""Families of mistakes a student's program makes beyond the scene file (issue 27): colour lost or mixed, light
+counted twice, the light facing the wrong way, black pixels, a surface of the room black, and the image's
+orientation.
+
+Every hand-in is a **Mitsuba** render (an edited scene, or a render post-processed with NumPy as a student's program
+would), never the grader's own model image nor a case of mcrt.grade.accuracy.programs. The context is the 32x32
+course assignment of test_diagnose, prepared once per module in a temporary cache; every render names its seed, and
+the levels are the production ones. Each family must claim its cause on its mistake and claim nothing on a correct
+render and on another mistake.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+from test_diagnose import ASSIGNMENT, RES
+
+from mcrt.grade.accuracy.cases import Spec, _render_spec, wall_albedo
+from mcrt.grade.accuracy.run import named_causes
+from mcrt.grade.assignment import assignment_from_dict
+from mcrt.grade.expected import prepare_context
+from mcrt.grade.grader import grade_image
+from mcrt.scene import load_scene
+
+#: The causes the families added here name (mcrt.grade.accuracy.run.CAUSE_OF), besides albedo.
+NEW = ("colour_lost", "channels", "direct_twice", "light_facing", "bad_pixels", "object_missing", "orientation")
+
+
+@pytest.fixture(scope="module")
+def ctx(tmp_path_factory):
+    a = assignment_from_dict(ASSIGNMENT, str(tmp_path_factory.mktemp("programs") / "explain32.toml"))
+    return prepare_context(a, tmp_path_factory.mktemp("cache"))
+
+
+def _mitsuba(seed: int, scene=None, **spec) -> np.ndarray:
+    spec = {"spp": 1024, **spec}
+    r = _render_spec(Spec("t", None, **spec), scene or load_scene(), width=RES, height=RES, max_depth=8, seed=seed)
+    return np.asarray(r.mean, np.float64)
+
+
+def _mitsuba_direct(seed: int, spp: int = 1024) -> np.ndarray:
+    """Mitsuba's direct-lighting integrator with the light itself hidden (what a direct pass adds)."""
+    from mcrt.mitsuba_scene import render_with_variance, scene_dict
+
+    d = scene_dict(load_scene(), "near", RES, RES, 8, spp=spp)
+    d["integrator"] = {"type": "direct", "hide_emitters": True}
+    return np.asarray(render_with_variance(d, spp=spp, seed=seed).mean, np.float64)
+
+
+def _claimed(res) -> tuple[str | None, str]:
+    ex = res.details.get("explanation") or {}
+    return (ex.get("family") if ex.get("verdict") == "claimed" else None), ex.get("sentence", res.summary)
+
+
+@pytest.mark.parametrize("name, post, family, what", [
+    ("grey", lambda x: np.repeat((x @ np.array([0.2126, 0.7152, 0.0722]))[..., None], 3, axis=2), "colour_lost",
+     "grey Rec. 709"),
+    ("blue_zeroed", lambda x: x * np.array([1.0, 1.0, 0.0]), "colour_lost", "blue zeroed"),
+    ("bgr", lambda x: x[..., ::-1], "channels", "channels BGR"),
+])
+def test_a_colour_matrix_is_named(ctx, name, post, family, what):
+    """A Mitsuba render (seed 61) written as luminance in every channel, with blue written as 0, and in BGR order:
+    claimed by the matrix that was applied, with a scale of about 1; the image loses points."""
+    res = grade_image(name, ctx, [post(_mitsuba(61))], spp=1024)
+    fam, said = _claimed(res)
+    assert fam == family and res.details["explanation"]["named"] == what, said
+    assert res.details["explanation"]["candidates"][0]["value"]["scale"] == pytest.approx(1.0, abs=0.03)
+    assert res.score < res.max_score
+
+
+def test_direct_light_added_twice_is_named(ctx):
+    """A Mitsuba path render (seed 62) plus a Mitsuba direct-lighting render with the light hidden (seed 63): the
+    direct light counted twice; no other cause."""
+    img = _mitsuba(62) + _mitsuba_direct(63)
+    res = grade_image("plus_direct", ctx, [img], spp=1024)
+    fam, said = _claimed(res)
+    assert fam == "direct_twice" and res.details["explanation"]["named"] == "direct light twice", said
+    assert named_causes(res)[0] == ["direct_twice"]
+    assert res.score < res.max_score
+
+
+@pytest.fixture(scope="module")
+def low_light(tmp_path_factory):
+    """The canonical scene with its light 1.5 below the ceiling (the canonical light, 0.01 below it, facing up
+    lights only the ceiling right above it: the image is nearly black, as any family times 0 is), and the
+    32x32 assignment on it, prepared in a temporary cache."""
+    from mcrt.scene import CANONICAL
+
+    d = tmp_path_factory.mktemp("low_light")
+    text = CANONICAL.read_text(encoding="utf-8").replace("center = [5.0, 0.0, 4.99]", "center = [5.0, 0.0, 3.5]")
+    assert "3.5]" in text
+    (d / "low.toml").write_text(text, encoding="utf-8")
+    a = assignment_from_dict({**ASSIGNMENT, "scene": {**ASSIGNMENT["scene"], "file": str(d / "low.toml")}},
+                             str(d / "low32.toml"))
+    return a.load_scene(), prepare_context(a, d / "cache")
+
+
+def test_a_light_facing_the_ceiling_is_named(low_light):
+    """The light's normal pointing up, 1.5 below the ceiling (Mitsuba, seed 64): the light facing the other way;
+    the same scene rendered correctly (seed 70) claims nothing."""
+    s, ctx = low_light
+    img = _mitsuba(64, replace(s, light=replace(s.light, normal=(0.0, 0.0, 1.0))))
+    res = grade_image("light_up", ctx, [img], spp=1024)
+    fam, said = _claimed(res)
+    assert fam == "light_facing" and res.details["explanation"]["named"] == "light facing the other way", said
+    assert res.score < res.max_score
+    res = grade_image("correct", ctx, [_mitsuba(70, s)], spp=1024)
+    assert res.score == res.max_score and named_causes(res)[0] == [], res.summary
+
+
+@pytest.mark.parametrize("name", ["block", "scattered"])
+def test_black_pixels_are_named_and_lose_points(ctx, name):
+    """A Mitsuba render (seed 65) with a 6 x 5 block written as 0, or 12 scattered pixels (seed 66): the black
+    pixels are claimed, the block by its rows and columns, and the image loses points."""
+    img = _mitsuba(65)
+    if name == "block":
+        img[10:16, 20:25] = 0.0
+    else:
+        flat = img.reshape(-1, 3)
+        flat[np.random.default_rng(66).choice(RES * RES, 12, replace=False)] = 0.0
+    res = grade_image(name, ctx, [img], spp=1024)
+    fam, said = _claimed(res)
+    assert fam == "bad_pixels", said
+    value = res.details["explanation"]["candidates"][0]["value"]
+    assert value["pixels"] == (30 if name == "block" else 12)
+    assert value["block"] == ([10, 15, 20, 24] if name == "block" else None)
+    assert res.score < res.max_score
+
+
+def test_a_wall_left_out_is_named_as_a_black_surface(ctx):
+    """Wall CD left out of the Mitsuba scene (seed 71): in the closed room it is black, which is what a wall of
+    albedo 0 looks like; the feedback claims that surface black and names both causes."""
+    res = grade_image("no_wall", ctx, [_mitsuba(71, mitsuba_edit=lambda d: {k: v for k, v in d.items()
+                                                                          if k != "wall_CD"})], spp=1024)
+    fam, said = _claimed(res)
+    assert fam == "surface_black" and res.details["explanation"]["named"] == "wall CD black", said
+    assert set(named_causes(res)[0]) == {"object_missing", "albedo"}
+    assert res.score < res.max_score
+
+
+def test_a_flipped_render_names_the_orientation(ctx):
+    """A Mitsuba render (seed 67) written upside down: the orientation criterion fails, and it is the cause named."""
+    res = grade_image("flipped", ctx, [_mitsuba(67)[::-1]], spp=1024)
+    assert named_causes(res)[0] == ["orientation"], res.summary
+    assert res.score < res.max_score
+
+
+def test_a_correct_render_claims_no_new_family(ctx):
+    """A correct Mitsuba render (seed 68): full marks, no cause named."""
+    res = grade_image("correct", ctx, [_mitsuba(68)], spp=1024)
+    assert res.score == res.max_score and named_causes(res)[0] == [], res.summary
+
+
+def test_another_mistake_is_not_taken_for_a_new_family(ctx):
+    """Wall EF recoloured blue (Mitsuba, seed 69): its albedo, none of the new families (a wall's colour is no
+    colour matrix of the whole image)."""
+    res = grade_image("wall", ctx, [_mitsuba(69, wall_albedo("EF", (0.15, 0.20, 0.75))(load_scene()))], spp=1024)
+    fam, said = _claimed(res)
+    assert fam == "albedo", said
+    assert not set(named_causes(res)[0]) & set(NEW), named_causes(res)
