@@ -310,6 +310,38 @@ _SCENE = """<scene version="3.0.0">
 """
 
 
+def test_every_perturbation_changes_its_parameters_and_undoes_the_change(tmp_path):
+    """Inside the block the parameters are scaled by the perturbation's factor; after it they are as loaded (Mitsuba
+    assigns a parameter in place, so an undo from the object it returned restored nothing and every later render of
+    the suite's scene stayed perturbed)."""
+    import mitsuba as mi
+
+    from mcrt import mitsuba_scene as mm
+    from mcrt.msuite.perturb import DEPTH, FACTORS, PERTURBATIONS, perturbed
+
+    xml = tmp_path / "s.xml"
+    xml.write_text(_SCENE)
+    mm._use("llvm")
+    scene, _ = mm.load_scene_file(xml)
+
+    def values():
+        p = mi.traverse(scene)
+        return {k: np.array(p[k]) for k in p.keys() if k.endswith(("x_fov", "radiance.value", "reflectance.value"))}
+
+    before = values()
+    assert len(before) == 5  # fov, radiance, three reflectances (the light's rectangle has a default BSDF)
+    for name in PERTURBATIONS:
+        with perturbed(mi, scene, name, 3) as change:
+            if name == DEPTH:
+                assert change == ("max_depth 3 -> 2", 2)
+                continue
+            inside = values()
+            changed = [k for k in before if not np.array_equal(inside[k], before[k])]
+            assert len(changed) == 1 and np.allclose(inside[changed[0]], before[changed[0]] * FACTORS[name], rtol=1e-6), name
+        after = values()
+        assert all(np.array_equal(after[k], before[k]) for k in before), name
+
+
 def _mitsuba_style_suite(root: Path, ref_spp: int) -> Path:
     """A one-scene tests/scenes folder laid out as Mitsuba's, with a reference pair written as Mitsuba writes it."""
     from mcrt.mitsuba_scene import render_with_variance
