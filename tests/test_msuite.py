@@ -313,7 +313,7 @@ _SCENE = """<scene version="3.0.0">
 def test_every_perturbation_changes_its_parameters_and_undoes_the_change(tmp_path):
     """Inside the block the parameters are scaled by the perturbation's factor; after it they are as loaded (Mitsuba
     assigns a parameter in place, so an undo from the object it returned restored nothing and every later render of
-    the suite's scene stayed perturbed)."""
+    the suite's scene stayed perturbed). The BSDF changed is the first by bounding box, not by load order."""
     import mitsuba as mi
 
     from mcrt import mitsuba_scene as mm
@@ -338,6 +338,8 @@ def test_every_perturbation_changes_its_parameters_and_undoes_the_change(tmp_pat
             inside = values()
             changed = [k for k in before if not np.array_equal(inside[k], before[k])]
             assert len(changed) == 1 and np.allclose(inside[changed[0]], before[changed[0]] * FACTORS[name], rtol=1e-6), name
+            if name.startswith("BSDF"):  # the floor: the lowest corner of the shapes that are not lights
+                assert np.allclose(before[changed[0]].ravel(), [0.2, 0.5, 0.7]) and change[0].startswith("bsdf.reflectance.value")
         after = values()
         assert all(np.array_equal(after[k], before[k]) for k in before), name
 

@@ -11,8 +11,8 @@ The issue's four, at its sizes:
 * ``fov x1.005``: the sensor's field of view times 1.005;
 * ``max depth - 1``: the integrator's ``max_depth`` one less (where it is
   bounded and at least 2);
-* ``BSDF x0.98``: the first reflectance-like BSDF parameter (in the order
-  the scene lists them) times 0.98.
+* ``BSDF x0.98``: the first reflectance-like parameter of the first
+  shape's BSDF (shapes by bounding box, lowest corner first) times 0.98.
 
 At those sizes both tests catch nearly everything on these low-noise scenes,
 so power is compared on a ladder fixed before any result was seen
@@ -33,7 +33,7 @@ _BSDF = re.compile(r"(^|\.)(reflectance|diffuse_reflectance|specular_reflectance
 KINDS = {
     "emitter": (1.02, "every emitter's radiance (intensity, irradiance, environment map scale)"),
     "fov": (1.005, "the camera's field of view"),
-    "BSDF": (0.98, "a BSDF's reflectance-like parameter (the first the scene lists)"),
+    "BSDF": (0.98, "a BSDF's reflectance-like parameter (the first of the first shape by bounding box, lowest corner first)"),
 }
 #: Each kind's deviation from 1 is divided by these: the issue's size and three subtler ones, fixed in advance.
 LADDER = (1, 4, 16, 64)
@@ -73,12 +73,35 @@ def _keys(params, name: str) -> list[str]:
         return found
     if name.startswith("fov"):
         return [k for k in keys if k.endswith("x_fov")]
-    if name.startswith("BSDF"):
-        found = [k for k in keys if _BSDF.search(k) and not _EMITTER.search(k) and "emitter" not in k
-                 and "opacity" not in k]
-        found = found or [k for k in keys if k.endswith(("face_color", "vertex_color"))]
-        return found[:1]
     raise ValueError(f"unknown perturbation {name!r} (have {', '.join(PERTURBATIONS)})")
+
+
+def _bsdf_target(mi, scene):
+    """``(params, [key], prefix)``: the first reflectance-like parameter of the first shape's BSDF, else the first
+    shape's face or vertex colour; ``(None, [], '')`` if none. Emitters' shapes are left out.
+
+    "First" in a fixed order: shapes by their bounding box (lowest corner x, y, z, then the highest), a BSDF's
+    parameters as it lists them. Neither the scene's shape list (shapes load in parallel) nor its parameter list
+    (keyed by generated object ids, memory addresses) keeps one order from run to run.
+    """
+    def corners(sh):
+        box = sh.bbox()
+        return tuple(float(v) for v in (*box.min, *box.max))
+
+    shapes = sorted((sh for sh in scene.shapes() if not sh.is_emitter()), key=corners)
+    for sh in shapes:
+        if sh.bsdf() is None:
+            continue
+        params = mi.traverse(sh.bsdf())
+        keys = [k for k in params.keys() if _BSDF.search(k) and "opacity" not in k]
+        if keys:
+            return params, keys[:1], "bsdf."
+    for sh in shapes:
+        params = mi.traverse(sh)
+        keys = [k for k in params.keys() if k.endswith(("face_color", "vertex_color"))]
+        if keys:
+            return params, keys[:1], "shape."
+    return None, [], ""
 
 
 @contextmanager
@@ -91,8 +114,11 @@ def perturbed(mi, scene, name: str, max_depth: int):
     if name == DEPTH:
         yield (f"max_depth {max_depth} -> {max_depth - 1}", max_depth - 1) if max_depth >= 2 else None
         return
-    params = mi.traverse(scene)
-    keys = _keys(params, name)
+    if name.startswith("BSDF"):
+        params, keys, prefix = _bsdf_target(mi, scene)
+    else:
+        params, prefix = mi.traverse(scene), ""
+        keys = _keys(params, name)
     if not keys:
         yield None
         return
@@ -106,7 +132,7 @@ def perturbed(mi, scene, name: str, max_depth: int):
         for k in keys:
             params[k] = old[k] * factor
         params.update()
-        yield ", ".join(sorted({_short(k) for k in keys})) + f" x{factor:g}", None
+        yield ", ".join(sorted({prefix + _short(k) for k in keys})) + f" x{factor:g}", None
     finally:
         for k in keys:
             params[k] = old[k]
