@@ -79,9 +79,10 @@ REPORTS: tuple[Report, ...] = (
     Report("samplers/bench", "bench --camera near --res 64 --res 256 --spp 64 --spp 1024 --repeats 3 --mse-renders 4 "
            "--renderers mcrt,mcrt-sobol,mitsuba --report reports/samplers/bench --tried none",
            "paths per second of mcrt with and without the sobol pixel sampler against Mitsuba, in one run"),
-    Report("mitsuba_suite", "mitsuba-suite ../shared/mitsuba-tests --seeds 5",
+    Report("mitsuba_suite", "mitsuba-suite ../shared/mitsuba-tests --seeds 40",
            "Mitsuba 3's own render-test scenes (the shared copy, beside the clone): mcrt's multi-scale test beside "
-           "Mitsuba's z-rule on correct renders at Mitsuba's budget, false alarms, power on stated perturbations"),
+           "Mitsuba's z-rule on correct renders at Mitsuba's budget, false alarms at the suite's level over 40 seeds, "
+           "power on the issue's perturbations and a ladder of subtler sizes"),
     Report("grading_accuracy", "grade-accuracy --out reports/grading_accuracy",
            "grading on a class of realistic mistakes made by Mitsuba scene edits and correct renders: scores, "
            "detection, naming and false-alarm rates, one student's CPU time and memory"),

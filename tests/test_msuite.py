@@ -310,6 +310,40 @@ _SCENE = """<scene version="3.0.0">
 """
 
 
+def test_every_perturbation_changes_its_parameters_and_undoes_the_change(tmp_path):
+    """Inside the block the parameters are scaled by the perturbation's factor; after it they are as loaded (Mitsuba
+    assigns a parameter in place, so an undo from the object it returned restored nothing and every later render of
+    the suite's scene stayed perturbed). The BSDF changed is the first by bounding box, not by load order."""
+    import mitsuba as mi
+
+    from mcrt import mitsuba_scene as mm
+    from mcrt.msuite.perturb import DEPTH, FACTORS, PERTURBATIONS, perturbed
+
+    xml = tmp_path / "s.xml"
+    xml.write_text(_SCENE)
+    mm._use("llvm")
+    scene, _ = mm.load_scene_file(xml)
+
+    def values():
+        p = mi.traverse(scene)
+        return {k: np.array(p[k]) for k in p.keys() if k.endswith(("x_fov", "radiance.value", "reflectance.value"))}
+
+    before = values()
+    assert len(before) == 5  # fov, radiance, three reflectances (the light's rectangle has a default BSDF)
+    for name in PERTURBATIONS:
+        with perturbed(mi, scene, name, 3) as change:
+            if name == DEPTH:
+                assert change == ("max_depth 3 -> 2", 2)
+                continue
+            inside = values()
+            changed = [k for k in before if not np.array_equal(inside[k], before[k])]
+            assert len(changed) == 1 and np.allclose(inside[changed[0]], before[changed[0]] * FACTORS[name], rtol=1e-6), name
+            if name.startswith("BSDF"):  # the floor: the lowest corner of the shapes that are not lights
+                assert np.allclose(before[changed[0]].ravel(), [0.2, 0.5, 0.7]) and change[0].startswith("bsdf.reflectance.value")
+        after = values()
+        assert all(np.array_equal(after[k], before[k]) for k in before), name
+
+
 def _mitsuba_style_suite(root: Path, ref_spp: int) -> Path:
     """A one-scene tests/scenes folder laid out as Mitsuba's, with a reference pair written as Mitsuba writes it."""
     from mcrt.mitsuba_scene import render_with_variance
@@ -339,11 +373,69 @@ def test_suite_on_a_scene_mcrt_makes_consistent_and_perturbations_caught(tmp_pat
     p = case["perturbations"]
     assert p["emitter x1.02"]["mcrt"]["caught"] and p["max depth - 1"]["change"] == "max_depth 3 -> 2"
     assert p["BSDF x0.98"]["mcrt"]["caught"] and p["fov x1.005"] is not None
+    # The ladder: every size rendered, the issue's four apart; one scene, so its level is the suite's.
+    from mcrt.msuite.perturb import ISSUE, PERTURBATIONS
+
+    assert list(p) == list(PERTURBATIONS) and len(p) == 13 and data["scene_alpha"] == data["alpha"] == 0.01
+    s = data["summary"]["all"]
+    assert s["perturbations"] == 13 and sum(b["applicable"] for b in s["by_perturbation"].values()) == 13
+    assert s["issue_sizes"]["applicable"] == 4 and set(ISSUE) <= set(s["by_perturbation"])
     md = (out / "index.md").read_text()
     assert "| made/test_made_path | 16x16, 7812 | path (per-sample) | consistent |" in md
+    assert "## Perturbations at the issue's sizes" in md and "| scene | emitter x1.02 | fov x1.005 | max depth - 1 | BSDF x0.98 |" in md
+    assert "fixed before any of its results were seen" in md and "| emitter x1.0003125 | 1 |" in md
     assert "Held-out scenes" in md and data["command"].startswith("mcrt mitsuba-suite")
     assert rc in (0, 1) and "[1/1] made/test_made_path: consistent" in capsys.readouterr().err
     assert main(["mitsuba-suite", str(tmp_path / "nowhere")]) == 2
+    assert main(["mitsuba-suite", str(root), "--alpha", "1.5"]) == 2
+
+
+def _fake_case(name: str, p_family: list[float], alpha: float, caught=None) -> dict:
+    """A scene's result as :func:`mcrt.msuite.run.run_case` gives it, without rendering: correct renders with these
+    family p-values (rejected at or below ``alpha``), the issue's emitter perturbation caught as ``caught`` says."""
+    correct = [{"mcrt": {"p_family": p, "passed": p > alpha, "rejected": int(p <= alpha), "confirmed": False,
+                         "failing": [], "noiseless_rejected": 0, "noisy_rejected": int(p <= alpha), "by_scale": {}},
+                "mitsuba": {"passed": True, "failing": 0, "allowed": 17}} for p in p_family]
+    who = caught or {"mcrt": True, "mitsuba": False}
+    return {"name": name, "held_out": False, "alpha": alpha, "size": [8, 8], "spp": 4, "integrator": "path",
+            "method": "samples", "time": 0.0, "correct": correct,
+            "perturbations": {"emitter x1.02": {who_: {"caught": c} for who_, c in who.items()}, "fov x1.005": None}}
+
+
+def test_suite_level_split_over_scenes_and_false_alarms_counted_per_suite_run(monkeypatch):
+    """run_suite tests each of N scenes at alpha / N; a seed with a false alarm in any scene fails that suite run, and
+    the rejection rate at other levels comes from the renders' family p-values (no rendering: run_case faked)."""
+    from mcrt.msuite import run as suite_run
+    from mcrt.msuite.markdown import markdown
+
+    levels = {}
+    p_values = {"bsdf_spheres/test_constant_path": [0.5, 0.003, 0.3], "spot_light/test_spot_direct": [0.2, 0.9, 1e-4],
+                "texture_interp/test_texture_interp_direct": [1e-6, 1e-7, 1e-6]}  # rejected on every seed
+
+    def fake_run_case(case, *, alpha, **options):
+        levels[case.name] = alpha
+        return _fake_case(case.name, p_values[case.name], alpha)
+
+    monkeypatch.setattr(suite_run, "run_case", fake_run_case)
+    monkeypatch.setattr(suite_run, "find_cases", lambda folder: ([suite_run.Case(n, Path(n), Path(n), Path(n))
+                                                                   for n in p_values], []))
+    data = suite_run.run_suite("anywhere", alpha=0.01)
+    assert levels == {n: 0.01 / 3 for n in p_values} and data["scene_alpha"] == 0.01 / 3
+    s = data["summary"]["all"]
+    # The texture scene, rejected on every seed, shows a difference of its reference: no false alarm, and left out of
+    # the power counts (its perturbed render's rejections are not the perturbation's). Seed 2 of the spot light
+    # (p 1e-4) and seed 1 of the plain one (p 0.003) are rejected at 0.01 / 3: two suite runs fail.
+    assert s["mcrt_reference_differences"] == 1 and s["power_left_out"] == ["texture_interp/test_texture_interp_direct"]
+    assert s["mcrt_false_alarms"] == 2 and s["mcrt_suite_runs_failed"] == 2 and s["suite_runs"] == 3
+    assert s["mcrt_calibration"] == {"renders": 6, "rejected": {"0.001": 1, "0.00333": 2, "0.01": 2, "0.05": 2}}
+    assert s["mcrt_caught"] == 2 and s["mitsuba_caught"] == 0 and s["issue_sizes"]["applicable"] == 2
+    data.update(command="mcrt mitsuba-suite anywhere", wall_time=1.0, options={"spp_scale": 1.0, "tiles": [2, 0], "ref_spp": 32000},
+                provenance={"git_commit": "x", "versions": {}, "machine": {"cores": 2}})
+    md = markdown(data)
+    assert "at the level 0.00333: the suite's family-wise error rate 0.01 split evenly over its 3 scenes" in md
+    assert "at 0.00333 (each scene's level): 2 (expected at most 0.02)" in md and "2 of 3 suite runs failed" in md
+    assert "| 1, 1, 0 of 3 |" in md  # the spot light: rejected at its level, at 0.01, by Mitsuba's rule
+    assert "| 3, 3, 0 of 3 |" in md and "| texture_interp/test_texture_interp_direct (a difference of the reference: not counted) |" in md
 
 
 def test_suite_on_a_shared_scene_names_the_references_offset(suite, tmp_path):
@@ -375,12 +467,12 @@ def test_a_rejection_the_other_seeds_confirm_is_a_difference_not_a_false_alarm()
         t[1, 2, 0] = t_value
         m = np.zeros((4, 4, 3), bool)
         m[1, 2, 0] = rejected
-        return {"mcrt": {"passed": not rejected}, "mitsuba": {"passed": True}}, [m], [t]
+        return {"mcrt": {"passed": not rejected, "p_family": 1e-5 if rejected else 0.5}, "mitsuba": {"passed": True}}, [m], [t]
 
     for others, expect in ((-2.5, True), (0.3, False)):
         runs = [seed_result(-4.6, True)] + [seed_result(others, False) for _ in range(4)]
         correct = [r[0] for r in runs]
         confirm(correct, [r[1] for r in runs], [r[2] for r in runs])
         assert correct[0]["mcrt"]["confirmed"] is expect and correct[1]["mcrt"]["confirmed"] is None
-        s = summarize([{"correct": correct, "perturbations": {}}])
+        s = summarize([{"name": "x", "alpha": 0.01, "correct": correct, "perturbations": {}}])
         assert s["mcrt_false_alarms"] == (0 if expect else 1) and s["mcrt_reference_differences"] == int(expect)

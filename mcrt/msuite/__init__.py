@@ -11,9 +11,11 @@ reference pair (``refs/<name>_ref_rgb.exr`` and ``_var.exr``):
   (:func:`mcrt.stats.compare_multiscale`, variance floored at the
   reference's), noiseless differences apart; beside it Mitsuba's own
   per-pixel z-rule on the same render (:mod:`.zrule`);
-* power: the stated perturbations of :mod:`.perturb` rendered at the same
-  budget and tested both ways;
-* the false alarms over the correct renders.
+* power: the stated perturbations of :mod:`.perturb` and its ladder of
+  subtler sizes, rendered at the same budget and tested both ways;
+* the false alarms over the correct renders, at the suite's level (one
+  family-wise error rate over all scenes, Bonferroni) and, from the renders'
+  family p-values, at other levels.
 
 Modules: :mod:`.scenes` (finding the scenes; the held-out part),
 :mod:`.zrule` (Mitsuba's test), :mod:`.perturb` (the perturbations),

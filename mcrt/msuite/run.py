@@ -13,7 +13,7 @@ from typing import IO, Callable
 
 import numpy as np
 
-from mcrt.msuite.perturb import PERTURBATIONS, perturbed
+from mcrt.msuite.perturb import ISSUE, PERTURBATIONS, perturbed
 from mcrt.msuite.scenes import Case, find_cases
 from mcrt.msuite.zrule import z_rule
 
@@ -26,6 +26,8 @@ REFERENCE_SPP = 32000
 MAX_OFFSET = 0.005
 #: Seeds of the correct renders (base + k) and of the perturbed ones (base + index).
 CORRECT_SEED, PERTURBED_SEED = 1000, 2000
+#: Levels (beside each scene's own) at which the report counts rejected correct renders, from their family p-values.
+CALIBRATION_LEVELS = (0.001, 0.01, 0.05)
 
 
 def budget_spp(h: int, w: int, scale: float = 1.0) -> int:
@@ -55,7 +57,10 @@ def _test(render, ref, ref_var_raw, *, alpha: float, tiles, rtol: float) -> dict
                             "rel_diff": float(c.rel_diff[ty, tx, ch]), "noiseless": bool(c.deterministic[ty, tx, ch]),
                             "mean": float(c.mean_a[ty, tx, ch]), "reference": float(c.mean_b[ty, tx, ch])})
     masks = [r.copy() for r in ms.rejected]
-    return {"_masks": masks, "_t": [np.nan_to_num(c.t, nan=0.0, posinf=50.0, neginf=-50.0) for c in ms.comparisons], "mcrt": {"failing": failing[:10], "peak": float(np.abs(ref.mean).max()), "passed": ms.passed, "rejected": ms.n_rejected, "noiseless_rejected": ms.noiseless_rejected,
+    # The family's p-value: the smallest level at which weighted Holm rejects any test (its smallest adjusted
+    # p-value), so one render is judged at every level at once (the false-alarm rate at any level, from the same renders).
+    p_family = float(min((float(pa.min()) for pa in ms.p_adjusted if pa.size), default=1.0))
+    return {"_masks": masks, "_t": [np.nan_to_num(c.t, nan=0.0, posinf=50.0, neginf=-50.0) for c in ms.comparisons], "mcrt": {"p_family": p_family, "failing": failing[:10], "peak": float(np.abs(ref.mean).max()), "passed": ms.passed, "rejected": ms.n_rejected, "noiseless_rejected": ms.noiseless_rejected,
                      "noisy_rejected": ms.noisy_rejected, "tests": ms.n_tests, "by_scale": ms.by_scale(),
                      "largest_noiseless_difference": ms.largest_noiseless_difference(), "headline": ms.headline()},
             "mitsuba": z}
@@ -91,7 +96,7 @@ def run_case(case: Case, *, spp_scale: float = 1.0, seeds: int = 1, alpha: float
     h, w = ref.mean.shape[:2]
     spp = budget_spp(h, w, spp_scale)
     depth = mm.integrator_max_depth(scene.integrator())
-    out = {"name": case.name, "held_out": case.held_out, "size": [w, h], "spp": spp, "integrator": None,
+    out = {"name": case.name, "held_out": case.held_out, "alpha": alpha, "size": [w, h], "spp": spp, "integrator": None,
            "max_depth": depth, "notes": notes, "ref_variance": ref.extra["variance"], "correct": [],
            "perturbations": {}}
 
@@ -126,6 +131,8 @@ def run_case(case: Case, *, spp_scale: float = 1.0, seeds: int = 1, alpha: float
             base_masks = res["_masks"]
         masks.append(res.pop("_masks"))
         ts.append(res.pop("_t"))
+        if k and res["mcrt"]["passed"]:  # a passing repeat: its verdict and p-value are all the report reads
+            res["mcrt"] = {key: res["mcrt"][key] for key in ("p_family", "passed", "rejected")}
         out["correct"].append(res)
     out["rtol"] = rtol
     confirm(out["correct"], masks, ts)
@@ -197,33 +204,76 @@ def verdict(case: dict) -> str:
     return "consistent"
 
 
+def _false_alarms(cases: list[dict], who: str) -> tuple[list[bool], list[list[bool]]]:
+    """Per scene, whether its rejections show a difference of the reference; per render, whether it is a false alarm.
+
+    A scene whose every correct render (independent seeds, more than one) is
+    rejected shows a difference of its reference, not noise; so does one
+    with a rejection the other seeds confirm (:func:`confirm`). Other
+    rejections are false alarms.
+    """
+    rejected = [[not r[who]["passed"] for r in c["correct"]] for c in cases]
+    confirmed = [[bool(r[who].get("confirmed")) for r in c["correct"]] for c in cases]
+    everywhere = [all(x) and len(x) > 1 for x in rejected]
+    systematic = [ev or any(cf) for ev, cf in zip(everywhere, confirmed)]
+    false = [[xj and not ev and not cj for xj, cj in zip(x, cf)] for x, ev, cf in zip(rejected, everywhere, confirmed)]
+    return systematic, false
+
+
+def _calibration(cases: list[dict], systematic: list[bool]) -> dict:
+    """mcrt's rejection rate of correct renders at several levels, from the same renders (scenes with a difference
+    of the reference left out): a render whose family p-value is at or below a level is rejected at that level."""
+    ps = [r["mcrt"]["p_family"] for c, sy in zip(cases, systematic) if not sy for r in c["correct"]]
+    levels = sorted({*(c["alpha"] for c in cases), *CALIBRATION_LEVELS})
+    return {"renders": len(ps), "rejected": {f"{a:.3g}": sum(p <= a for p in ps) for a in levels}}
+
+
+def _caught(cases: list[dict], names) -> dict:
+    """``{'applicable', 'mcrt', 'mitsuba'}``: the perturbed renders among ``names`` and how many each test catches."""
+    applicable = [p for c in cases for name, p in c["perturbations"].items() if name in names and p is not None]
+    return {"applicable": len(applicable), **{who: sum(p[who]["caught"] for p in applicable) for who in ("mcrt", "mitsuba")}}
+
+
 def summarize(cases: list[dict]) -> dict:
-    """Counts over ``cases``: rejected correct renders (a reference's difference where every seed is rejected,
-    false alarms where only some are) and catches of the perturbations, both tests."""
+    """Counts over ``cases``: rejected correct renders (differences of the reference and false alarms, :func:`_false_alarms`),
+    the rejection rate at other levels, suite runs (one seed over every scene) with a false alarm, and catches of
+    the perturbations by both tests (over all, the issue's four, and each perturbation) on the scenes without a
+    difference of the reference."""
     s = {"scenes": len(cases), "correct_renders": sum(len(c["correct"]) for c in cases)}
+    seeds = max((len(c["correct"]) for c in cases), default=0)
     for who in ("mcrt", "mitsuba"):
-        # A scene whose every correct render (independent seeds, more than one) is rejected shows a difference of
-        # its reference, not noise; rejections of only some seeds are false alarms.
-        rejected = [[not r[who]["passed"] for r in c["correct"]] for c in cases]
-        # mcrt's rejections confirmed by the other seeds (:func:`confirm`) are differences of the reference too.
-        confirmed = [[bool(r[who].get("confirmed")) for r in c["correct"]] for c in cases]
-        systematic = [(all(x) and len(x) > 1) or any(cf) for x, cf in zip(rejected, confirmed)]
-        s[f"{who}_rejected_correct"] = sum(sum(x) for x in rejected)
+        systematic, false = _false_alarms(cases, who)
+        s[f"{who}_rejected_correct"] = sum(not r[who]["passed"] for c in cases for r in c["correct"])
         s[f"{who}_reference_differences"] = sum(systematic)
-        everywhere = [all(x) and len(x) > 1 for x in rejected]
-        s[f"{who}_false_alarms"] = sum(int(xj and not ev and not cj) for x, ev, cf in zip(rejected, everywhere, confirmed)
-                                       for xj, cj in zip(x, cf))
-        applicable = [p for c in cases for p in c["perturbations"].values() if p is not None]
-        s["perturbations"] = len(applicable)
-        s[f"{who}_caught"] = sum(p[who]["caught"] for p in applicable)
+        s[f"{who}_false_alarms"] = sum(map(sum, false))
+        # One suite run is one seed over every scene: a false alarm in any scene fails the CI check.
+        s[f"{who}_suite_runs_failed"] = sum(any(f[k] for f in false if k < len(f)) for k in range(seeds))
+        if who == "mcrt":
+            s["mcrt_calibration"] = _calibration(cases, systematic)
+    s["suite_runs"] = seeds
+    # Power only where mcrt finds the correct renders consistent: where it already rejects them (a difference of
+    # the reference), a perturbed render's rejections are not evidence of the perturbation.
+    systematic, _ = _false_alarms(cases, "mcrt")
+    s["power_left_out"] = [c["name"] for c, sy in zip(cases, systematic) if sy]
+    fair = [c for c, sy in zip(cases, systematic) if not sy]
+    names = {name for c in fair for name in c["perturbations"]}
+    total = _caught(fair, names)
+    s["perturbations"], s["mcrt_caught"], s["mitsuba_caught"] = total["applicable"], total["mcrt"], total["mitsuba"]
+    s["issue_sizes"] = _caught(fair, ISSUE)
+    s["by_perturbation"] = {name: _caught(fair, {name}) for name in PERTURBATIONS if name in names}
     s["reference_offsets"] = sum("reference_offset" in c for c in cases)
     return s
 
 
-def run_suite(folder, *, only=(), held_out: str = "include", log: IO[str] | None = None,
+def run_suite(folder, *, only=(), held_out: str = "include", alpha: float = 0.01, log: IO[str] | None = None,
               on_case: Callable[[dict], None] | None = None, **options) -> dict:
     """Every scene of ``folder`` (:func:`find_cases`), tuning part first, held-out part last.
 
+    ``alpha`` is the family-wise error rate of the whole suite, run as one
+    check: each scene's comparisons are at ``alpha / scenes run``
+    (Bonferroni over the scenes; within a scene the tiles, channels and
+    scales are in one weighted-Holm family), so a correct suite fails one
+    seed's run with probability at most ``alpha``.
     ``held_out``: ``'include'``, ``'exclude'`` or ``'only'``. ``options``
     go to :func:`run_case`. Progress (done, time left) goes to ``log``;
     ``on_case`` is called with each scene's result as it is done.
@@ -239,10 +289,11 @@ def run_suite(folder, *, only=(), held_out: str = "include", log: IO[str] | None
     elif held_out == "only":
         cases = [c for c in cases if c.held_out]
     cases = sorted(cases, key=lambda c: (c.held_out, c.name))
+    scene_alpha = alpha / max(1, len(cases))
     results, t0 = [], time.perf_counter()
     for k, case in enumerate(cases):
         try:
-            r = run_case(case, **options)
+            r = run_case(case, alpha=scene_alpha, **options)
         except (ValueError, RuntimeError) as e:  # one broken scene never stops the suite
             r = {"name": case.name, "held_out": case.held_out, "error": " ".join(str(e).split())}
         results.append(r)
@@ -255,7 +306,7 @@ def run_suite(folder, *, only=(), held_out: str = "include", log: IO[str] | None
             print(f"[{k + 1}/{len(cases)}] {case.name}: {what} ({r.get('time', 0):.1f} s; {el:.0f} s, ~{left:.0f} s left)",
                   file=log, flush=True)
     done = [r for r in results if "error" not in r]
-    return {"cases": results, "skipped": [{"name": n, "why": w} for n, w in skipped],
+    return {"alpha": alpha, "scene_alpha": scene_alpha, "cases": results, "skipped": [{"name": n, "why": w} for n, w in skipped],
             "summary": {"all": summarize(done), "tuning": summarize([r for r in done if not r["held_out"]]),
                         "held_out": summarize([r for r in done if r["held_out"]])},
             "errors": [{"name": r["name"], "error": r["error"]} for r in results if "error" in r]}
