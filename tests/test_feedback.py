@@ -93,6 +93,30 @@ def test_the_object_test_sees_a_small_change_on_one_object():
     assert list(bt.extra["objects"].reshape(4, 3).any(axis=1)) == [False, False, False, True]
 
 
+def test_the_structure_test_sees_a_change_that_averages_out_on_one_object():
+    """On the 36 pixels of one surface, +4 noise deviations on one half and -4 on the other (seed 6): the mean
+    test cannot see it, the structure test does, on that surface alone, in the Holm family (level 0.01). Noise
+    of twice the model's variance with heavy tails (Student's t, 3 degrees of freedom; seed 7) is not structure."""
+    from mcrt.grade.objects import structure_family
+
+    R, S, noise, sc = _synthetic(6)
+    sd = np.sqrt(noise.model)
+    box = sc.labels == 3
+    S = S + np.where((box & (np.arange(RES)[None, :] < 7))[..., None], 4 * sd, 0.0) \
+        - np.where((box & (np.arange(RES)[None, :] >= 7))[..., None], 4 * sd, 0.0)
+    mask = np.ones((RES, RES), bool)
+    kw = {"alpha": sc.alpha, "min_effect": sc.min_effect, "full_effect": sc.full_effect}
+    ot = object_tests(S - R, R, mask, noise, sc.labels, 4)
+    fam = structure_family(S - R, R, mask, noise, sc.labels, 4, sc.min_effect)
+    bt = multiscale_test(S - R, R, mask, noise, sc.tiles, **kw, extra=[ot.family(sc.min_effect), fam])
+    assert not bt.penalised_any and not bt.extra["objects"].any()
+    assert list(bt.extra["object_structure"]) == [False, False, False, True]
+    rng = np.random.default_rng(7)
+    heavy = R + rng.standard_t(3, R.shape) * sd * np.sqrt(2.0 / 3.0) * np.sqrt(2.0)
+    fam = structure_family(heavy - R, R, mask, noise, sc.labels, 4, sc.min_effect)
+    assert not multiscale_test(heavy - R, R, mask, noise, sc.tiles, **kw, extra=[fam]).extra["object_structure"].any()
+
+
 def test_the_filter_test_ignores_a_bias_and_sees_a_filter():
     """A bias bound to one surface (a ramp and a step, 50 noise deviations) is not correlated noise; a
     Gaussian blur of 0.8 pixel of the noise is; and the difference of two renders, bias and all, is not (seeds 3-5)."""
@@ -212,3 +236,20 @@ def test_a_strongly_biased_image_is_not_read_as_noise(ctx):
                              progress=False).mean, 64)):
         ok = grade_image("correct", ctx, [np.asarray(img)], spp=spp)
         assert ok.score == ok.max_score, ok.summary
+
+
+def test_a_glossy_sphere_loses_points_without_a_claimed_cause(ctx):
+    """The mirror sphere rendered as Mitsuba's rough conductor (alpha 0.5; seed 53, 256 spp): its reflection is
+    blurred more than darkened, and the mean tests see nothing; the structure test does. The image loses points, no
+    cause is claimed (a darker mirror explains part of it), and the feedback places the rest on the sphere."""
+    from mcrt.grade.accuracy.outside import _sphere_bsdf
+
+    spec = Spec("t", None, spp=256, mitsuba_edit=lambda d: _sphere_bsdf(
+        d, {"type": "roughconductor", "material": "none", "alpha": 0.5}))
+    img = _render_spec(spec, load_scene(), width=RES, height=RES, max_depth=8, seed=53).mean
+    res = grade_image("glossy", ctx, [img], spp=256)
+    assert res.score < res.max_score, res.summary
+    assert res.details["structure"]["penalised"]["objects"] == 0  # the mean per object: nothing
+    ex = res.details["explanation"]
+    assert ex["named"] is None and ex["adequacy"]["verdict"] == "partial", ex["sentence"]
+    assert "something else is wrong on the mirror sphere" in ex["sentence"], ex["sentence"]

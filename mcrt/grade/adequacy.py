@@ -92,7 +92,8 @@ def remainder_test(S: np.ndarray, R: np.ndarray, delta: np.ndarray | float, mask
                pair=noise.pair)
     K = len(sc.names) - 1
     ot = obj.object_tests(resid, R, ok, nz, sc.labels, K)
-    name, p, rel, share = obj.structure_family(resid, R, ok, nz, sc.labels, K, sc.min_effect, sc.shares)
+    name, p, rel, share = obj.structure_family(resid, R, ok, nz, sc.labels, K, sc.min_effect, sc.shares,
+                                                image=np.where(ok[..., None], S, 0.0))
     # Structure the candidate leaves counts where it left most of the object's difference (a glossy sphere read
     # as a blur), not where it fits the object but for a trace of its shape that high spp shows.
     rel = rel & (_energy(resid, ok, sc.labels, K) >= LEFT * _energy(np.where(ok[..., None], S - R, 0.0), ok, sc.labels, K))
@@ -119,9 +120,9 @@ def _energy(x: np.ndarray, mask: np.ndarray, labels: np.ndarray, K: int) -> np.n
     return np.bincount(k, (x @ obj.LUMINANCE).ravel() ** 2, minlength=K + 1)[:K]
 
 
-#: Share of an object's difference a candidate must leave there (explaining at most a fifth of it) for the
-#: object's structure to count against it.
-LEFT = 0.8
+#: Share of an object's difference a candidate must leave there (explaining at most half of it) for the object's
+#: structure to count against it.
+LEFT = 0.5
 #: How many of the best candidates are tried, in order, for one whose remainder is noise.
 TRIED = 3
 #: Another family within this share of the claimed one whose remainder is noise too, with no more parameters, is

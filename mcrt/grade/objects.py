@@ -113,6 +113,16 @@ def structure_shares(base_resid: np.ndarray, var: np.ndarray, mask: np.ndarray, 
     return out
 
 
+def _brightness(image: np.ndarray, ref: np.ndarray, mask: np.ndarray, labels: np.ndarray, n_labels: int) -> np.ndarray:
+    """(H, W) each pixel's object's mean luminance in ``image`` over the reference's (clipped to [1/20, 20])."""
+    k = np.where(mask & (labels < n_labels), labels, n_labels).ravel().astype(np.int64)
+    s = np.bincount(k, (image @ LUMINANCE).ravel(), minlength=n_labels + 1)
+    r = np.bincount(k, (ref @ LUMINANCE).ravel(), minlength=n_labels + 1)
+    ratio = np.clip(np.where(r > 0, s / np.where(r > 0, r, 1.0), 1.0), 0.05, 20.0)
+    ratio[n_labels] = 1.0
+    return ratio[np.minimum(labels, n_labels)]
+
+
 def baseline_shares(ctx, cam: str, R: np.ndarray, ref, mask: np.ndarray) -> np.ndarray | None:
     """:func:`structure_shares` of the grading context's mcrt baseline (``ctx``: mcrt.grade.expected.Context) for
     camera ``cam`` against its reference (``R`` its mean, ``ref`` its Expected); None for another camera."""
@@ -125,8 +135,8 @@ def baseline_shares(ctx, cam: str, R: np.ndarray, ref, mask: np.ndarray) -> np.n
 
 
 def structure_family(resid: np.ndarray, ref: np.ndarray, mask: np.ndarray, noise, labels: np.ndarray,
-                     n_labels: int, min_effect: float, shares: np.ndarray | None = None
-                     ) -> tuple[str, np.ndarray, np.ndarray, float]:
+                     n_labels: int, min_effect: float, shares: np.ndarray | None = None,
+                     image: np.ndarray | None = None) -> tuple[str, np.ndarray, np.ndarray, float]:
     r"""Zero-mean structure within each object, as a family for :func:`mcrt.stats.onesample.multiscale_test`.
 
     A change that averages out over an object (a mirror's reflection
@@ -145,7 +155,10 @@ def structure_family(resid: np.ndarray, ref: np.ndarray, mask: np.ndarray, noise
     fits some objects less well than others (correct renders of Mitsuba and
     mcrt alike put a third of wall BC there), so :math:`q_k` is the share
     a correct render has (``shares``, :func:`structure_shares` of mcrt's
-    diagnosis baseline), at least a quarter. Relevant where the object's
+    diagnosis baseline), at least a quarter. A hand-in brighter or darker
+    on an object than the reference (``image``: a fall-off, a tone map)
+    has its noise scaled with it: the model's variance there is scaled by
+    the square of the object's brightness ratio. Relevant where the object's
     median :math:`|r_i|` is ``min_effect`` of its mean brightness and the
     share outside exceeds :math:`q_k` by :data:`MIN_EXCESS_SHARE` (a
     structure a fitted cause leaves, a fraction of a per cent, shows at
@@ -154,6 +167,8 @@ def structure_family(resid: np.ndarray, ref: np.ndarray, mask: np.ndarray, noise
     vm = (noise.model + noise.reference) @ LUMINANCE**2
     if noise.pair is not None:
         vm = np.maximum(vm, (noise.pair + noise.reference) @ LUMINANCE**2)
+    if image is not None:
+        vm = vm * _brightness(image, ref, mask, labels, n_labels) ** 2
     z2, keep, body = _outside(resid, vm, mask, labels, n_labels)
     p0 = np.full(n_labels, OUTSIDE) if shares is None else shares
     r, p, rel = resid @ LUMINANCE, np.ones(n_labels), np.zeros(n_labels, bool)

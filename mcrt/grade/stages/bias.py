@@ -52,7 +52,8 @@ def test(g: Grading, hand: Hand, lvl: Level, img: np.ndarray, resid: np.ndarray,
     K = len(ctx.label_names) - 1
     objs = object_tests(resid, R, lvl.clip_mask, noise, ctx.labels[hand.cam], K)
     shape = structure_family(resid, R, lvl.clip_mask, noise, ctx.labels[hand.cam], K, th.min_effect,
-                             shares=baseline_shares(ctx, hand.cam, hand.R, hand.ref, lvl.clip_mask))
+                             shares=baseline_shares(ctx, hand.cam, hand.R, hand.ref, lvl.clip_mask),
+                             image=np.where(lvl.clip_mask[..., None], img, 0.0))
     bt = multiscale_test(resid, R, lvl.clip_mask, noise, a.tiles, alpha=th.alpha, min_effect=th.min_effect,
                          full_effect=th.full_effect, extra=structure_families(st, th) + [objs.family(th.min_effect), shape])
     return Tested(bt, st, img)
