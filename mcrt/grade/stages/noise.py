@@ -4,11 +4,11 @@ The level is measured before the bias test (its noise model needs it) and
 judged after it (a biased image's noise says nothing about its sample
 count); noise correlated between neighbours (a filter) fails it. The
 tile spreads of one render hold its bias as well as its noise (a light
-moved by 0.7 measures as hundreds of times the expected noise): the noise
-model follows a measured excess only as far as the body of the high-passed
-residual (:func:`body_ratio`, times :data:`NOISE_BODY`) bears it out, and
-beyond the limit only; the measured excess itself is judged by the noise
-criterion. Excess
+moved by 0.7 measures as hundreds of times the expected noise): beyond
+the limit, the noise model follows a measured excess up to
+:data:`NOISE_BODY` times the expected noise, and further only as far as
+the body of the high-passed residual (:func:`body_ratio`) bears it out;
+the measured excess itself is judged by the noise criterion. Excess
 noise on unbiased tiles is told apart from a deterministic error that
 cancels within tiles by ranking the catalogue at pixel level, by its noise
 pattern and by its amount of noise (:mod:`mcrt.grade.explain.catalogue`).
@@ -27,8 +27,10 @@ from mcrt.grade.stages.state import Grading, Hand, Level
 from mcrt.stats.onesample import Noise
 
 #: The most a render's noise variance may exceed what the body of its high-passed residual shows
-#: (:func:`body_ratio`), as a multiple of it: correct renders of Mitsuba and mcrt at 16 to 1024 spp show their
-#: tile-spread ratio at most 20 times their body ratio (heavy tails); a bias, 100 to 1000 times.
+#: (:func:`body_ratio`, or the expected noise if more), as a multiple of it: correct renders of Mitsuba and mcrt at
+#: 16 to 1024 spp show their tile-spread ratio at most 20 times their body ratio (heavy tails); a bias, 100 to 1000
+#: times. An excess up to this multiple of the expected noise is credited to noise whatever the body (a filter
+#: lowers the body and raises the spread).
 NOISE_BODY = 20.0
 
 
@@ -50,7 +52,7 @@ def measure(g: Grading, hand: Hand, clip_mask: np.ndarray) -> Level:
     nominal = hand.spp or a.min_spp
     spp_broad = spp_eff if pair is not None else nominal / min(
         nominal / spp_eff if np.isfinite(spp_eff) else 0.0,
-        NOISE_BODY * body_ratio(resid, model_ps / (nominal * per) + ref_noise + q, clip_mask, ctx.labels[hand.cam]))
+        NOISE_BODY * max(1.0, body_ratio(resid, model_ps / (nominal * per) + ref_noise + q, clip_mask, ctx.labels[hand.cam])))
     g.details["noise"] = {"spp_declared": hand.spp, "renders": n_r,
                           "spp_effective": None if not np.isfinite(spp_eff) else spp_eff,
                           "spp_broad": None if not np.isfinite(spp_broad) else spp_broad}
@@ -145,6 +147,11 @@ def verdict(g: Grading, hand: Hand, lvl: Level, bt, found: dict[str, str], flagg
                                   f"renderer's (it is like mcrt with about {spp_text(lvl.spp_eff)} spp)")
     elif status == "failed" and not firm:
         # Excess pixel-to-pixel deviation with unbiased tiles: noise, or a deterministic error that
-        # cancels within tiles (aliasing). Only the catalogue at pixel level can tell.
+        # cancels within tiles (aliasing). Only the catalogue at pixel level can tell. The bias test found no
+        # bias, so the measured excess is taken as noise (rare huge samples have a narrow body: stages.noise).
+        if np.isfinite(lvl.spp_eff) and lvl.spp_eff < lvl.spp_model:
+            lvl.spp_model = max(1, int(lvl.spp_eff))
+            lvl.noise = Noise(model=lvl.model_ps / (lvl.spp_model * lvl.per) + lvl.q, reference=lvl.ref_noise,
+                              pair=lvl.pair)
         text += explain_excess_noise(g, hand, lvl)
     g.rubric.set("noise", status, text)
