@@ -168,8 +168,6 @@ def verdict(g: Grading, hand: Hand, lvl: Level, t: Tested, found: dict[str, str]
         # Likewise the residual of any structured mistake is correlated between neighbours:
         # where another cause explains it, the image is not also called filtered.
         found.pop("filter", None)
-    elif named is not None:  # a claimed blur is a filtered image, whether or not its noise showed it
-        found.setdefault("filter", fb.filter_text(t.st, True, lvl.spp_eff, hand.spp))
     unexplained = named is None and g.explanation is not None and g.explanation.adequacy is not None
     if unexplained:
         _findings_rule(g, hand, lvl, t, found)
