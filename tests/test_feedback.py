@@ -17,7 +17,7 @@ import pytest
 from scipy.ndimage import gaussian_filter
 from test_diagnose import ASSIGNMENT, RES
 
-from mcrt.grade.accuracy.cases import Spec, _render_spec, wall_albedo
+from mcrt.grade.accuracy.cases import Spec, _render_spec, light, wall_albedo
 from mcrt.grade.accuracy.outside import POSTS
 from mcrt.grade.adequacy import Scene2D, remainder_test
 from mcrt.grade.assignment import assignment_from_dict
@@ -25,6 +25,7 @@ from mcrt.grade.expected import prepare_context
 from mcrt.grade.filtertest import noise_correlation
 from mcrt.grade.grader import grade_image
 from mcrt.grade.objects import object_tests
+from mcrt.grade.stages.noise import NOISE_BODY
 from mcrt.scene import Lambertian, Sphere, load_scene
 from mcrt.stats.onesample import Noise, multiscale_test
 
@@ -91,6 +92,30 @@ def test_the_object_test_sees_a_small_change_on_one_object():
     ot = object_tests(S - R, R, mask, noise, sc.labels, 4)
     bt = multiscale_test(S - R, R, mask, noise, sc.tiles, **kw, extra=[ot.family(sc.min_effect)])
     assert list(bt.extra["objects"].reshape(4, 3).any(axis=1)) == [False, False, False, True]
+
+
+def test_the_structure_test_sees_a_change_that_averages_out_on_one_object():
+    """On the 36 pixels of one surface, +4 noise deviations on one half and -4 on the other (seed 6): the mean
+    test cannot see it, the structure test does, on that surface alone, in the Holm family (level 0.01). Noise
+    of twice the model's variance with heavy tails (Student's t, 3 degrees of freedom; seed 7) is not structure."""
+    from mcrt.grade.objects import structure_family
+
+    R, S, noise, sc = _synthetic(6)
+    sd = np.sqrt(noise.model)
+    box = sc.labels == 3
+    S = S + np.where((box & (np.arange(RES)[None, :] < 7))[..., None], 4 * sd, 0.0) \
+        - np.where((box & (np.arange(RES)[None, :] >= 7))[..., None], 4 * sd, 0.0)
+    mask = np.ones((RES, RES), bool)
+    kw = {"alpha": sc.alpha, "min_effect": sc.min_effect, "full_effect": sc.full_effect}
+    ot = object_tests(S - R, R, mask, noise, sc.labels, 4)
+    fam = structure_family(S - R, R, mask, noise, sc.labels, 4, sc.min_effect)
+    bt = multiscale_test(S - R, R, mask, noise, sc.tiles, **kw, extra=[ot.family(sc.min_effect), fam])
+    assert not bt.penalised_any and not bt.extra["objects"].any()
+    assert list(bt.extra["object_structure"]) == [False, False, False, True]
+    rng = np.random.default_rng(7)
+    heavy = R + rng.standard_t(3, R.shape) * sd * np.sqrt(2.0 / 3.0) * np.sqrt(2.0)
+    fam = structure_family(heavy - R, R, mask, noise, sc.labels, 4, sc.min_effect)
+    assert not multiscale_test(heavy - R, R, mask, noise, sc.tiles, **kw, extra=[fam]).extra["object_structure"].any()
 
 
 def test_the_filter_test_ignores_a_bias_and_sees_a_filter():
@@ -191,3 +216,41 @@ def test_a_curve_no_tone_map_has_is_fitted_as_a_monotone_curve(ctx):
     assert ex["named"] == "monotone curve" and ex["verdict"] == "claimed", ex["sentence"]
     top = ex["candidates"][0]["value"]["maps"][-1]
     assert top[0] == pytest.approx(20.0, rel=0.01) and top[1] == pytest.approx(0.3 + 0.25 * 19.7, rel=0.05), top
+
+
+def test_a_strongly_biased_image_is_not_read_as_noise(ctx):
+    """The light moved by 0.7 along y (Mitsuba, seed 12, 256 spp) measures as hundreds of times mcrt's noise at
+    256 spp in its tile spreads; the noise model must not absorb the bias: the image loses most of the unbiased
+    points and the feedback names the light's position. Correct renders of Mitsuba (16 spp, seed 51) and mcrt
+    (64 spp, seed 52) keep full marks."""
+    r = _mitsuba(light(move=(0.0, 0.7, 0.0))(load_scene()), 12, 256)
+    res = grade_image("light_y07", ctx, [r], spp=256)
+    assert res.details["noise"]["spp_effective"] < 4, res.details["noise"]  # the tile spreads hold the bias
+    assert res.details["noise"]["spp_model"] >= 256 / NOISE_BODY - 1, res.details["noise"]  # not 1 spp
+    assert res.score <= 0.75 * res.max_score, res.summary
+    assert res.details["explanation"]["family"] == "light_position", res.summary
+    from mcrt.render import render
+
+    s = load_scene()
+    for img, spp in ((_mitsuba(load_scene(), 51, 16), 16),
+                     (render(s, s.settings(camera="near", width=RES, height=RES, spp=64, max_depth=8), seed=52,
+                             progress=False).mean, 64)):
+        ok = grade_image("correct", ctx, [np.asarray(img)], spp=spp)
+        assert ok.score == ok.max_score, ok.summary
+
+
+def test_a_glossy_sphere_loses_points_without_a_claimed_cause(ctx):
+    """The mirror sphere rendered as Mitsuba's rough conductor (alpha 0.5; seed 53, 256 spp): its reflection is
+    blurred more than darkened, and the mean tests see nothing; the structure test does. The image loses points, no
+    cause is claimed (a darker mirror explains part of it), and the feedback places the rest on the sphere."""
+    from mcrt.grade.accuracy.outside import _sphere_bsdf
+
+    spec = Spec("t", None, spp=256, mitsuba_edit=lambda d: _sphere_bsdf(
+        d, {"type": "roughconductor", "material": "none", "alpha": 0.5}))
+    img = _render_spec(spec, load_scene(), width=RES, height=RES, max_depth=8, seed=53).mean
+    res = grade_image("glossy", ctx, [img], spp=256)
+    assert res.score < res.max_score, res.summary
+    assert res.details["structure"]["penalised"]["objects"] == 0  # the mean per object: nothing
+    ex = res.details["explanation"]
+    assert ex["named"] is None and ex["adequacy"]["verdict"] == "partial", ex["sentence"]
+    assert "something else is wrong on the mirror sphere" in ex["sentence"], ex["sentence"]

@@ -9,8 +9,8 @@ predicts a change :math:`\Delta` of the reference R. What it leaves,
 
 is tested with the bias test itself (:func:`mcrt.stats.onesample.multiscale_test`:
 the same noise model, tiles, Holm family at the same ``alpha`` and the same
-relevance threshold ``min_effect``), with the per-object test of
-:mod:`mcrt.grade.objects` in its family and the candidate's own noise
+relevance threshold ``min_effect``), with the per-object tests of
+:mod:`mcrt.grade.objects` (means and zero-mean structure) in its family and the candidate's own noise
 (``extra_var``: the basis renders' variance) added to the reference's. Then:
 
 * **adequate**: nothing is rejected: the remainder is consistent with noise,
@@ -75,11 +75,15 @@ class Scene2D:
     full_effect: float
     labels: np.ndarray  # (H, W) surface index
     names: tuple[str, ...]  # label names (the last is 'nothing')
+    shares: np.ndarray | None = None  # each object's share outside the noise's body in a correct render
+    filtered: bool = False  # the blur or correlated-noise detector found a filter over the image
 
 
 def remainder_test(S: np.ndarray, R: np.ndarray, delta: np.ndarray | float, mask: np.ndarray, noise: Noise,
-                   sc: Scene2D, *, extra_var: np.ndarray | None = None, explained: float = 1.0) -> Adequacy:
-    """Test S - R - delta (the module docstring); ``explained`` is the candidate's share, for the verdict's words."""
+                   sc: Scene2D, *, extra_var: np.ndarray | None = None, explained: float = 1.0,
+                   structure: bool = True) -> Adequacy:
+    """Test S - R - delta (the module docstring); ``explained`` is the candidate's share, for the verdict's words;
+    ``structure``: with the per-object structure test (:func:`mcrt.grade.objects.structure_family`)."""
     S, R = np.asarray(S, np.float64), np.asarray(R, np.float64)
     d = np.broadcast_to(np.asarray(delta, np.float64), S.shape)
     ok = mask & np.isfinite(S).all(axis=-1) & np.isfinite(d).all(axis=-1)
@@ -88,11 +92,18 @@ def remainder_test(S: np.ndarray, R: np.ndarray, delta: np.ndarray | float, mask
                pair=noise.pair)
     K = len(sc.names) - 1
     ot = obj.object_tests(resid, R, ok, nz, sc.labels, K)
-    bt = multiscale_test(resid, R, ok, nz, sc.tiles, alpha=sc.alpha, min_effect=sc.min_effect,
-                         full_effect=sc.full_effect, extra=[ot.family(sc.min_effect)])
-    rej_o = bt.extra.get("objects", np.zeros(K * 3, bool)).reshape(K, 3)
+    name, p, rel, share = obj.structure_family(resid, R, ok, nz, sc.labels, K, sc.min_effect, sc.shares,
+                                                image=np.where(ok[..., None], S, 0.0))
+    # Structure the candidate leaves counts where it left most of the object's difference (a glossy sphere read
+    # as a blur), not where it fits the object but for a trace of its shape that high spp shows.
+    rel = rel & (_energy(resid, ok, sc.labels, K) >= LEFT * _energy(np.where(ok[..., None], S - R, 0.0), ok, sc.labels, K))
+    bt = multiscale_test(resid, R, ok, nz, sc.tiles, alpha=sc.alpha, min_effect=sc.min_effect, full_effect=sc.full_effect,
+                         extra=[ot.family(sc.min_effect)] + ([(name, p, rel, share)] if structure else []))
+    # An object whose structure test rejects is placed as one whose mean does (every channel).
+    rej_s = bt.extra.get("object_structure", np.zeros(K, bool))
+    rej_o = bt.extra.get("objects", np.zeros(K * 3, bool)).reshape(K, 3) | rej_s[:, None]
     n_rej = sum(int(np.count_nonzero(s.penalised)) for s in bt.scales) + int(np.count_nonzero(rej_o))
-    n_tests = bt.n_tests + K * 3
+    n_tests = bt.n_tests + K * 4
     if n_rej == 0:
         return Adequacy("adequate", explained, 0, n_tests, excess_rms=bt.excess_rms)
     where = obj.flagged_objects(ot, rej_o, tile_effect=bt.pixel_effect, labels=sc.labels, mask=ok)
@@ -103,6 +114,15 @@ def remainder_test(S: np.ndarray, R: np.ndarray, delta: np.ndarray | float, mask
                     bt.excess_rms)
 
 
+def _energy(x: np.ndarray, mask: np.ndarray, labels: np.ndarray, K: int) -> np.ndarray:
+    """(K,) the sum of squared luminance of x over each object's pixels."""
+    k = np.where(mask, labels, K).ravel().astype(np.int64)
+    return np.bincount(k, (x @ obj.LUMINANCE).ravel() ** 2, minlength=K + 1)[:K]
+
+
+#: Share of an object's difference a candidate must leave there (explaining at most half of it) for the object's
+#: structure to count against it.
+LEFT = 0.5
 #: How many of the best candidates are tried, in order, for one whose remainder is noise.
 TRIED = 3
 #: Another family within this share of the claimed one whose remainder is noise too, with no more parameters, is
@@ -133,7 +153,10 @@ def claim_rule(S: np.ndarray, R: np.ndarray, mask: np.ndarray, noise: Noise, sc:
 
     def test(c):
         var = extra_var(c) if extra_var is not None else None
-        return remainder_test(S, R, c.change, mask, noise, sc, extra_var=var, explained=c.explained)
+        # A denoiser's kernel is no Gaussian: where the detectors found a filter over the image, the structure a
+        # blur leaves on objects is the denoiser's, not another mistake's.
+        return remainder_test(S, R, c.change, mask, noise, sc, extra_var=var, explained=c.explained,
+                              structure=not (sc.filtered and c.family == "blur"))
 
     def rule(e, fit, inputs) -> None:
         share_rule(e, fit, inputs)

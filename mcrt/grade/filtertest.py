@@ -58,7 +58,7 @@ def lag_one(z: np.ndarray, mask: np.ndarray) -> tuple[float, float]:
     return num / np.sqrt(den), num / max(ss, 1e-300)
 
 
-def _differences(e: np.ndarray, v: np.ndarray, keep: np.ndarray, labels: np.ndarray):
+def second_differences(e: np.ndarray, v: np.ndarray, keep: np.ndarray, labels: np.ndarray):
     """Consecutive normalised second differences (x1, x2) along rows and columns within one surface, and the
     correlation c that independent pixels of variances v give them."""
     out1, out2, out_c = [], [], []
@@ -103,12 +103,12 @@ def noise_correlation(e: np.ndarray, wt: np.ndarray, mask: np.ndarray, labels: n
     lab = labels if labels is not None else np.zeros(e.shape, np.int16)
     keep = mask & (wt > 0)
     v = np.where(keep, 1.0 / np.where(keep, wt, 1.0), 0.0)
-    t, c = _stat(*_differences(np.where(keep, e, 0.0), v, keep, lab))
+    t, c = _stat(*second_differences(np.where(keep, e, 0.0), v, keep, lab))
     if not np.isfinite(t):
         return 0.0, 1.0, 0.0
     # The terms of overlapping triples are correlated: the spread of T comes from white noise through the same steps.
     rng = np.random.default_rng(SEED)
     sd = np.sqrt(v)
-    null = np.array([_stat(*_differences(rng.standard_normal(e.shape) * sd, v, keep, lab))[0] for _ in range(SIMS)])
+    null = np.array([_stat(*second_differences(rng.standard_normal(e.shape) * sd, v, keep, lab))[0] for _ in range(SIMS)])
     zt = t / max(float(np.sqrt(np.mean(null**2))), 1e-12)
     return float(zt), float(_sps.norm.sf(zt)), float(c)

@@ -36,6 +36,12 @@ from mcrt.stats import LUMINANCE_WEIGHTS
 LUMINANCE = np.asarray(LUMINANCE_WEIGHTS)
 #: Share of the family-wise error rate the per-object test gets (the tiles keep the rest).
 SHARE = 0.05
+#: Share of the family-wise error rate of the per-object structure test (:func:`structure_family`).
+STRUCTURE_SHARE = 0.01
+#: Least excess share outside the body for the structure test to be relevant (see :func:`structure_family`).
+MIN_EXCESS_SHARE = 0.15
+#: The share of the image's squared z-scores counted as outside its noise's body (above their upper quartile).
+OUTSIDE = 0.25
 #: Fewest pixels an object needs to be tested on its own.
 MIN_PIXELS = 4
 #: Within an object, the reference's variation must be this many times its noise to speak of contrast or detail.
@@ -83,6 +89,99 @@ def object_tests(resid: np.ndarray, ref: np.ndarray, mask: np.ndarray, noise, la
         rel = np.where(np.abs(rm) > 0, d / np.abs(rm), 0.0)
     p = np.where(ok, 2.0 * _sps.t.sf(np.abs(t), np.maximum(n - 1.0, 1.0)[:, None]), 1.0)
     return ObjectTests(n, d, rm, var, np.minimum(p, 1.0), np.where(ok, rel, 0.0))
+
+
+def _outside(resid: np.ndarray, var: np.ndarray, mask: np.ndarray, labels: np.ndarray, n_labels: int):
+    """Luminance z^2 over the kept pixels, the kept pixels, and the image's body (the upper quartile of z^2)."""
+    keep = mask & (labels < n_labels) & (var > 0)
+    r = resid @ LUMINANCE
+    z2 = np.where(keep, r * r / np.where(keep, var, 1.0), 0.0)
+    return z2, keep, float(np.quantile(z2[keep], 1.0 - OUTSIDE)) if keep.any() else np.inf
+
+
+def structure_shares(base_resid: np.ndarray, var: np.ndarray, mask: np.ndarray, labels: np.ndarray,
+                     n_labels: int) -> np.ndarray:
+    """(K,) each object's share outside the body in a correct render (``base_resid``: mcrt's diagnosis baseline
+    less the reference; ``var`` its luminance variance), at least :data:`OUTSIDE`: the expected share of
+    :func:`structure_family`, where the noise model fits some objects less well than others."""
+    z2, keep, body = _outside(base_resid, var, mask, labels, n_labels)
+    out = np.full(n_labels, OUTSIDE)
+    for k in range(n_labels):
+        sel = keep & (labels == k)
+        if sel.sum() >= MIN_PIXELS:
+            out[k] = max(OUTSIDE, float(np.mean(z2[sel] > body)))
+    return out
+
+
+def _brightness(image: np.ndarray, ref: np.ndarray, mask: np.ndarray, labels: np.ndarray, n_labels: int) -> np.ndarray:
+    """(H, W) each pixel's object's mean luminance in ``image`` over the reference's (clipped to [1/20, 20])."""
+    k = np.where(mask & (labels < n_labels), labels, n_labels).ravel().astype(np.int64)
+    s = np.bincount(k, (image @ LUMINANCE).ravel(), minlength=n_labels + 1)
+    r = np.bincount(k, (ref @ LUMINANCE).ravel(), minlength=n_labels + 1)
+    ratio = np.clip(np.where(r > 0, s / np.where(r > 0, r, 1.0), 1.0), 0.05, 20.0)
+    ratio[n_labels] = 1.0
+    return ratio[np.minimum(labels, n_labels)]
+
+
+def baseline_shares(ctx, cam: str, R: np.ndarray, ref, mask: np.ndarray) -> np.ndarray | None:
+    """:func:`structure_shares` of the grading context's mcrt baseline (``ctx``: mcrt.grade.expected.Context) for
+    camera ``cam`` against its reference (``R`` its mean, ``ref`` its Expected); None for another camera."""
+    b = ctx.baseline
+    if cam != ctx.assignment.camera or b.mean.shape != R.shape:
+        return None
+    var = ctx.model_var[cam].astype(np.float64) / b.spp + ref.var.astype(np.float64) / ref.spp
+    return structure_shares(b.mean.astype(np.float64) - R, var @ LUMINANCE**2, mask, ctx.labels[cam],
+                            len(ctx.label_names) - 1)
+
+
+def structure_family(resid: np.ndarray, ref: np.ndarray, mask: np.ndarray, noise, labels: np.ndarray,
+                     n_labels: int, min_effect: float, shares: np.ndarray | None = None,
+                     image: np.ndarray | None = None) -> tuple[str, np.ndarray, np.ndarray, float]:
+    r"""Zero-mean structure within each object, as a family for :func:`mcrt.stats.onesample.multiscale_test`.
+
+    A change that averages out over an object (a mirror's reflection
+    blurred: brighter here, darker there) escapes the test of its mean; its
+    pixels' luminance z-scores :math:`z_i = r_i / \sqrt{v_i}` (the bias
+    test's noise model) are then too large over the whole object. Neither
+    their sum of squares nor a fixed threshold on them will do: Monte-Carlo
+    noise is heavy-tailed (a few bright paths make a chi-square of correct
+    renders reject), and the model's variance is right only to a factor of
+    a few (correct renders at 1024 spp have 40 % of their :math:`z_i^2`
+    above the upper quartile of a chi-square, at 16 spp 9 %). So each object
+    is compared with the image: the pixels outside the image's own body, with
+    :math:`z_i^2` above its upper quartile, are counted on each object and
+    tested one-sided against Binomial(n, :math:`q_k`). Noise of one
+    calibration everywhere puts a quarter of each object there; the model
+    fits some objects less well than others (correct renders of Mitsuba and
+    mcrt alike put a third of wall BC there), so :math:`q_k` is the share
+    a correct render has (``shares``, :func:`structure_shares` of mcrt's
+    diagnosis baseline), at least a quarter. A hand-in brighter or darker
+    on an object than the reference (``image``: a fall-off, a tone map)
+    has its noise scaled with it: the model's variance there is scaled by
+    the square of the object's brightness ratio. Relevant where the object's
+    median :math:`|r_i|` is ``min_effect`` of its mean brightness and the
+    share outside exceeds :math:`q_k` by :data:`MIN_EXCESS_SHARE` (a
+    structure a fitted cause leaves, a fraction of a per cent, shows at
+    high spp in a few more pixels; a wrong material in most of them).
+    """
+    vm = (noise.model + noise.reference) @ LUMINANCE**2
+    if noise.pair is not None:
+        vm = np.maximum(vm, (noise.pair + noise.reference) @ LUMINANCE**2)
+    if image is not None:
+        vm = vm * _brightness(image, ref, mask, labels, n_labels) ** 2
+    z2, keep, body = _outside(resid, vm, mask, labels, n_labels)
+    p0 = np.full(n_labels, OUTSIDE) if shares is None else shares
+    r, p, rel = resid @ LUMINANCE, np.ones(n_labels), np.zeros(n_labels, bool)
+    for k in range(n_labels):
+        sel = keep & (labels == k)
+        n = int(sel.sum())
+        if n < MIN_PIXELS or not np.isfinite(body):
+            continue
+        out = int(np.count_nonzero(z2[sel] > body))
+        p[k] = _sps.binom.sf(out - 1, n, p0[k])
+        rel[k] = (out / n - p0[k] >= MIN_EXCESS_SHARE
+                  and float(np.median(np.abs(r[sel]))) >= min_effect * abs(float(np.mean(ref[sel] @ LUMINANCE))))
+    return ("object_structure", p, rel, STRUCTURE_SHARE)
 
 
 def describe(S: np.ndarray, R: np.ndarray, mask: np.ndarray, noise_var: np.ndarray, labels: np.ndarray,

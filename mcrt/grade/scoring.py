@@ -158,6 +158,16 @@ def wrong_surfaces(bt, th, labels: np.ndarray, label_names) -> list[str]:
     return out
 
 
+def _rejected_objects(ex: dict, labels: np.ndarray, n_labels: int) -> np.ndarray:
+    """(H, W) the pixels of objects whose own tests (mean or structure, mcrt.grade.objects) are rejected."""
+    hit = np.zeros(n_labels, bool)
+    if "objects" in ex:
+        hit |= np.asarray(ex["objects"]).reshape(n_labels, 3).any(axis=1)
+    if "object_structure" in ex:
+        hit |= np.asarray(ex["object_structure"]).reshape(n_labels)
+    return np.append(hit, False)[np.minimum(labels, n_labels)]
+
+
 def unbiased_loss(bt, th, labels, label_names, *, registration: bool, filtered: bool,
                   major: str | None = None) -> tuple[float, str]:
     """Share of the unbiased points lost, as a TA would: by the kind of mistake, then by its extent.
@@ -171,7 +181,7 @@ def unbiased_loss(bt, th, labels, label_names, *, registration: bool, filtered: 
     ex = bt.extra
     t_loss = tile_loss(bt, th.min_loss) if bt.penalised_any else 0.0
     pix = ex["pixels"].reshape(bt.shape + (3,)).any(axis=2) if "pixels" in ex else np.zeros(bt.shape, bool)
-    area = float(np.mean((bt.pixel_effect > 0) | pix))
+    area = float(np.mean((bt.pixel_effect > 0) | pix | _rejected_objects(ex, labels, len(label_names) - 1)))
     surfaces = wrong_surfaces(bt, th, labels, label_names) if bt.penalised_any else []
     if registration or surfaces or major:
         what = ("; ".join(surfaces[:3]) + (" look wrong" if len(surfaces) > 1 else " looks wrong") if surfaces

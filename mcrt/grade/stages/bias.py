@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from mcrt.grade import feedback as fb
-from mcrt.grade.objects import object_tests
+from mcrt.grade.objects import baseline_shares, object_tests, structure_family
 from mcrt.grade.regions import short_text
 from mcrt.grade.score import LUMINANCE, metrics
 from mcrt.grade.stages.state import Grading, Hand, Level
@@ -49,9 +49,13 @@ def test(g: Grading, hand: Hand, lvl: Level, img: np.ndarray, resid: np.ndarray,
                           base=ctx.baseline.mean if hand.cam == a.camera else None, labels=ctx.labels[hand.cam],
                           pair=hand.imgs[0] - hand.imgs[1] if hand.n_r == 2 else None)
     # Beside the tiles, a test per object (mcrt.grade.objects): a small change confined to one object loses points.
-    objs = object_tests(resid, R, lvl.clip_mask, noise, ctx.labels[hand.cam], len(ctx.label_names) - 1)
+    K = len(ctx.label_names) - 1
+    objs = object_tests(resid, R, lvl.clip_mask, noise, ctx.labels[hand.cam], K)
+    shape = structure_family(resid, R, lvl.clip_mask, noise, ctx.labels[hand.cam], K, th.min_effect,
+                             shares=baseline_shares(ctx, hand.cam, hand.R, hand.ref, lvl.clip_mask),
+                             image=np.where(lvl.clip_mask[..., None], img, 0.0))
     bt = multiscale_test(resid, R, lvl.clip_mask, noise, a.tiles, alpha=th.alpha, min_effect=th.min_effect,
-                         full_effect=th.full_effect, extra=structure_families(st, th) + [objs.family(th.min_effect)])
+                         full_effect=th.full_effect, extra=structure_families(st, th) + [objs.family(th.min_effect), shape])
     return Tested(bt, st, img)
 
 

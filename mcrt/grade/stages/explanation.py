@@ -82,6 +82,7 @@ def explain(g: Grading, hand: Hand, img, mask, noise: Noise):
     When the claim rule claims no cause the diagnosis is left empty: no bug is named.
     """
     from mcrt.grade.explain import explain as engine
+    from mcrt.grade.objects import baseline_shares
 
     ctx, cam, R, tile = g.ctx, hand.cam, hand.R, hand.base_tile
     basis = getattr(ctx, "explain", None)
@@ -99,7 +100,9 @@ def explain(g: Grading, hand: Hand, img, mask, noise: Noise):
 
     inputs = Inputs(basis, mutants=ctx.mutants, baseline=ctx.baseline, texts=ctx.mutant_texts, labels=labels,
                     label_names=names, where=where_fn, test_remainder=test_remainder)
-    sc = Scene2D(tuple(a.tiles), th.alpha, th.min_effect, th.full_effect, labels, names)
+    sc = Scene2D(tuple(a.tiles), th.alpha, th.min_effect, th.full_effect, labels, names,
+                 shares=baseline_shares(ctx, cam, R, hand.ref, mask),
+                 filtered=any(g.details.get("structure", {}).get("penalised", {}).get(k, 0) for k in ("blur", "correlation")))
     rule = CLAIM_RULE(img, R, mask, noise, sc, extra_var=lambda c: _change_var(g, c, basis))
     e = engine(img, R, noise.model + noise.reference, mask, inputs, claim=rule, tile=tile)
     g.explanation = e

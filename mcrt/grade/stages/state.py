@@ -82,6 +82,7 @@ class Level:
     spp_model: int  # what the noise model assumes
     verdict: tuple[str, str, bool]  # (status, text, firm) before the bias test is known
     noise: Noise | None = None
+    spp_broad: float = float("inf")  # spp_eff with the noisiest tiles left out (stages.noise.BIAS_TILES)
 
     @property
     def samples(self) -> int:
