@@ -89,6 +89,10 @@ REPORTS: tuple[Report, ...] = (
     Report("grading_accuracy/outside", "grade-accuracy --class outside --out reports/grading_accuracy/outside",
            "grading on mistakes made outside the scene file (tone maps, BGR, materials, cosine weights, a point light, "
            "enlarged renders, object sizes, claimed spp): named right, confidently wrong, partial, false alarms"),
+    Report("grading_accuracy/programs", "grade-accuracy --class programs --out reports/grading_accuracy/programs",
+           "grading on mistakes of students' programs written apart from the grader's rules (orientation, encodings, "
+           "colour lost, direct light twice, bad pixels, a per-sample clamp, scene mistakes): named right, "
+           "confidently wrong, partial, false alarms, with a held-out half fixed before grading"),
     Report("grading/false_alarms", "grade-false-alarms --out reports/grading/false_alarms",
            "grading's false alarms on correct renders: estimators, samplers, spp 16-1024, 64x64 to 800x800, PNG curves"),
 )
