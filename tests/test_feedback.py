@@ -254,3 +254,16 @@ def test_a_glossy_sphere_loses_points_without_a_claimed_cause(ctx):
     ex = res.details["explanation"]
     assert ex["named"] is None and ex["adequacy"]["verdict"] == "partial", ex["sentence"]
     assert "something else is wrong on the mirror sphere" in ex["sentence"], ex["sentence"]
+
+
+def test_a_hand_in_with_no_measurable_noise_is_graded(ctx):
+    """The reference's own mean, a black image and a nearly black one (the light facing away) have no noise the
+    tile spreads can measure (an infinite effective spp): they are graded, not crashed on; the reference itself
+    keeps full marks and the black ones lose the unbiased points."""
+    R = np.asarray(ctx.references[ctx.assignment.camera].mean, np.float32)
+    scores = {}
+    for name, img in (("reference", R), ("black", np.zeros_like(R)), ("dim", R * 1e-6)):
+        res = grade_image(name, ctx, [img], spp=256)
+        assert res.details["noise"]["spp_effective"] is None, res.details["noise"]
+        scores[name] = res.score / res.max_score
+    assert scores["reference"] == 1.0 and scores["black"] < 0.5 and scores["dim"] < 0.5, scores

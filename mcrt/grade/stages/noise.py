@@ -50,9 +50,8 @@ def measure(g: Grading, hand: Hand, clip_mask: np.ndarray) -> Level:
     spp_eff = _spp(ratio, per)
     # The difference of two renders holds no bias; one render's tile spreads hold it as well as the noise.
     nominal = hand.spp or a.min_spp
-    spp_broad = spp_eff if pair is not None else nominal / min(
-        nominal / spp_eff if np.isfinite(spp_eff) else 0.0,
-        NOISE_BODY * max(1.0, body_ratio(resid, model_ps / (nominal * per) + ref_noise + q, clip_mask, ctx.labels[hand.cam])))
+    spp_broad = spp_eff if pair is not None else _broad(
+        nominal, spp_eff, body_ratio(resid, model_ps / (nominal * per) + ref_noise + q, clip_mask, ctx.labels[hand.cam]))
     g.details["noise"] = {"spp_declared": hand.spp, "renders": n_r,
                           "spp_effective": None if not np.isfinite(spp_eff) else spp_eff,
                           "spp_broad": None if not np.isfinite(spp_broad) else spp_broad}
@@ -79,6 +78,13 @@ def body_ratio(resid: np.ndarray, var: np.ndarray, mask: np.ndarray, labels: np.
     v = np.where(keep, var @ LUMINANCE**2, 0.0)
     x1, _, _ = second_differences(np.where(keep, resid @ LUMINANCE, 0.0), v, keep, labels)
     return float(np.median(x1 * x1) / _sps.chi2.ppf(0.5, 1)) if x1.size else float("inf")
+
+
+def _broad(nominal: int, spp_eff: float, body: float) -> float:
+    """The samples per pixel of the noise a single render's excess may be credited with (module docstring); an
+    image with no measurable noise (spp_eff infinite: a noise-free or constant hand-in) has infinitely many."""
+    excess = min(nominal / spp_eff, NOISE_BODY * max(1.0, body))
+    return nominal / excess if excess > 0 else float("inf")
 
 
 def _spp(ratio: float, per: int) -> float:
