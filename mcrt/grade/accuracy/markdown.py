@@ -37,7 +37,10 @@ _OUTSIDE = ("The wrong renders are mistakes made **outside the scene file** (mcr
             "conductor spheres of alpha 0.05 to 0.3, correct renders at 16 to 1024 spp) and the tuned half, and the "
             "held-out half was graded only with the rules final; after that, one rule was dropped (a claimed blur "
             "counted as a filtered image by itself: it made correct renders that the false-alarm report already "
-            "flags lose more points), and no held-out verdict changed.")
+            "flags lose more points), and no held-out verdict changed. The same round added families tuned on the "
+            "tuned half of the programs class (a colour matrix, light counted twice, the light facing, bad pixels, "
+            "a black surface) without grading this class's held-out half; with them, the held-out `bgr_png` went "
+            "from partial to named right (the colour matrix names BGR in an 8-bit PNG).")
 
 _PROGRAMS = ("The wrong renders are mistakes of **students' programs** (mcrt.grade.accuracy.programs), written apart "
              "from the grader's rules and not graded by their author: images written flipped, mirrored or transposed, "
