@@ -111,7 +111,8 @@ def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta
     if gradescope:
         L += ["", "## One student as Gradescope grades it", "",
               "A fresh process imports mcrt, loads the prepared context (the grading cache, as workers receive it) "
-              "and grades one student (mcrt.grade.accuracy.run.gradescope_figures). Gradescope's defaults: half a "
+              "and grades one student (mcrt.grade.accuracy.run.gradescope_figures): the mistakes and the correct render "
+              "that took longest to grade above. Gradescope's defaults: half a "
               "vCPU, 768 MB, a 10-minute timeout; under half a vCPU the wall time is about twice the CPU time.", "",
               "| case | exit | score | CPU s (process) | CPU s (grading) | wall s here | peak memory MB | context MB |",
               "|---|---|---|---|---|---|---|---|"]
