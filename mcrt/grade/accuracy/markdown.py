@@ -121,8 +121,9 @@ def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta
             mem = "-" if g.get("peak_rss_mb") is None else f"{g['peak_rss_mb']:.0f}"
             L.append(f"| {g['case']} | {g['exit']} | {g.get('score')} | {g['cpu_s']:.1f} | {gc} | {g['wall_s']:.1f} | "
                      f"{mem} | {g['context_mb']:.1f} |")
-        L += ["", f"Building the cache (`mcrt grade --prepare`, references, catalogue and the explanation's "
-              f"variations): {meta.get('prepare_seconds', 0):.0f} s here."]
+        prep = meta.get("prepare_seconds", 0)
+        L += ["", "Building the cache (`mcrt grade --prepare`, references, catalogue and the explanation's "
+              "variations): " + (f"{prep:.0f} s here." if prep >= 1 else f"already built by an earlier run (loading it took {prep:.1f} s).")]
     path = out / "index.md"
     path.write_text("\n".join(L) + "\n", encoding="utf-8")
     return path
