@@ -27,10 +27,11 @@ from mcrt.grade.stages.state import Grading, Hand, Level
 from mcrt.stats.onesample import Noise
 
 #: The most a render's noise variance may exceed what the body of its high-passed residual shows
-#: (:func:`body_ratio`, or the expected noise if more), as a multiple of it: correct renders of Mitsuba and mcrt at
-#: 16 to 1024 spp show their tile-spread ratio at most 20 times their body ratio (heavy tails); a bias, 100 to 1000
-#: times. An excess up to this multiple of the expected noise is credited to noise whatever the body (a filter
-#: lowers the body and raises the spread).
+#: (:func:`body_ratio`, or the expected noise if more), as a multiple of it: heavy tails put a correct render's
+#: tile spread above its body, a bias puts it far above (the grading-accuracy and false-alarm reports show both
+#: classes; tests/test_feedback.py holds a moved light and correct renders at 16 and 64 spp on either side). An
+#: excess up to this multiple of the expected noise is credited to noise whatever the body (a filter lowers the
+#: body and raises the spread).
 NOISE_BODY = 20.0
 
 
