@@ -76,6 +76,7 @@ class Spec:
     render_scale: int = 1  # rendered at 1/render_scale of the resolution (a post then enlarges it)
     declared_spp: int | None = None  # the spp the manifest claims, when not the rendered one
     writer: Callable[[np.ndarray, Path], Path] | None = None  # writes the image file as a student's program does
+    manifest: str = ""  # more lines of the manifest (TOML), e.g. "linear = true\n"
 
 
 @dataclass
@@ -404,5 +405,5 @@ def write_submission(case: Case, folder: str | Path) -> Path:
         path = folder / "render.exr"
         write_exr(path, RenderResult(mean=encoded(case).astype(np.float32), variance=None, spp=case.spp, seed=case.seed, max_depth=-1,
                                      renderer="student", scene_hash="", camera="near"))
-    (folder / "manifest.toml").write_text(f"spp = {case.spec.declared_spp or case.spp}\n")
+    (folder / "manifest.toml").write_text(f"spp = {case.spec.declared_spp or case.spp}\n{case.spec.manifest}")
     return path

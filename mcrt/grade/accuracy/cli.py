@@ -11,7 +11,7 @@ from mcrt.util import progress
 DEFAULT_OUT = "reports/grading_accuracy"
 DEFAULT_ASSIGNMENT = "course2023"
 #: The classes by --class name: the module (under mcrt.grade.accuracy) holding its SPECS and CAUSES.
-CLASSES = {"scene": "cases", "outside": "outside", "programs": "programs"}
+CLASSES = {"scene": "cases", "outside": "outside", "programs": "programs", "fresh": "fresh"}
 
 
 def register(sub) -> None:
@@ -20,8 +20,9 @@ def register(sub) -> None:
                        description=__doc__)
     p.add_argument("--class", dest="klass", choices=tuple(CLASSES), default="scene",
                    help="the class graded: 'scene' (scene edits, mcrt.grade.accuracy.cases), 'outside' (mistakes "
-                   "outside the scene file, mcrt.grade.accuracy.outside) or 'programs' (mistakes of students' "
-                   "programs, written apart from the grader's rules, mcrt.grade.accuracy.programs) (default: scene)")
+                   "outside the scene file, mcrt.grade.accuracy.outside), 'programs' (mistakes of students' "
+                   "programs, written apart from the grader's rules, mcrt.grade.accuracy.programs) or 'fresh' (mistakes "
+                   "no other class tried, all held out, mcrt.grade.accuracy.fresh) (default: scene)")
     p.add_argument("--held-out", choices=("all", "only", "none"), default="all",
                    help="grade all cases, only the held-out ones, or none of them (default: all)")
     p.add_argument("--out", default=None, help=f"report folder (default: {DEFAULT_OUT}, or {DEFAULT_OUT}/CLASS "

@@ -53,12 +53,27 @@ _PROGRAMS = ("The wrong renders are mistakes of **students' programs** (mcrt.gra
              "module before any case was graded.")
 
 
+_FRESH = ("The wrong renders are mistakes **no other class tried** (mcrt.grade.accuracy.fresh), written apart from the "
+          "grader's rules and not graded by their author: files written wrongly (8-bit codes truncated, a PFM's byte "
+          "order, the image divided by its maximum, the display curve applied per sample, XYZ written as RGB), the "
+          "light emitting from both faces, materials (a glossy coat, a tinted mirror, a default grey), normals facing "
+          "the wrong way, a wall or a face missing, camera models (up negated, the field of view's tangent in the "
+          "wrong unit, pixel centres mapped with W - 1, orthographic), resampling a 2x render, two renders with one seed, "
+          "only the last pass written, and Russian roulette without re-weighting; from Mitsuba renders of edited "
+          "scenes, Mitsuba renders combined, or correct renders written as students' programs write files. The "
+          "correct ones come from Mitsuba and mcrt in formats no other class used. *Named right*, *confidently "
+          "wrong*, *partial or none*: as for the other classes. **The whole class is held out** (every case marked "
+          "H): it was written after the other classes' held-out halves had been seen, to measure the rules as they "
+          "stand, so it has no tuned half.")
+
+
 def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta: dict, gradescope: list[dict],
                  klass: str = "scene") -> Path:
     """Write index.md and data.json under ``out``; returns the Markdown's path. ``klass`` is the class graded:
-    'scene' (mcrt.grade.accuracy.cases), 'outside' (mcrt.grade.accuracy.outside) or 'programs'
-    (mcrt.grade.accuracy.programs)."""
-    from mcrt.grade.accuracy import outside, programs
+    'scene' (mcrt.grade.accuracy.cases), 'outside' (mcrt.grade.accuracy.outside), 'programs'
+    (mcrt.grade.accuracy.programs) or 'fresh' (mcrt.grade.accuracy.fresh, all held out: the rates table leaves out
+    the empty tuned half)."""
+    from mcrt.grade.accuracy import fresh, outside, programs
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     tuned = [o for o in outcomes if not o.held_out]
@@ -68,7 +83,8 @@ def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta
             "cases": [o.to_dict() for o in outcomes]}
     (out / "data.json").write_text(json.dumps(data, indent=1, default=str) + "\n", encoding="utf-8")
     title = "Grading accuracy on a class of realistic hand-ins" + {
-        "outside": ": mistakes outside the scene file", "programs": ": mistakes of students' programs"}.get(klass, "")
+        "outside": ": mistakes outside the scene file", "programs": ": mistakes of students' programs",
+        "fresh": ": mistakes no other class tried (all held out)"}.get(klass, "")
     L = [f"# {title}", "",
          f"Written by `{command}` ({meta.get('date', '')}, {meta.get('seconds', 0):.0f} s). "
          f"Assignment: `{meta.get('assignment')}`; reference: {meta.get('reference')}.", "",
@@ -79,12 +95,15 @@ def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta
          "the mistake's cause (the explanation's family, or a criterion that names it: `linear` for an encoding, "
          "`exposure` for a constant factor, `camera` for misregistration). *Confidently wrong*: it names a cause, and "
          "not the right one; *also wrong*: it names the right cause and a wrong one beside it. **Held-out** cases (marked H) were not looked at while the diagnosis was tuned, with one exception: the last two rules of the grader (the camera not blamed beside a cause outside it; an explained wrong geometry, light placement, colour or camera scored as a major mistake) were added after the held-out results had been seen; and when the per-object structure test was added, the exemption of a blur's remainder where the detectors found a filter (a denoiser's kernel is no Gaussian) was added after the held-out `denoised` case had been seen to lose its name, and a rule (a claimed blur counted as a filtered image by itself) was dropped after the final run, with no held-out verdict changed."
-         if klass not in ("outside", "programs") else {"outside": _OUTSIDE, "programs": _PROGRAMS}[klass], "",
+         if klass not in ("outside", "programs", "fresh") else {"outside": _OUTSIDE, "programs": _PROGRAMS,
+                                                                "fresh": _FRESH}[klass], "",
          "## Rates", "",
          "| | mistakes | detected (lost points) | named right | confidently wrong | partial or none | also wrong | "
          "major mistakes losing >= 25 % | correct renders | false alarms | correct named a bug |",
          "|---|---|---|---|---|---|---|---|---|---|---|"]
     for g, r in groups.items():
+        if r["mistakes"] + r["correct"] == 0 and g != "all":  # a class with no tuned (or no held-out) half
+            continue
         L.append(f"| {g} | {r['mistakes']} | {_pct(r['detected'])} | {_pct(r['named_right'])} | {_pct(r['named_wrong'])} | "
                  f"{_pct(r['honest_partial'])} | {_pct(r['also_named_wrong'])} | "
                  f"{_pct(r['major_lost_a_quarter'])} | {r['correct']} | {_pct(r['false_alarms'])} | "
@@ -106,7 +125,7 @@ def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta
             continue
         L.append(f"| {o.name} | {'H' if o.held_out else ''} | {_cell(o.truth, 90)} | {o.spp} | {o.file} | "
                  f"{o.score:g}/{o.max_score:g} | {'yes' if o.wrong else 'no'} | {_cell(o.said) or '-'} | {o.seconds:.1f} |")
-    causes = {"outside": outside.CAUSES, "programs": programs.CAUSES}.get(klass, CAUSES)
+    causes = {"outside": outside.CAUSES, "programs": programs.CAUSES, "fresh": fresh.CAUSES}.get(klass, CAUSES)
     L += ["", "Causes: " + "; ".join(f"`{k}` {v}" for k, v in causes.items()) + "."]
     if gradescope:
         L += ["", "## One student as Gradescope grades it", "",
