@@ -153,8 +153,9 @@ def _write_exr_half_rgba(image: np.ndarray, folder: Path) -> Path:
 
 
 def _write_hdr(image: np.ndarray, folder: Path) -> Path:
-    """A Radiance RGBE picture written by hand, flat scanlines: Ward's float-to-RGBE (frexp, mantissa * 256 truncated;
-    readers add half a step back)."""
+    """A Radiance RGBE picture written by hand, flat scanlines: Ward's float-to-RGBE (frexp of the largest channel, the
+    channels times 256 / 2^e), rounded to the nearest code (rgbe.c truncates, and readers that do not add half a code
+    back, as stb_image's, then read every value low)."""
     h, w = image.shape[:2]
     v = np.maximum(np.nan_to_num(image.astype(np.float64)), 0.0)
     m = v.max(axis=2)
@@ -162,7 +163,8 @@ def _write_hdr(image: np.ndarray, folder: Path) -> Path:
     rgbe = np.zeros((h, w, 4), np.uint8)
     ok = m > 1e-32
     f = np.where(ok, mant * 256.0 / np.where(ok, m, 1.0), 0.0)
-    rgbe[..., :3] = np.where(ok[..., None], np.floor(v * f[..., None]), 0).astype(np.uint8)
+    codes = np.minimum(np.floor(v * f[..., None] + 0.5), 255)  # 255.5 and up: clipped (a mantissa of 1 - 1/512)
+    rgbe[..., :3] = np.where(ok[..., None], codes, 0).astype(np.uint8)
     rgbe[..., 3] = np.where(ok, ex + 128, 0).astype(np.uint8)
     path = folder / "render.hdr"
     path.write_bytes(b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n" + f"-Y {h} +X {w}\n".encode() + rgbe.tobytes())
@@ -454,7 +456,7 @@ def _specs() -> tuple[tuple[Spec, ...], tuple[Spec, ...]]:
         Spec("ok_exr_half_rgba", None, **H, spp=200, writer=_write_exr_half_rgba, file="exr-half-rgbaz",
              truth="Mitsuba path 200 spp, a half-float EXR with A and Z channels"),
         Spec("ok_hdr_by_hand", None, **H, spp=256, writer=_write_hdr, file="hdr",
-             truth="Mitsuba path 256 spp, a Radiance HDR written by hand (flat RGBE)"),
+             truth="Mitsuba path 256 spp, a Radiance HDR written by hand (flat RGBE, rounded)"),
         Spec("ok_png16_declared_linear", None, **H, spp=100, sampler="stratified", writer=_write_png16_linear,
              file="png16-linear", manifest="linear = true\n",
              truth="Mitsuba path, stratified, two passes of 100 spp, a 16-bit linear PNG declared linear"),
