@@ -525,6 +525,21 @@ def test_suite_on_a_shared_scene_names_the_references_offset(suite, tmp_path):
     assert "rtol 0.0011: a reference of Mitsuba version 3.0.1" in (out / "index.md").read_text()
 
 
+def test_what_the_camera_sees_in_a_pixel_box_of_a_shared_scene(suite):
+    """The lower right 16x16 tile of the bsdf_spheres grid sees the two masked leaves (Mask BSDFs, leaf_mask.png)
+    and, mostly, nothing; the upper left one sees spheres, no leaf."""
+    from mcrt import mitsuba_scene as mm
+    from mcrt.msuite.run import scene_objects, seen_in
+
+    mm._use("llvm")
+    scene, _ = mm.load_scene_file(suite / "tests/scenes/bsdf_spheres/test_pointlight_path.xml")
+    seen = dict(seen_in(scene, (32, 48, 32, 48)))
+    leaves = [w for w in seen if w.startswith("rectangle.obj") and "Mask" in w and "leaf_mask.png" in w]
+    assert len(leaves) == 2 and len(seen) == 3 and 0.6 < seen["nothing"] < 0.9
+    assert set(leaves) <= set(scene_objects(scene)) and abs(sum(seen.values()) - 1) < 1e-9
+    assert not any("leaf_mask" in w for w in dict(seen_in(scene, (0, 16, 0, 16))))
+
+
 def test_a_rejection_the_other_seeds_confirm_is_a_difference_not_a_false_alarm():
     """Stouffer's z of the other seeds' t on the rejected test decides; their own rejections are not needed."""
     from mcrt.msuite.run import confirm, summarize

@@ -171,18 +171,20 @@ def _differences_of_references(data: dict) -> list[str]:
 
 def _difference_text(d: dict, seeds: int) -> str:
     rel = d["rel_diff"]
-    size = ", ".join(f"{ch} {100 * v:+.2f} %" for ch, v in zip("XYZ", rel))
+    size = ", ".join(f"{ch} {100 * v:+.3g} %" for ch, v in zip("XYZ", rel))
     same = max(rel) - min(rel) <= 0.1 * max(abs(v) for v in rel) if any(rel) else False
     seen = ", ".join(f"{what} {100 * f:.0f} %" for what, f in d["seen"])
+    way = ("darker than" if max(rel) < 0 else "brighter than" if min(rel) > 0 else "different from")
     return (f"rows {d['rows'][0]}-{d['rows'][1]}, cols {d['cols'][0]}-{d['cols'][1]}: the mean of the {seeds} correct "
-            f"renders is {'darker' if sum(rel) < 0 else 'brighter'} than the reference, {size}"
+            f"renders is {way} the reference, {size}"
             + (" (the same in every channel: not a colour shift)" if same else "")
             + (" in noiseless pixels (no variance on either side)" if d.get("noiseless") else "")
-            + f" (Y {d['mean'][1]:.3g} against {d['reference'][1]:.3g}); there the camera sees {seen}")
+            + f" (Y {d['mean'][1]:.5g} against {d['reference'][1]:.5g}); there the camera sees {seen}")
 
 
 def _elsewhere(case: dict, done: list[dict], systematic: list[bool], version: str) -> str:
-    """Other scenes holding every shape seen in the case's differences, and whether mcrt finds them consistent."""
+    """Other scenes holding every shape seen in the case's differences: whether mcrt finds a difference of the
+    reference there, and whether that difference too is where these shapes are seen."""
     shapes = {what for d in case["differences"] for what, _ in d["seen"] if what != "nothing"}
     # A shape in words includes its place and BSDF: the same object, not merely the same kind.
     others = [(c, sy) for c, sy in zip(done, systematic) if c is not case and shapes <= set(c.get("objects", []))]
@@ -190,17 +192,28 @@ def _elsewhere(case: dict, done: list[dict], systematic: list[bool], version: st
         return ""
     ok = [c for c, sy in others if not sy]
     bad = [c for c, sy in others if sy]
+    there = [c for c in bad if shapes & {what for d in c.get("differences", []) for what, _ in d["seen"]}]
+
+    def named(cs):
+        return ", ".join(f"{c['name']} (emitters {', '.join(c.get('emitters', []))})" for c in cs)
+
     text = ""
     if ok:
-        text += ("; the same shapes are in " + ", ".join(f"{c['name']} (emitters {', '.join(c.get('emitters', []))})" for c in ok)
-                 + ", where mcrt finds no difference of the reference")
-    if bad:
-        text += "; and in " + ", ".join(c["name"] for c in bad) + ", which differs too"
+        text += f"; the same shapes are in {named(ok)}, where mcrt finds no difference of the reference"
+    if there:
+        text += f"; {'and ' if ok else 'the same shapes are '}in {named(there)}, which differ{'s' if len(there) == 1 else ''} too, where these shapes are seen"
+    rest = [c for c in bad if c not in there]
+    if rest:
+        text += f"; and in {named(rest)}, which differ{'s' if len(rest) == 1 else ''} elsewhere"
+    rel = case["differences"][0]["rel_diff"]
+    sign = "darker" if max(rel) < 0 else "brighter" if min(rel) > 0 else "different"
+    by = case.get("written_by") or "the reference's version"
     if ok and not bad:
-        lit = ", ".join(case.get("emitters", []))
-        text += (f": so the difference comes with these shapes lit by {lit}, which Mitsuba {version} renders "
-                 f"{'darker' if sum(case['differences'][0]['rel_diff']) < 0 else 'brighter'} than "
-                 f"{case.get('written_by') or 'the reference'} did")
+        text += (f": the difference comes with these shapes lit by {', '.join(case.get('emitters', []))}, which "
+                 f"Mitsuba {version} renders {sign} than {by} did")
+    elif there and not rest:
+        text += (f": the difference goes with these shapes, under more than one emitter; Mitsuba {version} renders "
+                 f"them otherwise than {by} did ({sign} here)")
     return text
 
 
