@@ -212,8 +212,8 @@ def _elsewhere(case: dict, done: list[dict], systematic: list[bool], version: st
         text += (f": the difference comes with these shapes lit by {', '.join(case.get('emitters', []))}, which "
                  f"Mitsuba {version} renders {sign} than {by} did")
     elif there and not rest:
-        text += (f": the difference goes with these shapes, under more than one emitter; Mitsuba {version} renders "
-                 f"them otherwise than {by} did ({sign} here)")
+        text += (f": in every scene with these shapes where mcrt finds a difference of the reference, it is where "
+                 f"these shapes are seen; Mitsuba {version} renders them otherwise than {by} did ({sign} here)")
     return text
 
 
