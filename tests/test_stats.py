@@ -237,6 +237,34 @@ def test_zero_variance_tiles_equal_pass_unequal_fail():
     json.dumps(c.to_dict(), allow_nan=False)  # inf is written as null
 
 
+def test_zero_variance_tiles_within_a_per_channel_rtol_or_an_atol():
+    # alpha = 0.01. A noiseless tile 0.03 % brighter in R and B only: exact, rejected; within a per-channel rtol
+    # of (0.00031, exact, 0.00031), accepted, and a 0.03 % offset in G is still rejected there. A noiseless dark
+    # tile 1e-7 off (float32 rounding at the scale of 1): rejected exactly, accepted with atol 2.4e-7.
+    mu = mean_image(32, 32)
+    light = np.full(mu.shape, np.nan)
+    light[0:8, 0:8] = 17.3
+    light[8:16, 0:8] = 1e-6
+    a = synth(61, mu, 256, constant=light)
+    off = light.copy()
+    off[0:8, 0:8] *= np.array([1.0003, 1.0, 1.0003])
+    b = synth(62, mu, 512, "gamma2", constant=off)
+    assert not compare_images(a, b, alpha=0.01, tile=8).passed
+    c = compare_images(a, b, alpha=0.01, tile=8, rtol=(0.00031, 1e-5, 0.00031))
+    assert c.passed and c.rtol == (0.00031, 1e-5, 0.00031) and c.atol == 0.0
+    off[0:8, 0:8, 1] *= 1.0003
+    c = compare_images(a, synth(62, mu, 512, "gamma2", constant=off), alpha=0.01, tile=8, rtol=(0.00031, 1e-5, 0.00031))
+    assert [(f.ty, f.tx, f.channel) for f in c.failing_tiles] == [(0, 0, "G")]
+    dark = light.copy()
+    dark[8:16, 0:8] += 1e-7
+    b = synth(62, mu, 512, "gamma2", constant=dark)
+    assert [(f.ty, f.tx) for f in compare_images(a, b, alpha=0.01, tile=8).failing_tiles] == [(1, 0)] * 3
+    c = compare_images(a, b, alpha=0.01, tile=8, atol=2.4e-7)
+    assert c.passed and c.atol == 2.4e-7 and c.rtol == 1e-5  # one number given, one number recorded (mcrt compare)
+    with pytest.raises(ValueError, match="atol must be"):
+        compare_images(a, b, atol=-1.0)
+
+
 def test_zero_variance_on_one_side_uses_the_ordinary_statistic():
     # alpha = 0.01. A is exact (constant 0.5) in tile (1, 1), B is noisy
     # around 0.5 there: an ordinary, finite test that passes.

@@ -28,6 +28,17 @@ MAX_OFFSET = 0.005
 CORRECT_SEED, PERTURBED_SEED = 1000, 2000
 #: Levels (beside each scene's own) at which the report counts rejected correct renders, from their family p-values.
 CALIBRATION_LEVELS = (0.001, 0.01, 0.05)
+#: The white of the references older Mitsuba versions wrote, as stored: bsdf_spheres/refs/test_constant_ref_rgb.exr
+#: (Mitsuba 2.2.1) holds the constant emitter's radiance 1.0 in its background pixel [0, 0] as this RGB.
+#: :func:`xyz_version_rtol` turns it into the margin against such references, per tested (XYZ) channel.
+STORED_WHITE_RGB = (1.001084, 0.999708, 0.999703)
+#: An absolute margin of every test against a reference: twice float32's spacing at 1.0 (2^-22, about 2.4e-7).
+#: Mitsuba computes in float32 with factors of order 1 (filter weights, reflectances, colour conversion), so a
+#: reference value near 0 carries rounding at that scale, not at its own: the report counts, per reference, the
+#: XYZ values of its dark pixels that lie on the 2^-24 grid (:func:`rounding_grid`).
+ROUNDING_ATOL = 2.0 * float(np.finfo(np.float32).eps)
+#: Dark pixel-channels, for :func:`rounding_grid`: a reference XYZ value this small in magnitude (but not 0).
+DARK = 1e-5
 
 
 def budget_spp(h: int, w: int, scale: float = 1.0) -> int:
@@ -40,13 +51,49 @@ def _round_up(x: float) -> float:
     if x <= 0:
         return 0.0
     e = math.floor(math.log10(x)) - 1
-    return math.ceil(x / 10**e) * 10**e
+    return float(f"{math.ceil(x / 10**e) * 10**e:.2g}")  # 28 * 1e-5 printed as 0.00028, not 0.00028000000000000003
 
 
-def _test(render, ref, ref_var_raw, *, alpha: float, tiles, rtol: float) -> dict:
+def xyz_version_rtol(white=STORED_WHITE_RGB) -> tuple[float, float, float]:
+    """The margin against a reference another Mitsuba version wrote, per XYZ channel (the space of the tests).
+
+    That version's colour conversion stores a white 1.0 as ``white`` (RGB).
+    Through :data:`mcrt.image_files.RGB_TO_XYZ` its relative offset from a
+    true white, channel by channel, rounded up to two significant digits, is
+    the margin of that channel; :data:`EXACT_RTOL` (float32 rounding) where
+    the offset is below it (Y, the luminance row, nearly cancels).
+    """
+    from mcrt.image_files import RGB_TO_XYZ
+    from mcrt.stats.twosample import EXACT_RTOL
+
+    stored, true = RGB_TO_XYZ @ np.asarray(white, np.float64), RGB_TO_XYZ @ np.ones(3)
+    return tuple(max(EXACT_RTOL, _round_up(abs(o))) for o in stored / true - 1.0)
+
+
+def rtol_text(rtol) -> str:
+    """A margin in words: one number, or one per channel (``X 0.00031, Y exact, Z 0.00028``)."""
+    from mcrt.stats.twosample import EXACT_RTOL
+
+    values = np.atleast_1d(np.asarray(rtol, np.float64))
+    if np.all(values == values[0]):
+        return f"{values[0]:g}"
+    return ", ".join(f"{c} {'exact' if v <= EXACT_RTOL else f'{v:g}'}" for c, v in zip("XYZ", values))
+
+
+def rounding_grid(ref_xyz: np.ndarray) -> dict:
+    """How many of the reference's dark XYZ values (0 < |v| < :data:`DARK`) lie on multiples of 2^-24 (within 1 %
+    of a step): ``{'dark', 'on_grid'}``. Values that all do were rounded at the scale of 1, not at their own."""
+    v = np.asarray(ref_xyz, np.float64).ravel()
+    v = v[(v != 0) & (np.abs(v) < DARK)]
+    k = v / 2.0**-24
+    return {"dark": int(v.size), "on_grid": int(np.count_nonzero(np.abs(k - np.round(k)) < 0.01))}
+
+
+def _test(render, ref, ref_var_raw, *, alpha: float, tiles, rtol) -> dict:
     from mcrt.stats import compare_multiscale
 
-    ms = compare_multiscale(render, ref, tiles=tiles, alpha=alpha, policy="reference-floor", channels="xyz", rtol=rtol)
+    ms = compare_multiscale(render, ref, tiles=tiles, alpha=alpha, policy="reference-floor", channels="xyz", rtol=rtol,
+                            atol=ROUNDING_ATOL)
     z = z_rule(render.mean, ref.mean, ref_var_raw, render.spp)
     failing = []
     for t, c, rej in zip(ms.tiles, ms.comparisons, ms.rejected):
@@ -68,12 +115,14 @@ def _test(render, ref, ref_var_raw, *, alpha: float, tiles, rtol: float) -> dict
 
 def run_case(case: Case, *, spp_scale: float = 1.0, seeds: int = 1, alpha: float = 0.01, tiles=(2, 4, 8, 16, 32, 0),
              ref_spp: int = REFERENCE_SPP, perturbations=tuple(PERTURBATIONS), backend: str = "llvm",
-             version_rtol: float = 0.0011) -> dict:
+             version_rtol: float | None = None) -> dict:
     """One scene: ``seeds`` correct renders and the perturbed ones, each tested both ways.
 
     A reference that another Mitsuba version wrote is compared within
-    ``version_rtol`` (a margin of every test: that version's colour
-    conversion stores a constant 1.0 as 1.00108 or 0.99971). The reference
+    ``version_rtol`` (a margin of every test; None: per XYZ channel,
+    :func:`xyz_version_rtol`, from the white such versions store). Every test
+    also accepts an absolute difference up to :data:`ROUNDING_ATOL`
+    (float32 rounding at the scale of 1). The reference
     offset: where the first correct render still differs from the
     reference in noiseless tiles (no noise there: a difference of the
     reference, such as a constant 1.0 stored as 1.00108) of at most
@@ -106,15 +155,20 @@ def run_case(case: Case, *, spp_scale: float = 1.0, seeds: int = 1, alpha: float
             raise ValueError(f"{case.name}: renders {r.mean.shape[1]}x{r.mean.shape[0]}, its reference is {w}x{h}")
         return r
 
-    # A reference written by another Mitsuba version went through that version's colour conversion: a constant
-    # 1.0 comes back as 1.00108 or 0.99971 (up to 0.11 %), in every pixel, noisy or not.
+    # A reference written by another Mitsuba version went through that version's colour conversion, which offsets
+    # a white (STORED_WHITE_RGB) in every pixel, noisy or not; in XYZ, the space of the tests, the offset differs
+    # per channel, hence a margin per channel.
     written_by = ref.extra.get("exr.generatedBy", "")
     other_version = written_by != f"Mitsuba version {mi.__version__}"
-    rtol = max(EXACT_RTOL, version_rtol) if other_version else EXACT_RTOL
-    out["written_by"], out["version_rtol"] = written_by, rtol
+    margin = xyz_version_rtol() if version_rtol is None else (max(EXACT_RTOL, version_rtol),) * 3
+    rtol = tuple(margin) if other_version else (EXACT_RTOL,) * 3
+    out["written_by"], out["version_rtol"] = written_by, list(rtol)
+    out["rounding_grid"] = rounding_grid(ref.mean)
     masks, ts = [], []
+    render_sum = np.zeros(ref.mean.shape)
     for k in range(seeds):
         r = render(CORRECT_SEED + k)
+        render_sum += r.mean
         out["integrator"], out["method"] = r.renderer, r.extra.get("method")
         out["variance_method"] = r.extra.get("variance_method")
         res = _test(r, ref, ref_var_raw, alpha=alpha, tiles=tiles, rtol=rtol)
@@ -123,7 +177,7 @@ def run_case(case: Case, *, spp_scale: float = 1.0, seeds: int = 1, alpha: float
             offset = res["mcrt"]["largest_noiseless_difference"]
             if k or not res["mcrt"]["noiseless_rejected"] or offset > MAX_OFFSET:
                 break
-            rtol = max(rtol, _round_up(offset))
+            rtol = tuple(max(x, _round_up(offset)) for x in rtol)
             out["reference_offset"] = offset
             res = _test(r, ref, ref_var_raw, alpha=alpha, tiles=tiles, rtol=rtol)
         res.update(seed=CORRECT_SEED + k, time=r.wall_time, spp=r.spp)
@@ -134,8 +188,12 @@ def run_case(case: Case, *, spp_scale: float = 1.0, seeds: int = 1, alpha: float
         if k and res["mcrt"]["passed"]:  # a passing repeat: its verdict and p-value are all the report reads
             res["mcrt"] = {key: res["mcrt"][key] for key in ("p_family", "passed", "rejected")}
         out["correct"].append(res)
-    out["rtol"] = rtol
+    out["rtol"] = list(rtol)
     confirm(out["correct"], masks, ts)
+    out["objects"], out["emitters"] = scene_objects(scene), sorted({e.class_name() for e in scene.emitters()})
+    rejected = [res for res in out["correct"] if not res["mcrt"]["passed"]]
+    if rejected:  # where the renders differ: the seeds' mean render against the reference, and what is seen there
+        out["differences"] = describe_differences(scene, rejected[0]["mcrt"]["failing"], render_sum / seeds, ref.mean)
     first = out["correct"][0]
     for i, name in enumerate(perturbations):
         with perturbed(mi, scene, name, depth) as change:
@@ -157,6 +215,76 @@ def run_case(case: Case, *, spp_scale: float = 1.0, seeds: int = 1, alpha: float
         res["mitsuba"]["caught"] = bool(not z1["passed"] and (z0["passed"] or z1["failing"] > z0["failing"] + z1["allowed"]))
         out["perturbations"][name] = res
     out["time"] = time.perf_counter() - t0
+    return out
+
+
+def _bsdf_text(bsdf) -> str:
+    """A BSDF as its chain of classes and the files of its textures (``Mask / TwoSided / SmoothDiffuse (leaf_mask.png)``)."""
+    import re
+
+    text = str(bsdf)
+    classes = [c for c in re.findall(r"(\w+)\[", text) if not re.search("Texture|Spectrum|Transform|Bounding|brdf", c)]
+    files = list(dict.fromkeys(re.findall(r'name = "([^"]+)"', text)))
+    return " / ".join(dict.fromkeys(classes)) + (f" ({', '.join(files)})" if files else "")
+
+
+def _shape_text(shape) -> str:
+    """A shape as its file (or class), where it is (its bounding box's centre) and its BSDF."""
+    import re
+
+    found = re.search(r'name = "([^"]+)"', str(shape).split("bsdf =")[0])
+    c = np.array(shape.bbox().center(), np.float64).ravel()
+    where = ", ".join(f"{v:g}" for v in np.round(c, 2))
+    return f"{found.group(1) if found else shape.class_name()} at ({where}) with {_bsdf_text(shape.bsdf())}"
+
+
+def scene_objects(scene) -> list[str]:
+    """Every shape of the scene in words (:func:`_shape_text`), sorted."""
+    return sorted(_shape_text(s) for s in scene.shapes())
+
+
+def seen_in(scene, box, per_pixel: int = 4) -> list[tuple[str, float]]:
+    """What the camera sees in a pixel box ``(y0, y1, x0, x1)``, end exclusive: ``(shape in words, fraction)`` for
+    each shape its primary rays (``per_pixel`` x ``per_pixel`` per pixel) hit first, largest first, and
+    ``('nothing', fraction)`` for those that hit nothing. A shape with an opacity mask counts over its whole surface."""
+    import drjit as dr
+    import mitsuba as mi
+
+    y0, y1, x0, x1 = box
+    sensor = scene.sensors()[0]
+    w, h = sensor.film().crop_size()
+    ys, xs = np.meshgrid((np.arange(y0 * per_pixel, y1 * per_pixel) + 0.5) / per_pixel,
+                         (np.arange(x0 * per_pixel, x1 * per_pixel) + 0.5) / per_pixel, indexing="ij")
+    ray, _ = sensor.sample_ray(0.0, 0.0, mi.Point2f(xs.ravel() / w, ys.ravel() / h), mi.Point2f(0.5, 0.5))
+    si = scene.ray_intersect(ray)
+    hit = np.array(si.is_valid(), bool)
+    ids = np.array(dr.reinterpret_array(mi.UInt32, si.shape))
+    out = []
+    for s in scene.shapes():
+        n = np.count_nonzero(hit & (ids == np.array(dr.reinterpret_array(mi.UInt32, mi.ShapePtr(s)))[0]))
+        if n:
+            out.append((_shape_text(s), n / hit.size))
+    out.sort(key=lambda x: -x[1])
+    if not hit.all():
+        out.append(("nothing", float(1.0 - hit.mean())))
+    return out
+
+
+def describe_differences(scene, failing: list[dict], mean_render: np.ndarray, ref: np.ndarray, limit: int = 3) -> list[dict]:
+    """Each pixel box of ``failing`` (a rejected render's tests; at most ``limit`` boxes): the relative difference
+    of ``mean_render`` (the mean of every seed's render) from the reference there, per channel, their means, and
+    what the camera sees there (:func:`seen_in`)."""
+    boxes = list(dict.fromkeys((f["rows"][0], f["rows"][1] + 1, f["cols"][0], f["cols"][1] + 1) for f in failing))
+    out = []
+    for y0, y1, x0, x1 in boxes[:limit]:
+        a = mean_render[y0:y1, x0:x1].mean(axis=(0, 1))
+        b = ref[y0:y1, x0:x1].astype(np.float64).mean(axis=(0, 1))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            rel = np.where(b != 0, a / b - 1.0, 0.0)
+        noiseless = all(f["noiseless"] for f in failing if (f["rows"][0], f["cols"][0]) == (y0, x0))
+        out.append({"rows": [y0, y1 - 1], "cols": [x0, x1 - 1], "rel_diff": [float(v) for v in rel], "noiseless": noiseless,
+                    "mean": [float(v) for v in a], "reference": [float(v) for v in b],
+                    "seen": [[what, float(f)] for what, f in seen_in(scene, (y0, y1, x0, x1))]})
     return out
 
 
@@ -198,9 +326,9 @@ def verdict(case: dict) -> str:
                 f"({', '.join(f'{k} {v}' for k, v in m['by_scale'].items())})")
     if "reference_offset" in case:
         return (f"consistent, with the reference's offset in noiseless pixels ({100 * case['reference_offset']:.3g} %) "
-                f"accepted (rtol {case['rtol']:g})")
-    if case.get("rtol", 0) > 1e-5:
-        return f"consistent (rtol {case['rtol']:g}: a reference of {case['written_by'] or 'another version'})"
+                f"accepted (rtol {rtol_text(case['rtol'])})")
+    if max(np.atleast_1d(case.get("rtol", 0))) > 1e-5:
+        return f"consistent (rtol {rtol_text(case['rtol'])}: a reference of {case['written_by'] or 'another version'})"
     return "consistent"
 
 
@@ -306,7 +434,10 @@ def run_suite(folder, *, only=(), held_out: str = "include", alpha: float = 0.01
             print(f"[{k + 1}/{len(cases)}] {case.name}: {what} ({r.get('time', 0):.1f} s; {el:.0f} s, ~{left:.0f} s left)",
                   file=log, flush=True)
     done = [r for r in results if "error" not in r]
-    return {"alpha": alpha, "scene_alpha": scene_alpha, "cases": results, "skipped": [{"name": n, "why": w} for n, w in skipped],
+    given = options.get("version_rtol")
+    margins = {"stored_white_rgb": list(STORED_WHITE_RGB), "rounding_atol": ROUNDING_ATOL,
+               "version_rtol": list(xyz_version_rtol()) if given is None else [given] * 3}
+    return {"alpha": alpha, "scene_alpha": scene_alpha, "margins": margins, "cases": results, "skipped": [{"name": n, "why": w} for n, w in skipped],
             "summary": {"all": summarize(done), "tuning": summarize([r for r in done if not r["held_out"]]),
                         "held_out": summarize([r for r in done if r["held_out"]])},
             "errors": [{"name": r["name"], "error": r["error"]} for r in results if "error" in r]}

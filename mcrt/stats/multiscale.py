@@ -46,7 +46,8 @@ class MultiScale:
     comparisons: list[Comparison]
     p_adjusted: list[np.ndarray]
     rejected: list[np.ndarray]
-    rtol: float = EXACT_RTOL
+    rtol: float | tuple[float, ...] = EXACT_RTOL
+    atol: float | tuple[float, ...] = 0.0
     notes: list[str] = field(default_factory=list)
 
     @property
@@ -95,18 +96,19 @@ class MultiScale:
 
 
 def compare_multiscale(a: RenderResult, b: RenderResult, *, tiles=(2, 4, 8, 16, 32, 0), alpha: float = 0.01,
-                       policy: str = "independent", channels: str = "rgb", rtol: float = EXACT_RTOL,
+                       policy: str = "independent", channels: str = "rgb",
+                       rtol: float | tuple[float, ...] = EXACT_RTOL, atol: float | tuple[float, ...] = 0.0,
                        min_spp: int = 2) -> MultiScale:
     """Compare ``a`` with ``b`` at every tile size of :func:`scales_for` in one family-wise level ``alpha``.
 
-    ``policy``, ``channels``, ``rtol`` and ``min_spp`` are those of
+    ``policy``, ``channels``, ``rtol``, ``atol`` and ``min_spp`` are those of
     :func:`mcrt.stats.policy.compare`, applied at each scale. Returns a
     :class:`MultiScale`.
     """
     h, w = a.mean.shape[:2]
     scales = scales_for(h, w, tiles)
     comps = [compare(a, b, policy=policy, alpha=alpha, tile=t if t > 0 else max(h, w), channels=channels, rtol=rtol,
-                     min_spp=min_spp) for t in scales]
+                     atol=atol, min_spp=min_spp) for t in scales]
     p = np.concatenate([c.p_values.ravel() for c in comps])
     weights = np.concatenate([np.full(c.p_values.size, 1.0 / (len(comps) * c.p_values.size)) for c in comps])
     adj = adjust_p_values_weighted(p, weights)
@@ -118,4 +120,4 @@ def compare_multiscale(a: RenderResult, b: RenderResult, *, tiles=(2, 4, 8, 16, 
         out_rej.append(pa <= alpha)
         k += n
     return MultiScale(alpha=float(alpha), tiles=scales, comparisons=comps, p_adjusted=out_adj, rejected=out_rej,
-                      rtol=float(rtol))
+                      rtol=comps[0].rtol, atol=comps[0].atol)

@@ -86,7 +86,8 @@ def compare(
     channels: str = "rgb",
     correction: str = "holm",
     min_spp: int = 2,
-    rtol: float = EXACT_RTOL,
+    rtol: float | tuple[float, ...] = EXACT_RTOL,
+    atol: float | tuple[float, ...] = 0.0,
 ) -> Comparison:
     """Compare a render with another under a named policy.
 
@@ -105,9 +106,10 @@ def compare(
     image_ref : RenderResult
         The other render (side B); the reference under ``'reference-floor'``.
     policy : {'independent', 'reference-floor'}
-    alpha, tile, channels, correction, min_spp, rtol
+    alpha, tile, channels, correction, min_spp, rtol, atol
         As in :func:`compare_images` (``rtol``: the relative difference
-        accepted between noiseless tiles; float32 rounding by default).
+        accepted between noiseless tiles, float32 rounding by default, one
+        number or one per channel; ``atol``: an absolute margin, 0 by default).
 
     Returns
     -------
@@ -126,5 +128,5 @@ def compare(
     if policy == "reference-floor":
         image_test = floor_variance(image_test, image_ref)
     c = compare_images(image_test, image_ref, alpha=alpha, tile=tile, channels=channels, correction=correction,
-                       min_spp=min_spp, rtol=rtol)
+                       min_spp=min_spp, rtol=rtol, atol=atol)
     return replace(c, policy=policy)

@@ -155,7 +155,8 @@ class Comparison:
     max_abs_t: TileResult | None = None
     min_p: float = 1.0
     policy: str = "independent"
-    rtol: float = 1e-5
+    rtol: float | tuple[float, ...] = 1e-5
+    atol: float | tuple[float, ...] = 0.0
 
     def noiseless(self) -> dict:
         """The tests decided by equality (both sides noiseless) apart from the others.
@@ -350,7 +351,7 @@ def side_variance_terms(r: RenderResult, tile: int) -> tuple[int, float]:
 
 
 def _side_stats(mean: np.ndarray, var: np.ndarray, spp: int, tile: int, channels: str, dof: int | None = None,
-                factor: float = 1.0, rtol: float = EXACT_RTOL) -> _Side:
+                factor: float = 1.0, rtol: float | np.ndarray = EXACT_RTOL) -> _Side:
     mean, var = _to_channels(mean, var, channels)
     npix = tile_counts(*mean.shape[:2], tile)[:, :, None]
     # Noiseless: a per-sample sd at float32 rounding of the moments, and a mean whose sd is below what the
@@ -388,6 +389,22 @@ def _check_side(r: RenderResult, name: str, min_spp: int) -> None:
             raise StatsError(f"image {name}: {bad} non-finite values (NaN or inf) in its {what}")
 
 
+def _per_channel(value, n: int, name: str) -> np.ndarray:
+    """A tolerance given as one number or one per tested channel, as an array that broadcasts over (.., .., n)."""
+    v = np.asarray(value, dtype=np.float64)
+    if v.ndim == 0:
+        v = np.full(n, float(v))
+    if v.shape != (n,) or not np.all(np.isfinite(v)) or np.any(v < 0):
+        raise ValueError(f"{name} must be one non-negative number or {n} (one per tested channel), got {value!r}")
+    return v
+
+
+def _as_given(value):
+    """A tolerance as the Comparison records it: a float where one number was given, else a tuple per channel."""
+    v = np.asarray(value, dtype=np.float64)
+    return float(v) if v.ndim == 0 else tuple(float(x) for x in v)
+
+
 def _relative(diff: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """``diff / ((|a| + |b|) / 2)``, 0 where a and b are both 0."""
     avg = 0.5 * (np.abs(a) + np.abs(b))
@@ -404,7 +421,8 @@ def compare_images(
     channels: str = "rgb",
     correction: str = "holm",
     min_spp: int = 2,
-    rtol: float = EXACT_RTOL,
+    rtol: float | tuple[float, ...] = EXACT_RTOL,
+    atol: float | tuple[float, ...] = 0.0,
 ) -> Comparison:
     r"""Two-sample Welch test of tile means, corrected for multiple testing.
 
@@ -483,7 +501,16 @@ def compare_images(
         (default: float32 rounding, "exact"). Above the default it is also
         a margin of the noisy tests, whose statistic then takes only the
         part of the difference beyond ``rtol max(|mA|, |mB|)``: a known
-        relative offset (a reference's) is accepted everywhere.
+        relative offset (a reference's) is accepted everywhere. One number
+        for every channel, or one per tested channel (a known offset that
+        differs between channels, such as an old reference's white in XYZ).
+    atol : float or tuple of float
+        An absolute margin of every test, one number or one per tested
+        channel (default 0): a difference of tile means within
+        ``atol + rtol max(|mA|, |mB|)`` is accepted, as in numpy.isclose,
+        and a noisy test's statistic takes only the part beyond it. For
+        differences known to be rounding, such as the float32 resolution
+        of the arithmetic that wrote a reference.
 
     Returns
     -------
@@ -509,9 +536,11 @@ def compare_images(
     _check_side(a, "A", min_spp)
     _check_side(b, "B", min_spp)
 
-    sa = _side_stats(a.mean, a.variance, a.spp, tile, channels, *side_variance_terms(a, tile), rtol=rtol)
-    sb = _side_stats(b.mean, b.variance, b.spp, tile, channels, *side_variance_terms(b, tile), rtol=rtol)
     names = {"rgb": ("R", "G", "B"), "xyz": ("X", "Y", "Z")}.get(channels, ("Y",))
+    rt = _per_channel(rtol, len(names), "rtol")
+    at = _per_channel(atol, len(names), "atol")
+    sa = _side_stats(a.mean, a.variance, a.spp, tile, channels, *side_variance_terms(a, tile), rtol=rt)
+    sb = _side_stats(b.mean, b.variance, b.spp, tile, channels, *side_variance_terms(b, tile), rtol=rt)
 
     diff = sa.mean - sb.mean
     scale = np.maximum(np.abs(sa.mean), np.abs(sb.mean))
@@ -521,12 +550,14 @@ def compare_images(
         det = (sa.deterministic & sb.deterministic) | (v <= 0)
         # A tolerance above float32 rounding is a margin on noisy tests too: H0 is |mA - mB| <= rtol max(|mA|, |mB|),
         # tested by the part of the difference beyond it (a known offset of a reference must not fail them either).
-        beyond = np.copysign(np.maximum(np.abs(diff) - rtol * scale, 0.0), diff) if rtol > EXACT_RTOL else diff
+        # An atol is a margin of every test (rounding, not a difference).
+        margin = np.where(rt > EXACT_RTOL, rt * scale, 0.0) + at
+        beyond = np.copysign(np.maximum(np.abs(diff) - margin, 0.0), diff)
         t = np.where(det, 0.0, beyond / np.sqrt(v))
         dterm = sa.dof_term + sb.dof_term
         df = np.where(det | (dterm <= 0), np.inf, v * v / dterm)
     p = 2.0 * _sps.t.sf(np.abs(t), df)
-    equal = np.abs(diff) <= rtol * scale
+    equal = np.abs(diff) <= rt * scale + at
     p = np.where(det, np.where(equal, 1.0, 0.0), np.minimum(p, 1.0))
     t = np.where(det & ~equal, np.copysign(np.inf, diff), t)
 
@@ -567,5 +598,6 @@ def compare_images(
         largest_effect=largest,
         max_abs_t=max_t,
         min_p=float(p.min()),
-        rtol=float(rtol),
+        rtol=_as_given(rtol),
+        atol=_as_given(atol),
     )
