@@ -236,3 +236,12 @@ def test_report_words_this_class_and_leaves_out_the_empty_tuned_half(tmp_path):
     assert "no other class tried" in text and "mcrt.grade.accuracy.fresh" in text
     assert f"`roulette` {fresh.NEW_CAUSES['roulette']}" in text
     assert "| held out | 1 |" in text and "| tuned on |" not in text
+
+
+def test_the_same_mistake_in_other_words_is_named_right_only_where_fixed_in_advance():
+    from mcrt.grade.accuracy.run import is_named
+
+    assert is_named("quantisation", ["encoding"]) and is_named("camera_model", ["camera_fov"])
+    assert is_named("depth", ["depth"]) and not is_named("depth", ["albedo"])
+    # A black surface is not normals facing the wrong way; the depth setting is not roulette's re-weighting.
+    assert not is_named("normals", ["object_missing", "albedo"]) and not is_named("roulette", ["depth"])

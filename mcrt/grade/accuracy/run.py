@@ -68,6 +68,22 @@ _ACCEPTED = {**{c: _CAMERA_CAUSES for c in _CAMERA_CAUSES},
              "colour_lost": ("colour_lost", "channels"),
              "resampling": ("resampling", "blur")}
 
+#: Causes of the fresh class (mcrt.grade.accuracy.fresh) that another cause word names as the same mistake, fixed
+#: before the class was graded: the feedback sends the student to the line that is wrong. Truncated 8-bit codes
+#: and a display curve applied to each sample are curves on the values (the encoding step); XYZ written as RGB is
+#: a colour matrix; a face of a mesh missing is part of an object missing; a camera of another model fails the
+#: camera criterion, which names the camera. Not accepted: a black surface (missing, albedo 0) for normals facing
+#: the wrong way, non-finite pixels for a PFM's byte order, the path depth for roulette without re-weighting (the
+#: student would check a max-depth setting that is right), the light facing one way for a light emitting from both.
+SAME_MISTAKE: dict[str, tuple[str, ...]] = {
+    "quantisation": ("encoding", "tone_map"), "sample_curve": ("encoding", "tone_map"), "colour_space": ("channels",),
+    "mesh_face": ("object_missing",), "camera_model": _CAMERA_CAUSES}
+
+
+def is_named(cause: str, named: list[str]) -> bool:
+    """Whether the feedback's ``named`` causes name ``cause``, itself or in other words (:data:`SAME_MISTAKE`)."""
+    return cause in named or any(n in SAME_MISTAKE.get(cause, ()) for n in named)
+
 
 @dataclass
 class Outcome:
@@ -154,9 +170,10 @@ def grade_cases(cases: list[Case], ctx, *, workdir: str | Path | None = None, lo
             res = grade_submission(sub, ctx)
             dt = time.perf_counter() - t1
             named, said = named_causes(res)
-            right = None if c.cause is None else c.cause in named
-            wrong = bool(named) and (c.cause is None or c.cause not in named)
-            also = bool(right) and any(n not in _ACCEPTED.get(c.cause, (c.cause,)) for n in named)
+            right = None if c.cause is None else is_named(c.cause, named)
+            wrong = bool(named) and not right
+            accepted = _ACCEPTED.get(c.cause, (c.cause,)) + SAME_MISTAKE.get(c.cause, ())
+            also = bool(right) and any(n not in accepted for n in named)
             verdict = ((res.details.get("explanation") or {}).get("adequacy") or {}).get("verdict", "")
             out.append(Outcome(c.name, c.spec.truth, c.cause, c.major, c.held_out, c.spp, c.spec.file, float(res.score),
                                float(res.max_score), named, right, wrong, also, said or res.summary, dt, verdict))
