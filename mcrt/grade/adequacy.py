@@ -36,7 +36,12 @@ differences of their chi-squares over its spread, against :data:`OCCAM_Z`).
 A more complex family that fits only insignificantly better is not claimed,
 nor named beside the claim; another family with no more parameters that
 explains as much (:data:`AMBIGUOUS`) and leaves noise too is named beside it:
-"so would Y: the image cannot tell them apart".
+"so would Y: the image cannot tell them apart". A family with more
+parameters that is another reading of the image rather than a generalisation
+of the claimed one (a curve on the values beside a per-sample clamp,
+:attr:`mcrt.grade.candidates.Candidate.rivals`) is named beside it too where
+it leaves noise: Occam's rule then says which reading is simpler, not that
+the other is wrong.
 
 The checks that print findings of their own follow the same rule: the
 exposure criterion claims a constant factor only where the image divided by
@@ -246,9 +251,13 @@ def claim_rule(S: np.ndarray, R: np.ndarray, mask: np.ndarray, noise: Noise, sc:
             adequate = [c for c in pool if tried[id(c)].verdict == "adequate"]
             c = occam(adequate, fit)
             if c is not None:
-                _claim(e, c, tried[id(c)], [a for a in adequate if a is not c and a.family != c.family
-                                            and a.params <= c.params and a.explained >= c.explained - AMBIGUOUS],
-                       np.where(mask[..., None], S - R - c.change, 0.0))
+                alts = [a for a in adequate if a is not c and a.family != c.family
+                        and a.params <= c.params and a.explained >= c.explained - AMBIGUOUS]
+                for fam in c.rivals:  # the best adequate one of each rival family
+                    a = next((a for a in adequate if a.family == fam and a not in alts), None)
+                    if a is not None and not any(x.family == fam for x in alts):
+                        alts.append(a)
+                _claim(e, c, tried[id(c)], alts, np.where(mask[..., None], S - R - c.change, 0.0))
                 return
         if best is not None and best.change is not None and best.explained >= PARTIAL_SHARE:
             ad = tried.get(id(best)) or test(best)

@@ -76,7 +76,10 @@ def sample_clamp(fit: Fit, inputs: Inputs) -> list[Candidate]:
     text = (f"each sample clamped at about {_num(c)} (fireflies removed with their energy){light}and pixels whose "
             "samples are sometimes brighter than that (near the light, and light the mirror reflects onto the room) "
             "darker than the scene makes them")
-    return [Candidate("sample_clamp", "each sample clamped", text, float(errs[k]), 1, value=c, change=dm)]
+    # A curve on the values that maps the light to c reads the same image otherwise (it is no generalisation of a
+    # per-sample clamp): where it leaves noise too, the feedback names it beside this one.
+    return [Candidate("sample_clamp", "each sample clamped", text, float(errs[k]), 1, value=c, change=dm,
+                      rivals=("tone_curve",))]
 
 
 sample_clamp.name, sample_clamp.prepare = "sample_clamp", _prepare
