@@ -95,7 +95,8 @@ def _occam_case(eps: float):
 
     def three(fit, inputs):
         m = (labels == 1)[..., None] & fit.ok
-        k = np.sum(np.where(m, fit.w * fit.D * step, 0), axis=(0, 1)) / np.sum(np.where(m, fit.w * step**2, 0), axis=(0, 1))
+        k = (np.sum(np.where(m, fit.w * fit.D * step, 0), axis=(0, 1))
+             / np.sum(np.where(m, fit.w * step**2, 0), axis=(0, 1)))
         return [Candidate("three", "three factors", "the right half brighter per channel", fit.delta(k * step), 3,
                           change=k * step)]
 

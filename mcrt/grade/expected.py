@@ -126,15 +126,19 @@ def _cache_key(scene: Scene, s: RenderSettings, mutant: str, tricks: dict | None
     desc = {"scene": scene.content_hash(), "settings": asdict(s), "mutant": mutant, "mcrt": mcrt.__version__,
             "source": source_hash(), **({"tricks": tricks} if tricks else {})}
     digest = hashlib.sha256(json.dumps(desc, sort_keys=True).encode()).hexdigest()[:12]
-    what = mutant + "".join(f"_{k}{v:g}" if isinstance(v, float) else f"_{k}{v}" for k, v in sorted((tricks or {}).items()))
+    what = mutant + "".join(f"_{k}{v:g}" if isinstance(v, float) else f"_{k}{v}"
+                            for k, v in sorted((tricks or {}).items()))
     return f"{scene.name}_{s.camera}_{s.width}x{s.height}_d{s.max_depth}_{what}_{s.spp}spp_s{s.seed}_{digest}"
 
 
 def cached_render(scene: Scene, camera: str, w: int, h: int, max_depth: int, spp: int, seed: int, mutant: str,
                   cache_dir: Path, log=None, tricks: dict | None = None) -> RenderResult:
-    """An mcrt render (:func:`grading_settings`) from the cache, rendered and stored on a miss (``mutant='none'``: no bug;
-    ``tricks``: the renderer's estimator tricks, :data:`mcrt.options.TRICK_OPTIONS`, as a mistake rendered for the
-    explanation, such as a per-sample clamp)."""
+    """An mcrt render (:func:`grading_settings`) from the cache, rendered and stored on a miss.
+
+    ``mutant='none'``: no bug; ``tricks``: the renderer's estimator tricks
+    (:data:`mcrt.options.TRICK_OPTIONS`), as a mistake rendered for the
+    explanation, such as a per-sample clamp.
+    """
     from mcrt.image_files import ImageError, read_exr, write_exr
     from mcrt.render import render
 

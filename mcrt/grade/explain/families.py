@@ -20,10 +20,10 @@ from mcrt.grade.explain.tonecurve import tone_curve
 
 #: Every family the engine fits, in this order (ties keep it). The scene file's parameters (and the colours mixed by
 #: a matrix, a surface of the room black) and the catalogue; then what a student's program gets wrong beyond the
-#: scene file (a tone curve, each sample clamped, a fall-off, resampling, an object's material or size, light counted twice, the light
-#: facing the wrong way, black pixels).
-FAMILIES = (scale, colour, curves, albedo, surface_black, rendered, camera, catalogue, tone_curve, sample_clamp, falloff,
-            resampling, material, object_size, light_twice, light_facing, bad_pixels)
+#: scene file (a tone curve, each sample clamped, a fall-off, resampling, an object's material or size, light
+#: counted twice, the light facing the wrong way, black pixels).
+FAMILIES = (scale, colour, curves, albedo, surface_black, rendered, camera, catalogue, tone_curve, sample_clamp,
+            falloff, resampling, material, object_size, light_twice, light_facing, bad_pixels)
 
 #: The families that are mistakes of the camera (what the misregistration test of mcrt.grade.structure also sees).
 CAMERA_FAMILIES = frozenset({"fov", "pixel_offset", "rotation", "eye"})
