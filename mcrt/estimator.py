@@ -189,6 +189,7 @@ class PathEstimator:
         spawn_offset, brdf_inv_pi = self.opt.mutations.spawn_offset, self.opt.mutations.brdf_inv_pi
         mis = self.opt.settings.mis
         caustics = self.opt.caustics.mirror_caustics
+        clamp = self.opt.tricks.sample_clamp  # None, or each finished path's radiance clamped to it per channel
 
         # ---- Loop state.
         L = host.Spectrum(0.0)  # radiance of the current path gathered so far
@@ -249,8 +250,9 @@ class PathEstimator:
 
             # ---- A path that ended is added to the sums; its lane starts the next one.
             ended = ~alive
-            sum_x = dr.select(ended, sum_x + L, sum_x)
-            sum_x2 = dr.select(ended, dr.fma(L, L, sum_x2), sum_x2)
+            x = L if clamp is None else dr.minimum(L, clamp)  # the finished sample, clamped where asked
+            sum_x = dr.select(ended, sum_x + x, sum_x)
+            sum_x2 = dr.select(ended, dr.fma(x, x, sum_x2), sum_x2)
             L = dr.select(ended, 0.0, L)
             if new_path is None:
                 active = alive

@@ -92,8 +92,13 @@ class Tricks:
     roulette_survival: float | None = None  # fixed survival probability; None: the scheme's (min(max beta, 0.95); 0.25)
     roulette_start: int | None = None  # first depth roulette runs at; None: the scheme's (rr_depth; 1)
     light_sampling: str = "area"  # 'area': uniform on the light; 'solid_angle': uniform in its solid angle
+    # Each camera path's radiance clamped per channel to this before it is added (fireflies removed, with their
+    # energy: biased); None: no clamp. A student's mistake the grader's explanation renders (mcrt.grade.explain).
+    sample_clamp: float | None = None
 
     def __post_init__(self):
+        if self.sample_clamp is not None and not self.sample_clamp > 0.0:
+            raise ValueError(f"sample_clamp must be > 0, got {self.sample_clamp}")
         if self.roulette_survival is not None and not 0.0 < self.roulette_survival <= 1.0:
             raise ValueError(f"roulette_survival must be in (0, 1], got {self.roulette_survival}")
         if self.roulette_start is not None and self.roulette_start < 1:
@@ -167,7 +172,8 @@ _PART_OF = {f.name: part for part, kind in PARTS.items() for f in fields(kind)}
 
 
 #: Name -> default of every estimator trick the ``mcrt`` renderer takes (its Tricks, and Mutations' roulette scheme).
-TRICK_OPTIONS = {"roulette": "unbiased", "roulette_survival": None, "roulette_start": None, "light_sampling": "area"}
+TRICK_OPTIONS = {"roulette": "unbiased", "roulette_survival": None, "roulette_start": None, "light_sampling": "area",
+                 "sample_clamp": None}
 
 
 def trick_options(tricks: dict) -> tuple:

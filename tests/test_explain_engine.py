@@ -62,3 +62,86 @@ def test_a_claim_rule_plugs_in_and_a_partial_explanation_says_where_the_rest_is(
     assert e.verdict == PARTIAL and e.named is None
     assert np.allclose(e.remainder, S - R - 0.5 * step)
     assert e.sentence.startswith("Partly like the half, which explains") and "on the right half" in e.sentence
+
+
+# --------------------------------------------------------------------------
+# Occam's rule (mcrt.grade.adequacy.occam): the simplest adequate explanation
+# --------------------------------------------------------------------------
+
+
+def _occam_case(eps: float):
+    """A change (the right half 10 % brighter) explained by a 1-parameter family that predicts it ``eps`` too weak,
+    and a 3-parameter family (a factor per channel, fitted) that absorbs the shortfall; graded by the production
+    claim rule with the bias test's noise model. Noise: seed 1, standard deviation 0.01."""
+    from mcrt.grade.adequacy import Scene2D, claim_rule
+    from mcrt.stats.onesample import Noise
+
+    rng = np.random.default_rng(1)
+    labels = np.zeros((H, W), np.int16)
+    labels[:, 16:] = 1
+    labels[16:, :] = 2
+    R = np.stack([0.2 + 0.1 * labels, 0.3 + 0.05 * labels, 0.25 * np.ones_like(labels)], axis=-1).astype(np.float64)
+    var = np.full(R.shape, 1e-4)
+    step = np.where((labels == 1)[..., None], 0.1 * R, 0.0)
+    S = R + step + rng.standard_normal(R.shape) * np.sqrt(var)
+    sc = Scene2D((8, 16, 0), 0.01, 0.003, 0.1, labels, ("left", "right", "floor", "nothing"))
+    mask = np.ones((H, W), bool)
+    basis = Basis(camera="near", spp=1, base=R.astype(np.float32), var=np.zeros(R.shape, np.float32),
+                  fine=R.astype(np.float32), fine_tan=1.0, fov_deg=90.0, max_depth=8)
+
+    def one(fit, inputs):
+        a = (1 - eps) * step
+        return [Candidate("one", "one factor", "the right half brighter", fit.delta(a), 1, change=a)]
+
+    def three(fit, inputs):
+        m = (labels == 1)[..., None] & fit.ok
+        k = (np.sum(np.where(m, fit.w * fit.D * step, 0), axis=(0, 1))
+             / np.sum(np.where(m, fit.w * step**2, 0), axis=(0, 1)))
+        return [Candidate("three", "three factors", "the right half brighter per channel", fit.delta(k * step), 3,
+                          change=k * step)]
+
+    one.name, three.name = "one", "three"
+    rule = claim_rule(S, R, mask, Noise(model=var, reference=np.zeros_like(var)), sc)
+    return explain(S, R, var, mask, Inputs(basis), families=(one, three), claim=rule), (S, R, var)
+
+
+def test_occam_claims_the_simpler_adequate_family_over_one_that_fits_insignificantly_better():
+    """eps = 4 %: the 3-parameter family explains more of the difference (it ranks first, BIC included), but the
+    1-parameter one leaves noise too and the gain is not significant (closeness < OCCAM_Z): the simpler is claimed,
+    and the more complex one is not named beside it."""
+    from mcrt.grade.adequacy import OCCAM_Z, closeness
+    from mcrt.grade.explain.fit import Fit
+
+    e, (S, R, var) = _occam_case(0.04)
+    assert e.verdict == CLAIMED and e.named.name == "one factor", [(c.name, c.explained) for c in e.candidates]
+    three = next(c for c in e.candidates if c.name == "three factors")
+    assert three.explained > e.named.explained  # the rule before Occam's would have claimed it
+    assert e.adequacy.alternatives == []
+    fit = Fit(S, R, var, np.ones(S.shape, bool), np.zeros(S.shape))  # as the engine builds it (no basis noise)
+    assert closeness(fit, three, e.named) < OCCAM_Z
+
+
+def test_occam_claims_the_complex_family_where_the_simple_one_leaves_structure():
+    """eps = 10 %: the 1-parameter family leaves a structured remainder (the right half 1 % too dark): not
+    adequate, so the 3-parameter family that fits is claimed."""
+    e, _ = _occam_case(0.10)
+    assert e.verdict == CLAIMED and e.named.name == "three factors"
+
+
+def test_closeness_is_significant_for_a_clearly_better_fit_and_signed():
+    """Vuong's statistic: the exact change against one 30 % too weak, on noise of seed 3 (sd 0.01): far beyond
+    OCCAM_Z for the exact one, as far below it the other way round, and 0 for a candidate against itself."""
+    from mcrt.grade.adequacy import OCCAM_Z, closeness
+    from mcrt.grade.explain.fit import Fit
+
+    rng = np.random.default_rng(3)
+    R = np.full((H, W, 3), 0.5)
+    step = np.zeros_like(R)
+    step[:, W // 2:] = 0.05
+    S = R + step + rng.normal(0.0, 1e-2, R.shape)
+    fit = Fit(S, R, np.full(R.shape, 1e-4), np.ones(R.shape, bool), np.zeros(R.shape))
+    exact = Candidate("a", "exact", "", fit.delta(step), 1, change=step)
+    weak = Candidate("b", "weak", "", fit.delta(0.7 * step), 1, change=0.7 * step)
+    assert closeness(fit, exact, weak) > 3 * OCCAM_Z
+    assert closeness(fit, weak, exact) < -3 * OCCAM_Z
+    assert closeness(fit, exact, exact) == 0.0

@@ -160,3 +160,47 @@ def test_another_mistake_is_not_taken_for_a_new_family(ctx):
     fam, said = _claimed(res)
     assert fam == "albedo", said
     assert not set(named_causes(res)[0]) & set(NEW), named_causes(res)
+
+
+def _mcrt_clamped(seed: int, clamp: float, spp: int = 1024) -> np.ndarray:
+    """mcrt's render with each sample clamped at ``clamp`` (the renderer's sample_clamp trick)."""
+    from mcrt.render import render
+
+    s = load_scene()
+    settings = s.settings(camera="near", width=RES, height=RES, spp=spp, max_depth=8, light_samples=1)
+    return np.asarray(render(s, settings, seed=seed, progress=False, sample_clamp=clamp).mean, np.float64)
+
+
+def _mitsuba_clamped(seed: int, clamp: float, k: int = 8) -> np.ndarray:
+    """Mitsuba's path tracer, one sample in each of k x k sub-pixels, each clamped, then averaged per pixel (a
+    student's firefly clamp in a renderer of their own: another estimator than the grader's renders)."""
+    from mcrt.mitsuba_scene import render_with_variance, scene_dict
+
+    d = scene_dict(load_scene(), "near", RES * k, RES * k, 8, spp=1)
+    s = np.minimum(np.asarray(render_with_variance(d, spp=1, seed=seed).mean, np.float64), clamp)
+    return s.reshape(RES, k, RES, k, 3).mean(axis=(1, 3))
+
+
+def test_each_sample_clamped_is_named_with_its_clamp(ctx):
+    """mcrt with each sample clamped at 3 (seed 72, 1024 spp; 3 lies between the family's renders at 2 and 4): the
+    per-sample clamp is claimed, not a curve on the values (one may be named beside it: at 32 x 32 a clamp this high
+    shows mostly on the light), with c recovered to within a quarter octave, and the image loses points."""
+    res = grade_image("clamp3", ctx, [_mcrt_clamped(72, 3.0)], spp=1024)
+    fam, said = _claimed(res)
+    assert fam == "sample_clamp", said
+    c = res.details["explanation"]["candidates"][0]["value"]
+    assert 3.0 / 2**0.25 <= c <= 3.0 * 2**0.25, c
+    assert "each sample clamped at about" in said and "where the scene says 20" in said
+    assert named_causes(res)[0][0] == "sample_clamp"  # a curve on the values may be named beside it (rivals)
+    assert res.score < res.max_score
+
+
+def test_a_clamp_in_another_renderer_is_a_sample_clamp_not_a_tone_curve(ctx):
+    """Mitsuba, each of 64 samples a pixel clamped at 2 (seed 73; Mitsuba's estimator, not the grader's renders): the
+    cause claimed is the sample clamp, with one parameter, not a curve on the values with one per level (a curve
+    that leaves noise too may only be named beside it), and the image loses points."""
+    res = grade_image("clamp2", ctx, [_mitsuba_clamped(73, 2.0)], spp=64)
+    fam, said = _claimed(res)
+    assert fam == "sample_clamp", said
+    assert named_causes(res)[0][0] == "sample_clamp"
+    assert res.score < res.max_score

@@ -19,6 +19,7 @@ from test_diagnose import ASSIGNMENT, RES
 
 from mcrt.grade.accuracy.cases import Spec, _render_spec, light, wall_albedo
 from mcrt.grade.accuracy.outside import POSTS
+from mcrt.grade.accuracy.run import named_causes
 from mcrt.grade.adequacy import Scene2D, remainder_test
 from mcrt.grade.assignment import assignment_from_dict
 from mcrt.grade.expected import prepare_context
@@ -209,12 +210,16 @@ def test_resampling_and_falloff_are_named(ctx, post, scale, family):
 
 def test_a_curve_no_tone_map_has_is_fitted_as_a_monotone_curve(ctx):
     """A Mitsuba render (seed 48) through a knee no named curve has (linear to 0.3, a quarter of the slope above):
-    claimed as a monotone curve that maps the brightest value (the light, 20) to about 5.2."""
+    a monotone curve that maps the brightest value (the light, 20) to about 5.2 is named, claimed or beside the
+    claim as a reading the image cannot tell apart (at 32 x 32 the knee shows mostly on the light, which each sample
+    clamped at about 5 reads as well, with one parameter: Occam's rule claims that, and names the curve beside it)."""
     img = _mitsuba(load_scene(), 48)
     res = grade_image("knee", ctx, [np.minimum(img, 0.3) + 0.25 * np.maximum(img - 0.3, 0.0)], spp=1024)
     ex = res.details["explanation"]
-    assert ex["named"] == "monotone curve" and ex["verdict"] == "claimed", ex["sentence"]
-    top = ex["candidates"][0]["value"]["maps"][-1]
+    assert ex["verdict"] == "claimed", ex["sentence"]
+    assert ex["named"] == "monotone curve" or "tone_curve" in ex["adequacy"]["alternatives"], ex["sentence"]
+    assert "tone_map" in named_causes(res)[0]
+    top = next(c for c in ex["candidates"] if c["mutant"] == "monotone curve")["value"]["maps"][-1]
     assert top[0] == pytest.approx(20.0, rel=0.01) and top[1] == pytest.approx(0.3 + 0.25 * 19.7, rel=0.05), top
 
 

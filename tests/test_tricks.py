@@ -67,11 +67,23 @@ def test_the_tricks_at_their_defaults_render_the_default_image_bit_for_bit(scene
     s = _settings(scene, 16, res=32)
     plain = render(scene, s, seed=3, progress=False)
     explicit = render(scene, s, seed=3, progress=False, roulette="unbiased", roulette_survival=None, roulette_start=None,
-                      light_sampling="area", adaptive=None, denoise=None)
+                      light_sampling="area", sample_clamp=None, adaptive=None, denoise=None)
     assert np.array_equal(plain.mean, explicit.mean) and np.array_equal(plain.variance, explicit.variance)
     assert "tricks" not in plain.extra
     moved = render(scene, s, seed=3, progress=False, roulette_start=1)
     assert not np.array_equal(plain.mean, moved.mean) and moved.extra["tricks"] == "roulette_start=1"
+
+
+def test_a_sample_clamp_caps_every_sample_and_only_darkens(scene):
+    """Each sample clamped at 1 (seed 5, 16 spp): no pixel's mean exceeds 1, the light (20 in the scene) shows 1,
+    no pixel gets brighter than the same samples unclamped, and a clamp above every sample changes nothing."""
+    s = _settings(scene, 16, res=32)
+    plain = render(scene, s, seed=5, progress=False)
+    clamped = render(scene, s, seed=5, progress=False, sample_clamp=1.0)
+    assert float(plain.mean.max()) > 10.0 and float(clamped.mean.max()) <= 1.0 + 1e-6
+    assert np.all(clamped.mean <= plain.mean + 1e-6) and clamped.extra["tricks"] == "sample_clamp=1.0"
+    high = render(scene, s, seed=5, progress=False, sample_clamp=1e6)
+    assert np.array_equal(high.mean, plain.mean)
 
 
 def test_the_course_roulette_as_a_trick_is_the_catalogued_bug(scene):
@@ -85,6 +97,7 @@ def test_the_course_roulette_as_a_trick_is_the_catalogued_bug(scene):
     ({"roulette_survival": 0.0}, "roulette_survival must be in"),
     ({"roulette_start": 0}, "roulette_start must be"),
     ({"light_sampling": "cosine"}, "light_sampling must be one of"),
+    ({"sample_clamp": 0.0}, "sample_clamp must be > 0"),
     ({"light_sampling": "solid_angle", "mis": True}, "runs without MIS"),
 ])
 def test_bad_trick_values_are_refused(options, message):

@@ -23,6 +23,26 @@ relevance threshold ``min_effect``), with the per-object tests of
   difference) to be mentioned: the objects the difference sits on are named
   instead, with how they differ.
 
+**Which adequate candidate is claimed (Occam's rule).** Several candidates
+can leave noise: a small darkening of the room is a path cut one bounce
+short, a wall's three albedos, or a curve through the values. Adequacy says
+that each fits to within noise; it does not say which to believe. The rule
+claims the *simplest adequate explanation*: of the candidates whose remainder
+is noise (the best of a few families, :func:`tried_candidates`), the one with
+the fewest fitted parameters (:func:`occam`), unless one with more fits
+significantly better, by Vuong's closeness test for models that are not
+nested (:func:`closeness`: the BIC-adjusted sum of the term-by-term
+differences of their chi-squares over its spread, against :data:`OCCAM_Z`).
+A more complex family that fits only insignificantly better is not claimed,
+nor named beside the claim; another family with no more parameters that
+explains as much (:data:`AMBIGUOUS`) and leaves noise too is named beside it:
+"so would Y: the image cannot tell them apart". A family with more
+parameters that is another reading of the image rather than a generalisation
+of the claimed one (a curve on the values beside a per-sample clamp,
+:attr:`mcrt.grade.candidates.Candidate.rivals`) is named beside it too where
+it leaves noise: Occam's rule then says which reading is simpler, not that
+the other is wrong.
+
 The checks that print findings of their own follow the same rule: the
 exposure criterion claims a constant factor only where the image divided by
 it passes the bias test (:mod:`mcrt.grade.stages.exposure`); the filter,
@@ -34,6 +54,7 @@ explanation engine takes it.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -123,12 +144,72 @@ def _energy(x: np.ndarray, mask: np.ndarray, labels: np.ndarray, K: int) -> np.n
 #: Share of an object's difference a candidate must leave there (explaining at most half of it) for the object's
 #: structure to count against it.
 LEFT = 0.5
-#: How many of the best candidates are tried, in order, for one whose remainder is noise.
+#: Candidates tried for adequacy: the best, in rank order, until :data:`TRIED` families are among them (two walls'
+#: albedos are one family and do not crowd another cause out), at most :data:`MAX_TRIED`.
 TRIED = 3
+MAX_TRIED = 6
 #: Another family within this share of the claimed one whose remainder is noise too, with no more parameters, is
 #: named beside it: the image cannot tell the two apart (a family with more parameters that also fits, as a
 #: monotone curve fits a constant factor, is no other explanation).
 AMBIGUOUS = 0.05
+#: Occam's rule: of two adequate candidates, the one with more parameters is claimed only where it fits better
+#: than the simpler by at least this many standard deviations of the term-by-term difference of their chi^2
+#: (:func:`closeness`, after the BIC's ln n per extra parameter); about 2 % one-sided.
+OCCAM_Z = 2.0
+
+
+def closeness(fit, a, b) -> float:
+    r"""Vuong's closeness statistic of candidate ``a`` over ``b`` (positive: a fits better), BIC-adjusted.
+
+    With :math:`\ell_i` the difference of the two candidates' capped chi^2
+    terms (:meth:`mcrt.grade.explain.fit.Fit.terms`, b's minus a's) over
+    the n terms,
+
+    .. math::
+
+        z = \frac{\sum_i \ell_i - (p_a - p_b) \ln n}{\sqrt{\sum_i (\ell_i - \bar\ell)^2}}.
+
+    Neither candidate need be nested in the other (a surface's albedo and the
+    path depth are not), and neither need be exactly right: the spread of
+    :math:`\ell_i` measures how far the image tells the two apart, noise and
+    model error together (Vuong 1989, with the Bayesian information
+    criterion's correction for the parameters).
+    """
+    la, lb = fit.terms(a.change), fit.terms(b.change)
+    ell = lb - la
+    gain = float(np.sum(ell)) - (a.params - b.params) * math.log(max(fit.n, 2))
+    sd = float(np.sqrt(np.sum((ell - ell.mean()) ** 2)))
+    if sd > 0:
+        return gain / sd
+    return math.copysign(math.inf, gain) if gain else 0.0
+
+
+def occam(adequate: list, fit):
+    """The simplest adequate candidate that no adequate candidate with more parameters beats by :data:`OCCAM_Z`
+    (:func:`closeness`); among equally many parameters, the first in rank order. None when none is adequate."""
+    for s in sorted(adequate, key=lambda c: c.params):  # stable: rank order within a count of parameters
+        if not any(c.params > s.params and closeness(fit, c, s) >= OCCAM_Z for c in adequate):
+            return s
+    return None
+
+
+def tried_candidates(cands: list) -> list:
+    """The candidates whose remainder is tested: the best (explaining at least :data:`mcrt.grade.explain.NAMED`,
+    with a predicted change) in rank order until :data:`TRIED` families are among them, at most :data:`MAX_TRIED`."""
+    from mcrt.grade.explain.claim import NAMED
+
+    out, families = [], set()
+    for c in cands:
+        if c.change is None or c.explained < NAMED:
+            continue
+        if c.family not in families:
+            if len(families) == TRIED:
+                break
+            families.add(c.family)
+        out.append(c)
+        if len(out) == MAX_TRIED:
+            break
+    return out
 
 
 def claim_rule(S: np.ndarray, R: np.ndarray, mask: np.ndarray, noise: Noise, sc: Scene2D, *, extra_var=None):
@@ -137,19 +218,20 @@ def claim_rule(S: np.ndarray, R: np.ndarray, mask: np.ndarray, noise: Noise, sc:
     After the share rule (:func:`mcrt.grade.explain.claim.share_rule`), a
     candidate with its share (claimed, or indistinct: a small gain over
     noise's chi-square, as a change confined to one object has) is claimed
-    only if its remainder is noise: the first of the
-    :data:`TRIED` best candidates (explaining at least
-    :data:`mcrt.grade.explain.NAMED`) whose remainder is noise is claimed
-    (moved first), with the other families that fit as well
-    (:data:`AMBIGUOUS`); else the best is PARTIAL, with where its remainder
-    lies, if it explains :data:`PARTIAL_SHARE` of the difference; else nothing is
-    claimed and the difference itself is placed on objects
-    (``remainder_where``). ``extra_var(c)`` is the noise (H, W, 3) of
-    candidate c's predicted change (None: none). The rule's measurements
-    go to ``e.adequacy`` (:class:`Adequacy`).
+    only if its remainder is noise. The best candidates
+    (:func:`tried_candidates`: the best of :data:`TRIED` families) are
+    tested; of those whose remainder is noise, the **simplest** is claimed
+    (:func:`occam`: fewest parameters, unless one with more fits
+    significantly better by :func:`closeness`), moved first, with the other
+    families that fit as well (:data:`AMBIGUOUS`); else the best is PARTIAL,
+    with where its remainder lies, if it explains :data:`PARTIAL_SHARE` of
+    the difference; else nothing is claimed and the difference itself is
+    placed on objects (``remainder_where``). ``extra_var(c)`` is the noise
+    (H, W, 3) of candidate c's predicted change (None: none). The rule's
+    measurements go to ``e.adequacy`` (:class:`Adequacy`).
     """
     from mcrt.grade import candidates as cd
-    from mcrt.grade.explain.claim import NAMED, share_rule
+    from mcrt.grade.explain.claim import share_rule
 
     def test(c):
         var = extra_var(c) if extra_var is not None else None
@@ -163,14 +245,20 @@ def claim_rule(S: np.ndarray, R: np.ndarray, mask: np.ndarray, noise: Noise, sc:
         best = e.best
         tried = {}
         if e.verdict in (cd.CLAIMED, cd.INDISTINCT):  # a share of NAMED; a small gain over noise is no objection
-            for c in [c for c in e.candidates[:TRIED] if c.change is not None and c.explained >= NAMED]:
-                tried[id(c)] = ad = test(c)
-                if ad.verdict == "adequate":
-                    _claim(e, c, ad, [a for a in e.candidates[:TRIED] if a is not c and a.family != c.family
-                                      and a.params <= c.params and a.change is not None
-                                      and a.explained >= c.explained - AMBIGUOUS and test(a).verdict == "adequate"],
-                           np.where(mask[..., None], S - R - c.change, 0.0))
-                    return
+            pool = tried_candidates(e.candidates)
+            for c in pool:
+                tried[id(c)] = test(c)
+            adequate = [c for c in pool if tried[id(c)].verdict == "adequate"]
+            c = occam(adequate, fit)
+            if c is not None:
+                alts = [a for a in adequate if a is not c and a.family != c.family
+                        and a.params <= c.params and a.explained >= c.explained - AMBIGUOUS]
+                for fam in c.rivals:  # the best adequate one of each rival family
+                    a = next((a for a in adequate if a.family == fam and a not in alts), None)
+                    if a is not None and not any(x.family == fam for x in alts):
+                        alts.append(a)
+                _claim(e, c, tried[id(c)], alts, np.where(mask[..., None], S - R - c.change, 0.0))
+                return
         if best is not None and best.change is not None and best.explained >= PARTIAL_SHARE:
             ad = tried.get(id(best)) or test(best)
             if ad.verdict == "partial":

@@ -65,6 +65,10 @@ class Candidate:
     amplitude: float | None = None  # catalogue rankings only: the fitted amplitude of the bug's signature
     chi2_fit: float | None = None  # catalogue rankings only: chi^2 at that amplitude
     ranked: bool = False  # from a catalogue ranking (tile, pixel or noise statistics) rather than a model-image fit
+    # Families with more parameters that are another reading of the same image, not a generalisation of this one
+    # (a curve on the values beside a per-sample clamp): named beside it where their remainder is noise too
+    # (mcrt.grade.adequacy.claim_rule), whatever Occam's rule prefers.
+    rivals: tuple[str, ...] = ()
 
     def to_dict(self) -> dict:
         if self.ranked:

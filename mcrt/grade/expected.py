@@ -119,24 +119,31 @@ def grading_settings(scene: Scene, camera: str, w: int, h: int, max_depth: int, 
     return scene.settings(camera=camera, width=w, height=h, spp=spp, max_depth=max_depth, light_samples=1, seed=seed)
 
 
-def _cache_key(scene: Scene, s: RenderSettings, mutant: str) -> str:
+def _cache_key(scene: Scene, s: RenderSettings, mutant: str, tricks: dict | None = None) -> str:
     import mcrt
     from mcrt.provenance import source_hash
 
     desc = {"scene": scene.content_hash(), "settings": asdict(s), "mutant": mutant, "mcrt": mcrt.__version__,
-            "source": source_hash()}
+            "source": source_hash(), **({"tricks": tricks} if tricks else {})}
     digest = hashlib.sha256(json.dumps(desc, sort_keys=True).encode()).hexdigest()[:12]
-    return f"{scene.name}_{s.camera}_{s.width}x{s.height}_d{s.max_depth}_{mutant}_{s.spp}spp_s{s.seed}_{digest}"
+    what = mutant + "".join(f"_{k}{v:g}" if isinstance(v, float) else f"_{k}{v}"
+                            for k, v in sorted((tricks or {}).items()))
+    return f"{scene.name}_{s.camera}_{s.width}x{s.height}_d{s.max_depth}_{what}_{s.spp}spp_s{s.seed}_{digest}"
 
 
 def cached_render(scene: Scene, camera: str, w: int, h: int, max_depth: int, spp: int, seed: int, mutant: str,
-                  cache_dir: Path, log=None) -> RenderResult:
-    """An mcrt render (:func:`grading_settings`) from the cache, rendered and stored on a miss (``mutant='none'``: no bug)."""
+                  cache_dir: Path, log=None, tricks: dict | None = None) -> RenderResult:
+    """An mcrt render (:func:`grading_settings`) from the cache, rendered and stored on a miss.
+
+    ``mutant='none'``: no bug; ``tricks``: the renderer's estimator tricks
+    (:data:`mcrt.options.TRICK_OPTIONS`), as a mistake rendered for the
+    explanation, such as a per-sample clamp.
+    """
     from mcrt.image_files import ImageError, read_exr, write_exr
     from mcrt.render import render
 
     s = grading_settings(scene, camera, w, h, max_depth, spp, seed)
-    path = Path(cache_dir) / (_cache_key(scene, s, mutant) + ".exr")
+    path = Path(cache_dir) / (_cache_key(scene, s, mutant, tricks) + ".exr")
     if path.exists():
         try:
             r = read_exr(path)
@@ -145,7 +152,7 @@ def cached_render(scene: Scene, camera: str, w: int, h: int, max_depth: int, spp
         except ImageError:
             pass
     t0 = time.perf_counter()
-    r = render(scene, s, seed=seed, progress=False, mutants=() if mutant == "none" else (mutant,))
+    r = render(scene, s, seed=seed, progress=False, mutants=() if mutant == "none" else (mutant,), **(tricks or {}))
     if log:
         log(f"  rendered {camera} {w}x{h} d{max_depth} {mutant} at {spp} spp in {time.perf_counter() - t0:.1f} s")
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -235,8 +242,8 @@ def prepare_context(a: Assignment, cache_dir: str | os.PathLike | None = None, *
         muts[m] = _expected(r, f"mcrt with mutant {m} ({a.diagnosis_spp} spp)")
     from mcrt.grade.explain.families import prepare as prepare_basis
 
-    def render_cached(sc, cam, width, height, depth, spp, seed):
-        return cached_render(sc, cam, width, height, depth, spp, seed, "none", cache, log)
+    def render_cached(sc, cam, width, height, depth, spp, seed, **tricks):
+        return cached_render(sc, cam, width, height, depth, spp, seed, "none", cache, log, tricks=tricks)
 
     basis = prepare_basis(a, scene, render_cached) if explain else None
     return Context(

@@ -63,8 +63,8 @@ def summary(tests, score: float, max_score: float, *, blocked: str | None, headl
 
 #: The kinds of mistake the explanation families (mcrt.grade.explain.families.FAMILIES) try, in a student's words.
 _TRIED = ("No single mistake we tried (the catalogued bugs, the scene's colours, light, objects and camera, "
-          "the path depth, encodings, tone curves, colour channels, light counted twice, fall-offs, resampling, "
-          "materials, object sizes, missing pixels and blur)")
+          "the path depth, encodings, tone curves, clamped samples, colour channels, light counted twice, fall-offs, "
+          "resampling, materials, object sizes, missing pixels and blur)")
 
 
 def explanation_words(e: Explanation) -> tuple[str, str]:

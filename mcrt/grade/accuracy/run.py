@@ -51,6 +51,8 @@ CAUSE_OF: dict[str, tuple[str, ...]] = {
     # way, black pixels.
     "colour_lost": ("colour_lost",), "colour_matrix": ("channels", "colour_lost"), "direct_twice": ("direct_twice",),
     "light_facing": ("light_facing",), "bad_pixels": ("bad_pixels",),
+    # Each sample clamped (fireflies removed with their energy): mcrt.grade.explain.sample_clamp.
+    "sample_clamp": ("sample_clamp",),
     # A surface of the closed room missing looks exactly like it black: the words name both.
     "surface_black": ("object_missing", "albedo"),
 }

@@ -27,6 +27,7 @@ encoding       sRGB or a power curve on the values          closed form on R
 blur           a Gaussian blur of width sigma               closed form on R
 catalogue      R + (E_m - E_0) for each catalogued bug      the catalogue's renders
 tone_curve     a tone map, clamp or any monotone curve      closed form; isotonic regression
+sample_clamp   each sample clamped at c (fireflies)         mcrt renders at c = 1/2 ... 16
 falloff        a smooth fall-off, cos^k of the ray's angle  weighted least squares; a scan
 resampling     rendered at 1/k the resolution and enlarged  closed form on R
 material       an object rendered with the other material   mcrt renders at 0, 1/2, 1
@@ -80,7 +81,7 @@ a cause is claimed only when what it leaves is noise); the families
 :mod:`.scene`, :mod:`.curves`, :mod:`.camera` and :mod:`.catalogue` (the
 catalogued bugs among them, and their rankings by tiles, pixels and noise),
 :mod:`.colour` and :mod:`.surface_black`, and beyond the scene file
-:mod:`.tonecurve`, :mod:`.falloff`, :mod:`.resampling`, :mod:`.objects`,
+:mod:`.tonecurve`, :mod:`.sample_clamp`, :mod:`.falloff`, :mod:`.resampling`, :mod:`.objects`,
 :mod:`.light_twice`, :mod:`.light_facing` and :mod:`.pixels`, in the order of
 :data:`FAMILIES`.
 """

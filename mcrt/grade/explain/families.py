@@ -13,16 +13,17 @@ from mcrt.grade.explain.light_twice import light_twice
 from mcrt.grade.explain.objects import material, object_size
 from mcrt.grade.explain.pixels import bad_pixels
 from mcrt.grade.explain.resampling import resampling
+from mcrt.grade.explain.sample_clamp import sample_clamp
 from mcrt.grade.explain.scene import albedo, rendered, scale
 from mcrt.grade.explain.surface_black import surface_black
 from mcrt.grade.explain.tonecurve import tone_curve
 
 #: Every family the engine fits, in this order (ties keep it). The scene file's parameters (and the colours mixed by
 #: a matrix, a surface of the room black) and the catalogue; then what a student's program gets wrong beyond the
-#: scene file (a tone curve, a fall-off, resampling, an object's material or size, light counted twice, the light
-#: facing the wrong way, black pixels).
-FAMILIES = (scale, colour, curves, albedo, surface_black, rendered, camera, catalogue, tone_curve, falloff, resampling,
-            material, object_size, light_twice, light_facing, bad_pixels)
+#: scene file (a tone curve, each sample clamped, a fall-off, resampling, an object's material or size, light
+#: counted twice, the light facing the wrong way, black pixels).
+FAMILIES = (scale, colour, curves, albedo, surface_black, rendered, camera, catalogue, tone_curve, sample_clamp,
+            falloff, resampling, material, object_size, light_twice, light_facing, bad_pixels)
 
 #: The families that are mistakes of the camera (what the misregistration test of mcrt.grade.structure also sees).
 CAMERA_FAMILIES = frozenset({"fov", "pixel_offset", "rotation", "eye"})

@@ -68,6 +68,14 @@ class Fit:
         return float(np.sum(np.minimum((self.D - dm) ** 2 * self.w, CAP)) +
                      np.sum(np.minimum((self.Dt - dt) ** 2 * self.wt, CAP)))
 
+    def terms(self, dm) -> np.ndarray:
+        """Each capped term of :meth:`delta` (pixels, then tiles), flattened: what two model images are compared by
+        term by term (:func:`mcrt.grade.adequacy.closeness`)."""
+        dm = np.broadcast_to(np.asarray(dm, np.float64), self.D.shape)
+        dt = self.tile_means(dm)
+        return np.concatenate([np.minimum((self.D - dm) ** 2 * self.w, CAP).ravel(),
+                               np.minimum((self.Dt - dt) ** 2 * self.wt, CAP).ravel()])
+
     def model(self, m: np.ndarray) -> float:
         return self.delta(m - self.R)
 
