@@ -110,7 +110,8 @@ def test_the_object_and_tile_tests_penalise_a_relevant_difference_not_a_precise_
         S = np.where(floor, S0 + effect * R, S0)
         ot = object_tests(S - R, R, mask, noise, sc.labels, 4)
         assert ot.p[2].max() < 1e-6 and np.all(np.abs(ot.rel[2]) >= sc.min_effect), (ot.p[2], ot.rel[2])
-        bt = multiscale_test(S - R, R, mask, noise, sc.tiles, **kw, extra=[ot.family(sc.min_effect)])
+        bt = multiscale_test(S - R, R, mask, noise, sc.tiles, **kw, relevant=True,
+                             extra=[ot.family(sc.min_effect, relevant=True)])
         assert list(bt.extra["objects"].reshape(4, 3).any(axis=1)) == [False, False, penalised, False], effect
         assert bt.penalised_any == penalised, effect  # the tiles on the floor likewise (0.05 % at 16x16)
 

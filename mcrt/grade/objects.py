@@ -16,7 +16,9 @@ residual is tested like a tile of the bias test (:func:`mcrt.stats.onesample.sca
 per channel, with :math:`n_k - 1` degrees of freedom. What joins the bias
 test's Holm family as one more detector (``multiscale_test(..., extra=...)``,
 share :data:`SHARE` of alpha) is not the test of a zero difference but of a
-*relevant* one (:meth:`ObjectTests.family`): the null hypothesis is
+*relevant* one (:meth:`ObjectTests.family` with ``relevant=True``; a
+remainder's test in :mod:`mcrt.grade.adequacy` keeps the test of a zero
+difference, the cautious side for claiming a cause): the null hypothesis is
 :math:`|\mu_k| \le \delta |\bar R_k|` with :math:`\delta` the relevance
 threshold ``min_effect``, and its p-value is the least favourable one,
 
@@ -89,10 +91,13 @@ class ObjectTests:
         p = _sps.t.sf((np.abs(self.diff) - bound) / sd, dof) + _sps.t.sf((np.abs(self.diff) + bound) / sd, dof)
         return np.where(ok, np.minimum(p, 1.0), 1.0)
 
-    def family(self, min_effect: float) -> tuple[str, np.ndarray, np.ndarray, float]:
-        """(name, p-values, relevant, share) for :func:`mcrt.stats.onesample.multiscale_test`'s ``extra``: the test
-        of a relevant difference (:meth:`relevant_p`), relevant where the estimate is ``min_effect`` or more."""
-        return ("objects", self.relevant_p(min_effect).ravel(), (np.abs(self.rel) >= min_effect).ravel(), SHARE)
+    def family(self, min_effect: float, relevant: bool = False) -> tuple[str, np.ndarray, np.ndarray, float]:
+        """(name, p-values, relevant, share) for :func:`mcrt.stats.onesample.multiscale_test`'s ``extra``, relevant
+        where the estimate is ``min_effect`` or more; ``relevant``: the test of a relevant difference
+        (:meth:`relevant_p`; the grade's bias test, which takes points), else of a zero one (a remainder's test,
+        where rejecting more is the cautious side)."""
+        p = self.relevant_p(min_effect) if relevant else self.p
+        return ("objects", p.ravel(), (np.abs(self.rel) >= min_effect).ravel(), SHARE)
 
 
 def object_tests(resid: np.ndarray, ref: np.ndarray, mask: np.ndarray, noise, labels: np.ndarray,

@@ -28,7 +28,7 @@ three estimates of the variance of D_t, of which the largest is used:
   like a bias: a single huge sample inflates S_t^2 as much as D_t.
 
 Tiles where all three are 0 (pixels that see only the light) are compared
-for equality. What is tested is a *relevant* bias: the null hypothesis of
+for equality. What the grade's bias test (``relevant=True``) tests is a *relevant* bias: the null hypothesis of
 tile t is :math:`|E[D_t]| \le \delta |\bar R_t|` with :math:`\delta` =
 ``min_effect``, and its p-value the least favourable one,
 :math:`p_t = S((|D_t| - \delta |\bar R_t|)/\sqrt{V_t}) + S((|D_t| + \delta |\bar R_t|)/\sqrt{V_t})`
@@ -175,7 +175,7 @@ def bias_scales(tiles, h: int, w: int) -> list[int]:
 
 
 def multiscale_test(resid: np.ndarray, ref: np.ndarray, mask: np.ndarray, noise: Noise, tiles, *, alpha: float,
-              min_effect: float, full_effect: float, extra=()) -> MultiScaleTest:
+              min_effect: float, full_effect: float, extra=(), relevant: bool = False) -> MultiScaleTest:
     """Multi-scale tile test, Holm-corrected over every tile, scale and channel (module docstring).
 
     ``extra`` holds other detectors' tests that share the family-wise error
@@ -184,10 +184,15 @@ def multiscale_test(resid: np.ndarray, ref: np.ndarray, mask: np.ndarray, noise:
     are then adjusted together by weighted Holm, each test weighted by its
     group's share over the group's size; ``MultiScaleTest.extra`` maps each name
     to the tests that are rejected and relevant.
+
+    ``relevant``: the tiles test a bias beyond ``min_effect`` (:func:`relevant_p`; the grade's bias test, which
+    takes points), else a zero bias with the estimate compared with ``min_effect`` (a test that decides whether
+    a remainder is noise, where rejecting more is the cautious side).
     """
     h, w = resid.shape[:2]
     scales = [scale_stats(resid, ref, mask, noise, tile) for tile in bias_scales(tiles, h, w)]
-    ps = np.concatenate([relevant_p(s, min_effect)[s.valid].ravel() for s in scales]) if scales else np.zeros(0)
+    ps = np.concatenate([(relevant_p(s, min_effect) if relevant else s.p)[s.valid].ravel() for s in scales]) \
+        if scales else np.zeros(0)
     extra = [(name, np.asarray(p, np.float64).ravel(), np.asarray(rel, bool).ravel(), share)
              for name, p, rel, share in extra if np.size(p)]
     tile_share = 1.0 - sum(e[3] for e in extra)
@@ -233,7 +238,7 @@ def multiscale_test(resid: np.ndarray, ref: np.ndarray, mask: np.ndarray, noise:
         # Relative effect a single base tile needs to clear Holm's first threshold.
         zcrit = float(_sps.norm.isf(alpha / max(ps.size, 1) / 2))
         with np.errstate(divide="ignore", invalid="ignore"):
-            need = zcrit * np.sqrt(b.var) / np.abs(b.ref) + min_effect
+            need = zcrit * np.sqrt(b.var) / np.abs(b.ref) + (min_effect if relevant else 0.0)
         need = need[ok & (np.abs(b.ref) > 0) & (b.var > 0)]
         bt.min_detectable = float(np.median(need)) if need.size else 0.0
     return bt
