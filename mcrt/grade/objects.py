@@ -31,10 +31,9 @@ threshold ``min_effect``, and its p-value is the least favourable one,
 two-sided test of :attr:`ObjectTests.p`). An object pools hundreds to
 thousands of pixels, so its mean is known to a tenth of a per cent at high
 spp: the test of a zero difference then rejects differences a correct
-renderer has, smaller than anything the rubric penalises (Mitsuba's
-``ldsampler`` puts the floor about 0.4 % below the reference at any spp,
-its ``stratified`` sampler some walls by 0.5 % at 16 spp; the false-alarm
-report, ``mcrt grade-false-alarms``, shows the raw p-values of both tests),
+renderer has, of the order of ``min_effect`` (Mitsuba's ``ldsampler`` on
+the floor and the ceiling; the false-alarm report, ``mcrt grade-false-alarms``,
+shows each renderer's difference per object and the raw p-values of both tests),
 and comparing the *estimate* with ``min_effect`` afterwards lets such a
 difference through whenever noise lifts it past the threshold. Testing the
 relevant difference keeps the family-wise level for every renderer whose

@@ -81,6 +81,10 @@ def record(g: Grading, hand: Hand, lvl: Level, t: Tested) -> dict:
         g.details["structure"]["p_objects"] = t.objects.p[ok].ravel().tolist()
         g.details["structure"]["p_objects_relevant"] = t.objects.relevant_p(bt.min_effect)[ok].ravel().tolist()
         g.details["structure"]["p_object_structure"] = np.asarray(t.shape[1])[ok].tolist()
+        lum_ref = t.objects.ref @ LUMINANCE
+        g.details["structure"]["objects_rel"] = {
+            g.ctx.label_names[k]: float((t.objects.diff[k] @ LUMINANCE) / lum_ref[k])
+            for k in np.flatnonzero(ok) if lum_ref[k] > 0}
     return m
 
 
