@@ -12,6 +12,14 @@ the measured excess itself is judged by the noise criterion. Excess
 noise on unbiased tiles is told apart from a deterministic error that
 cancels within tiles by ranking the catalogue at pixel level, by its noise
 pattern and by its amount of noise (:mod:`mcrt.grade.explain.catalogue`).
+
+The limit on the variance ratio (the rubric's ``noise.max_ratio``) is set
+from the spread of correct renderers' ratios, the least efficient correct
+estimators included (Russian roulette from the first bounce), with a margin:
+``mcrt grade-false-alarms`` measures the spread and the margin. It cannot
+catch every claim: a hand-in whose estimator is more efficient than mcrt's
+(a stratified or low-discrepancy sampler) may claim a few times the samples
+it took, and at 16 spp the ratio of one render is itself noisy (heavy tails).
 """
 
 from __future__ import annotations
