@@ -109,7 +109,8 @@ class Thresholds:
     negative_tolerance: float = 0.0  # non_negative.tolerance: values below -tol * mean(reference) count
     orientation_margin: float = 0.05  # orientation.margin: correlation gain that proves a flip
     max_exposure_stops: float = 1.0  # exposure.max_stops: |log2 of the overall brightness ratio|
-    max_noise_ratio: float = 4.0  # noise.max_ratio: measured / expected noise variance at the declared spp
+    max_noise_ratio: float = 3.0  # noise.max_ratio: measured / expected noise variance at the declared spp (a margin
+    # over correct renderers' ratios: reports/grading/false_alarms)
     alpha: float = 0.01  # unbiased.alpha: family-wise error rate (Holm over tiles, scales, channels)
     min_effect: float = 0.003  # unbiased.min_effect: smaller relative biases are never penalised
     min_loss: float = 0.25  # unbiased.min_loss: share of the points lost for any penalised bias

@@ -28,11 +28,22 @@ three estimates of the variance of D_t, of which the largest is used:
   like a bias: a single huge sample inflates S_t^2 as much as D_t.
 
 Tiles where all three are 0 (pixels that see only the light) are compared
-for equality. The two-sided p-values of all tiles, scales and channels form
-one family, corrected by Holm (:func:`mcrt.stats.adjust_p_values`) at level
-``alpha``; a test is *penalised* only if it is rejected **and** its relative
-effect :math:`|D_t| / |\bar R_t|` is at least ``min_effect``: significant
-and relevant.
+for equality. What the grade's bias test (``relevant=True``) tests is a *relevant* bias: the null hypothesis of
+tile t is :math:`|E[D_t]| \le \delta |\bar R_t|` with :math:`\delta` =
+``min_effect``, and its p-value the least favourable one,
+:math:`p_t = S((|D_t| - \delta |\bar R_t|)/\sqrt{V_t}) + S((|D_t| + \delta |\bar R_t|)/\sqrt{V_t})`
+(:func:`relevant_p`; S Student's survival function with :math:`\nu`
+degrees of freedom; :math:`\delta = 0` is the two-sided test of a zero
+bias, kept in ``ScaleResult.p``). The p-values of all tiles, scales and
+channels form one family, corrected by Holm (:func:`mcrt.stats.adjust_p_values`)
+at level ``alpha``; a test is *penalised* where it is rejected (its
+relative effect :math:`|D_t| / |\bar R_t|` is then at least ``min_effect``).
+Testing a zero bias and comparing the estimate with ``min_effect`` after
+would not hold the level for an image whose bias is below ``min_effect``:
+at high spp a large tile's mean is known to a tenth of a per cent, correct
+samplers differ from the reference by a few tenths on whole surfaces
+(Mitsuba's ``ldsampler``; ``mcrt grade-false-alarms`` reports them), and
+noise lifts such an estimate past the threshold.
 
 Other detectors' tests join the same family (``multiscale_test(..., extra=...)``; in grading the
 structured-error detectors of :mod:`mcrt.grade.structure`): weighted Holm
@@ -79,6 +90,7 @@ class ScaleResult:
     p: np.ndarray
     rel: np.ndarray  # D_t / |R_t|
     valid: np.ndarray  # (tiles_y, tiles_x) tiles with n >= 2
+    rel_scale: np.ndarray | None = None  # the brightness rel is relative to: |ref|, at least a floor
     p_adj: np.ndarray | None = None
     rejected: np.ndarray | None = None
     penalised: np.ndarray | None = None
@@ -137,7 +149,23 @@ def scale_stats(resid: np.ndarray, ref: np.ndarray, mask: np.ndarray, noise: Noi
         floor = 1e-3 * max(float(np.mean(np.abs(ref[mask]))) if mask.any() else 0.0, 1e-12)
         rel = d / np.maximum(scale_ref, floor)
     valid = n >= min_n
-    return ScaleResult(tile, n, d, rm, v, vm, vs, vp, t, np.minimum(p, 1.0), rel, valid)
+    return ScaleResult(tile, n, d, rm, v, vm, vs, vp, t, np.minimum(p, 1.0), rel, valid,
+                       rel_scale=np.maximum(scale_ref, floor))
+
+
+def relevant_p(s: ScaleResult, min_effect: float) -> np.ndarray:
+    """p-values of the null hypothesis |bias| <= ``min_effect`` |mean reference| of each tile and channel of one
+    scale (module docstring): the least favourable point of the null, Student's t with n - 1 degrees of freedom.
+    A tile without noise (the light) is rejected where it differs by more than ``min_effect``."""
+    bound = min_effect * np.abs(s.rel_scale)
+    ad = np.abs(s.diff)
+    zero_var = s.var <= 0
+    sd = np.sqrt(np.where(zero_var, 1.0, s.var))
+    df = np.maximum(s.n[..., None] - 1.0, 1.0) * np.ones_like(s.diff)
+    with np.errstate(invalid="ignore"):
+        p = _sps.t.sf((ad - bound) / sd, df) + _sps.t.sf((ad + bound) / sd, df)
+    p = np.where(zero_var, np.where(s.p <= 0.0, np.where(ad > bound, 0.0, 1.0), 1.0), p)
+    return np.minimum(np.where(min_effect > 0, p, s.p), 1.0)
 
 
 def bias_scales(tiles, h: int, w: int) -> list[int]:
@@ -147,7 +175,7 @@ def bias_scales(tiles, h: int, w: int) -> list[int]:
 
 
 def multiscale_test(resid: np.ndarray, ref: np.ndarray, mask: np.ndarray, noise: Noise, tiles, *, alpha: float,
-              min_effect: float, full_effect: float, extra=()) -> MultiScaleTest:
+              min_effect: float, full_effect: float, extra=(), relevant: bool = False) -> MultiScaleTest:
     """Multi-scale tile test, Holm-corrected over every tile, scale and channel (module docstring).
 
     ``extra`` holds other detectors' tests that share the family-wise error
@@ -156,10 +184,15 @@ def multiscale_test(resid: np.ndarray, ref: np.ndarray, mask: np.ndarray, noise:
     are then adjusted together by weighted Holm, each test weighted by its
     group's share over the group's size; ``MultiScaleTest.extra`` maps each name
     to the tests that are rejected and relevant.
+
+    ``relevant``: the tiles test a bias beyond ``min_effect`` (:func:`relevant_p`; the grade's bias test, which
+    takes points), else a zero bias with the estimate compared with ``min_effect`` (a test that decides whether
+    a remainder is noise, where rejecting more is the cautious side).
     """
     h, w = resid.shape[:2]
     scales = [scale_stats(resid, ref, mask, noise, tile) for tile in bias_scales(tiles, h, w)]
-    ps = np.concatenate([s.p[s.valid].ravel() for s in scales]) if scales else np.zeros(0)
+    ps = np.concatenate([(relevant_p(s, min_effect) if relevant else s.p)[s.valid].ravel() for s in scales]) \
+        if scales else np.zeros(0)
     extra = [(name, np.asarray(p, np.float64).ravel(), np.asarray(rel, bool).ravel(), share)
              for name, p, rel, share in extra if np.size(p)]
     tile_share = 1.0 - sum(e[3] for e in extra)
@@ -205,7 +238,7 @@ def multiscale_test(resid: np.ndarray, ref: np.ndarray, mask: np.ndarray, noise:
         # Relative effect a single base tile needs to clear Holm's first threshold.
         zcrit = float(_sps.norm.isf(alpha / max(ps.size, 1) / 2))
         with np.errstate(divide="ignore", invalid="ignore"):
-            need = zcrit * np.sqrt(b.var) / np.abs(b.ref)
+            need = zcrit * np.sqrt(b.var) / np.abs(b.ref) + (min_effect if relevant else 0.0)
         need = need[ok & (np.abs(b.ref) > 0) & (b.var > 0)]
         bt.min_detectable = float(np.median(need)) if need.size else 0.0
     return bt

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from mcrt.grade import feedback as fb
-from mcrt.grade.objects import baseline_shares, object_tests, structure_family
+from mcrt.grade.objects import MIN_PIXELS, baseline_shares, object_tests, structure_family
 from mcrt.grade.regions import short_text
 from mcrt.grade.score import LUMINANCE, metrics
 from mcrt.grade.stages.state import Grading, Hand, Level
@@ -31,6 +31,8 @@ class Tested:
     bt: object  # mcrt.stats.onesample.MultiScaleTest, the detectors' results in bt.extra
     st: object  # mcrt.grade.structure's measurements
     img: np.ndarray  # the image they tested
+    objects: object = None  # mcrt.grade.objects.ObjectTests of the image
+    shape: tuple | None = None  # the per-object structure family (name, p-values, relevant, share)
 
 
 def flagged(bt) -> bool:
@@ -54,9 +56,12 @@ def test(g: Grading, hand: Hand, lvl: Level, img: np.ndarray, resid: np.ndarray,
     shape = structure_family(resid, R, lvl.clip_mask, noise, ctx.labels[hand.cam], K, th.min_effect,
                              shares=baseline_shares(ctx, hand.cam, hand.R, hand.ref, lvl.clip_mask),
                              image=np.where(lvl.clip_mask[..., None], img, 0.0))
+    # A relevant bias is tested (beyond min_effect), not a zero one: correct samplers are a few tenths of a per
+    # cent off the reference on whole surfaces, which large tiles and objects resolve at high spp (mcrt.stats.onesample).
     bt = multiscale_test(resid, R, lvl.clip_mask, noise, a.tiles, alpha=th.alpha, min_effect=th.min_effect,
-                         full_effect=th.full_effect, extra=structure_families(st, th) + [objs.family(th.min_effect), shape])
-    return Tested(bt, st, img)
+                         full_effect=th.full_effect, relevant=True,
+                         extra=structure_families(st, th) + [objs.family(th.min_effect, relevant=True), shape])
+    return Tested(bt, st, img, objs, shape)
 
 
 def record(g: Grading, hand: Hand, lvl: Level, t: Tested) -> dict:
@@ -71,6 +76,15 @@ def record(g: Grading, hand: Hand, lvl: Level, t: Tested) -> dict:
     m["excess_rms"] = bt.excess_rms
     g.details["metrics"] = m
     g.details["structure"] = _structure_details(t.st, bt)
+    if t.objects is not None:  # raw p-values (the false-alarm report's calibration table), untested ones left out
+        ok = t.objects.n >= MIN_PIXELS
+        g.details["structure"]["p_objects"] = t.objects.p[ok].ravel().tolist()
+        g.details["structure"]["p_objects_relevant"] = t.objects.relevant_p(bt.min_effect)[ok].ravel().tolist()
+        g.details["structure"]["p_object_structure"] = np.asarray(t.shape[1])[ok].tolist()
+        lum_ref = t.objects.ref @ LUMINANCE
+        g.details["structure"]["objects_rel"] = {
+            g.ctx.label_names[k]: float((t.objects.diff[k] @ LUMINANCE) / lum_ref[k])
+            for k in np.flatnonzero(ok) if lum_ref[k] > 0}
     return m
 
 
