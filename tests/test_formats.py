@@ -117,7 +117,7 @@ def test_bmp_tga_by_pillow(tmp_path, ext):
     np.testing.assert_array_equal(np.round(read_image(path, linear_png=True).mean * 255).astype(np.uint8), c)
 
 
-def _imagemagick() -> bool:
+def has_imagemagick() -> bool:
     if shutil.which("convert") is None:
         return False
     try:
@@ -127,7 +127,7 @@ def _imagemagick() -> bool:
     return out.returncode == 0 and "ImageMagick" in out.stdout
 
 
-@pytest.mark.skipif(not _imagemagick(), reason="ImageMagick's convert is not installed (apt-get install imagemagick)")
+@pytest.mark.skipif(not has_imagemagick(), reason="ImageMagick's convert is not installed (apt-get install imagemagick)")
 @pytest.mark.parametrize("target", ["out.bmp", "out.tga", "out.png", "out16.png", "out.ppm", "out16.ppm"])
 def test_files_written_by_imagemagick(tmp_path, target):
     c = codes16() if "16" in target else codes8()

@@ -579,11 +579,11 @@ def test_code_mode_command_line(code_class, assignment, workdir):
 # --------------------------------------------------------------------------
 
 import dataclasses  # noqa: E402
-import shutil  # noqa: E402
 import subprocess  # noqa: E402
 
 from PIL import Image  # noqa: E402
 from scipy import ndimage  # noqa: E402
+from test_formats import has_imagemagick  # noqa: E402
 
 from mcrt.grade.submissions import discover  # noqa: E402
 from mcrt.grade.grader import grade_submission  # noqa: E402
@@ -714,7 +714,7 @@ def test_png_encodings_are_decoded_not_called_bugs(scene, context64, workdir):
     for k, curve in enumerate(("srgb", "gamma22", "gamma2", "linear")):
         files[f"png_{curve}"] = (_png_writer(_render(scene, 100, 500 + k, res=64).mean, curve), 100)
     res = _grade_files(workdir / "pngs", files, context64)
-    if shutil.which("convert"):
+    if has_imagemagick():  # the real program: a stand-in named convert may be on PATH
         d = workdir / "ppm"
         d.mkdir()
         subprocess.run(["convert", str(workdir / "pngs" / "png_srgb.png"), str(d / "magick.ppm")], check=True)
