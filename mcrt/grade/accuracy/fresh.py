@@ -65,6 +65,9 @@ from mcrt.grade.accuracy.cases import Spec
 from mcrt.image_files import RGB_TO_XYZ, srgb_oetf
 from mcrt.scene import Scene
 
+#: Whether the class is held out (see the module docstring).
+HELD_OUT = True
+
 #: The causes new in this class, as the report words them.
 NEW_CAUSES: dict[str, str] = {
     "quantisation": "values quantised wrongly (8-bit codes truncated, not rounded)",
@@ -379,11 +382,11 @@ FOV_W_MINUS_1 = _fov_of_tan(64.0 / 63.0)
 _S = 256
 
 
-def _specs() -> tuple[tuple[Spec, ...], tuple[Spec, ...]]:
+def _mistakes() -> tuple[Spec, ...]:
     from mcrt.scene import Lambertian, Mirror
 
-    H = {"held_out": True}  # every case
-    mistakes = (
+    H = {"held_out": HELD_OUT}
+    return (
         # Writing the file
         Spec("png_truncated", "quantisation", **H, writer=partial(_write_png8, truncate=True), file="png-srgb-truncated",
              truth="sRGB 8-bit PNG with codes (v * 255).astype(uint8): truncated, not rounded"),
@@ -450,7 +453,11 @@ def _specs() -> tuple[tuple[Spec, ...], tuple[Spec, ...]]:
              **_posted("roulette", partial(_roulette, p=0.8, start=0, spp=_S, seed=_crc("roulette_08_from_1"))),
              truth="Russian roulette with survival 0.8 from the first hit on, survivors not divided by 0.8"),
     )
-    correct = (
+
+
+def _correct() -> tuple[Spec, ...]:
+    H = {"held_out": HELD_OUT}
+    return (
         Spec("ok_orthogonal_121", None, **H, spp=121, sampler="orthogonal",
              truth="Mitsuba path, orthogonal-array sampler, two passes of 121 spp, EXR"),
         Spec("ok_exr_half_rgba", None, **H, spp=200, writer=_write_exr_half_rgba, file="exr-half-rgbaz",
@@ -468,10 +475,9 @@ def _specs() -> tuple[tuple[Spec, ...], tuple[Spec, ...]]:
         Spec("ok_png_dithered", None, **H, spp=512, writer=partial(_write_png8, dither_seed=_crc("dither")),
              file="png-srgb-dithered", truth="Mitsuba path 512 spp, an 8-bit sRGB PNG dithered by one code"),
     )
-    return mistakes, correct
 
 
-MISTAKES, CORRECT = _specs()
+MISTAKES, CORRECT = _mistakes(), _correct()
 SPECS: tuple[Spec, ...] = MISTAKES + CORRECT
 
 #: An existing cause worded for this class's cases (outside's words speak of enlarging only).
