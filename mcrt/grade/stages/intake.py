@@ -1,4 +1,7 @@
-"""Intake: a hand-in's manifest, the choice of its images, and reading them (the ``readable`` criterion)."""
+"""Intake: a hand-in's manifest, the choice of its images, and reading them (the ``readable`` criterion).
+
+A PFM whose header declares the other byte order than its data are written in is read in the data's order and
+loses the ``readable`` points (:func:`_byte_order`), as an undeclared encoding loses ``linear``'s."""
 
 from __future__ import annotations
 

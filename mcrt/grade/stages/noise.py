@@ -8,7 +8,10 @@ moved by 0.7 measures as hundreds of times the expected noise): beyond
 the limit, the noise model follows a measured excess up to
 :data:`NOISE_BODY` times the expected noise, and further only as far as
 the body of the high-passed residual (:func:`body_ratio`) bears it out;
-the measured excess itself is judged by the noise criterion. Excess
+the measured excess itself is judged by the noise criterion. Two renders
+whose noise is the same (one seed: :func:`same_pair`) cannot measure the
+noise: the first is graded alone, with the model noise, and the noise
+criterion fails saying so. Excess
 noise on unbiased tiles is told apart from a deterministic error that
 cancels within tiles by ranking the catalogue at pixel level, by its noise
 pattern and by its amount of noise (:mod:`mcrt.grade.explain.catalogue`).
