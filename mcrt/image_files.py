@@ -608,16 +608,44 @@ def _attr_float(path: str, header: dict, name: str, default: float | None) -> fl
 _PFM_HEADER = re.compile(rb"(PF|Pf)\s+(\d+)\s+(\d+)\s+([-+0-9.eE]+)\s")
 
 
-def read_pfm(path: PathLike) -> np.ndarray:
+def read_pfm(path: PathLike, *, swap_byte_order: bool = False) -> np.ndarray:
     """Read a Portable Float Map: (H, W, 3) float32, top row first.
 
     ``PF`` is colour, ``Pf`` greyscale (replicated to three channels). A
     negative scale means little-endian data, a positive one big-endian; rows
     are stored bottom to top. A scale magnitude other than 1 multiplies the
-    data (as pbrt does).
+    data (as pbrt does). ``swap_byte_order`` reads the data in the other byte
+    order than the header declares (not the spec: for a grader that checks
+    whether a header's sign contradicts its data).
     """
     path = os.fspath(path)
     data = _read_bytes(path)
+    w, h, scale, colour, m = _pfm_header(path, data)
+    if w == 0 or h == 0 or scale == 0 or not math.isfinite(scale):
+        raise ImageError(f"{path}: PFM header gives {w}x{h} pixels and scale {scale}")
+    _check_pixels(path, w, h)
+    c = 3 if colour else 1
+    n = w * h * c * 4
+    body = data[m.end(): m.end() + n]
+    if len(body) < n:
+        raise ImageError(f"{path}: truncated PFM file ({len(body)} of {n} data bytes)")
+    little = (scale < 0) != swap_byte_order
+    a = np.frombuffer(body, dtype="<f4" if little else ">f4").reshape(h, w, c)
+    a = a[::-1].astype(np.float32)
+    if abs(scale) != 1.0:
+        with np.errstate(over="ignore", invalid="ignore"):
+            a *= np.float32(abs(scale))
+    return np.ascontiguousarray(np.repeat(a, 3, axis=2) if c == 1 else a)
+
+
+def pfm_scale(path: PathLike) -> float:
+    """The scale of a PFM file's header (its sign declares the byte order: negative little-endian)."""
+    path = os.fspath(path)
+    return _pfm_header(path, _read_bytes(path))[2]
+
+
+def _pfm_header(path: str, data: bytes):
+    """(width, height, scale, colour, the header's match) of a PFM file's bytes; ImageError when it is not one."""
     m = _PFM_HEADER.match(data)
     if not m:
         raise ImageError(f"{path}: not a PFM file (expected 'PF' or 'Pf', width, height, scale)")
@@ -627,20 +655,7 @@ def read_pfm(path: PathLike) -> np.ndarray:
         scale = float(m.group(4))
     except ValueError:
         raise ImageError(f"{path}: PFM scale {m.group(4).decode()!r} is not a number") from None
-    if w == 0 or h == 0 or scale == 0 or not math.isfinite(scale):
-        raise ImageError(f"{path}: PFM header gives {w}x{h} pixels and scale {scale}")
-    _check_pixels(path, w, h)
-    c = 3 if colour else 1
-    n = w * h * c * 4
-    body = data[m.end(): m.end() + n]
-    if len(body) < n:
-        raise ImageError(f"{path}: truncated PFM file ({len(body)} of {n} data bytes)")
-    a = np.frombuffer(body, dtype="<f4" if scale < 0 else ">f4").reshape(h, w, c)
-    a = a[::-1].astype(np.float32)
-    if abs(scale) != 1.0:
-        with np.errstate(over="ignore", invalid="ignore"):
-            a *= np.float32(abs(scale))
-    return np.ascontiguousarray(np.repeat(a, 3, axis=2) if c == 1 else a)
+    return w, h, scale, colour, m
 
 
 def write_pfm(path: PathLike, rgb: np.ndarray, *, little_endian: bool = True) -> None:

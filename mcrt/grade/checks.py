@@ -148,10 +148,8 @@ def read_renders(paths: list[str], linear_png: bool) -> tuple[Loaded | None, str
             notes.append(f"second render {name} is {img.shape[1]}x{img.shape[0]}, the first "
                          f"{images[0].shape[1]}x{images[0].shape[0]}; graded the first alone")
             continue
-        elif np.array_equal(np.nan_to_num(img), np.nan_to_num(images[0])):
-            notes.append(f"second render {name} is identical to the first, so it is not an independent render "
-                         "(same seed?); graded the first alone")
-            continue
+        # A second render identical to the first (one seed) is kept: the noise stage names it and grades the
+        # first alone (mcrt.grade.stages.noise.same_pair).
         images.append(img)
         files.append(_shown(p))
     return Loaded(images, files, fmt, spp, cam, notes), None

@@ -11,8 +11,9 @@ prepared context. For each case the outcome says:
   or a criterion whose failure names the cause itself (``linear``: an
   encoding; ``exposure``: a constant factor, which a light of the wrong
   radiance is, where dividing by it passes the bias test; a camera criterion
-  failed for misregistration; the noise criterion: a filter, or fewer
-  samples than declared);
+  failed for misregistration; the noise criterion: a filter, fewer
+  samples than declared, or two renders with one seed; ``readable``: a
+  PFM header declaring the other byte order);
 * whether the named cause is the right one (:data:`CAUSE_OF`), or a wrong
   one (a confident wrong cause), or none.
 
@@ -134,6 +135,10 @@ def named_causes(res) -> tuple[list[str], str]:
         causes += CAUSE_OF.get(m, (f"catalogue:{m}",))
         said.append(f"consistent with {m}")
     tests = {t.name: t for t in res.tests}
+    readable = tests.get("readable")
+    if readable is not None and readable.status == "failed" and res.details.get("byte_order"):
+        causes.append("file_format")  # a PFM's header declaring the other byte order (stages.intake)
+        said.append(readable.output.split(";")[0])
     for crit, cause in (("linear", "encoding"), ("exposure", "light_radiance"), ("orientation", "orientation"),
                         ("finite", "bad_pixels")):
         t = tests.get(crit)
@@ -147,6 +152,10 @@ def named_causes(res) -> tuple[list[str], str]:
         causes += ["camera_fov", "camera_rotation", "camera_eye", "pixel_offset"]
         said.append(cam.output.split(";")[0])
     noise = tests.get("noise")
+    if noise is not None and noise.status == "failed" and (res.details.get("pair") or {}).get("same_noise"):
+        causes.append("same_seed")  # two renders with one seed (stages.noise.same_pair)
+        said.append(noise.output.split(";")[0])
+        noise = None if "; also, " not in noise.output else noise
     if noise is not None and noise.status == "failed" and any(w in noise.output for w in ("blur", "denois", "filter")):
         causes.append("blur")
         said.append(noise.output.split(";")[0])

@@ -8,7 +8,10 @@ moved by 0.7 measures as hundreds of times the expected noise): beyond
 the limit, the noise model follows a measured excess up to
 :data:`NOISE_BODY` times the expected noise, and further only as far as
 the body of the high-passed residual (:func:`body_ratio`) bears it out;
-the measured excess itself is judged by the noise criterion. Excess
+the measured excess itself is judged by the noise criterion. Two renders
+whose noise is the same (one seed: :func:`same_pair`) cannot measure the
+noise: the first is graded alone, with the model noise, and the noise
+criterion fails saying so. Excess
 noise on unbiased tiles is told apart from a deterministic error that
 cancels within tiles by ranking the catalogue at pixel level, by its noise
 pattern and by its amount of noise (:mod:`mcrt.grade.explain.catalogue`).
@@ -46,13 +49,23 @@ NOISE_BODY = 20.0
 #: are often more efficient than mcrt (stratified and low-discrepancy samplers); this bound is not the rubric's
 #: ``noise.max_ratio``, which judges the other side (a hand-in noisier than its declared spp allows).
 MORE_EFFICIENT = 4.0
+#: Below this ratio of the noise in two renders' difference to one render's noise (:func:`same_pair`), the two share
+#: their noise (one seed, or one render saved twice). Both are medians of thousands of squared normalised second
+#: differences (relative standard error a few per cent at 64 x 64); for independent renders the ratio is about 1 for
+#: Gaussian noise and above it for heavy-tailed noise (the median of a difference of two heavy-tailed variates' squares
+#: exceeds one's), so a ratio of 0.1 is many standard errors below any independent pair: tests/test_intake_pairs.py
+#: holds a proper pair and a pair whose noise is correlated by 0.99 on either side.
+SAME_PAIR_RATIO = 0.1
 
 
 def measure(g: Grading, hand: Hand, clip_mask: np.ndarray) -> Level:
     """Noise level: 1 / (samples per grade pixel) of an mcrt-like estimator, and the verdict it would get."""
-    a, ctx, imgs, qvar, n_r = g.a, g.ctx, hand.imgs, hand.qvar, hand.n_r
+    a, ctx = g.a, g.ctx
     model_ps = ctx.model_var[hand.cam].astype(np.float64)  # mcrt per-sample variance at the grade resolution
     ref_noise = hand.ref.var.astype(np.float64) / hand.ref.spp
+    if hand.n_r == 2:
+        _pair_check(g, hand, clip_mask, model_ps, ref_noise)
+    imgs, qvar, n_r = hand.imgs, hand.qvar, hand.n_r
     img = imgs[0] if n_r == 1 else 0.5 * (imgs[0] + imgs[1])
     q = qvar[0] if n_r == 1 else 0.25 * (qvar[0] + qvar[1])
     pair = 0.25 * (imgs[0] - imgs[1]) ** 2 if n_r == 2 else None
@@ -81,6 +94,42 @@ def measure(g: Grading, hand: Hand, clip_mask: np.ndarray) -> Level:
     g.details["noise"]["spp_model"] = lvl.spp_model
     lvl.noise = Noise(model=model_ps / (lvl.spp_model * per) + q, reference=ref_noise, pair=pair)
     return lvl
+
+
+def same_pair(a: np.ndarray, b: np.ndarray, R: np.ndarray, var: np.ndarray, mask: np.ndarray,
+              labels: np.ndarray) -> tuple[bool, float]:
+    """(whether two renders share their noise, the ratio of their difference's noise to one render's).
+
+    The ratio is the body (:func:`body_ratio`) of (a - b) / sqrt(2) over that of a - R: about 1 or more for
+    independent renders (the difference of two holds twice one's noise variance; :data:`SAME_PAIR_RATIO`), about
+    1 - rho times that for renders whose noise is correlated by rho, 0 for identical ones. Second differences within surfaces cancel a smooth bias, so a biased pair is judged by
+    its noise alone. They share it when identical, or when the ratio is below :data:`SAME_PAIR_RATIO`."""
+    keep = mask & np.isfinite(a).all(axis=2) & np.isfinite(b).all(axis=2)
+    if np.array_equal(np.where(keep[..., None], a, 0.0), np.where(keep[..., None], b, 0.0)):
+        return True, 0.0
+    one = body_ratio(np.where(keep[..., None], a - R, 0.0), var, keep, labels)
+    diff = body_ratio(np.where(keep[..., None], (a - b) / np.sqrt(2.0), 0.0), var, keep, labels)
+    ratio = diff / one if one > 0 and np.isfinite(one) else float("nan")
+    return bool(ratio < SAME_PAIR_RATIO), ratio
+
+
+def _pair_check(g: Grading, hand: Hand, clip_mask, model_ps, ref_noise) -> None:
+    """Two renders whose noise is the same (one seed): the pair cannot measure the noise, so the first is graded
+    alone with the noise model of one render, and the noise criterion says why (:func:`verdict`)."""
+    nominal = hand.spp or g.a.min_spp
+    var = model_ps / (nominal * hand.k_down**2) + ref_noise + hand.qvar[0]
+    same, ratio = same_pair(hand.imgs[0], hand.imgs[1], hand.R, var, clip_mask, g.ctx.labels[hand.cam])
+    g.details["pair"] = {"same_noise": same, "noise_ratio": None if not np.isfinite(ratio) else round(ratio, 4)}
+    if not same:
+        return
+    what = ("your two renders are identical" if ratio == 0 else
+            f"your two renders' noise is nearly the same (the difference of the two has {ratio:.2g} times the "
+            f"noise variance of independent renders, below {SAME_PAIR_RATIO:g} they are taken as one seed)")
+    g.details["pair"]["text"] = (f"{what}: render them with different seeds (the difference of two independent "
+                                 "renders measures the noise); the noise was taken from the model of one render "
+                                 "instead, and the first render was graded alone")
+    for lst in (hand.imgs, hand.qvar, hand.diag_imgs):
+        del lst[1:]
 
 
 def body_ratio(resid: np.ndarray, var: np.ndarray, mask: np.ndarray, labels: np.ndarray) -> float:
@@ -169,6 +218,10 @@ def verdict(g: Grading, hand: Hand, lvl: Level, bt, found: dict[str, str], flagg
     status, text, firm = lvl.verdict
     if "filter" in found:
         status, text, firm = "failed", found["filter"], True
+    same = (g.details.get("pair") or {}).get("text")
+    if same:  # a pair with one seed loses the noise points whatever else is found; a firm finding is kept beside it
+        g.rubric.set("noise", "failed", same + (f"; also, {text}" if status == "failed" and firm else ""))
+        return
     if status == "failed" and not firm and flagged:
         status, text = "passed", (f"not judged: the image is biased, so its noise cannot be compared with a correct "
                                   f"renderer's (it is like mcrt with about {spp_text(lvl.spp_eff)} spp)")

@@ -1,0 +1,147 @@
+"""Two file mistakes named at intake (issue 27): a PFM header declaring the other byte order, and a pair of renders
+made with one seed.
+
+The hand-ins are Mitsuba renders (fixed seeds) written the way a student's program writes them; they are graded by
+the production grader with the 32x32 assignment of test_diagnose, prepared once per module in a temporary cache.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from test_diagnose import ASSIGNMENT, RES
+
+from mcrt.grade.accuracy.cases import Spec, _render_spec
+from mcrt.grade.accuracy.run import named_causes
+from mcrt.grade.assignment import assignment_from_dict
+from mcrt.grade.expected import prepare_context
+from mcrt.grade.grader import grade_submission
+from mcrt.grade.stages.intake import implausible_share
+from mcrt.grade.stages.noise import SAME_PAIR_RATIO, same_pair
+from mcrt.grade.submissions import discover
+from mcrt.image_files import read_pfm, write_pfm
+from mcrt.scene import load_scene
+
+
+@pytest.fixture(scope="module")
+def ctx(tmp_path_factory):
+    a = assignment_from_dict(ASSIGNMENT, str(tmp_path_factory.mktemp("intake") / "explain32.toml"))
+    return prepare_context(a, tmp_path_factory.mktemp("cache"))
+
+
+@pytest.fixture(scope="module")
+def renders():
+    """Two Mitsuba renders at 256 spp, seeds 31 and 32."""
+    scene = load_scene()
+    return [_render_spec(Spec("t", None, spp=256), scene, width=RES, height=RES, max_depth=8, seed=s).mean
+            for s in (31, 32)]
+
+
+def _pfm(path, img, scale: str, order: str) -> None:
+    """A PFM as a student's program writes it: header with ``scale``, rows bottom to top, floats in ``order``."""
+    h, w = img.shape[:2]
+    path.write_bytes(f"PF\n{w} {h}\n{scale}\n".encode() + np.ascontiguousarray(img[::-1], order + "f4").tobytes())
+
+
+def _grade(ctx, folder, files: dict, spp: int = 256):
+    folder.mkdir()
+    for name, write in files.items():
+        write(folder / name)
+    (folder / "manifest.toml").write_text(f"spp = {spp}\n")
+    return grade_submission(discover(folder, single=True, student=folder.name)[0], ctx)
+
+
+def _test(res, name):
+    return next(t for t in res.tests if t.name == name)
+
+
+# --------------------------------------------------------------------------
+# The PFM's byte order
+# --------------------------------------------------------------------------
+
+
+def test_little_endian_data_under_a_big_endian_header_is_read_swapped_and_named(ctx, renders, tmp_path):
+    """Header scale 1.0 over little-endian floats (x86): read per the spec the values are garbage; the grader reads
+    them little-endian, grades that render (full marks on the bias test) and names the file mistake."""
+    img = renders[0]
+    p = tmp_path / "raw.pfm"
+    _pfm(p, img, "1.0", "<")
+    assert implausible_share(read_pfm(p)) > 0.1  # per the spec: garbage (NaN, huge and tiny values)
+    res = _grade(ctx, tmp_path / "student", {"render.pfm": lambda q: _pfm(q, img, "1.0", "<")})
+    readable = _test(res, "readable")
+    assert readable.status == "failed" and readable.score == 0
+    assert "header scale 1.0 declares big-endian data, but the data are little-endian" in readable.output
+    assert "write -1.0 (little-endian) in the header" in readable.output
+    assert _test(res, "finite").status == "passed"
+    assert _test(res, "unbiased").status == "passed"
+    assert res.score == res.max_score - readable.max_score
+    named, _ = named_causes(res)
+    assert named == ["file_format"]
+
+
+@pytest.mark.parametrize("scale, order", [("1.0", ">"), ("-1.0", "<")])
+def test_a_pfm_whose_header_matches_its_data_is_unaffected(ctx, renders, tmp_path, scale, order):
+    res = _grade(ctx, tmp_path / "student", {"render.pfm": lambda q: _pfm(q, renders[0], scale, order)})
+    assert _test(res, "readable").status == "passed"
+    assert "byte_order" not in res.details
+    assert res.score == res.max_score
+    assert named_causes(res)[0] == []
+
+
+def test_a_pfm_with_some_nan_pixels_is_not_taken_for_a_byte_order_mistake(ctx, renders, tmp_path):
+    """A correct little-endian PFM with 2 % of its pixels NaN (a renderer's bug): the other byte order is no more
+    plausible, so the NaN pixels are reported as such."""
+    img = renders[0].astype(np.float32).copy()
+    img[::7, ::7] = np.nan
+    res = _grade(ctx, tmp_path / "student", {"render.pfm": lambda q: _pfm(q, img, "-1.0", "<")})
+    assert _test(res, "readable").status == "passed" and "byte_order" not in res.details
+    assert _test(res, "finite").status == "failed"
+
+
+def test_implausible_share_counts_what_no_radiance_is():
+    x = np.array([0.0, 1e-3, 20.0, -0.01, np.nan, np.inf, 1e31, 1e-35, 1e-40], np.float64)
+    assert implausible_share(x) == pytest.approx(5 / 9)
+
+
+# --------------------------------------------------------------------------
+# Two renders with one seed
+# --------------------------------------------------------------------------
+
+
+def test_an_identical_pair_is_named_and_the_model_noise_used(ctx, renders, tmp_path):
+    img = renders[0]
+    files = {f"render_{k}.pfm": (lambda q: write_pfm(q, img)) for k in (1, 2)}
+    res = _grade(ctx, tmp_path / "student", files, spp=256)
+    noise = _test(res, "noise")
+    assert noise.status == "failed" and noise.score == 0
+    assert noise.output.startswith("your two renders are identical: render them with different seeds")
+    assert "the noise was taken from the model of one render instead" in noise.output
+    assert res.details["noise"]["renders"] == 1
+    assert _test(res, "unbiased").status == "passed"
+    assert res.score == res.max_score - noise.max_score
+    assert named_causes(res)[0] == ["same_seed"]
+
+
+def test_a_proper_pair_is_not_named(ctx, renders, tmp_path):
+    files = {f"render_{k}.pfm": (lambda q, k=k: write_pfm(q, renders[k - 1])) for k in (1, 2)}
+    res = _grade(ctx, tmp_path / "student", files, spp=256)
+    assert _test(res, "noise").status == "passed"
+    assert res.details["pair"]["same_noise"] is False and res.details["noise"]["renders"] == 2
+    assert res.score == res.max_score
+    assert named_causes(res)[0] == []
+
+
+def test_same_pair_measures_shared_noise(ctx, renders):
+    """The ratio is about 1 or more for independent renders (seeds 31, 32: Mitsuba's noise is heavy-tailed), far
+    below the limit for renders whose noise is correlated by 0.99, and 0 for identical ones."""
+    a, b = (np.asarray(r, np.float64) for r in renders)
+    ref = ctx.references["near"]
+    R = ref.mean.astype(np.float64)
+    var = ctx.model_var["near"] / 256 + ref.var / ref.spp
+    mask, labels = np.ones((RES, RES), bool), ctx.labels["near"]
+    same, ratio = same_pair(a, b, R, var, mask, labels)
+    assert not same and 0.7 < ratio < 3.0
+    # b' = 0.9 a + 0.1 b: its noise is correlated with a's by 0.99 (its difference from a: 0.01 of two renders')
+    same, ratio = same_pair(a, a + 0.1 * (b - a), R, var, mask, labels)
+    assert same and ratio < SAME_PAIR_RATIO
+    assert same_pair(a, a.copy(), R, var, mask, labels) == (True, 0.0)
