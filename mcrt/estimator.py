@@ -250,7 +250,7 @@ class PathEstimator:
 
             # ---- A path that ended is added to the sums; its lane starts the next one.
             ended = ~alive
-            x = L if clamp is None else dr.minimum(L, clamp)  # the finished sample, clamped where asked
+            x = L if clamp is None else dr.select(L > clamp, clamp, L)  # the finished sample, clamped where asked
             sum_x = dr.select(ended, sum_x + x, sum_x)
             sum_x2 = dr.select(ended, dr.fma(x, x, sum_x2), sum_x2)
             L = dr.select(ended, 0.0, L)

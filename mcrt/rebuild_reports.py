@@ -93,6 +93,10 @@ REPORTS: tuple[Report, ...] = (
            "grading on mistakes of students' programs written apart from the grader's rules (orientation, encodings, "
            "colour lost, direct light twice, bad pixels, a per-sample clamp, scene mistakes): named right, "
            "confidently wrong, partial, false alarms, with a held-out half fixed before grading"),
+    Report("grading_accuracy/fresh", "grade-accuracy --class fresh --out reports/grading_accuracy/fresh",
+           "grading on mistakes no other class tried (file writing, normals, camera models, resampling, a pair of one "
+           "seed, roulette without re-weighting), written apart from the grader's rules: named right, confidently "
+           "wrong, partial, false alarms"),
     Report("grading/false_alarms", "grade-false-alarms --out reports/grading/false_alarms",
            "grading's false alarms on correct renders: estimators, samplers, spp 16-1024, 64x64 to 800x800, PNG curves"),
 )
