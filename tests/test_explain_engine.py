@@ -145,3 +145,34 @@ def test_closeness_is_significant_for_a_clearly_better_fit_and_signed():
     assert closeness(fit, exact, weak) > 3 * OCCAM_Z
     assert closeness(fit, weak, exact) < -3 * OCCAM_Z
     assert closeness(fit, exact, exact) == 0.0
+
+
+def test_the_camera_warp_shifts_a_point_of_light_without_changing_its_footprint():
+    """A fine image (FINE times finer, WIDE times wider, exactly) holding one bright fine pixel, warped by the
+    pixel-offset family's shifts from 0 to 1/2 pixel in steps of 1/20: the point keeps its total light at every shift
+    and its centroid moves with the shift (each grade pixel's footprint is the same box whatever the shift). With
+    fewer warp samples than fine pixels the footprint narrows between samples, the total ripples with the shift, and
+    so does the chi^2 of a shift: a quarter-pixel shift is then not found, and a rotation is claimed in its place."""
+    import math
+
+    from mcrt.grade.explain.basis import FINE, WIDE
+    from mcrt.grade.explain.camera import _Warp
+
+    h = w = 20
+    n = round(FINE * WIDE * w)
+    assert n == FINE * WIDE * w  # the fine grid lies exactly on the grade grid
+    yy, xx = np.mgrid[0:n, 0:n]
+    fine = np.zeros((n, n, 3), np.float32)
+    fine[n // 2 + 1, n // 2 + 2, 0] = 1.0  # red: a point
+    fine[..., 1] = np.exp(-((xx - n / 2) ** 2 + (yy - n / 2) ** 2) / (2 * 6.0**2))  # green: a smooth blob
+    b = Basis(camera="near", spp=1, base=np.zeros((h, w, 3), np.float32), var=np.zeros((h, w, 3), np.float32),
+              fine=fine, fine_tan=WIDE * math.tan(math.radians(45.0)), fov_deg=90.0, max_depth=8)
+    wp = _Warp(b)
+    jj, ii = np.mgrid[0:h, 0:w]
+    totals, cx = [], []
+    for d in np.arange(0.0, 0.55, 0.05):
+        img = wp.image(dx=d, dy=d)
+        totals.append(img[..., 0].sum())
+        cx.append((img[..., 1] * ii).sum() / img[..., 1].sum())
+    np.testing.assert_allclose(totals, totals[0], rtol=1e-5)
+    np.testing.assert_allclose(np.diff(cx), -0.05, atol=2e-3)  # what lies at x is seen at x - dx
