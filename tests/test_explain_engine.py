@@ -176,3 +176,18 @@ def test_the_camera_warp_shifts_a_point_of_light_without_changing_its_footprint(
         cx.append((img[..., 1] * ii).sum() / img[..., 1].sum())
     np.testing.assert_allclose(totals, totals[0], rtol=1e-5)
     np.testing.assert_allclose(np.diff(cx), -0.05, atol=2e-3)  # what lies at x is seen at x - dx
+
+
+def test_the_adequacy_rule_tries_what_chi2_cannot_tell_from_the_best():
+    """Ranked candidates (a rotation best, an albedo, a pixel shift, then a blur with a third of a small difference but
+    a chi^2 within noise's spread of the best's): the blur's remainder is tested too, beside the camera's two families
+    (one reading, a misregistration, which does not crowd the blur out); with no spread it is left out by its share."""
+    from mcrt.grade.adequacy import tried_candidates
+
+    z = np.zeros((2, 2, 3))
+    cands = [Candidate(f, f, f, chi2, 1, explained=e, change=z) for f, chi2, e in
+             (("rotation", 100.0, 1.0), ("albedo", 110.0, 0.9), ("pixel_offset", 112.0, 0.85), ("blur", 150.0, 0.3),
+              ("depth", 400.0, 0.1))]
+    tried = [c.family for c in tried_candidates(cands, within=60.0)]
+    assert tried == ["rotation", "albedo", "pixel_offset", "blur"], tried
+    assert [c.family for c in tried_candidates(cands)] == ["rotation", "albedo", "pixel_offset"]
