@@ -145,3 +145,49 @@ def test_closeness_is_significant_for_a_clearly_better_fit_and_signed():
     assert closeness(fit, exact, weak) > 3 * OCCAM_Z
     assert closeness(fit, weak, exact) < -3 * OCCAM_Z
     assert closeness(fit, exact, exact) == 0.0
+
+
+def test_the_camera_warp_shifts_a_point_of_light_without_changing_its_footprint():
+    """A fine image (FINE times finer, WIDE times wider, exactly) holding one bright fine pixel, warped by the
+    pixel-offset family's shifts from 0 to 1/2 pixel in steps of 1/20: the point keeps its total light at every shift
+    and its centroid moves with the shift (each grade pixel's footprint is the same box whatever the shift). With
+    fewer warp samples than fine pixels the footprint narrows between samples, the total ripples with the shift, and
+    so does the chi^2 of a shift: a quarter-pixel shift is then not found, and a rotation is claimed in its place."""
+    import math
+
+    from mcrt.grade.explain.basis import FINE, WIDE
+    from mcrt.grade.explain.camera import _Warp
+
+    h = w = 20
+    n = round(FINE * WIDE * w)
+    assert n == FINE * WIDE * w  # the fine grid lies exactly on the grade grid
+    yy, xx = np.mgrid[0:n, 0:n]
+    fine = np.zeros((n, n, 3), np.float32)
+    fine[n // 2 + 1, n // 2 + 2, 0] = 1.0  # red: a point
+    fine[..., 1] = np.exp(-((xx - n / 2) ** 2 + (yy - n / 2) ** 2) / (2 * 6.0**2))  # green: a smooth blob
+    b = Basis(camera="near", spp=1, base=np.zeros((h, w, 3), np.float32), var=np.zeros((h, w, 3), np.float32),
+              fine=fine, fine_tan=WIDE * math.tan(math.radians(45.0)), fov_deg=90.0, max_depth=8)
+    wp = _Warp(b)
+    jj, ii = np.mgrid[0:h, 0:w]
+    totals, cx = [], []
+    for d in np.arange(0.0, 0.55, 0.05):
+        img = wp.image(dx=d, dy=d)
+        totals.append(img[..., 0].sum())
+        cx.append((img[..., 1] * ii).sum() / img[..., 1].sum())
+    np.testing.assert_allclose(totals, totals[0], rtol=1e-5)
+    np.testing.assert_allclose(np.diff(cx), -0.05, atol=2e-3)  # what lies at x is seen at x - dx
+
+
+def test_the_adequacy_rule_tries_what_chi2_cannot_tell_from_the_best():
+    """Ranked candidates (a rotation best, an albedo, a pixel shift, then a blur with a third of a small difference but
+    a chi^2 within noise's spread of the best's): the blur's remainder is tested too, beside the camera's two families
+    (one reading, a misregistration, which does not crowd the blur out); with no spread it is left out by its share."""
+    from mcrt.grade.adequacy import tried_candidates
+
+    z = np.zeros((2, 2, 3))
+    cands = [Candidate(f, f, f, chi2, 1, explained=e, change=z) for f, chi2, e in
+             (("rotation", 100.0, 1.0), ("albedo", 110.0, 0.9), ("pixel_offset", 112.0, 0.85), ("blur", 150.0, 0.3),
+              ("depth", 400.0, 0.1))]
+    tried = [c.family for c in tried_candidates(cands, within=60.0)]
+    assert tried == ["rotation", "albedo", "pixel_offset", "blur"], tried
+    assert [c.family for c in tried_candidates(cands)] == ["rotation", "albedo", "pixel_offset"]

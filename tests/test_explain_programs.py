@@ -136,7 +136,45 @@ def test_a_wall_left_out_is_named_as_a_black_surface(ctx):
                                                                           if k != "wall_CD"})], spp=1024)
     fam, said = _claimed(res)
     assert fam == "surface_black" and res.details["explanation"]["named"] == "wall CD black", said
-    assert set(named_causes(res)[0]) == {"object_missing", "albedo"}
+    assert set(named_causes(res)[0]) == {"object_missing", "albedo", "normals"}
+    assert "missing from the scene" in said and "normals facing away" in said
+    assert res.score < res.max_score
+
+
+def _object_albedo(name: str, albedo):
+    def edit(s):
+        return replace(s, objects=tuple(replace(o, material=replace(o.material, albedo=tuple(albedo)))
+                                        if o.name == name else o for o in s.objects))
+    return edit
+
+
+def test_a_black_object_is_named_with_every_cause_of_black(ctx):
+    """The tetrahedron at albedo 0 (Mitsuba, seed 74): black, as it would be with its normals facing away under
+    one-sided shading; the feedback claims it black and names albedo 0 and the normals, not one of them alone nor
+    a mirror of reflectance 0 beside it, and not missing (a missing object shows what lies behind it)."""
+    res = grade_image("tetra_black", ctx, [_mitsuba(74, _object_albedo("tetrahedron", (0.0, 0.0, 0.0))(load_scene()))],
+                      spp=1024)
+    fam, said = _claimed(res)
+    assert fam == "object_black", said
+    assert set(named_causes(res)[0]) == {"albedo", "normals"}, named_causes(res)
+    assert "the tetrahedron black" in said and "albedo 0" in said and "normals facing away" in said, said
+    assert "missing" not in said and "mirror" not in said, said
+    assert res.score < res.max_score
+
+
+def test_a_render_shifted_by_a_quarter_pixel_is_claimed_as_a_shift(ctx):
+    """A Mitsuba render at twice the resolution (seed 75) reduced by keeping every other pixel, img[1::2, 1::2]: the
+    image shifted by a quarter pixel right and down, with no blur. A small rotation reads much the same with a
+    parameter more: the shift is claimed (Occam's rule), with both offsets near +0.25, and the words name a resampled
+    image beside pixel centres off."""
+    fine = _render_spec(Spec("t", None, spp=1024), load_scene(), width=2 * RES, height=2 * RES, max_depth=8, seed=75)
+    img = np.asarray(fine.mean, np.float64)[1::2, 1::2]
+    res = grade_image("every_other", ctx, [img], spp=1024)
+    fam, said = _claimed(res)
+    assert fam == "pixel_offset", said
+    dx, dy = res.details["explanation"]["candidates"][0]["value"]
+    assert 0.1 <= dx <= 0.4 and 0.1 <= dy <= 0.4, (dx, dy)
+    assert "resampled with an offset" in said and "resampling" in named_causes(res)[0]
     assert res.score < res.max_score
 
 

@@ -193,23 +193,37 @@ def occam(adequate: list, fit):
     return None
 
 
-def tried_candidates(cands: list) -> list:
+def tried_candidates(cands: list, within: float = 0.0) -> list:
     """The candidates whose remainder is tested: the best (explaining at least :data:`mcrt.grade.explain.NAMED`,
-    with a predicted change) in rank order until :data:`TRIED` families are among them, at most :data:`MAX_TRIED`."""
+    or with a chi^2 within ``within`` of the best's, with a predicted change) in rank order until :data:`TRIED`
+    readings are among them, at most :data:`MAX_TRIED`.
+
+    ``within`` is the spread of noise's chi^2 (the share rule's GAIN_SIGMAS sqrt(2 n)): a candidate the chi^2
+    cannot tell from the best fits as well as far as chi^2 can say, whatever share of a small difference it has,
+    and its remainder decides. The camera's families are one reading (:func:`_reading`): a shift by a fraction of
+    a pixel and a small rotation are one misregistration, and do not crowd another cause out."""
     from mcrt.grade.explain.claim import NAMED
 
-    out, families = [], set()
+    best = next((c.chi2 for c in cands if c.change is not None), None)
+    out, readings = [], set()
     for c in cands:
-        if c.change is None or c.explained < NAMED:
+        if c.change is None or (c.explained < NAMED and not c.chi2 - best <= within):
             continue
-        if c.family not in families:
-            if len(families) == TRIED:
+        if _reading(c.family) not in readings:
+            if len(readings) == TRIED:
                 break
-            families.add(c.family)
+            readings.add(_reading(c.family))
         out.append(c)
         if len(out) == MAX_TRIED:
             break
     return out
+
+
+def _reading(family: str) -> str:
+    """The reading of the image a family belongs to: the camera's families are one."""
+    from mcrt.grade.explain.families import CAMERA_FAMILIES
+
+    return "camera" if family in CAMERA_FAMILIES else family
 
 
 def claim_rule(S: np.ndarray, R: np.ndarray, mask: np.ndarray, noise: Noise, sc: Scene2D, *, extra_var=None):
@@ -231,7 +245,7 @@ def claim_rule(S: np.ndarray, R: np.ndarray, mask: np.ndarray, noise: Noise, sc:
     measurements go to ``e.adequacy`` (:class:`Adequacy`).
     """
     from mcrt.grade import candidates as cd
-    from mcrt.grade.explain.claim import share_rule
+    from mcrt.grade.explain.claim import GAIN_SIGMAS, share_rule
 
     def test(c):
         var = extra_var(c) if extra_var is not None else None
@@ -245,7 +259,7 @@ def claim_rule(S: np.ndarray, R: np.ndarray, mask: np.ndarray, noise: Noise, sc:
         best = e.best
         tried = {}
         if e.verdict in (cd.CLAIMED, cd.INDISTINCT):  # a share of NAMED; a small gain over noise is no objection
-            pool = tried_candidates(e.candidates)
+            pool = tried_candidates(e.candidates, GAIN_SIGMAS * math.sqrt(2 * fit.n))
             for c in pool:
                 tried[id(c)] = test(c)
             adequate = [c for c in pool if tried[id(c)].verdict == "adequate"]

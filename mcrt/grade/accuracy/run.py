@@ -39,8 +39,9 @@ CAUSE_OF: dict[str, tuple[str, ...]] = {
     "light_size": ("light_size",), "object_missing": ("object_missing",), "object_moved": ("object_moved",),
     # Moving the eye along the view is nearly a zoom: either word is right for either mistake.
     "eye": ("camera_eye", "camera_fov"), "fov": ("camera_fov", "camera_eye"), "rotation": ("camera_rotation",),
-    # A shift of the image by a fraction of a pixel is what a small rotation does too.
-    "pixel_offset": ("pixel_offset", "camera_rotation"), "depth": ("depth",), "emitter_hidden": ("light_hidden",),
+    # A shift of the image by a fraction of a pixel is what a small rotation does too; the words name an image
+    # resampled with an offset (every other pixel kept) beside pixel centres off.
+    "pixel_offset": ("pixel_offset", "camera_rotation", "resampling"), "depth": ("depth",), "emitter_hidden": ("light_hidden",),
     "encoding": ("encoding",), "blur": ("blur",),
     "gamma_output": ("encoding",), "depth_off_by_one": ("depth",), "albedo_1pct": ("albedo",),
     "mirror_wrong_sign": ("albedo",), "no_jitter": ("blur",), "double_count": ("direct_twice",),
@@ -54,8 +55,10 @@ CAUSE_OF: dict[str, tuple[str, ...]] = {
     "light_facing": ("light_facing",), "bad_pixels": ("bad_pixels",),
     # Each sample clamped (fireflies removed with their energy): mcrt.grade.explain.sample_clamp.
     "sample_clamp": ("sample_clamp",),
-    # A surface of the closed room missing looks exactly like it black: the words name both.
-    "surface_black": ("object_missing", "albedo"),
+    # A surface black (mcrt.grade.explain.surface_black): a surface of the closed room missing, of albedo 0, or with
+    # its normals facing away under one-sided shading looks the same, and the words name every cause; an object
+    # black is not missing (what lies behind it would show).
+    "surface_black": ("object_missing", "albedo", "normals"), "object_black": ("albedo", "normals"),
 }
 
 
@@ -69,7 +72,12 @@ _ACCEPTED = {**{c: _CAMERA_CAUSES for c in _CAMERA_CAUSES},
              # enlarging a small render blurs it.
              "tone_map": ("tone_map", "encoding"), "channels": ("channels", "albedo", "colour_lost"),
              "colour_lost": ("colour_lost", "channels"),
-             "resampling": ("resampling", "blur")}
+             "resampling": ("resampling", "blur"),
+             # A surface black names all its causes in one statement: each is the others in other words.
+             "albedo": ("albedo", "object_missing", "normals"), "object_missing": ("object_missing", "albedo", "normals"),
+             "normals": ("normals", "object_missing", "albedo")}
+# The shift of the image by a fraction of a pixel names resampling with an offset in the same words.
+_ACCEPTED.update({c: _CAMERA_CAUSES + ("resampling",) for c in ("pixel_offset", "camera_rotation")})
 
 #: Causes of the fresh class (mcrt.grade.accuracy.fresh) that another cause word names as the same mistake, fixed
 #: before the class was graded: the feedback sends the student to the line that is wrong. Truncated 8-bit codes

@@ -32,7 +32,7 @@ falloff        a smooth fall-off, cos^k of the ray's angle  weighted least squar
 resampling     rendered at 1/k the resolution and enlarged  closed form on R
 material       an object rendered with the other material   mcrt renders at 0, 1/2, 1
 object_size    an object's size                             mcrt renders at a few scales
-surface_black  a surface of the room black (missing)        the albedo renders at 0
+surface_black  a surface black (missing, albedo 0, normals) the albedo renders at 0
 light_twice    direct light, or all light, counted twice    the path-depth renders 1 and 2
 light_facing   the light emitting on its other side         one mcrt render
 bad_pixels     pixels (or a block) written as 0             closed form on R

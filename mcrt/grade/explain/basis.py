@@ -14,7 +14,11 @@ from mcrt.scene import Lambertian, Mirror, Scene
 #: the fine image sees WIDE times further to each side (tan of the half angle), so that warps stay inside it.
 FINE = 4
 WIDE = 1.2
-SUB = 2
+#: As many warp samples per grade pixel and axis as fine pixels: bilinear samples fewer than the fine pixels give a
+#: pixel a footprint whose width changes with a sub-pixel shift (the chi^2 of a shift then ripples with the period of
+#: a fine pixel and a quarter-pixel shift is not found, while a rotation, whose shift varies across the image,
+#: averages the ripple out); with SUB = FINE every shift's footprint is the same box.
+SUB = FINE
 #: Albedo nodes rendered per surface (with the scene's own value).
 ALBEDO_NODES = (0.0, 0.5, 1.0)
 #: Offsets (scene units) of the light, the objects and the eye; light size factors.

@@ -142,7 +142,8 @@ def camera(fit: Fit, inputs: Inputs) -> list[Candidate]:
     p, chi, dm = _fit_camera(fit, wp, "pixel_offset", f0)
     dx, dy = float(p["dx"]), float(p["dy"])
     out.append(Candidate("pixel_offset", "pixel-centre offset", f"the image shifted by ({dx:+.2f}, {dy:+.2f}) pixel "
-                         "(x right, y down), as when pixel centres are not at (i + 0.5, j + 0.5)", chi, 2,
+                         "(x right, y down), as when pixel centres are not at (i + 0.5, j + 0.5), or an image "
+                         "resampled with an offset", chi, 2,
                          value=(dx, dy), change=dm))
     p, chi, dm = _fit_camera(fit, wp, "rotation", f0)
     ya, pi_, ro = (float(p[k]) for k in ("yaw", "pitch", "roll"))

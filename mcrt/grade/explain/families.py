@@ -30,7 +30,8 @@ CAMERA_FAMILIES = frozenset({"fov", "pixel_offset", "rotation", "eye"})
 #: The families a TA counts as major mistakes whatever their share of the image: the camera, the scene's geometry
 #: (an object or the light missing, moved or resized) and its colours (mcrt.grade.scoring.unbiased_loss).
 MAJOR_FAMILIES = CAMERA_FAMILIES | {"object_missing", "object_moved", "light_position", "light_size", "albedo", "channels",
-                                    "material", "object_size", "colour_lost", "light_facing", "surface_black"}
+                                    "material", "object_size", "colour_lost", "light_facing", "surface_black",
+                                    "object_black"}
 
 
 def prepare(a, scene, render) -> Basis:

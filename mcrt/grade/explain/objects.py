@@ -4,7 +4,9 @@ r"""An object's material and size, as a student's program gets them wrong.
   sphere diffuse, the diffuse tetrahedron a mirror), at albedo or
   reflectance 0, 1/2 and 1; the model image is the Lagrange interpolation
   through them per channel (channel c of the image depends on channel c of
-  the material only), the value scanned on :data:`GRID` per channel.
+  the material only), the value scanned on :data:`GRID` per channel. At 0
+  in every channel the object is black whatever its material, and is
+  worded as black with every cause of that (:mod:`.surface_black`).
 * **object_size**: each object scaled about its centre (a sphere's radius,
   a tetrahedron about its centroid) by the factors :data:`SIZES`, with the
   scene's own; the model image is linear between two neighbouring sizes.
@@ -26,6 +28,7 @@ from mcrt.grade.candidates import Candidate, Inputs
 from mcrt.grade.explain.basis import basis_settings
 from mcrt.grade.explain.fit import Fit
 from mcrt.grade.explain.scene import lagrange
+from mcrt.grade.explain.surface_black import black_family, black_words, is_black
 from mcrt.grade.feedback import fmt_values
 from mcrt.grade.feedback import num as _num
 from mcrt.scene import Lambertian, Mirror, Scene
@@ -98,8 +101,12 @@ def material(fit: Fit, inputs: Inputs) -> list[Candidate]:
             change[..., c] = curves[k]
         word = "a mirror of reflectance" if kind == "mirror" else "a diffuse (Lambertian) surface of albedo"
         was = "a diffuse surface" if kind == "mirror" else "a mirror"
-        out.append(Candidate("material", f"{name} as {kind}", f"the {name} rendered as {word} {fmt_values(fitted)} "
-                             f"where the scene makes it {was}", fit.delta(change), 3,
+        fam, text = "material", f"the {name} rendered as {word} {fmt_values(fitted)} where the scene makes it {was}"
+        label = next((k for k in (f"the {name}", f"the mirror {name}") if k in inputs.basis.values), None)
+        if is_black(fitted) and label is not None:  # black whatever the material: the surface black, every cause named
+            own = inputs.basis.values[label]
+            fam, text = black_family(label), black_words(label, own[1], own[0])
+        out.append(Candidate(fam, f"{name} as {kind}", text, fit.delta(change), 3,
                              value={"object": name, "material": kind, "value": fitted}, change=change))
     return out
 

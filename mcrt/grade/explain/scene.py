@@ -8,6 +8,7 @@ import numpy as np
 from mcrt.grade.candidates import Candidate, Inputs
 from mcrt.grade.explain.basis import AXES, _shift
 from mcrt.grade.explain.fit import CAP, Fit, refine
+from mcrt.grade.explain.surface_black import black_family, black_words, is_black
 from mcrt.grade.feedback import fmt_values as _fmt
 from mcrt.grade.feedback import num as _num
 
@@ -46,7 +47,9 @@ def albedo(fit: Fit, inputs: Inputs) -> list[Candidate]:
     r"""Each surface's albedo, fitted per channel on a grid of 101 values in [0, 1] then refined by a parabola.
 
     Channel c of the image depends on channel c of the albedos only (RGB
-    transport is channel-independent), so the three channels fit apart.
+    transport is channel-independent), so the three channels fit apart. A
+    fit black in every channel is worded as the surface black, with every
+    cause of that (:mod:`.surface_black`).
     """
     b = inputs.basis
     grid = np.linspace(0.0, 1.0, 101)
@@ -68,8 +71,10 @@ def albedo(fit: Fit, inputs: Inputs) -> list[Candidate]:
             dm[..., c] = np.tensordot(lagrange(np.array([fitted[-1]]), xs), ys, axes=(1, 0))[0] - b.base[..., c]
         kind = b.values[label][0]
         word = "albedo" if kind == "albedo" else "reflectance"
-        out.append(Candidate(word, f"{word} of {label}", f"{label} with {word} {_fmt(fitted)} where the scene says "
-                             f"{_fmt(scene_v)}", fit.delta(dm), 3, value=tuple(fitted), change=dm))
+        fam, text = word, f"{label} with {word} {_fmt(fitted)} where the scene says {_fmt(scene_v)}"
+        if is_black(fitted):  # black in every channel: albedo 0 is one of its causes, not the only one
+            fam, text = black_family(label), black_words(label, scene_v, word)
+        out.append(Candidate(fam, f"{word} of {label}", text, fit.delta(dm), 3, value=tuple(fitted), change=dm))
     return out
 
 

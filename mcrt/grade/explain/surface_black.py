@@ -1,13 +1,27 @@
-r"""A surface of the room black: missing from the scene, or of albedo 0 (the image cannot tell which).
+r"""A surface black: missing from the scene, of albedo 0, or shaded on its back (the image cannot tell which).
 
-The room is closed and nothing lies outside it, so a wall, the floor or the
-ceiling left out of the scene (a list of surfaces one short, a face culled)
-looks exactly like that surface with albedo 0: it reflects nothing, and no
-light comes from behind it. The model image is the basis's render of the
-surface at albedo 0 (:data:`mcrt.grade.explain.basis.ALBEDO_NODES` holds
-0), with no free parameter, and its words name both causes. The objects are
-not among them: an object left out shows what lies behind it (the
-``object_missing`` candidates of :mod:`.scene`).
+A surface that sends no light to the camera is black whatever the reason,
+and the image alone cannot say which reason it is:
+
+* its albedo (or a mirror's reflectance) is 0;
+* its normals face away from the light and the camera (triangles wound the
+  other way, a normal not flipped toward the incoming ray), so that
+  one-sided shading, :math:`\max(0, n \cdot l)`, gives 0 at every hit;
+* for a surface of the room, it is missing: the room is closed and nothing
+  lies outside it, so a wall, the floor or the ceiling left out of the scene
+  (a list of surfaces one short, a face culled) reflects nothing and no
+  light comes from behind it. An *object* left out is not black: what lies
+  behind it shows (the ``object_missing`` candidates of :mod:`.scene`).
+
+So every family that can predict a black surface words it as one statement
+naming every cause (:func:`black_words`), under one family name
+(:func:`black_family`): this module's candidates (each surface of the room
+at albedo 0: the basis's render at albedo 0,
+:data:`mcrt.grade.explain.basis.ALBEDO_NODES` holds 0, with no free
+parameter), the albedo or reflectance family where its fitted value is
+:data:`BLACK` or less in every channel (:func:`mcrt.grade.explain.scene.albedo`),
+and the material family at reflectance or albedo 0
+(:func:`mcrt.grade.explain.objects.material`).
 """
 
 from __future__ import annotations
@@ -20,6 +34,34 @@ from mcrt.grade.feedback import fmt_values
 
 #: Labels of the room's own surfaces in the basis (mcrt.grade.explain.basis._surface_edits).
 ROOM = ("wall ", "the floor", "the ceiling")
+#: A fitted albedo or reflectance at most this in every channel is the surface black (the albedo family's grid
+#: steps by 0.01, the material family's by 0.025: the first node above 0 of either is not black).
+BLACK = 0.02
+
+
+def is_room(label: str) -> bool:
+    """Whether ``label`` ('wall BC', 'the floor', 'the tetrahedron') is a surface of the closed room."""
+    return label.startswith(ROOM)
+
+
+def is_black(values) -> bool:
+    """Whether a fitted albedo or reflectance (one value per channel) is black in every channel."""
+    return bool(np.all(np.asarray(values, np.float64) <= BLACK))
+
+
+def black_family(label: str) -> str:
+    """The family a black reading of ``label`` belongs to: 'surface_black' for the room's surfaces (missing is among
+    its causes), 'object_black' for an object (an object missing shows what lies behind it)."""
+    return "surface_black" if is_room(label) else "object_black"
+
+
+def black_words(label: str, scene_values, word: str = "albedo") -> str:
+    """One clause, to follow "It looks like", naming every cause of ``label`` black (the module docstring);
+    ``word`` is what the scene sets ('albedo', or 'reflectance' for a mirror), ``scene_values`` its value."""
+    missing = "missing from the scene (nothing lies behind it in the closed room), " if is_room(label) else ""
+    return (f"{label} black: {missing}with {word} 0 where the scene says {fmt_values(scene_values)}, or with its "
+            "normals facing away, so that one-sided shading (max(0, n.l)) gives 0 (check the triangles' winding, "
+            "or flip each normal toward the incoming ray)")
 
 
 def surface_black(fit: Fit, inputs: Inputs) -> list[Candidate]:
@@ -29,12 +71,11 @@ def surface_black(fit: Fit, inputs: Inputs) -> list[Candidate]:
     out = []
     for label, (nodes, imgs, scene_v) in b.albedo.items():
         zero = np.flatnonzero(np.asarray(nodes) == 0.0)
-        if not label.startswith(ROOM) or zero.size == 0 or max(scene_v) <= 0.0:
+        if not is_room(label) or zero.size == 0 or max(scene_v) <= 0.0:
             continue
         change = imgs[zero[0]].astype(np.float64) - base
-        out.append(Candidate("surface_black", f"{label} black", f"{label} black: missing from the scene (nothing lies "
-                             f"behind it in the closed room), or with albedo 0 where the scene says "
-                             f"{fmt_values(scene_v)}", fit.delta(change), 0, value=label, change=change))
+        out.append(Candidate("surface_black", f"{label} black", black_words(label, scene_v), fit.delta(change), 0,
+                             value=label, change=change))
     return out
 
 
