@@ -1,9 +1,9 @@
-"""The fourth class (mcrt.grade.accuracy.fresh) builds what its specs say, and the report handles a class all held out.
+"""The fourth class (mcrt.grade.accuracy.fresh) builds what its specs say, and the report leaves out an empty half.
 
 These check the construction of the hand-ins at a tiny resolution (the files
 written, and the images' relations to a plain render of the same seed or to
-the relation the mistake implies); they never grade them: the class is held
-out. Mitsuba renders, seeds fixed per case.
+the relation the mistake implies); they never grade them (the class was
+written to be held out). Mitsuba renders, seeds fixed per case.
 """
 
 from __future__ import annotations
@@ -38,14 +38,14 @@ def _pair(name, tmp_path, **plain_changes):
     return case, write_submission(case, tmp_path / name), plain
 
 
-def test_specs_are_new_consistent_and_all_held_out():
+def test_specs_are_new_consistent_and_held_out_as_one():
     names = [s.name for s in fresh.SPECS]
     assert len(names) == len(set(names))
     others = {s.name for s in cases.SPECS + outside.SPECS + programs.SPECS}
     assert not others & set(names)
     assert all(s.cause in fresh.CAUSES and fresh.CAUSES[s.cause] for s in fresh.MISTAKES)
     assert all(s.cause is None for s in fresh.CORRECT)
-    assert all(s.held_out for s in fresh.SPECS)
+    assert all(s.held_out == fresh.HELD_OUT for s in fresh.SPECS)
     # A new cause key is one no other class uses, and every new one is used here.
     old = set(cases.CAUSES) | set(outside.CAUSES) | set(programs.NEW_CAUSES)
     assert not old & set(fresh.NEW_CAUSES)
@@ -224,18 +224,19 @@ def test_correct_files_read_back(tmp_path):
     assert np.all(np.abs(codes - exact) <= 1.0 + 1e-9) and np.any(codes != np.floor(exact + 0.5))
 
 
-def test_report_words_this_class_and_leaves_out_the_empty_tuned_half(tmp_path):
-    """The report of --class fresh names the class and its causes; with every case held out there is no tuned row
-    (outcomes made up: nothing graded)."""
+def test_report_words_this_class_and_leaves_out_an_empty_half(tmp_path):
+    """The report of --class fresh names the class and its causes; with every case in one half there is no row for
+    the other (outcomes made up: nothing graded)."""
     from mcrt.grade.accuracy.markdown import write_report
     from mcrt.grade.accuracy.run import Outcome
 
     s = _by_name("roulette_half_from_3")
-    o = Outcome(s.name, s.truth, s.cause, s.major, s.held_out, 16, s.file, 1.0, 2.0, [], False, False, False, "", 0.1)
-    text = write_report(tmp_path, [o], command="test", meta={}, gradescope=[], klass="fresh").read_text()
-    assert "no other class tried" in text and "mcrt.grade.accuracy.fresh" in text
-    assert f"`roulette` {fresh.NEW_CAUSES['roulette']}" in text
-    assert "| held out | 1 |" in text and "| tuned on |" not in text
+    for held_out, row, empty in ((True, "| held out | 1 |", "| tuned on |"), (False, "| tuned on | 1 |", "| held out |")):
+        o = Outcome(s.name, s.truth, s.cause, s.major, held_out, 16, s.file, 1.0, 2.0, [], False, False, False, "", 0.1)
+        text = write_report(tmp_path, [o], command="test", meta={}, gradescope=[], klass="fresh").read_text()
+        assert "no other class tried" in text and "mcrt.grade.accuracy.fresh" in text
+        assert f"`roulette` {fresh.NEW_CAUSES['roulette']}" in text
+        assert row in text and empty not in text
 
 
 def test_the_same_mistake_in_other_words_is_named_right_only_where_fixed_in_advance():

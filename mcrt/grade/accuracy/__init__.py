@@ -8,7 +8,7 @@
 * :mod:`~mcrt.grade.accuracy.outside` and :mod:`~mcrt.grade.accuracy.programs`:
   two more classes, mistakes outside the scene file and mistakes of students'
   programs (the latter written apart from the grader's rules);
-  :mod:`~mcrt.grade.accuracy.fresh`, a fourth, all held out: mistakes no
+  :mod:`~mcrt.grade.accuracy.fresh`, a fourth (held out until first graded): mistakes no
   other class tried, also written apart from the grader's rules.
 * :mod:`~mcrt.grade.accuracy.run`: every case graded with the course
   assignment; score, points lost, and whether the feedback named the cause.

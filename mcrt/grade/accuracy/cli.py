@@ -22,7 +22,7 @@ def register(sub) -> None:
                    help="the class graded: 'scene' (scene edits, mcrt.grade.accuracy.cases), 'outside' (mistakes "
                    "outside the scene file, mcrt.grade.accuracy.outside), 'programs' (mistakes of students' "
                    "programs, written apart from the grader's rules, mcrt.grade.accuracy.programs) or 'fresh' (mistakes "
-                   "no other class tried, all held out, mcrt.grade.accuracy.fresh) (default: scene)")
+                   "no other class tried, tuned on since its first grading, mcrt.grade.accuracy.fresh) (default: scene)")
     p.add_argument("--held-out", choices=("all", "only", "none"), default="all",
                    help="grade all cases, only the held-out ones, or none of them (default: all)")
     p.add_argument("--out", default=None, help=f"report folder (default: {DEFAULT_OUT}, or {DEFAULT_OUT}/CLASS "

@@ -1,4 +1,4 @@
-r"""A fourth class of hand-ins, all held out: mistakes no earlier class tried, written apart from the grader.
+r"""A fourth class of hand-ins: mistakes no earlier class tried, written apart from the grader.
 
 How it was written: from what goes wrong in students' ray tracers and in the
 code that saves their images, not from the grader. Its author read only the
@@ -45,9 +45,13 @@ Causes use the words of the other classes where the mistake really is that
 cause; the keys new here (:data:`NEW_CAUSES`) describe mistakes no existing
 cause does, and the grader may name none.
 
-**Held out**: the whole class. It was written after the other classes' held-out
-halves had been seen, to measure the rules as they stand; nothing in it is for
-tuning. The report's "tuned on" row is empty for it.
+**Held out, then tuned on.** The class was written after the other classes'
+held-out halves had been seen, to measure the rules as they stood, and graded
+once with every case held out (commit c4a8457, its report
+reports/grading_accuracy/fresh at that commit). The rules were then changed
+on what that grading showed (a PFM's byte order, a pair of one seed, a black
+surface's causes, a sub-pixel shift), so no case is held out any more
+(:data:`HELD_OUT`): the report's figures are those of a class tuned on.
 """
 
 from __future__ import annotations
@@ -65,8 +69,8 @@ from mcrt.grade.accuracy.cases import Spec
 from mcrt.image_files import RGB_TO_XYZ, srgb_oetf
 from mcrt.scene import Scene
 
-#: Whether the class is held out (see the module docstring).
-HELD_OUT = True
+#: Whether the class is held out: no longer, since its first grading (the module docstring).
+HELD_OUT = False
 
 #: The causes new in this class, as the report words them.
 NEW_CAUSES: dict[str, str] = {

@@ -83,9 +83,10 @@ _ACCEPTED.update({c: _CAMERA_CAUSES + ("resampling",) for c in ("pixel_offset", 
 #: before the class was graded: the feedback sends the student to the line that is wrong. Truncated 8-bit codes
 #: and a display curve applied to each sample are curves on the values (the encoding step); XYZ written as RGB is
 #: a colour matrix; a face of a mesh missing is part of an object missing; a camera of another model fails the
-#: camera criterion, which names the camera. Not accepted: a black surface (missing, albedo 0) for normals facing
-#: the wrong way, non-finite pixels for a PFM's byte order, the path depth for roulette without re-weighting (the
-#: student would check a max-depth setting that is right), the light facing one way for a light emitting from both.
+#: camera criterion, which names the camera. Not accepted: non-finite pixels for a PFM's byte order, the path depth
+#: for roulette without re-weighting (the student would check a max-depth setting that is right), the light facing
+#: one way for a light emitting from both. (Normals facing the wrong way are named where the feedback says so: a
+#: black surface's words name them, CAUSE_OF, since the class was first graded.)
 SAME_MISTAKE: dict[str, tuple[str, ...]] = {
     "quantisation": ("encoding", "tone_map"), "sample_curve": ("encoding", "tone_map"), "colour_space": ("channels",),
     "mesh_face": ("object_missing",), "camera_model": _CAMERA_CAUSES}
