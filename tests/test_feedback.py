@@ -117,6 +117,25 @@ def test_the_object_and_tile_tests_penalise_a_relevant_difference_not_a_precise_
         assert bt.penalised_any == penalised, effect  # the tiles on the floor likewise (0.05 % at 16x16)
 
 
+def test_the_whole_image_has_its_own_share_of_alpha():
+    """A flat 64 x 64 image 0.8 % too bright whose mean is known to 0.33 % (noise variance 4e-3 per pixel on 0.3,
+    seed 3): tiles of 8, 16 and 32 pixels and the whole image (255 tests, level 0.01, relevant beyond 0.3 %). With
+    equal weights the whole image's test is corrected as one of 255 and misses it; with its share (WHOLE_SHARE) it
+    is penalised. No bias at all is penalised by neither."""
+    from mcrt.stats.onesample import WHOLE_SHARE
+
+    R = np.full((64, 64, 3), 0.3)
+    var = np.full(R.shape, 4e-3)
+    e = np.random.default_rng(3).standard_normal(R.shape) * np.sqrt(var)
+    mask, noise = np.ones((64, 64), bool), Noise(model=var, reference=np.zeros_like(var))
+    kw = {"alpha": 0.01, "min_effect": 0.003, "full_effect": 0.1, "relevant": True}
+    for bias, equal, shared in ((0.0, False, False), (0.008, False, True)):
+        S = R * (1.0 + bias) + e
+        got = [multiscale_test(S - R, R, mask, noise, (8, 16, 32, 0), **kw, whole_share=w).penalised_any
+               for w in (0.0, WHOLE_SHARE)]
+        assert got == [equal, shared], bias
+
+
 def test_the_structure_test_sees_a_change_that_averages_out_on_one_object():
     """On the 36 pixels of one surface, +4 noise deviations on one half and -4 on the other (seed 6): the mean
     test cannot see it, the structure test does, on that surface alone, in the Holm family (level 0.01). Noise

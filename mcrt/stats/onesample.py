@@ -48,7 +48,8 @@ noise lifts such an estimate past the threshold.
 Other detectors' tests join the same family (``multiscale_test(..., extra=...)``; in grading the
 structured-error detectors of :mod:`mcrt.grade.structure`): weighted Holm
 (:func:`mcrt.stats.adjust_p_values_weighted`) gives each detector its share
-of ``alpha`` and the tiles the rest.
+of ``alpha`` and the tiles the rest, of which the whole image's tests get
+:data:`WHOLE_SHARE` and the other tiles equal parts.
 """
 
 from __future__ import annotations
@@ -62,6 +63,11 @@ from mcrt.stats.multiple import adjust_p_values_weighted
 from mcrt.stats.tiles import tile_box, tile_sums
 
 CHANNELS = ("R", "G", "B")
+#: Share of the tiles' part of ``alpha`` that the whole image's tests (tile 0) get, the rest going to the other tiles
+#: in equal parts. A bias over the whole image (a light's radiance, light reaching the ceiling that should not) is
+#: the commonest mistake and the whole image its most powerful test; among hundreds of equally weighted tiles it
+#: would need the p-value of an 8 x 8 tile, and a bias of a per cent at 256 spp would go unseen.
+WHOLE_SHARE = 0.1
 
 
 
@@ -174,8 +180,22 @@ def bias_scales(tiles, h: int, w: int) -> list[int]:
     return [t for t in tiles if not (t > 0 and t >= max(h, w) and 0 in tiles)]
 
 
+def _tile_weights(scales: list[ScaleResult], share: float, whole_share: float) -> np.ndarray:
+    """Weighted Holm's weights of the tile tests, in :func:`multiscale_test`'s order: ``share`` split equally, or,
+    when the whole image is among other scales, ``whole_share`` of it to the whole image's tests."""
+    counts = [int(np.count_nonzero(s.valid)) * 3 for s in scales]
+    whole = [s.tile == 0 for s in scales]
+    n_whole = sum(c for c, w in zip(counts, whole) if w)
+    n_rest = sum(counts) - n_whole
+    if not (whole_share > 0 and n_whole and n_rest):
+        return np.full(sum(counts), share / max(sum(counts), 1))
+    return np.concatenate([np.full(c, share * (whole_share / n_whole if w else (1.0 - whole_share) / n_rest))
+                           for c, w in zip(counts, whole)])
+
+
 def multiscale_test(resid: np.ndarray, ref: np.ndarray, mask: np.ndarray, noise: Noise, tiles, *, alpha: float,
-              min_effect: float, full_effect: float, extra=(), relevant: bool = False) -> MultiScaleTest:
+              min_effect: float, full_effect: float, extra=(), relevant: bool = False,
+              whole_share: float = WHOLE_SHARE) -> MultiScaleTest:
     """Multi-scale tile test, Holm-corrected over every tile, scale and channel (module docstring).
 
     ``extra`` holds other detectors' tests that share the family-wise error
@@ -188,6 +208,9 @@ def multiscale_test(resid: np.ndarray, ref: np.ndarray, mask: np.ndarray, noise:
     ``relevant``: the tiles test a bias beyond ``min_effect`` (:func:`relevant_p`; the grade's bias test, which
     takes points), else a zero bias with the estimate compared with ``min_effect`` (a test that decides whether
     a remainder is noise, where rejecting more is the cautious side).
+
+    ``whole_share``: the part of the tiles' share the whole image's tests get (:data:`WHOLE_SHARE`; 0: every
+    tile of every scale weighs the same).
     """
     h, w = resid.shape[:2]
     scales = [scale_stats(resid, ref, mask, noise, tile) for tile in bias_scales(tiles, h, w)]
@@ -196,7 +219,7 @@ def multiscale_test(resid: np.ndarray, ref: np.ndarray, mask: np.ndarray, noise:
     extra = [(name, np.asarray(p, np.float64).ravel(), np.asarray(rel, bool).ravel(), share)
              for name, p, rel, share in extra if np.size(p)]
     tile_share = 1.0 - sum(e[3] for e in extra)
-    weights = [np.full(ps.size, tile_share / max(ps.size, 1))] + [np.full(e[1].size, e[3] / e[1].size) for e in extra]
+    weights = [_tile_weights(scales, tile_share, whole_share)] + [np.full(e[1].size, e[3] / e[1].size) for e in extra]
     all_p = np.concatenate([ps] + [e[1] for e in extra])
     all_adj = adjust_p_values_weighted(all_p, np.concatenate(weights)) if all_p.size else all_p
     adj = all_adj[:ps.size]
