@@ -104,7 +104,8 @@ def test_buffer_mistakes():
     planar = blind._planar_as_interleaved(x)
     np.testing.assert_array_equal(planar[0, 0], x[0, :3, 0])  # three red values as one pixel
     sheared = blind._row_stride_slip(x)
-    np.testing.assert_array_equal(sheared[1, 0], x[1, 1])  # row 1 starts one pixel in: its first sits at the end of row 0
+    # Row 1 starts one pixel in: its first pixel sits at the end of row 0.
+    np.testing.assert_array_equal(sheared[1, 0], x[1, 1])
     np.testing.assert_array_equal(sheared[0, W - 1], x[1, 0])
     assert np.all(sheared[-1, W - H + 1:] == 0)
 

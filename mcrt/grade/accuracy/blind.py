@@ -2,10 +2,12 @@ r"""A fifth class of hand-ins: mistakes made outside the scene file, written bli
 
 How it was written: from what goes wrong in students' programs around a
 correct scene, not from the grader. Its author read the other classes' specs
-and cause words and :data:`~mcrt.grade.accuracy.run.CAUSE_OF`'s and
-:data:`~mcrt.grade.accuracy.run.SAME_MISTAKE`'s keys (to reuse their words),
-never the grader's rules, and graded none of it, not one case. Each cause and
-``major`` flag was set from the mistake alone. The mistakes differ from those
+and cause words, :data:`~mcrt.grade.accuracy.run.CAUSE_OF` and
+:data:`~mcrt.grade.accuracy.run.SAME_MISTAKE` (with the scoring equivalences
+beside them), to reuse their words; never the grader's rules (what decides a
+cause), and graded none of it, not one case. Each cause and ``major`` flag
+was set from the mistake alone, and the equivalences of the new causes were
+added to ``SAME_MISTAKE`` before any grading. The mistakes differ from those
 of the four other classes (:mod:`~mcrt.grade.accuracy.cases`,
 :mod:`~mcrt.grade.accuracy.outside`, :mod:`~mcrt.grade.accuracy.programs`,
 :mod:`~mcrt.grade.accuracy.fresh`):
@@ -414,7 +416,8 @@ def _light_disk(d: dict) -> dict:
     lt = load_scene().light
     to_world = mi.ScalarTransform4f().translate([float(c) for c in lt.center]) @ \
         mi.ScalarTransform4f().rotate([1.0, 0.0, 0.0], 180.0) @ mi.ScalarTransform4f().scale(0.5 * float(lt.size[0]))
-    disk = {"type": "disk", "to_world": to_world, "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.0] * 3}},
+    black = {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.0] * 3}}
+    disk = {"type": "disk", "to_world": to_world, "bsdf": black,
             "emitter": {"type": "area", "radiance": {"type": "rgb", "value": [float(c) for c in lt.radiance]}}}
     return dict(fresh._without_mesh(d, "light"), light=disk)
 
@@ -449,7 +452,8 @@ def _mistakes() -> tuple[Spec, ...]:
         # Post-processing
         Spec("pp_hable", "tone_map", **_posted("hable", _hable),
              truth="Hable's filmic (Uncharted 2) curve after an exposure of 2, white point 11.2, written as EXR"),
-        Spec("pp_exposure_sidecar", "light_radiance", True, held_out=True, **_posted("times_0.25", partial(_scaled, f=0.25)),
+        Spec("pp_exposure_sidecar", "light_radiance", True, held_out=True,
+             **_posted("times_0.25", partial(_scaled, f=0.25)),
              writer=partial(_write_exr_sidecar, ev=2), file="exr+exposure.txt",
              truth="the image divided by 4 to fit a display, '+2 EV' written in exposure.txt and not applied"),
         Spec("pp_unsharp", "sharpen", **_posted("unsharp", _unsharp),
@@ -458,34 +462,41 @@ def _mistakes() -> tuple[Spec, ...]:
              truth="saturation raised 1.3x about each pixel's luminance (a vibrance slider), negatives clipped"),
         # Writing the file
         Spec("file_planar_as_rgb", "channels", True, **_posted("planar_as_interleaved", _planar_as_interleaved),
-             truth="a planar buffer (all R, all G, all B) written as interleaved RGB: a 3 x 3 mosaic of one channel each"),
+             truth="a planar buffer (all R, all G, all B) written as interleaved RGB: a 3 x 3 mosaic, one channel "
+             "each"),
         Spec("file_png16_12bit", "code_range", True, held_out=True, writer=partial(_write_png16_codes, bits=12),
              file="png16-srgb-12bit-codes", truth="sRGB codes of 12 bits (0-4095) written into a 16-bit PNG unscaled"),
-        Spec("file_row_stride", "row_stride", True, **_posted("row_stride_w_minus_1", _row_stride_slip), file="png-srgb",
+        Spec("file_row_stride", "row_stride", True, **_posted("row_stride_w_minus_1", _row_stride_slip),
+             file="png-srgb",
              truth="pixel (x, y) stored at y * (W - 1) + x: the image sheared a pixel a row, an 8-bit sRGB PNG"),
         Spec("file_bmp_rows_top_first", "orientation", True, held_out=True, writer=_write_bmp_by_hand,
-             file="bmp-by-hand", truth="a BMP written by hand: its header declares bottom-up rows, the top row went first"),
+             file="bmp-by-hand",
+             truth="a BMP written by hand: its header declares bottom-up rows, the top row went first"),
         # Materials
         Spec("lambert_pi_twice", "brdf_norm", True, mitsuba_edit=partial(_diffuse_remapped, factor=1.0 / math.pi),
              truth="every Lambertian's 1/pi applied twice (in the BRDF and again in its sample's weight): albedo / pi"),
         Spec("albedo_squared", "albedo", True, held_out=True, mitsuba_edit=partial(_diffuse_remapped, power=2.0),
-             truth="the albedo multiplied in twice (in the BRDF and the sample's weight): every diffuse colour squared"),
-        Spec("mirror_silver", "albedo", held_out=False,
+             truth="the albedo multiplied in twice (in the BRDF and the sample's weight): every diffuse colour "
+             "squared"),
+        Spec("mirror_silver", "albedo",
              mitsuba_edit=partial(_sphere_bsdf, bsdf={"type": "conductor", "material": "Ag"}),
              truth="the mirror sphere a silver conductor (Fresnel of Ag) instead of a perfect mirror"),
         Spec("mirror_glass_fresnel", "material", True, held_out=True,
              mitsuba_edit=partial(_sphere_bsdf, bsdf={"type": "plastic", "int_ior": 1.5, "diffuse_reflectance": {
                  "type": "rgb", "value": [0.0, 0.0, 0.0]}}),
-             truth="the mirror weighted by a glass's Fresnel reflectance (ior 1.5: 4 % head-on), nothing else reflected"),
+             truth="the mirror weighted by a glass's Fresnel reflectance (ior 1.5: 4 % head-on), nothing else "
+             "reflected"),
         Spec("floor_mirror", "material", True, mitsuba_edit=_floor_mirror,
              truth="the floor given the sphere's material (a perfect mirror): material indices one off"),
         # Camera model
         Spec("thin_lens", "camera_model", sensor={"type": "thinlens", "aperture_radius": 0.1,
                                                   "focus_distance": _SPHERE_DISTANCE},
-             truth="a thin lens of aperture radius 0.1 focused on the sphere's centre (11.2): the rest slightly defocused"),
+             truth="a thin lens of aperture radius 0.1 focused on the sphere's centre (11.2): the rest slightly "
+             "defocused"),
         Spec("fov_diagonal", "camera_fov", True, held_out=True, sensor={"fov_axis": "diagonal"},
              truth="the 90 degrees taken as the diagonal field of view: 70.5 degrees horizontally"),
-        Spec("aspect_4_3", "camera_fov", True, **_posted("aspect_4_3", partial(_aspect_4_3, spp=_S, seed=c("aspect_4_3"))),
+        Spec("aspect_4_3", "camera_fov", True,
+             **_posted("aspect_4_3", partial(_aspect_4_3, spp=_S, seed=c("aspect_4_3"))),
              truth="an aspect ratio of 4:3 hard-coded: rays' y scaled by 3/4, the image stretched vertically"),
         Spec("jitter_two_pixels", "blur", held_out=True,
              **_posted("jitter_2px", partial(_jitter_two_pixels, spp=_S, seed=c("jitter_two_pixels"))),
@@ -514,7 +525,8 @@ def _mistakes() -> tuple[Spec, ...]:
              truth="R, G and B traced apart, 64 spp each (three seeds), 192 spp declared"),
         Spec("adaptive_stop", "spp_claim", held_out=True, spp=256,
              **_posted("adaptive", partial(_adaptive, batch=16, batches=16, rel=0.03, seed=c("adaptive_stop"))),
-             truth="adaptive sampling: batches of 16 spp until the standard error < 3 % of the luminance, 256 declared"),
+             truth="adaptive sampling: batches of 16 spp until the standard error < 3 % of the luminance (98 spp on "
+             "average), 256 declared"),
         Spec("tiles_interrupted", "spp_claim", spp=256,
              **_posted("tiles", partial(_tiles_interrupted, full=256, low=32, done=9, seed=c("tiles_interrupted"))),
              truth="the render stopped at its time limit: 9 of 16 tiles at 256 spp, 7 at 32, 256 declared"),
