@@ -95,18 +95,16 @@ def _crc(name: str) -> int:
 # --------------------------------------------------------------------------
 
 
-def _render(width: int, height: int, spp: int, seed: int, *, fov: float | None = None, max_depth: int = 8,
-            dict_edit=None) -> np.ndarray:
-    """A Mitsuba path render of the canonical scene at ``width`` x ``height`` (field of view ``fov`` if given,
-    ``dict_edit`` applied to the scene dict): the mean, linear RGB."""
+def _render(width: int, height: int, spp: int, seed: int, *, fov: float | None = None,
+            max_depth: int = 8) -> np.ndarray:
+    """A Mitsuba path render of the canonical scene at ``width`` x ``height`` (field of view ``fov`` if given): the
+    mean, linear RGB."""
     from mcrt.mitsuba_scene import render_with_variance, scene_dict
     from mcrt.scene import load_scene
 
     d = scene_dict(load_scene(), "near", width, height, max_depth, spp=spp)
     if fov is not None:
         d["sensor"] = dict(d["sensor"], fov=float(fov))
-    if dict_edit is not None:
-        d = dict_edit(d)
     return np.asarray(render_with_variance(d, spp=spp, seed=seed).mean, np.float64)
 
 
@@ -235,7 +233,7 @@ def _adaptive(x, *, batch: int, batches: int, rel: float, seed: int):
     h, w = x.shape[:2]
     means = np.stack([_render(w, h, batch, seed + k) for k in range(batches)])
     lum = means @ programs._LUMA
-    out = means[-1].copy()
+    out = np.empty_like(means[0])  # every pixel is set: where it stopped, or the mean of all batches
     done = np.zeros(lum.shape[1:], bool)
     for n in range(2, batches + 1):
         m = means[:n].mean(axis=0)
