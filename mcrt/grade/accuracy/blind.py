@@ -26,7 +26,8 @@ of the four other classes (:mod:`~mcrt.grade.accuracy.cases`,
   taken as the diagonal's; a 4:3 aspect ratio hard-coded into a square
   image; pixel jitter twice the pixel's width;
 * **light model**: the radiance times the light's area; the light's pdf
-  without its area; a disk inscribed in the square;
+  without its area; a disk inscribed in the square; the light sampled on
+  one of its two triangles with the square's pdf;
 * **resolution**: rendered at 63 x 63 and padded; rendered at 65 x 65 and
   cropped; rendered at 32 x 32 and enlarged with Pillow's default (bicubic)
   on 8-bit codes;
@@ -80,7 +81,8 @@ NEW_CAUSES: dict[str, str] = {
     "code_range": "codes of another bit depth in the file (12-bit codes in a 16-bit PNG)",
     "row_stride": "pixels written at the wrong addresses (a row stride off by one)",
     "brdf_norm": "a BRDF's normalisation (a Lambertian divided by pi twice)",
-    "light_pdf": "the light sampled with a wrong pdf (the light seen right, its light on surfaces not)",
+    "light_pdf": "the light sampled wrongly (a wrong pdf, or part of it only): the light seen right, its light on "
+                 "surfaces not",
     "light_shape": "the light's shape (a disk for a square)",
     "resolution_crop": "rendered at another resolution, then padded or cropped to the assignment's",
 }
@@ -95,16 +97,18 @@ def _crc(name: str) -> int:
 # --------------------------------------------------------------------------
 
 
-def _render(width: int, height: int, spp: int, seed: int, *, fov: float | None = None,
-            max_depth: int = 8) -> np.ndarray:
-    """A Mitsuba path render of the canonical scene at ``width`` x ``height`` (field of view ``fov`` if given): the
-    mean, linear RGB."""
+def _render(width: int, height: int, spp: int, seed: int, *, fov: float | None = None, max_depth: int = 8,
+            dict_edit=None) -> np.ndarray:
+    """A Mitsuba path render of the canonical scene at ``width`` x ``height`` (field of view ``fov`` if given,
+    ``dict_edit`` applied to the scene dict): the mean, linear RGB."""
     from mcrt.mitsuba_scene import render_with_variance, scene_dict
     from mcrt.scene import load_scene
 
     d = scene_dict(load_scene(), "near", width, height, max_depth, spp=spp)
     if fov is not None:
         d["sensor"] = dict(d["sensor"], fov=float(fov))
+    if dict_edit is not None:
+        d = dict_edit(d)
     return np.asarray(render_with_variance(d, spp=spp, seed=seed).mean, np.float64)
 
 
@@ -194,6 +198,17 @@ def _light_pdf_without_area(x, *, f: float, spp: int, seed: int):
     seen = _render(w, h, spp, seed, max_depth=1)
     full = _render(w, h, spp, seed)
     return seen + f * (full - seen)
+
+
+def _light_one_triangle(x, *, spp: int, seed: int):
+    """NEE on the light's first triangle only, with the whole square's pdf (1/4): that triangle lights the room at
+    twice its radiance, the other not at all; the light seen directly is the square. Same-seed renders: the light
+    seen (max depth 1) of the scene, plus everything else (full minus max depth 1) of the scene whose light is
+    :func:`_first_triangle_light`; light seen in the mirror is the latter's."""
+    h, w = x.shape[:2]
+    seen = _render(w, h, spp, seed, max_depth=1)
+    edit = _first_triangle_light
+    return seen + _render(w, h, spp, seed, dict_edit=edit) - _render(w, h, spp, seed, max_depth=1, dict_edit=edit)
 
 
 def _padded(x, *, spp: int, seed: int):
@@ -420,6 +435,20 @@ def _light_disk(d: dict) -> dict:
     return dict(fresh._without_mesh(d, "light"), light=disk)
 
 
+def _first_triangle_light(d: dict) -> dict:
+    """The light's first triangle emitting twice the radiance, its second black (a surface, emitting nothing)."""
+    from mcrt.mitsuba_scene import _light_surface, _mesh
+    from mcrt.scene import Surface, load_scene
+
+    s = load_scene()
+    lt = next(sf for sf in s.surfaces() if sf.name == "light")
+    tris = np.asarray(_light_surface(lt, s.light.normal).triangles)
+    black = {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.0] * 3}}
+    emitter = {"type": "area", "radiance": {"type": "rgb", "value": [2.0 * float(c) for c in s.light.radiance]}}
+    return dict(d, light=_mesh(Surface("light", tris[:1], None), black, emitter),
+                light_rest=_mesh(Surface("light_rest", tris[1:], None), black))
+
+
 #: The sphere's distance from the eye (-1, 0, 0): the thin lens's focus.
 _SPHERE_DISTANCE = math.dist((-1.0, 0.0, 0.0), (9.5, 2.0, -3.3))
 
@@ -438,7 +467,7 @@ CATEGORIES: dict[str, tuple[str, ...]] = {
     "file": ("file_planar_as_rgb", "file_png16_12bit", "file_row_stride", "file_bmp_rows_top_first"),
     "materials": ("lambert_pi_twice", "albedo_squared", "mirror_silver", "mirror_glass_fresnel", "floor_mirror"),
     "camera": ("thin_lens", "fov_diagonal", "aspect_4_3", "jitter_two_pixels"),
-    "light": ("light_times_area", "light_pdf_no_area", "light_disk"),
+    "light": ("light_times_area", "light_pdf_no_area", "light_disk", "light_one_triangle"),
     "resolution": ("render_63_padded", "render_65_cropped", "pillow_enlarged_32"),
     "samples": ("channels_apart", "adaptive_stop", "tiles_interrupted"),
 }
@@ -507,6 +536,10 @@ def _mistakes() -> tuple[Spec, ...]:
              truth="the light's pdf taken as 1, not 1/area: light on surfaces 1/4 of the truth, the light seen right"),
         Spec("light_disk", "light_shape", True, mitsuba_edit=_light_disk,
              truth="the light a disk of diameter 2 inscribed in the 2 x 2 square, same radiance (pi/4 of the power)"),
+        Spec("light_one_triangle", "light_pdf", True, held_out=True,
+             **_posted("light_first_triangle", partial(_light_one_triangle, spp=_S, seed=c("light_one_triangle"))),
+             truth="light sampled on the square's first triangle only, with the square's pdf: half the light at "
+             "twice its radiance lights the room, the light seen right"),
         # Resolution
         Spec("render_63_padded", "resolution_crop", True,
              **_posted("63_padded", partial(_padded, spp=_S, seed=c("render_63_padded"))),
