@@ -11,7 +11,8 @@ from mcrt.util import progress
 DEFAULT_OUT = "reports/grading_accuracy"
 DEFAULT_ASSIGNMENT = "course2023"
 #: The classes by --class name: the module (under mcrt.grade.accuracy) holding its SPECS and CAUSES.
-CLASSES = {"scene": "cases", "outside": "outside", "programs": "programs", "fresh": "fresh"}
+CLASSES = {"scene": "cases", "outside": "outside", "programs": "programs", "fresh": "fresh",
+           "blind": "blind"}
 
 
 def register(sub) -> None:
@@ -21,8 +22,10 @@ def register(sub) -> None:
     p.add_argument("--class", dest="klass", choices=tuple(CLASSES), default="scene",
                    help="the class graded: 'scene' (scene edits, mcrt.grade.accuracy.cases), 'outside' (mistakes "
                    "outside the scene file, mcrt.grade.accuracy.outside), 'programs' (mistakes of students' "
-                   "programs, written apart from the grader's rules, mcrt.grade.accuracy.programs) or 'fresh' (mistakes "
-                   "no other class tried, tuned on since its first grading, mcrt.grade.accuracy.fresh) (default: scene)")
+                   "programs, written apart from the grader's rules, mcrt.grade.accuracy.programs), 'fresh' (mistakes "
+                   "no other class tried, tuned on since its first grading, mcrt.grade.accuracy.fresh) or 'blind' "
+                   "(mistakes outside the scene file no other class tried, written blind to the grader, a held-out half "
+                   "fixed by category, mcrt.grade.accuracy.blind) (default: scene)")
     p.add_argument("--held-out", choices=("all", "only", "none"), default="all",
                    help="grade all cases, only the held-out ones, or none of them (default: all)")
     p.add_argument("--out", default=None, help=f"report folder (default: {DEFAULT_OUT}, or {DEFAULT_OUT}/CLASS "

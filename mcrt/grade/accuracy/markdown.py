@@ -69,13 +69,29 @@ _FRESH = ("The wrong renders are mistakes **no other class tried** (mcrt.grade.a
           "a class tuned on.")
 
 
+_BLIND = ("The wrong renders are mistakes made **outside the scene file** that no other class tried "
+          "(mcrt.grade.accuracy.blind), written blind to the grader's rules and not graded by their author: "
+          "post-processing (a filmic curve, an exposure left in a sidecar, an unsharp mask, a saturation change), "
+          "writing the file (a planar buffer as interleaved, 12-bit codes in a 16-bit PNG, a row stride off by one, a "
+          "BMP's rows upside down), materials (a Lambertian divided by pi twice, albedos squared, a silver or "
+          "glass-Fresnel mirror, a mirror floor), camera models (a thin lens, a diagonal field of view, a 4:3 aspect, "
+          "jitter over two pixels), light models (radiance times area, a pdf without the area, a disk, one "
+          "triangle sampled), resolution (63 or 65 pixels padded or cropped, a bicubic enlargement) and claimed "
+          "spp (channels traced apart, "
+          "adaptive stopping, an interrupted render); from Mitsuba renders of edited scenes, Mitsuba renders "
+          "combined, or correct renders written as students' programs write files. The correct ones come from "
+          "Mitsuba and mcrt in formats no other class used. *Named right*, *confidently wrong*, *partial or none*: "
+          "as for the other classes. **Held-out** cases (marked H) were fixed by the rule stated in the module (every "
+          "other case of each category) before any case was graded.")
+
+
 def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta: dict, gradescope: list[dict],
                  klass: str = "scene") -> Path:
     """Write index.md and data.json under ``out``; returns the Markdown's path. ``klass`` is the class graded:
     'scene' (mcrt.grade.accuracy.cases), 'outside' (mcrt.grade.accuracy.outside), 'programs'
-    (mcrt.grade.accuracy.programs) or 'fresh' (mcrt.grade.accuracy.fresh); an empty half (tuned on or held out) is
-    left out of the rates table."""
-    from mcrt.grade.accuracy import fresh, outside, programs
+    (mcrt.grade.accuracy.programs), 'fresh' (mcrt.grade.accuracy.fresh) or 'blind' (mcrt.grade.accuracy.blind); an
+    empty half (tuned on or held out) is left out of the rates table."""
+    from mcrt.grade.accuracy import blind, fresh, outside, programs
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     tuned = [o for o in outcomes if not o.held_out]
@@ -86,7 +102,8 @@ def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta
     (out / "data.json").write_text(json.dumps(data, indent=1, default=str) + "\n", encoding="utf-8")
     title = "Grading accuracy on a class of realistic hand-ins" + {
         "outside": ": mistakes outside the scene file", "programs": ": mistakes of students' programs",
-        "fresh": ": mistakes no other class tried"}.get(klass, "")
+        "fresh": ": mistakes no other class tried",
+        "blind": ": mistakes outside the scene file, written blind"}.get(klass, "")
     L = [f"# {title}", "",
          f"Written by `{command}` ({meta.get('date', '')}, {meta.get('seconds', 0):.0f} s). "
          f"Assignment: `{meta.get('assignment')}`; reference: {meta.get('reference')}.", "",
@@ -97,8 +114,8 @@ def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta
          "the mistake's cause (the explanation's family, or a criterion that names it: `linear` for an encoding, "
          "`exposure` for a constant factor, `camera` for misregistration). *Confidently wrong*: it names a cause, and "
          "not the right one; *also wrong*: it names the right cause and a wrong one beside it. **Held-out** cases (marked H) were not looked at while the diagnosis was tuned, with one exception: the last two rules of the grader (the camera not blamed beside a cause outside it; an explained wrong geometry, light placement, colour or camera scored as a major mistake) were added after the held-out results had been seen; and when the per-object structure test was added, the exemption of a blur's remainder where the detectors found a filter (a denoiser's kernel is no Gaussian) was added after the held-out `denoised` case had been seen to lose its name, and a rule (a claimed blur counted as a filtered image by itself) was dropped after the final run, with no held-out verdict changed."
-         if klass not in ("outside", "programs", "fresh") else {"outside": _OUTSIDE, "programs": _PROGRAMS,
-                                                                "fresh": _FRESH}[klass], "",
+         if klass not in ("outside", "programs", "fresh", "blind") else {
+             "outside": _OUTSIDE, "programs": _PROGRAMS, "fresh": _FRESH, "blind": _BLIND}[klass], "",
          "## Rates", "",
          "| | mistakes | detected (lost points) | named right | confidently wrong | partial or none | also wrong | "
          "major mistakes losing >= 25 % | correct renders | false alarms | correct named a bug |",
@@ -127,7 +144,8 @@ def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta
             continue
         L.append(f"| {o.name} | {'H' if o.held_out else ''} | {_cell(o.truth, 90)} | {o.spp} | {o.file} | "
                  f"{o.score:g}/{o.max_score:g} | {'yes' if o.wrong else 'no'} | {_cell(o.said) or '-'} | {o.seconds:.1f} |")
-    causes = {"outside": outside.CAUSES, "programs": programs.CAUSES, "fresh": fresh.CAUSES}.get(klass, CAUSES)
+    causes = {"outside": outside.CAUSES, "programs": programs.CAUSES, "fresh": fresh.CAUSES,
+              "blind": blind.CAUSES}.get(klass, CAUSES)
     L += ["", "Causes: " + "; ".join(f"`{k}` {v}" for k, v in causes.items()) + "."]
     if gradescope:
         L += ["", "## One student as Gradescope grades it", "",

@@ -89,7 +89,17 @@ _ACCEPTED.update({c: _CAMERA_CAUSES + ("resampling",) for c in ("pixel_offset", 
 #: black surface's words name them, CAUSE_OF, since the class was first graded.)
 SAME_MISTAKE: dict[str, tuple[str, ...]] = {
     "quantisation": ("encoding", "tone_map"), "sample_curve": ("encoding", "tone_map"), "colour_space": ("channels",),
-    "mesh_face": ("object_missing",), "camera_model": _CAMERA_CAUSES}
+    "mesh_face": ("object_missing",), "camera_model": _CAMERA_CAUSES,
+    # The blind class (mcrt.grade.accuracy.blind), fixed before any of it was graded: a sharpening filter after
+    # rendering is a filter after rendering, as a blur is; a saturation change is a 3 x 3 matrix on the channels, as a
+    # change of primaries or a channel swap is; codes of another bit depth are the file's encoding of the values; a
+    # row stride off by one puts pixels at the wrong places, as a flip does, in the same lines of the writer; a
+    # Lambertian divided by pi twice makes every diffuse surface's colour 1/pi of its own; a disk for the square is a
+    # light of another size; rendering at another resolution and padding or cropping is resampling wrongly. Not
+    # accepted: the light's radiance for a wrong light pdf (the light seen is right).
+    "sharpen": ("blur",), "colour_grade": ("colour_space", "channels"), "code_range": ("encoding",),
+    "row_stride": ("orientation",), "brdf_norm": ("albedo",), "light_shape": ("light_size",),
+    "resolution_crop": ("resampling",)}
 
 
 def is_named(cause: str, named: list[str]) -> bool:
