@@ -237,7 +237,9 @@ def claim_rule(S: np.ndarray, R: np.ndarray, mask: np.ndarray, noise: Noise, sc:
     tested; of those whose remainder is noise, the **simplest** is claimed
     (:func:`occam`: fewest parameters, unless one with more fits
     significantly better by :func:`closeness`), moved first, with the other
-    families that fit as well (:data:`AMBIGUOUS`); else the best is PARTIAL,
+    families that fit as well (:data:`AMBIGUOUS`); where that simplest is a
+    description (:attr:`mcrt.grade.candidates.Candidate.describes`: any
+    monotone curve), it is DESCRIBED, said but not claimed; else the best is PARTIAL,
     with where its remainder lies, if it explains :data:`PARTIAL_SHARE` of
     the difference; else nothing is claimed and the difference itself is
     placed on objects (``remainder_where``). ``extra_var(c)`` is the noise
@@ -264,6 +266,10 @@ def claim_rule(S: np.ndarray, R: np.ndarray, mask: np.ndarray, noise: Noise, sc:
                 tried[id(c)] = test(c)
             adequate = [c for c in pool if tried[id(c)].verdict == "adequate"]
             c = occam(adequate, fit)
+            if c is not None and c.describes:  # only a description leaves noise: how the image differs, no cause
+                _claim(e, c, tried[id(c)], [], np.where(mask[..., None], S - R - c.change, 0.0))
+                e.verdict = e.adequacy.verdict = cd.DESCRIBED
+                return
             if c is not None:
                 alts = [a for a in adequate if a is not c and a.family != c.family
                         and a.params <= c.params and a.explained >= c.explained - AMBIGUOUS]

@@ -38,8 +38,9 @@ TIE = 0.02
 CLAIMED = "claimed"  # the best candidate is the cause: "It looks like ..."
 PARTIAL = "partial"  # it explains part of the difference and something else is wrong (where: Explanation.remainder)
 INDISTINCT = "indistinct"  # it fits, but no better than noise would let anything fit
+DESCRIBED = "described"  # only a description fits (Candidate.describes): how the image differs, with no cause
 NONE = "none"  # nothing explains most of the difference
-VERDICTS = (CLAIMED, PARTIAL, INDISTINCT, NONE)
+VERDICTS = (CLAIMED, PARTIAL, INDISTINCT, DESCRIBED, NONE)
 
 
 @dataclass
@@ -69,6 +70,9 @@ class Candidate:
     # (a curve on the values beside a per-sample clamp): named beside it where their remainder is noise too
     # (mcrt.grade.adequacy.claim_rule), whatever Occam's rule prefers.
     rivals: tuple[str, ...] = ()
+    # A description of how the image differs rather than a mistake a program makes (any monotone curve through the
+    # values, which a material or the light can mimic): it may leave noise, but it is said, never claimed.
+    describes: bool = False
 
     def to_dict(self) -> dict:
         if self.ranked:

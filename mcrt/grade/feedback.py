@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 
-from mcrt.grade.candidates import CLAIMED, INDISTINCT, PARTIAL, TIE, Explanation
+from mcrt.grade.candidates import CLAIMED, DESCRIBED, INDISTINCT, PARTIAL, TIE, Explanation
 from mcrt.util.fmt import short as num
 
 
@@ -64,7 +64,7 @@ def summary(tests, score: float, max_score: float, *, blocked: str | None, headl
 #: The kinds of mistake the explanation families (mcrt.grade.explain.families.FAMILIES) try, in a student's words.
 _TRIED = ("No single mistake we tried (the catalogued bugs, the scene's colours, light, objects and camera, "
           "the path depth, encodings, tone curves, clamped samples, colour channels, light counted twice, fall-offs, "
-          "resampling, materials, object sizes, missing pixels and blur)")
+          "resampling, materials, object sizes, a BRDF's normalisation, missing pixels and blur)")
 
 
 def explanation_words(e: Explanation) -> tuple[str, str]:
@@ -85,9 +85,18 @@ def explanation_words(e: Explanation) -> tuple[str, str]:
                     + (f" (so would {alt.text}, {100 * alt.explained:.0f} %)" if alt else "")
                     + (f"; it changes the image {best.where}" if best.where else "") + ".")
         return sentence, f"It looks like {best.text}."
+    if e.verdict == DESCRIBED:  # only a description leaves noise (Candidate.describes): how it differs, no cause
+        where_b = f", changing the image {best.where}" if best.where else ""
+        sentence = (f"The difference depends on each pixel's value alone, as {best.text} would make it (what is left "
+                    f"is consistent with noise){where_b}; no common tone map, clamp or encoding matches that curve, "
+                    "so no cause is claimed: if your program changes the values before saving, check that step; if "
+                    "not, look at what scales light by brightness (a BRDF's or the light's factors).")
+        return sentence, "The difference follows each pixel's value, as a curve on the values would; no common curve matches."
     if e.verdict == PARTIAL:
         rest = f"something else is wrong {e.remainder_where}" if e.remainder_where else "something else is wrong too"
-        sentence = f"Partly like {best.text}, which explains {100 * best.explained:.0f} % of the difference; {rest}."
+        # The share is of the difference's chi^2 beyond noise: a remainder on one object can be a sliver of it.
+        share = (f"{100 * best.explained:.0f} %" if best.explained < 0.995 else "nearly all") + " of the difference"
+        sentence = f"Partly like {best.text}, which explains {share}; {rest}."
         return sentence, f"Partly like {best.text}; {rest}."
     if e.verdict == INDISTINCT:  # it fits, but no better than noise would let anything fit
         gain = e.chi2_none - best.chi2

@@ -147,6 +147,7 @@ def _statistics(g: Grading, hand: Hand) -> None:
     if "registration" in found:
         g.rubric.failed("camera", found["registration"])
     noise.verdict(g, hand, lvl, t.bt, found, bias.flagged(t.bt))
+    calibration.judge_encoding(g, hand, bias.flagged(t.bt))
     if g.encoding in ("srgb", "gamma2.2") and not any(d["mutant"] == "gamma_output" for d in g.diagnosis[:1]):
         gm = g.ctx.mutant_texts.get("gamma_output", "Output gamma-encoded (sRGB) instead of linear radiance.")
         g.diagnosis.insert(0, {"mutant": "gamma_output", "description": gm, "explained": None, "amplitude": None,

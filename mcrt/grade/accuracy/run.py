@@ -39,15 +39,24 @@ CAUSE_OF: dict[str, tuple[str, ...]] = {
     "light_size": ("light_size",), "object_missing": ("object_missing",), "object_moved": ("object_moved",),
     # Moving the eye along the view is nearly a zoom: either word is right for either mistake.
     "eye": ("camera_eye", "camera_fov"), "fov": ("camera_fov", "camera_eye"), "rotation": ("camera_rotation",),
+    # The image's height spanning another view than its width (an aspect ratio hard-coded) is the field of view
+    # wrong in one direction.
+    "aspect": ("camera_fov",),
     # A shift of the image by a fraction of a pixel is what a small rotation does too; the words name an image
     # resampled with an offset (every other pixel kept) beside pixel centres off.
     "pixel_offset": ("pixel_offset", "camera_rotation", "resampling"), "depth": ("depth",), "emitter_hidden": ("light_hidden",),
-    "encoding": ("encoding",), "blur": ("blur",),
+    # A smoothing's words name a blur, a denoiser and an enlargement from a lower resolution (bicubic enlarging is a
+    # smoothing): either mistake is named by them.
+    "encoding": ("encoding",), "blur": ("blur", "resampling"),
+    "sharpen": ("sharpen",),
     "gamma_output": ("encoding",), "depth_off_by_one": ("depth",), "albedo_1pct": ("albedo",),
     "mirror_wrong_sign": ("albedo",), "no_jitter": ("blur",), "double_count": ("direct_twice",),
     # Families beyond the scene file (mcrt.grade.families).
     "tone_curve": ("tone_map", "encoding"), "falloff": ("falloff",), "resampling": ("resampling", "blur"),
     "material": ("material",), "object_size": ("object_size",),
+    # Every diffuse reflectance off by one factor (mcrt.grade.explain.reflectance): a BRDF's normalisation, which
+    # changes every surface's colour.
+    "reflectance_scale": ("brdf_norm", "albedo"),
     # Mistakes of students' programs (mcrt.grade.accuracy.programs): a colour matrix that loses colour (grey, a
     # channel zeroed) and one that mixes the channels otherwise, light counted twice, the light facing the wrong
     # way, black pixels.
@@ -228,7 +237,7 @@ def rates(outcomes: list[Outcome]) -> dict:
         "detected": frac(wrong, lambda o: o.lost),
         "named_right": frac(wrong, lambda o: o.right),
         "named_wrong": frac(wrong, lambda o: o.wrong),
-        "honest_partial": frac(wrong, lambda o: not o.named and o.verdict in ("partial", "none")),
+        "honest_partial": frac(wrong, lambda o: not o.named and o.verdict in ("partial", "none", "described")),
         "also_named_wrong": frac(wrong, lambda o: o.also_wrong),
         "major_lost_a_quarter": frac(major, lambda o: o.max_score - o.score >= 0.25 * o.max_score),
         "false_alarms": frac(ok, lambda o: o.lost),

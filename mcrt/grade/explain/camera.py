@@ -1,4 +1,4 @@
-"""The camera families: field of view, pixel-centre offset and rotation, fitted by warping a finer image."""
+"""The camera families: field of view, aspect ratio, pixel-centre offset and rotation, fitted by warping a finer image."""
 
 from __future__ import annotations
 
@@ -26,7 +26,8 @@ class _Warp:
 
     A student pixel's sample (i + (s + 1/2)/SUB + dx, j + ...) is a
     direction in the student's camera frame,
-    :math:`d = (s_x t_s, s_y t_s h/w, 1)` with :math:`t = \tan(fov/2)`;
+    :math:`d = (s_x t_s, a\, s_y t_s h/w, 1)` with :math:`t = \tan(fov/2)` and
+    :math:`a` the aspect's error (1: square pixels, as the scene's camera has);
     rotated into the scene's camera frame it projects to the scene camera's
     film, where the FINE times finer (and WIDE times wider) image is sampled bilinearly; the SUB^2
     samples of a pixel are averaged (its box filter). Exact for a pinhole (a
@@ -47,9 +48,9 @@ class _Warp:
         self.u, self.v = (ii + 0.5) / SUB, (jj + 0.5) / SUB  # in grade pixels
         self.identity = self.image()
 
-    def image(self, fov: float | None = None, yaw=0.0, pitch=0.0, roll=0.0, dx=0.0, dy=0.0) -> np.ndarray:
+    def image(self, fov: float | None = None, yaw=0.0, pitch=0.0, roll=0.0, dx=0.0, dy=0.0, aspect=1.0) -> np.ndarray:
         ts = self.t if fov is None else math.tan(math.radians(fov) / 2)
-        asp = self.h / self.w
+        asp = aspect * self.h / self.w
         sx = 2 * (self.u + dx) / self.w - 1
         sy = 1 - 2 * (self.v + dy) / self.h
         R = _rot(yaw, pitch, roll)
@@ -67,6 +68,8 @@ class _Warp:
 #: The camera families: parameter names, start scans, finite-difference steps, bounds.
 _CAMERA = {
     "fov": (("fov",), {"fov": (0.9, 0.95, 1.05, 1.1)}, {"fov": 0.2}, {"fov": (0.8, 1.2)}),
+    "aspect": (("aspect",), {"aspect": (0.5625, 0.75, 0.8, 0.9, 1.1, 1.25, 1.333)}, {"aspect": 0.01},
+               {"aspect": (0.5, 2.0)}),
     "pixel_offset": (("dx", "dy"), {"dx": (-1.0, -0.5, 0.5, 1.0), "dy": (-1.0, -0.5, 0.5, 1.0)},
                      {"dx": 0.1, "dy": 0.1}, {"dx": (-2.0, 2.0), "dy": (-2.0, 2.0)}),
     "rotation": (("yaw", "pitch", "roll"), {"yaw": (-4.0, -2.0, -1.0, 1.0, 2.0, 4.0), "pitch": (-4.0, -2.0, -1.0, 1.0, 2.0, 4.0),
@@ -91,7 +94,7 @@ def _fit_camera(fit: Fit, wp: _Warp, family: str, fov0: float, steps: int = 4) -
     def img(p):
         return wp.image(**kw(p)) - wp.identity
 
-    p = np.array([fov0 if n == "fov" else 0.0 for n in names])
+    p = np.array([fov0 if n == "fov" else 1.0 if n == "aspect" else 0.0 for n in names])
     best = fit.delta(img(p))
     for i, n in enumerate(names):
         for v in scans[n]:
@@ -131,7 +134,7 @@ def _fit_camera(fit: Fit, wp: _Warp, family: str, fov0: float, steps: int = 4) -
 
 
 def camera(fit: Fit, inputs: Inputs) -> list[Candidate]:
-    """The camera's field of view, a pixel-centre offset, a rotation: each fitted by warping the fine image."""
+    """The camera's field of view, its aspect, a pixel-centre offset, a rotation: each fitted by warping the fine image."""
     b = inputs.basis
     wp = _Warp(b)
     f0 = b.fov_deg
@@ -139,6 +142,11 @@ def camera(fit: Fit, inputs: Inputs) -> list[Candidate]:
     p, chi, dm = _fit_camera(fit, wp, "fov", f0)
     out.append(Candidate("fov", "field of view", f"the camera's field of view {p['fov']:.1f} degrees where the scene "
                          f"says {_num(f0)}", chi, 1, value=float(p["fov"]), change=dm))
+    p, chi, dm = _fit_camera(fit, wp, "aspect", f0)
+    out.append(Candidate("aspect", "aspect ratio", f"the image's height spanning {_num(float(p['aspect']))} times the "
+                         "view the field of view gives it (rays' vertical component scaled: an aspect ratio such as "
+                         "4:3 or 16:9 hard-coded, or the width and height swapped in it)", chi, 1,
+                         value=float(p["aspect"]), change=dm))
     p, chi, dm = _fit_camera(fit, wp, "pixel_offset", f0)
     dx, dy = float(p["dx"]), float(p["dy"])
     out.append(Candidate("pixel_offset", "pixel-centre offset", f"the image shifted by ({dx:+.2f}, {dy:+.2f}) pixel "

@@ -1,4 +1,4 @@
-"""Closed-form families on the reference: encoding curves and a blur."""
+"""Closed-form families on the reference: encoding curves, a blur and a sharpening."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ from mcrt.grade.feedback import num as _num
 
 
 def curves(fit: Fit, inputs: Inputs) -> list[Candidate]:
-    """Encoding curves on the reference: sRGB (and its inverse), power curves; a Gaussian blur."""
+    """Encoding curves on the reference: sRGB (and its inverse), power curves; a Gaussian blur; an unsharp mask."""
     from scipy.ndimage import gaussian_filter
 
     from mcrt.image_files import srgb_eotf, srgb_oetf
@@ -34,10 +34,32 @@ def curves(fit: Fit, inputs: Inputs) -> list[Candidate]:
     errs = np.array([fit.model(gaussian_filter(fit.R, (s, s, 0), mode="nearest")) for s in sig])
     i = int(np.argmin(errs))
     s = sig[i]
-    out.append(Candidate("blur", "blur", f"the image blurred (or denoised) by about {_num(s)} pixel (a Gaussian of that "
-                         "standard deviation)", float(errs[i]), 1, value=float(s),
+    out.append(Candidate("blur", "blur", f"the image blurred, denoised or enlarged from a lower resolution: smoothed as by a "
+                         f"Gaussian of about {_num(s)} pixel", float(errs[i]), 1, value=float(s),
                          change=gaussian_filter(fit.R, (s, s, 0), mode="nearest") - fit.R))
+    out.append(_unsharp(fit, gaussian_filter))
     return out
+
+
+#: Radii (Gaussian standard deviations, pixels) and amounts of the unsharp masks tried.
+UNSHARP_SIGMAS = (0.5, 0.7, 1.0, 1.5, 2.0, 3.0)
+UNSHARP_AMOUNTS = np.linspace(0.1, 2.0, 39)
+
+
+def _unsharp(fit: Fit, gaussian_filter) -> Candidate:
+    """An unsharp mask after rendering, R + a (R - G_s * R) with negatives clipped to 0 (an image editor's or a
+    library's sharpen): the radius s and amount a, scanned."""
+    best = None
+    for s in UNSHARP_SIGMAS:
+        detail = fit.R - gaussian_filter(fit.R, (s, s, 0), mode="nearest")
+        for a in UNSHARP_AMOUNTS:
+            dm = np.maximum(fit.R + a * detail, 0.0) - fit.R
+            e = fit.delta(dm)
+            if best is None or e < best[0]:
+                best = (e, s, float(a), dm)
+    e, s, a, dm = best
+    return Candidate("sharpen", "unsharp mask", f"the image sharpened after rendering: an unsharp mask of radius about "
+                     f"{_num(s)} pixel and amount {_num(a)}", e, 2, value={"radius": s, "amount": a}, change=dm)
 
 
 

@@ -12,6 +12,7 @@ from mcrt.grade.explain.light_facing import light_facing
 from mcrt.grade.explain.light_twice import light_twice
 from mcrt.grade.explain.objects import material, object_size
 from mcrt.grade.explain.pixels import bad_pixels
+from mcrt.grade.explain.reflectance import reflectance_scale
 from mcrt.grade.explain.resampling import resampling
 from mcrt.grade.explain.sample_clamp import sample_clamp
 from mcrt.grade.explain.scene import albedo, rendered, scale
@@ -20,18 +21,18 @@ from mcrt.grade.explain.tonecurve import tone_curve
 
 #: Every family the engine fits, in this order (ties keep it). The scene file's parameters (and the colours mixed by
 #: a matrix, a surface of the room black) and the catalogue; then what a student's program gets wrong beyond the
-#: scene file (a tone curve, each sample clamped, a fall-off, resampling, an object's material or size, light
-#: counted twice, the light facing the wrong way, black pixels).
+#: scene file (a tone curve, each sample clamped, a fall-off, resampling, an object's material or size, every
+#: diffuse reflectance off by one factor, light counted twice, the light facing the wrong way, black pixels).
 FAMILIES = (scale, colour, curves, albedo, surface_black, rendered, camera, catalogue, tone_curve, sample_clamp,
-            falloff, resampling, material, object_size, light_twice, light_facing, bad_pixels)
+            falloff, resampling, material, object_size, reflectance_scale, light_twice, light_facing, bad_pixels)
 
 #: The families that are mistakes of the camera (what the misregistration test of mcrt.grade.structure also sees).
-CAMERA_FAMILIES = frozenset({"fov", "pixel_offset", "rotation", "eye"})
+CAMERA_FAMILIES = frozenset({"fov", "aspect", "pixel_offset", "rotation", "eye"})
 #: The families a TA counts as major mistakes whatever their share of the image: the camera, the scene's geometry
 #: (an object or the light missing, moved or resized) and its colours (mcrt.grade.scoring.unbiased_loss).
 MAJOR_FAMILIES = CAMERA_FAMILIES | {"object_missing", "object_moved", "light_position", "light_size", "albedo", "channels",
                                     "material", "object_size", "colour_lost", "light_facing", "surface_black",
-                                    "object_black"}
+                                    "object_black", "reflectance_scale"}
 
 
 def prepare(a, scene, render) -> Basis:

@@ -52,7 +52,8 @@ def _scaled(o, f: float) -> dict:
     return {"vertices": tuple(tuple(float(x) for x in c + f * (np.asarray(v) - c)) for v in o.vertices)}
 
 
-def _renderer(a, render):
+def basis_renderer(a, render):
+    """A function of a scene: its mcrt render at the basis's spp and seed, the assigned camera, grade size."""
     spp, seed = basis_settings(a)
 
     def img(s: Scene) -> np.ndarray:
@@ -63,7 +64,7 @@ def _renderer(a, render):
 
 def _prepare_material(a, scene: Scene, render) -> dict:
     """{object: (the other material's kind, nodes, images (nodes, H, W, 3))}."""
-    img = _renderer(a, render)
+    img = basis_renderer(a, render)
     out = {}
     for o in scene.objects:
         kind = "mirror" if isinstance(o.material, Lambertian) else "diffuse"
@@ -75,7 +76,7 @@ def _prepare_material(a, scene: Scene, render) -> dict:
 
 def _prepare_size(a, scene: Scene, render) -> dict:
     """{object: [(scale, image)]}."""
-    img = _renderer(a, render)
+    img = basis_renderer(a, render)
     return {o.name: [(f, img(_with_object(scene, o.name, **_scaled(o, f)))) for f in SIZES] for o in scene.objects}
 
 

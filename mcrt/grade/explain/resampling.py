@@ -2,8 +2,16 @@ r"""A resolution mistake: the image rendered at 1/k the resolution and enlarged.
 
 The model image is R box-filtered to 1/k of the resolution (the expected
 value of the smaller render), enlarged by repeating pixels (blocks of k x k
-equal pixels, whose share in the hand-in the words give) or bilinearly, for
-k in :data:`FACTORS`.
+equal pixels, whose share in the hand-in the words give), bilinearly, or
+bicubically as Pillow's ``Image.resize`` does by default on an 8-bit image
+(its own kernel on the display values: sRGB-encoded, clipped to 1, then
+decoded; in linear values the light's overshoot would ring into its
+neighbours, which clipped display values do not), for k in :data:`FACTORS`.
+A loop bound off by one renders the image at (W - 1) x (H - 1) or (W + 1) x
+(H + 1) and writes it from the top-left corner: the last row and column are
+black, or the render's are cut off; the model image is R box-filtered to
+that size (each new pixel the area-weighted mean of the grade pixels it
+covers), padded or cropped.
 """
 
 from __future__ import annotations
@@ -28,7 +36,7 @@ def _blocks_equal(S: np.ndarray, k: int) -> float:
 
 
 def resampling(fit: Fit, inputs: Inputs) -> list[Candidate]:
-    """The image rendered at 1/k the resolution and enlarged, by nearest neighbour or bilinearly."""
+    """The image rendered at 1/k the resolution and enlarged (nearest, bilinear, bicubic), or at one pixel more or less."""
     from scipy.ndimage import zoom
 
     from mcrt.stats.tiles import block_means
@@ -49,7 +57,53 @@ def resampling(fit: Fit, inputs: Inputs) -> list[Candidate]:
         out.append(Candidate("resampling", f"enlarged {k}x (bilinear)", f"the image rendered at {w // k} x {h // k} "
                               f"pixels and enlarged {k} times by bilinear interpolation", fit.model(lin), 1,
                               value={"factor": k, "method": "bilinear"}, change=lin - fit.R))
+        cub = _bicubic(low, w, h)
+        out.append(Candidate("resampling", f"enlarged {k}x (bicubic)", f"the image rendered at {w // k} x {h // k} "
+                              f"pixels and enlarged {k} times by bicubic interpolation of its display values (an image library's default)",
+                              fit.model(cub), 1, value={"factor": k, "method": "bicubic"}, change=cub - fit.R))
+    for d in (-1, 1):
+        off = _off_by_one(fit.R, d)
+        what = "the last row and column left black" if d < 0 else "its last row and column cut off"
+        out.append(Candidate("resampling", f"rendered {w + d} x {h + d}", f"the image rendered at {w + d} x {h + d} "
+                              f"pixels (a loop bound off by one) and written from the top-left corner, {what}",
+                              fit.model(off), 1, value={"size": [w + d, h + d], "method": "off by one"},
+                              change=off - fit.R))
     return out
+
+
+def _area_matrix(n: int, m: int) -> np.ndarray:
+    """(m, n): pixel j of m across the extent of n pixels, as the area-weighted mean of the n pixels it covers."""
+    edges = np.arange(m + 1) * n / m
+    A = np.zeros((m, n))
+    for j in range(m):
+        for i in range(int(np.floor(edges[j])), min(n, int(np.ceil(edges[j + 1])))):
+            A[j, i] = min(edges[j + 1], i + 1) - max(edges[j], i)
+    return A / A.sum(axis=1, keepdims=True)
+
+
+def _off_by_one(R: np.ndarray, d: int) -> np.ndarray:
+    """R as rendered at (W + d) x (H + d) and written into W x H from the top-left corner (black where unwritten)."""
+    h, w = R.shape[:2]
+    Ay, Ax = _area_matrix(h, h + d), _area_matrix(w, w + d)
+    small = np.einsum("yi,ijc,xj->yxc", Ay, R, Ax)
+    out = np.zeros_like(R)
+    hh, ww = min(h, h + d), min(w, w + d)
+    out[:hh, :ww] = small[:hh, :ww]
+    return out
+
+
+def _bicubic(low: np.ndarray, w: int, h: int) -> np.ndarray:
+    """``low`` enlarged to w x h with Pillow's bicubic filter on its display values (module docstring), channel by
+    channel in mode F (no rounding)."""
+    from PIL import Image
+
+    from mcrt.image_files import srgb_eotf, srgb_oetf
+
+    disp = srgb_oetf(np.clip(low, 0.0, 1.0))
+    up = np.stack([np.asarray(Image.fromarray(np.ascontiguousarray(disp[..., c], np.float32), "F")
+                              .resize((w, h), Image.Resampling.BICUBIC), np.float64) for c in range(low.shape[2])],
+                  axis=-1)
+    return srgb_eotf(np.clip(up, 0.0, 1.0))
 
 
 resampling.name = "resampling"

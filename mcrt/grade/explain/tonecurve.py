@@ -3,12 +3,16 @@ r"""A monotone value curve: any tone map, clamp or encoding a student's program 
 The model image is :math:`f_c(R)` with :math:`f_c` monotone per channel.
 Named curves come first, each with an exposure scanned before it (a
 student's exposure slider): Reinhard's :math:`x/(1+x)`, the ACES filmic
-curve (Narkowicz's fit), either followed by the sRGB curve, a clamp to
+curve (Narkowicz's fit), Hable's filmic curve (Uncharted 2's constants and
+white point 11.2), each alone or followed by the sRGB curve, a clamp to
 [0, 1], and 8-bit rounding. Any other monotone curve is fitted as an
 isotonic regression of S on R per channel
 (:func:`scipy.optimize.isotonic_regression`) on :data:`BINS` quantile bins
 of R, each bin's level one parameter at most, and worded by the values it
-maps three quantiles of R to.
+maps three quantiles of R to. Such a curve is a description, not a cause
+(:attr:`mcrt.grade.candidates.Candidate.describes`): a material's or the
+light's mistake can make the difference a function of the value too, and a
+curve no program applies is no evidence of a tone map.
 """
 
 from __future__ import annotations
@@ -30,6 +34,16 @@ def _aces(x):
     return np.clip(x * (2.51 * x + 0.03) / (x * (2.43 * x + 0.59) + 0.14), 0.0, 1.0)
 
 
+def _hable(x):
+    """Hable's filmic curve with Uncharted 2's constants, normalised to its white point 11.2 (above it, beyond 1: the
+    curve clips nothing itself, a display file does)."""
+    def f(v):
+        a, b, c, d, e, f_ = 0.15, 0.50, 0.10, 0.20, 0.02, 0.30
+        return (v * (a * v + c * b) + d * e) / (v * (a * v + b) + d * f_) - e / f_
+
+    return f(np.maximum(x, 0.0)) / f(11.2)
+
+
 def _named_curves() -> dict[str, tuple[str, callable]]:
     from mcrt.image_files import srgb_oetf
 
@@ -41,6 +55,9 @@ def _named_curves() -> dict[str, tuple[str, callable]]:
         "reinhard+srgb": ("put through Reinhard's tone map x / (1 + x), then the sRGB curve", lambda x: srgb_oetf(x / (1.0 + x))),
         "aces": ("put through the ACES filmic tone map", _aces),
         "aces+srgb": ("put through the ACES filmic tone map, then the sRGB curve", lambda x: srgb_oetf(_aces(x))),
+        "hable": ("put through Hable's filmic tone map (Uncharted 2)", _hable),
+        "hable+srgb": ("put through Hable's filmic tone map (Uncharted 2), then the sRGB curve",
+                       lambda x: srgb_oetf(_hable(x))),
         "clamp": ("clamped to [0, 1]", lambda x: np.clip(x, 0.0, 1.0)),
         "quantised": ("clamped to [0, 1] and rounded to 8 bits (linear)", q8),
     }
@@ -89,7 +106,8 @@ def _isotonic(fit: Fit) -> Candidate:
     text = (f"the values through a monotone curve (a tone map, clamp or encoding) that maps {says}" if says
             else "the values through a monotone curve")
     return Candidate("tone_curve", "monotone curve", text, fit.delta(change), params,
-                      value={"curve": "monotone", "maps": [[p, q] for p, q in zip(probe, lum)]}, change=change)
+                      value={"curve": "monotone", "maps": [[p, q] for p, q in zip(probe, lum)]}, change=change,
+                      describes=True)
 
 
 tone_curve.name = "tone_curve"

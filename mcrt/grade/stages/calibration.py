@@ -109,6 +109,30 @@ def _hdr_encoding(g: Grading, hand: Hand) -> None:
         rub.passed("linear", "linear radiance")
 
 
+def judge_encoding(g: Grading, hand: Hand, flagged: bool) -> None:
+    """The encoding finding under the claim rule (:mod:`mcrt.grade.adequacy`), once the bias test is known.
+
+    A curve is read off the image as the best of a few; on an image that,
+    decoded with it, still differs from the reference beyond noise, with no
+    cause that fits what is left (no claim of the explanation stage), that
+    choice is no evidence of an encoding (an image with its rows sheared fits
+    one curve a little better than another). The finding is then not judged,
+    as the exposure criterion claims a factor only where it leaves an image
+    that passes: the bias test's points go for the difference.
+    """
+    from mcrt.grade.candidates import CLAIMED
+
+    if "linear" not in hand.corrected or not flagged or (g.explanation is not None and g.explanation.verdict == CLAIMED):
+        return
+    detected = (g.details.get("encoding") or {}).get("detected", "")
+    what = ck.PNG_CURVES.get(detected, (None, f"the {detected} curve"))[1]
+    g.rubric.passed("linear", f"not judged: the values fit {what} best, but decoded with it the "
+                    "image still differs from the reference in a way no cause we tried explains, so the file's "
+                    "encoding cannot be told apart from the rest of the difference")
+    g.details["encoding"]["judged"] = False
+    g.encoding = "linear"
+
+
 def _png_unclipped(R, model_ps, spp: int) -> np.ndarray:
     """Grade pixels an 8-bit image cannot have clipped: expected value plus 3 sd of a hand-in pixel below 1,
     and not next to a pixel that is not (a grade pixel's hand-in pixels may see a brighter neighbour)."""
