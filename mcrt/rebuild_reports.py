@@ -97,6 +97,10 @@ REPORTS: tuple[Report, ...] = (
            "grading on mistakes no other class tried (file writing, normals, camera models, resampling, a pair of one "
            "seed, roulette without re-weighting), written apart from the grader's rules: named right, confidently "
            "wrong, partial, false alarms"),
+    Report("grading_accuracy/blind", "grade-accuracy --class blind --out reports/grading_accuracy/blind",
+           "grading on mistakes outside the scene file written blind to the grader (post-processing, file writing, "
+           "materials, camera and light models, resolution, claimed spp): named right, confidently wrong, partial, "
+           "false alarms, with a held-out half graded once after the rules were frozen"),
     Report("grading/false_alarms", "grade-false-alarms --out reports/grading/false_alarms",
            "grading's false alarms on correct renders: estimators, samplers, spp 16-1024, 64x64 to 800x800, PNG curves"),
 )

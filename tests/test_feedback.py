@@ -313,3 +313,65 @@ def test_a_hand_in_with_no_measurable_noise_is_graded(ctx):
         assert res.details["noise"]["spp_effective"] is None, res.details["noise"]
         scores[name] = res.score / res.max_score
     assert scores["reference"] == 1.0 and scores["black"] < 0.5 and scores["dim"] < 0.5, scores
+
+
+# --------------------------------------------------------------------------
+# Mistakes of the blind class's tuning half (mcrt.grade.accuracy.blind), at 32 x 32
+# --------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("case", ["lambert_pi_twice", "pp_unsharp", "render_63_padded", "aspect_4_3", "pp_hable"])
+def test_mistakes_beyond_the_scene_file_are_named(ctx, case):
+    """Tuning cases of the blind class (Mitsuba renders of edited scenes, or post-processed and written as a
+    student's program does; written apart from the grader, seeds fixed by name) at 32 x 32: each is named right,
+    with a remainder consistent with noise (a Lambertian divided by pi twice as every reflectance times 0.32; an
+    unsharp mask; a render one pixel smaller padded black; an aspect ratio hard-coded; Hable's filmic curve). None is
+    held out (the class's held-out half is graded in its report only). The bicubic enlargement is not here: at 32 x 32
+    it enlarges a 16 x 16 render, whose difference no family places (the report grades it at 64 x 64)."""
+    from mcrt.grade.accuracy import blind
+    from mcrt.grade.accuracy.cases import build_class
+    from mcrt.grade.accuracy.run import grade_cases
+
+    (c,) = build_class(width=RES, height=RES, max_depth=8, names=(case,), specs=blind.SPECS)
+    assert not c.held_out
+    (o,) = grade_cases([c], ctx)
+    assert o.right and o.verdict == "adequate" and o.lost, (o.named, o.said)
+
+
+def test_a_curve_no_program_applies_is_described_not_claimed(ctx):
+    """A Mitsuba render (seed 49) through a monotone curve no tone map has (each value times 0.3 + 0.7 x / (x + 0.05),
+    darkening the shadows, leaving the light): the difference is described as a curve on the values, and no cause is
+    claimed; points are lost."""
+    img = _mitsuba(load_scene(), 49)
+    res = grade_image("shadows_crushed", ctx, [img * (0.3 + 0.7 * img / (img + 0.05))], spp=1024)
+    ex = res.details["explanation"]
+    assert ex["verdict"] == "described" and ex["named"] is None, ex["sentence"]
+    assert named_causes(res)[0] == [] and "no common tone map" in ex["sentence"]
+    assert res.score < res.max_score
+
+
+def test_the_encoding_is_claimed_only_where_the_decoded_image_is_explained(ctx, tmp_path):
+    """8-bit PNGs holding linear values, undeclared, of a Mitsuba render (seed 50): written as they are, the encoding
+    criterion fails and names the encoding (decoded, the image passes); written with a row stride one short (each
+    row shifted one pixel more than the last, wrapping: no family explains it), the curve that fits best is no
+    evidence, so the encoding is not judged and names no cause, and the image loses points."""
+    from PIL import Image
+
+    from mcrt.grade.grader import grade_submission
+    from mcrt.grade.submissions import discover
+
+    codes = np.floor(np.clip(_mitsuba(load_scene(), 50), 0.0, 1.0) * 255 + 0.5).astype(np.uint8)
+    sheared = np.zeros_like(codes).reshape(-1, 3)
+    sheared[(np.arange(RES)[:, None] * (RES - 1) + np.arange(RES)[None, :]).ravel()] = codes.reshape(-1, 3)
+    for name, written, judged in (("plain", codes, True), ("sheared", sheared.reshape(codes.shape), False)):
+        (tmp_path / name).mkdir()
+        Image.fromarray(written, "RGB").save(tmp_path / name / "render.png")
+        (tmp_path / name / "manifest.toml").write_text("spp = 1024\n")
+        res = grade_submission(discover(tmp_path / name, single=True, student=name)[0], ctx)
+        linear = next(t for t in res.tests if t.name == "linear")
+        assert res.score < res.max_score
+        if judged:
+            assert linear.status == "failed" and "encoding" in named_causes(res)[0], linear.output
+        else:
+            assert linear.status == "passed" and linear.output.startswith("not judged"), (linear.output, res.summary)
+            assert "encoding" not in named_causes(res)[0], named_causes(res)

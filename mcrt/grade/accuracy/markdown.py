@@ -81,8 +81,13 @@ _BLIND = ("The wrong renders are mistakes made **outside the scene file** that n
           "adaptive stopping, an interrupted render); from Mitsuba renders of edited scenes, Mitsuba renders "
           "combined, or correct renders written as students' programs write files. The correct ones come from "
           "Mitsuba and mcrt in formats no other class used. *Named right*, *confidently wrong*, *partial or none*: "
-          "as for the other classes. **Held-out** cases (marked H) were fixed by the rule stated in the module (every "
-          "other case of each category) before any case was graded.")
+          "as for the other classes (*partial or none* includes a difference described as a curve on the values with "
+          "no cause claimed). **Held-out** cases (marked H) were fixed by the rule stated in the module (every "
+          "other case of each category) before any case was graded. The rules were changed on the tuning half only "
+          "(a curve no program applies described, not claimed; the encoding finding not judged where nothing "
+          "explains the decoded image; a BRDF's normalisation, an aspect ratio, an unsharp mask, a render one pixel "
+          "off, a bicubic enlargement, Hable's curve), and the held-out half was graded once, after the last change: "
+          "its row is the measure of rules that never saw it.")
 
 
 def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta: dict, gradescope: list[dict],

@@ -16,11 +16,15 @@ def curves(fit: Fit, inputs: Inputs) -> list[Candidate]:
     from mcrt.image_files import srgb_eotf, srgb_oetf
 
     R = np.maximum(fit.R, 0.0)
+    C = np.minimum(R, 1.0)  # a display file clips the encoded values; an EXR keeps them
     out = [Candidate("encoding", "sRGB curve", "the values sRGB-encoded (a display curve) instead of linear",
                      fit.model(srgb_oetf(R)), 0, value="srgb", change=srgb_oetf(R) - fit.R),
+           Candidate("encoding", "sRGB curve, clipped", "the values sRGB-encoded (a display curve) instead of linear, "
+                     "clipped to 1 (in an 8-bit file: the sRGB curve applied twice)", fit.model(srgb_oetf(C)), 0,
+                     value="srgb-clipped", change=srgb_oetf(C) - fit.R),
            Candidate("encoding", "decoded twice", "the values decoded from sRGB once too often (linear values written "
-                     "to a PNG that says sRGB, or decoded twice)", fit.model(srgb_eotf(np.minimum(R, 1.0))), 0,
-                     value="srgb-inverse", change=srgb_eotf(np.minimum(R, 1.0)) - fit.R)]
+                     "to a PNG that says sRGB, or decoded twice)", fit.model(srgb_eotf(C)), 0,
+                     value="srgb-inverse", change=srgb_eotf(C) - fit.R)]
     exps = np.linspace(0.25, 2.5, 91)
     errs = np.array([fit.model(R**p) for p in exps])
     i = int(np.argmin(errs))
