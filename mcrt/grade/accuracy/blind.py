@@ -474,7 +474,11 @@ CATEGORIES: dict[str, tuple[str, ...]] = {
 
 
 def _mistakes() -> tuple[Spec, ...]:
-    c = _crc
+    return _after_rendering() + _in_the_renderer()
+
+
+def _after_rendering() -> tuple[Spec, ...]:
+    """Post-processing, writing the file, materials."""
     return (
         # Post-processing
         Spec("pp_hable", "tone_map", **_posted("hable", _hable),
@@ -515,6 +519,13 @@ def _mistakes() -> tuple[Spec, ...]:
              "reflected"),
         Spec("floor_mirror", "material", True, mitsuba_edit=_floor_mirror,
              truth="the floor given the sphere's material (a perfect mirror): material indices one off"),
+    )
+
+
+def _in_the_renderer() -> tuple[Spec, ...]:
+    """Camera and light models, resolution, samples per pixel."""
+    c = _crc
+    return (
         # Camera model
         Spec("thin_lens", "camera_model", sensor={"type": "thinlens", "aperture_radius": 0.1,
                                                   "focus_distance": _SPHERE_DISTANCE},

@@ -152,22 +152,29 @@ def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta
     causes = {"outside": outside.CAUSES, "programs": programs.CAUSES, "fresh": fresh.CAUSES,
               "blind": blind.CAUSES}.get(klass, CAUSES)
     L += ["", "Causes: " + "; ".join(f"`{k}` {v}" for k, v in causes.items()) + "."]
-    if gradescope:
-        L += ["", "## One student as Gradescope grades it", "",
-              "A fresh process imports mcrt, loads the prepared context (the grading cache, as workers receive it) "
-              "and grades one student (mcrt.grade.accuracy.run.gradescope_figures): the mistakes and the correct render "
-              "that took longest to grade above. Gradescope's defaults: half a "
-              "vCPU, 768 MB, a 10-minute timeout; under half a vCPU the wall time is about twice the CPU time.", "",
-              "| case | exit | score | CPU s (process) | CPU s (grading) | wall s here | peak memory MB | context MB |",
-              "|---|---|---|---|---|---|---|---|"]
-        for g in gradescope:
-            gc = "-" if g.get("grading_cpu_s") is None else f"{g['grading_cpu_s']:.1f}"
-            mem = "-" if g.get("peak_rss_mb") is None else f"{g['peak_rss_mb']:.0f}"
-            L.append(f"| {g['case']} | {g['exit']} | {g.get('score')} | {g['cpu_s']:.1f} | {gc} | {g['wall_s']:.1f} | "
-                     f"{mem} | {g['context_mb']:.1f} |")
-        prep = meta.get("prepare_seconds", 0)
-        L += ["", "Building the cache (`mcrt grade --prepare`, references, catalogue and the explanation's "
-              "variations): " + (f"{prep:.0f} s here." if prep >= 1 else f"already built by an earlier run (loading it took {prep:.1f} s).")]
+    L += _gradescope_section(gradescope, meta)
     path = out / "index.md"
     path.write_text("\n".join(L) + "\n", encoding="utf-8")
     return path
+
+
+def _gradescope_section(gradescope: list[dict], meta: dict) -> list[str]:
+    """The report's lines on one student as Gradescope grades it (none without timings)."""
+    if not gradescope:
+        return []
+    L = ["", "## One student as Gradescope grades it", "",
+         "A fresh process imports mcrt, loads the prepared context (the grading cache, as workers receive it) "
+         "and grades one student (mcrt.grade.accuracy.run.gradescope_figures): the mistakes and the correct render "
+         "that took longest to grade above. Gradescope's defaults: half a "
+         "vCPU, 768 MB, a 10-minute timeout; under half a vCPU the wall time is about twice the CPU time.", "",
+         "| case | exit | score | CPU s (process) | CPU s (grading) | wall s here | peak memory MB | context MB |",
+         "|---|---|---|---|---|---|---|---|"]
+    for g in gradescope:
+        gc = "-" if g.get("grading_cpu_s") is None else f"{g['grading_cpu_s']:.1f}"
+        mem = "-" if g.get("peak_rss_mb") is None else f"{g['peak_rss_mb']:.0f}"
+        L.append(f"| {g['case']} | {g['exit']} | {g.get('score')} | {g['cpu_s']:.1f} | {gc} | {g['wall_s']:.1f} | "
+                 f"{mem} | {g['context_mb']:.1f} |")
+    prep = meta.get("prepare_seconds", 0)
+    L += ["", "Building the cache (`mcrt grade --prepare`, references, catalogue and the explanation's "
+         "variations): " + (f"{prep:.0f} s here." if prep >= 1 else f"already built by an earlier run (loading it took {prep:.1f} s).")]
+    return L
