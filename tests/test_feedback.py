@@ -375,3 +375,27 @@ def test_the_encoding_is_claimed_only_where_the_decoded_image_is_explained(ctx, 
         else:
             assert linear.status == "passed" and linear.output.startswith("not judged"), (linear.output, res.summary)
             assert "encoding" not in named_causes(res)[0], named_causes(res)
+
+
+def test_a_claim_needs_to_fit_better_than_another_reading():
+    """Two causes of different readings both leave noise on a hand-in made by the first (seed 3): a 0-parameter one
+    (brighter on the right by k) and a 3-parameter one (the same with a ramp across it). At k = 1 % with a ramp of
+    +-20 % the two predictions differ by far less than noise, closeness is a standard normal draw (-1.5 here), and the
+    other is returned: no claim. At k = 30 % with a ramp of +-50 % the first fits better by far and stands alone."""
+    from mcrt.grade.adequacy import reading_of, unconfirmed
+    from mcrt.grade.candidates import Candidate
+    from mcrt.grade.explain.fit import Fit
+
+    R, S, noise, sc = _synthetic(3)
+    right = (sc.labels == 1)[..., None]
+    for k, spread, ambiguous in ((0.01, 0.2, True), (0.3, 0.5, False)):
+        ramp = np.linspace(-spread, spread, RES)[None, :, None]
+        ca, cb = np.where(right, k * R, 0.0), np.where(right, k * R * (1 + ramp), 0.0)
+        fit = Fit(S + ca, R, noise.model, np.ones((RES, RES, 1), bool), np.zeros_like(R))
+        c = Candidate("depth", "depth", "paths cut short", fit.delta(ca), 0, change=ca)
+        a = Candidate("falloff", "falloff", "a fall-off", fit.delta(cb), 3, change=cb)
+        assert reading_of(c) != reading_of(a)
+        assert unconfirmed(c, [c, a], fit, []) == ([a] if ambiguous else []), k
+        # One reading never makes another of its own ambiguous: the catalogue's depth off by one is the depth's.
+        same = Candidate("catalogue", "depth_off_by_one", "depth off by one", fit.delta(cb), 0, change=cb)
+        assert unconfirmed(c, [c, same], fit, []) == []

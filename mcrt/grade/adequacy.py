@@ -79,11 +79,13 @@ class Adequacy:
     map: np.ndarray | None = None  # (H, W) per-object relative difference of the remainder (rejected objects)
     excess_rms: float = 0.0  # the remainder's bias beyond noise, relative
     alternatives: list[tuple] = field(default_factory=list)  # (family, text, share) of causes that fit as well
+    also_adequate: list[tuple] = field(default_factory=list)  # (family, params, closeness z of the claim over it)
 
     def to_dict(self) -> dict:
         return {"verdict": self.verdict, "explained": self.explained, "rejected": self.rejected,
                 "n_tests": self.n_tests, "objects": self.objects, "where": self.where,
-                "remainder_excess_rms": self.excess_rms, "alternatives": [a[0] for a in self.alternatives]}
+                "remainder_excess_rms": self.excess_rms, "alternatives": [a[0] for a in self.alternatives],
+                "also_adequate": [list(a) for a in self.also_adequate]}
 
 
 @dataclass
@@ -158,7 +160,7 @@ AMBIGUOUS = 0.05
 OCCAM_Z = 2.0
 
 
-def closeness(fit, a, b) -> float:
+def closeness(fit, a, b, *, bic: bool = True) -> float:
     r"""Vuong's closeness statistic of candidate ``a`` over ``b`` (positive: a fits better), BIC-adjusted.
 
     With :math:`\ell_i` the difference of the two candidates' capped chi^2
@@ -177,7 +179,7 @@ def closeness(fit, a, b) -> float:
     """
     la, lb = fit.terms(a.change), fit.terms(b.change)
     ell = lb - la
-    gain = float(np.sum(ell)) - (a.params - b.params) * math.log(max(fit.n, 2))
+    gain = float(np.sum(ell)) - bic * (a.params - b.params) * math.log(max(fit.n, 2))
     sd = float(np.sqrt(np.sum((ell - ell.mean()) ** 2)))
     if sd > 0:
         return gain / sd
@@ -224,6 +226,50 @@ def _reading(family: str) -> str:
     from mcrt.grade.explain.families import CAMERA_FAMILIES
 
     return "camera" if family in CAMERA_FAMILIES else family
+
+
+#: Families and catalogued bugs (``catalogue:NAME``) that read the image as one mistake, in other words or as a
+#: generalisation of one another: a curve on the values nests a scale, the catalogue's depth off by one is the path
+#: depth's 7. Candidates of one reading never make a claim ambiguous (:func:`unconfirmed`).
+READINGS = (
+    frozenset({"scale", "light_radiance", "colour_matrix", "colour_lost", "channels", "encoding", "tone_curve",
+               "sample_clamp", "catalogue:gamma_output"}),  # the values through a function of each pixel's colour
+    frozenset({"depth", "catalogue:depth_off_by_one", "catalogue:rr_no_divide"}),
+    frozenset({"albedo", "surface_black", "catalogue:albedo_1pct"}),
+    frozenset({"reflectance_scale", "reflectance_squared", "catalogue:brdf_no_inv_pi", "catalogue:uniform_as_cosine"}),
+    frozenset({"light_sampling", "catalogue:nee_no_area", "catalogue:nee_no_cos_light", "catalogue:nee_no_inv_dist2"}),
+    frozenset({"direct_twice", "catalogue:double_count"}),
+    frozenset({"light_facing", "catalogue:light_two_sided"}),
+    frozenset({"blur", "resampling", "sharpen", "catalogue:no_jitter"}),
+    frozenset({"material", "reflectance", "catalogue:mirror_wrong_sign"}),  # the mirror sphere's material
+)
+#: A claimed cause must fit better than every adequate candidate of another reading by this many standard deviations
+#: of the term-by-term difference of their chi^2 (:func:`closeness` without the BIC's credit): about 2 % one-sided.
+CONFIRM_Z = 2.0
+
+
+def reading_of(c) -> str:
+    """The reading of candidate c (:data:`READINGS`; the camera's families are one; else its family or bug)."""
+    key = f"catalogue:{c.name}" if c.family == "catalogue" else c.family
+    for i, group in enumerate(READINGS):
+        if key in group:
+            return f"reading {i}"
+    return _reading(key)
+
+
+def unconfirmed(c, adequate: list, fit, named: list) -> list:
+    """The adequate candidates of other readings than claimed c's (:data:`READINGS`; not a description, not a rival,
+    not ``named`` beside it) that c does not beat by :data:`CONFIRM_Z` (:func:`closeness` without the BIC's credit):
+    another cause the image cannot tell from c's, the best of each reading."""
+    out, seen = [], {reading_of(c)}
+    for a in adequate:
+        r = reading_of(a)
+        if (r in seen or a in named or a.describes or a.family in c.rivals or c.family in a.rivals
+                or closeness(fit, c, a, bic=False) >= CONFIRM_Z):
+            continue
+        seen.add(r)
+        out.append(a)
+    return out
 
 
 def claim_rule(S: np.ndarray, R: np.ndarray, mask: np.ndarray, noise: Noise, sc: Scene2D, *, extra_var=None):
@@ -277,7 +323,12 @@ def claim_rule(S: np.ndarray, R: np.ndarray, mask: np.ndarray, noise: Noise, sc:
                     a = next((a for a in adequate if a.family == fam and a not in alts), None)
                     if a is not None and not any(x.family == fam for x in alts):
                         alts.append(a)
-                _claim(e, c, tried[id(c)], alts, np.where(mask[..., None], S - R - c.change, 0.0))
+                others = unconfirmed(c, adequate, fit, alts)
+                _claim(e, c, tried[id(c)], others or alts, np.where(mask[..., None], S - R - c.change, 0.0))
+                e.adequacy.also_adequate = [(a.family if a.family != "catalogue" else a.name, a.params,
+                                             round(closeness(fit, c, a, bic=False), 2)) for a in adequate if a is not c]
+                if others:  # another reading fits as well: the image cannot say which, no cause is claimed
+                    e.verdict = e.adequacy.verdict = cd.AMBIGUOUS
                 return
         if best is not None and best.change is not None and best.explained >= PARTIAL_SHARE:
             ad = tried.get(id(best)) or test(best)

@@ -39,8 +39,9 @@ CLAIMED = "claimed"  # the best candidate is the cause: "It looks like ..."
 PARTIAL = "partial"  # it explains part of the difference and something else is wrong (where: Explanation.remainder)
 INDISTINCT = "indistinct"  # it fits, but no better than noise would let anything fit
 DESCRIBED = "described"  # only a description fits (Candidate.describes): how the image differs, with no cause
+AMBIGUOUS = "ambiguous"  # causes of other readings leave noise as well, none significantly better: no cause claimed
 NONE = "none"  # nothing explains most of the difference
-VERDICTS = (CLAIMED, PARTIAL, INDISTINCT, DESCRIBED, NONE)
+VERDICTS = (CLAIMED, PARTIAL, INDISTINCT, DESCRIBED, AMBIGUOUS, NONE)
 
 
 @dataclass

@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 
-from mcrt.grade.candidates import CLAIMED, DESCRIBED, INDISTINCT, PARTIAL, TIE, Explanation
+from mcrt.grade.candidates import AMBIGUOUS, CLAIMED, DESCRIBED, INDISTINCT, PARTIAL, TIE, Explanation
 from mcrt.util.fmt import short as num
 
 
@@ -63,7 +63,8 @@ def summary(tests, score: float, max_score: float, *, blocked: str | None, headl
 
 #: The kinds of mistake the explanation families (mcrt.grade.explain.families.FAMILIES) try, in a student's words.
 _TRIED = ("No single mistake we tried (the catalogued bugs, the scene's colours, light, objects and camera, "
-          "the path depth, encodings, tone curves, clamped samples, colour channels, light counted twice, fall-offs, "
+          "the path depth, encodings, tone curves, clamped samples, colour channels, light counted twice, a light "
+          "sample's weight, fall-offs, "
           "resampling, materials, object sizes, a BRDF's normalisation, missing pixels and blur)")
 
 
@@ -85,6 +86,12 @@ def explanation_words(e: Explanation) -> tuple[str, str]:
                     + (f" (so would {alt.text}, {100 * alt.explained:.0f} %)" if alt else "")
                     + (f"; it changes the image {best.where}" if best.where else "") + ".")
         return sentence, f"It looks like {best.text}."
+    if e.verdict == AMBIGUOUS:  # causes of other readings leave noise as well: the image cannot say which
+        alts = " or ".join(t for _, t, _ in e.adequacy.alternatives)
+        where_b = f"; the difference changes the image {best.where}" if best.where else ""
+        sentence = (f"It could be {best.text}, or {alts}: each leaves only noise and none fits significantly better, "
+                    f"so the image cannot tell which, and no cause is claimed{where_b}; check each of them.")
+        return sentence, f"It could be {best.text}, or {alts}: the image cannot tell which."
     if e.verdict == DESCRIBED:  # only a description leaves noise (Candidate.describes): how it differs, no cause
         where_b = f", changing the image {best.where}" if best.where else ""
         sentence = (f"The difference depends on each pixel's value alone, as {best.text} would make it (what is left "

@@ -57,11 +57,16 @@ CAUSE_OF: dict[str, tuple[str, ...]] = {
     # Every diffuse reflectance off by one factor (mcrt.grade.explain.reflectance): a BRDF's normalisation, which
     # changes every surface's colour.
     "reflectance_scale": ("brdf_norm", "albedo"),
+    # Every diffuse reflectance squared (the albedo multiplied in twice): every surface's colour wrong.
+    "reflectance_squared": ("albedo", "brdf_norm"),
     # Mistakes of students' programs (mcrt.grade.accuracy.programs): a colour matrix that loses colour (grey, a
     # channel zeroed) and one that mixes the channels otherwise, light counted twice, the light facing the wrong
     # way, black pixels.
     "colour_lost": ("colour_lost",), "colour_matrix": ("channels", "colour_lost"), "direct_twice": ("direct_twice",),
     "light_facing": ("light_facing",), "bad_pixels": ("bad_pixels",),
+    # A light sample weighted wrongly (mcrt.grade.explain.light_sampling): the light on surfaces off, the light seen
+    # right.
+    "light_sampling": ("light_pdf",),
     # Each sample clamped (fireflies removed with their energy): mcrt.grade.explain.sample_clamp.
     "sample_clamp": ("sample_clamp",),
     # A surface black (mcrt.grade.explain.surface_black): a surface of the closed room missing, of albedo 0, or with
@@ -237,7 +242,8 @@ def rates(outcomes: list[Outcome]) -> dict:
         "detected": frac(wrong, lambda o: o.lost),
         "named_right": frac(wrong, lambda o: o.right),
         "named_wrong": frac(wrong, lambda o: o.wrong),
-        "honest_partial": frac(wrong, lambda o: not o.named and o.verdict in ("partial", "none", "described")),
+        "honest_partial": frac(wrong, lambda o: not o.named and o.verdict in ("partial", "none", "described",
+                                                                                   "ambiguous")),
         "also_named_wrong": frac(wrong, lambda o: o.also_wrong),
         "major_lost_a_quarter": frac(major, lambda o: o.max_score - o.score >= 0.25 * o.max_score),
         "false_alarms": frac(ok, lambda o: o.lost),

@@ -67,7 +67,7 @@ class _Warp:
 
 #: The camera families: parameter names, start scans, finite-difference steps, bounds.
 _CAMERA = {
-    "fov": (("fov",), {"fov": (0.9, 0.95, 1.05, 1.1)}, {"fov": 0.2}, {"fov": (0.8, 1.2)}),
+    "fov": (("fov",), {"fov": (0.78, 0.9, 0.95, 1.05, 1.1)}, {"fov": 0.2}, {"fov": (0.7, 1.2)}),
     "aspect": (("aspect",), {"aspect": (0.5625, 0.75, 0.8, 0.9, 1.1, 1.25, 1.333)}, {"aspect": 0.01},
                {"aspect": (0.5, 2.0)}),
     "pixel_offset": (("dx", "dy"), {"dx": (-1.0, -0.5, 0.5, 1.0), "dy": (-1.0, -0.5, 0.5, 1.0)},
@@ -133,6 +133,14 @@ def _fit_camera(fit: Fit, wp: _Warp, family: str, fov0: float, steps: int = 4) -
     return kw(p), best, img(p)
 
 
+def _diagonal(fov: float, f0: float, shape) -> str:
+    """Words for a field of view that is the scene's taken as the image's diagonal one ('' where it is not)."""
+    h, w = shape[:2]
+    diag = math.degrees(2 * math.atan(math.tan(math.radians(f0) / 2) * w / math.hypot(w, h)))
+    return (f" (the {_num(f0)} degrees taken as the image's diagonal field of view: {diag:.1f} across)"
+            if abs(fov - diag) <= 0.02 * diag else "")
+
+
 def camera(fit: Fit, inputs: Inputs) -> list[Candidate]:
     """The camera's field of view, its aspect, a pixel-centre offset, a rotation: each fitted by warping the fine image."""
     b = inputs.basis
@@ -141,7 +149,8 @@ def camera(fit: Fit, inputs: Inputs) -> list[Candidate]:
     out = []
     p, chi, dm = _fit_camera(fit, wp, "fov", f0)
     out.append(Candidate("fov", "field of view", f"the camera's field of view {p['fov']:.1f} degrees where the scene "
-                         f"says {_num(f0)}", chi, 1, value=float(p["fov"]), change=dm))
+                         f"says {_num(f0)}{_diagonal(float(p['fov']), f0, b.base.shape)}", chi, 1,
+                         value=float(p["fov"]), change=dm))
     p, chi, dm = _fit_camera(fit, wp, "aspect", f0)
     out.append(Candidate("aspect", "aspect ratio", f"the image's height spanning {_num(float(p['aspect']))} times the "
                          "view the field of view gives it (rays' vertical component scaled: an aspect ratio such as "

@@ -14,6 +14,13 @@ scene's own) by Lagrange interpolation; light transport is a polynomial in k
 of the path depth's degree, and the nodes' low-order interpolant follows it
 over their range, :data:`GRID`. One parameter, fitted in the student's
 terms: the factor.
+
+A tracer that multiplies the albedo in twice (in the BRDF and again in the
+sample's weight) squares every reflectance instead: each colour channel
+darkens by its own albedo, a saturated wall more than a grey one. The second
+family is that render (every Lambertian albedo squared), with no free
+parameter: a power fitted freely would mimic any small darkening of the room
+(a power of 1.02 is no program's mistake).
 """
 
 from __future__ import annotations
@@ -35,18 +42,24 @@ NODES = (0.0, 0.25, 0.5, 0.75, 1.5, 2.0)
 GRID = np.unique(np.concatenate([np.linspace(0.0, 2.0, 161), [1.0 / np.pi]]))
 
 
-def _scale(v, k: float) -> tuple:
-    return tuple(k * x for x in v)
+
+
+def remapped_reflectance(scene: Scene, f) -> Scene:
+    """``scene`` with every Lambertian albedo (the room's faces and diffuse objects) channel by channel through f."""
+    def g(v):
+        return tuple(float(f(x)) for x in v)
+
+    room = scene.room
+    room = replace(room, floor_albedo=g(room.floor_albedo), ceiling_albedo=g(room.ceiling_albedo),
+                   walls=tuple(replace(w, albedo=g(w.albedo)) for w in room.walls))
+    objects = tuple(replace(o, material=replace(o.material, albedo=g(o.material.albedo)))
+                    if isinstance(o.material, Lambertian) else o for o in scene.objects)
+    return replace(scene, room=room, objects=objects)
 
 
 def scaled_reflectance(scene: Scene, k: float) -> Scene:
-    """``scene`` with every Lambertian albedo (the room's faces and diffuse objects) times ``k``."""
-    room = scene.room
-    room = replace(room, floor_albedo=_scale(room.floor_albedo, k), ceiling_albedo=_scale(room.ceiling_albedo, k),
-                   walls=tuple(replace(w, albedo=_scale(w.albedo, k)) for w in room.walls))
-    objects = tuple(replace(o, material=replace(o.material, albedo=_scale(o.material.albedo, k)))
-                    if isinstance(o.material, Lambertian) else o for o in scene.objects)
-    return replace(scene, room=room, objects=objects)
+    """``scene`` with every Lambertian albedo times ``k``."""
+    return remapped_reflectance(scene, lambda x: k * x)
 
 
 def _prepare(a, scene: Scene, render) -> tuple[np.ndarray, np.ndarray]:
@@ -55,23 +68,48 @@ def _prepare(a, scene: Scene, render) -> tuple[np.ndarray, np.ndarray]:
     return np.asarray(NODES), np.stack([img(scaled_reflectance(scene, k)) for k in NODES])
 
 
-def reflectance_scale(fit: Fit, inputs: Inputs) -> list[Candidate]:
-    """Every diffuse reflectance times one factor, scanned on :data:`GRID`."""
-    r = inputs.basis.extra.get(reflectance_scale.name)
+def _prepare_squared(a, scene: Scene, render) -> np.ndarray:
+    """The render with every Lambertian albedo squared, at the basis's spp and seed."""
+    return basis_renderer(a, render)(remapped_reflectance(scene, lambda x: x * x))
+
+
+def _scan(fit: Fit, inputs: Inputs, name: str, grid: np.ndarray):
+    """The best of ``grid`` through the family's nodes and the basis (at 1): (value, chi^2, change), or None."""
+    r = inputs.basis.extra.get(name)
     if r is None:
-        return []
+        return None
     base = inputs.basis.base.astype(np.float64)
     nodes = np.concatenate([r[0], [1.0]])
     imgs = np.concatenate([r[1].astype(np.float64), base[None]])
-    curves = np.tensordot(lagrange(GRID, nodes), imgs, axes=(1, 0)) - base[None]
+    curves = np.tensordot(lagrange(grid, nodes), imgs, axes=(1, 0)) - base[None]
     errs = [fit.delta(c) for c in curves]
     i = int(np.argmin(errs))
-    k = float(GRID[i])
+    return float(grid[i]), errs[i], curves[i]
+
+
+def reflectance_squared(fit: Fit, inputs: Inputs) -> list[Candidate]:
+    """Every diffuse reflectance squared (the module docstring)."""
+    img = inputs.basis.extra.get(reflectance_squared.name)
+    if img is None:
+        return []
+    change = img.astype(np.float64) - inputs.basis.base.astype(np.float64)
+    text = ("every diffuse surface's reflectance squared, channel by channel: the albedo multiplied in twice (in the "
+            "BRDF and again in the sample's weight)")
+    return [Candidate("reflectance_squared", "reflectance squared", text, fit.delta(change), 0, value={"power": 2},
+                      change=change)]
+
+
+def reflectance_scale(fit: Fit, inputs: Inputs) -> list[Candidate]:
+    """Every diffuse reflectance times one factor, scanned on :data:`GRID`."""
+    got = _scan(fit, inputs, reflectance_scale.name, GRID)
+    if got is None:
+        return []
+    k, err, change = got
     how = " (1/pi: the BRDF's 1/pi applied twice)" if abs(k - 1.0 / np.pi) < 0.005 else ""
     text = (f"every diffuse surface's reflectance {_num(k)} times the scene's{how}: a Lambertian BRDF's "
             "normalisation (f = albedo / pi; a cosine-sampled path's weight is the albedo)")
-    return [Candidate("reflectance_scale", "reflectance scale", text, errs[i], 1, value={"factor": k},
-                      change=curves[i])]
+    return [Candidate("reflectance_scale", "reflectance scale", text, err, 1, value={"factor": k}, change=change)]
 
 
 reflectance_scale.name, reflectance_scale.prepare = "reflectance_scale", _prepare
+reflectance_squared.name, reflectance_squared.prepare = "reflectance_squared", _prepare_squared

@@ -1,0 +1,60 @@
+r"""The light sampled with a wrong weight: the light seen right, the light it sheds on surfaces k times too much.
+
+Next-event estimation weighs a light sample by :math:`1 / p`; a pdf taken
+as 1 instead of :math:`1/A` (A the light's area), the area applied twice,
+or half the light's surface sampled with the whole one's pdf, scales all
+light that reaches a surface by one factor k and leaves the light seen
+directly (no light sample) as it is. With :math:`D_1` mcrt's render cut at
+depth 1 (the light seen directly) and B the full render (the basis's, one
+seed),
+
+.. math::
+
+    M(k) = D_1 + k\,(B - D_1).
+
+The light seen in the mirror sphere is a path that hits the light after a
+specular bounce, not a light sample, yet it is scaled with the rest: an
+approximation confined to a few of the sphere's pixels.
+
+No free parameter: k is one of the factors a program gets wrong
+(:func:`factors`: the light's area A or 1/A, 2 or 1/2); a weight fitted
+freely would mimic any small change of the light on the room (an adaptive
+sampler's bias of -1 % is no light sample's weight of 0.99).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from mcrt.grade.candidates import Candidate, Inputs
+from mcrt.grade.explain.fit import Fit
+from mcrt.grade.explain.light_twice import _depth
+from mcrt.grade.feedback import num as _num
+
+
+def factors(area: float) -> tuple[tuple[float, str], ...]:
+    """(k, what it means) of the light sample weights programs get wrong, for a light of ``area``."""
+    return ((1.0 / area, f"1/A = {_num(1.0 / area)}: the light's pdf taken as 1, not 1/A"),
+            (area, f"A = {_num(area)}: the light's area applied twice (its pdf taken as 1/A^2)"),
+            (0.5, "1/2: half the light's surface sampled (one of its two triangles) with the whole light's pdf"),
+            (2.0, "2: the light sampled with half its pdf (two triangles' samples both counted)"))
+
+
+def light_sampling(fit: Fit, inputs: Inputs) -> list[Candidate]:
+    """The light on surfaces k times the truth for the best k of :func:`factors`, the light seen directly unchanged
+    (the module docstring)."""
+    b = inputs.basis
+    d1 = _depth(b, 1)
+    size = b.values.get("light_size", (0.0, 0.0))
+    area = float(size[0]) * float(size[1])
+    if d1 is None or area <= 0:
+        return []
+    x = b.base.astype(np.float64) - d1  # what light sampling brings: k - 1 times it is the change
+    err, k, words = min((fit.delta((k - 1.0) * x), k, words) for k, words in factors(area) if k != 1.0)
+    text = (f"the light reaching surfaces {_num(k)} times what it should be, the light itself seen right: a light "
+            f"sample weighted wrongly (k = {words})")
+    return [Candidate("light_sampling", "light sample's weight", text, err, 0, value={"factor": k},
+                      change=(k - 1.0) * x)]
+
+
+light_sampling.name = "light_sampling"
