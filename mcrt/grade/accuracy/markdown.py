@@ -97,8 +97,8 @@ _UNSEEN = ("The wrong renders are a sixth class of mistakes in students' tracers
            "with exponents biased by 127), materials (a glass sphere, the tetrahedron's normals smoothed, an ambient "
            "term, the tetrahedron's colour decoded as sRGB), camera models (the far camera, up +y, jitter in x "
            "only), light models (the light sampled on one quadrant, shadow rays blocked by the light itself, the "
-           "light sampled on its diagonal), resolution (a 2x render reduced in display codes or by sums, rows one place up, the "
-           "course's 100 x 100 resized by nearest pixels) and samples per pixel (tiles of one seed, the median of "
+           "light sampled on its diagonal), resolution (a 2x render reduced in display codes or by sums, rows one "
+           "place up, the course's 100 x 100 resized by nearest pixels) and samples per pixel (tiles of one seed, the median of "
            "batches, two runs averaged with equal weights, a running mean halved each sample); from Mitsuba renders "
            "of edited scenes, Mitsuba renders combined, or correct renders written as students' programs write "
            "files. The correct ones come from Mitsuba and mcrt in ways no other class used. *Named right*, "
@@ -137,7 +137,8 @@ def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta
          "`exposure` for a constant factor, `camera` for misregistration). *Confidently wrong*: it names a cause, and "
          "not the right one; *also wrong*: it names the right cause and a wrong one beside it. **Held-out** cases (marked H) were not looked at while the diagnosis was tuned, with one exception: the last two rules of the grader (the camera not blamed beside a cause outside it; an explained wrong geometry, light placement, colour or camera scored as a major mistake) were added after the held-out results had been seen; and when the per-object structure test was added, the exemption of a blur's remainder where the detectors found a filter (a denoiser's kernel is no Gaussian) was added after the held-out `denoised` case had been seen to lose its name, and a rule (a claimed blur counted as a filtered image by itself) was dropped after the final run, with no held-out verdict changed."
          if klass not in ("outside", "programs", "fresh", "blind", "unseen") else {
-             "outside": _OUTSIDE, "programs": _PROGRAMS, "fresh": _FRESH, "blind": _BLIND, "unseen": _UNSEEN}[klass], "",
+             "outside": _OUTSIDE, "programs": _PROGRAMS, "fresh": _FRESH, "blind": _BLIND,
+             "unseen": _UNSEEN}[klass], "",
          "## Rates", "",
          "| | mistakes | detected (lost points) | named right | confidently wrong | partial or none | also wrong | "
          "major mistakes losing >= 25 % | correct renders | false alarms | correct named a bug |",
