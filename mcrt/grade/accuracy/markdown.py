@@ -98,7 +98,7 @@ _UNSEEN = ("The wrong renders are a sixth class of mistakes in students' tracers
            "term, the tetrahedron's colour decoded as sRGB), camera models (the far camera, up +y, jitter in x "
            "only), light models (the light sampled on one quadrant, shadow rays blocked by the light itself, the "
            "light sampled on its diagonal), resolution (a 2x render reduced in display codes or by sums, rows one "
-           "place up, the course's 100 x 100 resized by nearest pixels) and samples per pixel (tiles of one seed, the median of "
+           "place up, the course's 100 x 100 resized by nearest pixels) and samples per pixel (rows of one seed, the median of "
            "batches, two runs averaged with equal weights, a running mean halved each sample); from Mitsuba renders "
            "of edited scenes, Mitsuba renders combined, or correct renders written as students' programs write "
            "files. The correct ones come from Mitsuba and mcrt in ways no other class used. *Named right*, "

@@ -31,7 +31,7 @@ before any grading. The mistakes differ from those of the five other classes
 * **resolution**: a 2x render reduced in 8-bit display codes; rows stored
   one place up (the first at the bottom); a 2x render reduced by 2 x 2 sums;
   the course's 100 x 100 render resized to 64 x 64 by nearest pixels;
-* **samples per pixel**: every 16 x 16 tile rendered with the same seed;
+* **samples per pixel**: every row rendered with the same random numbers;
   the median of 8 batch means; a 64 and a 192 spp render averaged with equal
   weights; a running mean updated as ``(mean + sample) / 2``.
 
@@ -44,7 +44,7 @@ roulette, and a run-length encoded TGA.
 Every wrong image comes from **Mitsuba**: edited scenes (:class:`Spec`'s
 ``edit``, ``sensor`` and ``mitsuba_edit``), Mitsuba renders combined where
 light transport or pixel integrals are linear in what is combined (paths seen
-directly or not, tiles, thin bands of rows, batches), or correct renders
+directly or not, rows, thin bands of rows, batches), or correct renders
 post-processed and written with NumPy, SciPy, Pillow and pypng as students'
 programs do. mcrt renders only a correct hand-in.
 
@@ -114,7 +114,7 @@ def _render(width: int, height: int, spp: int, seed: int, *, max_depth: int = 8,
 
 def _window(n: int, of: int, offset_x: float, offset_y: float) -> dict:
     """Sensor entries that render the window ``n`` pixels wide of an ``of``-pixel image (90 degrees) whose centre
-    lies ``offset_x``, ``offset_y`` windows right of and below the image's centre (a tile, or a band of a row)."""
+    lies ``offset_x``, ``offset_y`` windows right of and below the image's centre (a row, or a band of one)."""
     fov = math.degrees(2.0 * math.atan(n / of))
     return {"fov": fov, "principal_point_offset_x": float(offset_x), "principal_point_offset_y": float(offset_y)}
 
@@ -233,16 +233,12 @@ def _nearest_from_100(x, *, spp: int, seed: int):
                     axis=-1).astype(np.float64)
 
 
-def _tiles_one_seed(x, *, spp: int, seed: int, tile: int = 16):
-    """Each ``tile`` x ``tile`` tile rendered by its own worker, every worker seeded with the same seed: a film of
-    the tile's size (the same random streams) whose window is the tile's."""
+def _rows_one_seed(x, *, spp: int, seed: int):
+    """Each row rendered by its own task, every task's generator in the same state (workers forked with one seed):
+    a film one row high (the same random streams) whose window is the row's. Rows next to each other see nearly the
+    same scene with the same random numbers: the noise runs in vertical streaks."""
     h, w = x.shape[:2]
-    out = np.empty((h, w, 3))
-    for r in range(h // tile):
-        for c in range(w // tile):
-            sensor = _window(tile, w, c - (w / tile - 1) / 2, r - (h / tile - 1) / 2)
-            out[r * tile:(r + 1) * tile, c * tile:(c + 1) * tile] = _render(tile, tile, spp, seed, sensor=sensor)
-    return out
+    return np.concatenate([_render(w, 1, spp, seed, sensor=_window(w, w, 0.0, j + 0.5 - h / 2)) for j in range(h)])
 
 
 def _median_of_batches(x, *, batches: int, spp: int, seed: int):
@@ -467,7 +463,7 @@ CATEGORIES: dict[str, tuple[str, ...]] = {
     "camera": ("far_camera", "up_y", "jitter_x_only"),
     "light": ("light_samples_quadrant", "shadow_rays_hit_light", "light_samples_diagonal"),
     "resolution": ("reduced_in_srgb_codes", "rows_up_one", "summed_2x", "nearest_from_100"),
-    "samples": ("tiles_one_seed", "median_of_batches", "equal_weights_64_192", "halving_mean"),
+    "samples": ("rows_one_seed", "median_of_batches", "equal_weights_64_192", "halving_mean"),
 }
 
 
@@ -561,9 +557,10 @@ def _pixels_and_samples() -> tuple[Spec, ...]:
              **_posted("nearest_from_100", partial(_nearest_from_100, spp=256, seed=c("nearest_from_100"))),
              truth="rendered at the course's 100 x 100, resized to 64 x 64 with Pillow's NEAREST"),
         # Samples per pixel
-        Spec("tiles_one_seed", "same_seed", spp=64,
-             **_posted("tiles_one_seed", partial(_tiles_one_seed, spp=64, seed=c("tiles_one_seed"))),
-             truth="16 x 16 tiles rendered by workers all seeded alike: the same random numbers in every tile, 64 spp"),
+        Spec("rows_one_seed", "same_seed", spp=64,
+             **_posted("rows_one_seed", partial(_rows_one_seed, spp=64, seed=c("rows_one_seed"))),
+             truth="each row rendered by a forked worker whose generator has the same state: the same random numbers "
+             "in every row, 64 spp"),
         Spec("median_of_batches", "biased_estimator", held_out=True, spp=256, **_posted("median_of_8", partial(
             _median_of_batches, batches=8, spp=32, seed=c("median_of_batches"))),
              truth="each pixel the median of 8 batch means of 32 spp (to remove fireflies), 256 declared"),
@@ -607,7 +604,7 @@ _REWORDED = {
     "file_format": "the file's header and data disagree (byte order, a byte too many, a grey header for colour)",
     "resampling": "rendered at another resolution and resized wrongly",
     "row_stride": "pixels written at the wrong addresses (rows one place off)",
-    "same_seed": "what should be independent rendered with the same seed (tiles, renders)",
+    "same_seed": "what should be independent rendered with the same seed (rows, renders)",
     "light_pdf": "the light sampled wrongly (part of it only, with the whole light's pdf): the light seen right, its "
                  "light on surfaces not",
     "normals": "surface normals wrong (smoothed across an object's edges)",
