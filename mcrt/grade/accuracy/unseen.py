@@ -44,9 +44,10 @@ roulette, and a run-length encoded TGA.
 Every wrong image comes from **Mitsuba**: edited scenes (:class:`Spec`'s
 ``edit``, ``sensor`` and ``mitsuba_edit``), Mitsuba renders combined where
 light transport or pixel integrals are linear in what is combined (paths seen
-directly or not, rows, thin bands of rows, batches), or correct renders
-post-processed and written with NumPy, SciPy, Pillow and pypng as students'
-programs do. mcrt renders only a correct hand-in.
+directly or not, rows, thin bands of rows, runs), Mitsuba renders combined
+as the student's estimator combines its samples (a median of batches, a
+running mean halved), or correct renders post-processed and written with
+NumPy, SciPy, Pillow and pypng as students' programs do. mcrt renders only a correct hand-in.
 
 Causes use the words of the other classes where the mistake really is that
 cause (reworded for this class where the old words name only another
