@@ -101,6 +101,10 @@ REPORTS: tuple[Report, ...] = (
            "grading on mistakes outside the scene file written blind to the grader (post-processing, file writing, "
            "materials, camera and light models, resolution, claimed spp): named right, confidently wrong, partial, "
            "false alarms, with a held-out half graded once after the rules were frozen"),
+    Report("grading_accuracy/unseen", "grade-accuracy --class unseen --out reports/grading_accuracy/unseen",
+           "grading on a sixth class of mistakes in students' tracers and their output, written blind to the grader "
+           "(post-processing, file writing, materials, camera and light models, resolution, samples per pixel): named "
+           "right, confidently wrong, partial, false alarms, with a held-out half fixed before any grading"),
     Report("grading/false_alarms", "grade-false-alarms --out reports/grading/false_alarms",
            "grading's false alarms on correct renders: estimators, samplers, spp 16-1024, 64x64 to 800x800, PNG curves"),
 )

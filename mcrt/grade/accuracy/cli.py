@@ -12,7 +12,7 @@ DEFAULT_OUT = "reports/grading_accuracy"
 DEFAULT_ASSIGNMENT = "course2023"
 #: The classes by --class name: the module (under mcrt.grade.accuracy) holding its SPECS and CAUSES.
 CLASSES = {"scene": "cases", "outside": "outside", "programs": "programs", "fresh": "fresh",
-           "blind": "blind"}
+           "blind": "blind", "unseen": "unseen"}
 
 
 def register(sub) -> None:
@@ -23,9 +23,10 @@ def register(sub) -> None:
                    help="the class graded: 'scene' (scene edits, mcrt.grade.accuracy.cases), 'outside' (mistakes "
                    "outside the scene file, mcrt.grade.accuracy.outside), 'programs' (mistakes of students' "
                    "programs, written apart from the grader's rules, mcrt.grade.accuracy.programs), 'fresh' (mistakes "
-                   "no other class tried, tuned on since its first grading, mcrt.grade.accuracy.fresh) or 'blind' "
+                   "no other class tried, tuned on since its first grading, mcrt.grade.accuracy.fresh), 'blind' "
                    "(mistakes outside the scene file no other class tried, written blind to the grader, a held-out half "
-                   "fixed by category, mcrt.grade.accuracy.blind) (default: scene)")
+                   "fixed by category, mcrt.grade.accuracy.blind) or 'unseen' (a sixth class of such mistakes, in "
+                   "tracers and their output, written blind, mcrt.grade.accuracy.unseen) (default: scene)")
     p.add_argument("--held-out", choices=("all", "only", "none"), default="all",
                    help="grade all cases, only the held-out ones, or none of them (default: all)")
     p.add_argument("--out", default=None, help=f"report folder (default: {DEFAULT_OUT}, or {DEFAULT_OUT}/CLASS "

@@ -90,13 +90,29 @@ _BLIND = ("The wrong renders are mistakes made **outside the scene file** that n
           "its row is the measure of rules that never saw it.")
 
 
+_UNSEEN = ("The wrong renders are a sixth class of mistakes in students' tracers and their output that no other class "
+           "tried (mcrt.grade.accuracy.unseen), written blind to the grader's rules and not graded by their author: "
+           "post-processing (Reinhard on the luminance, a vignette, a bloom, a grey-world white balance), writing the "
+           "file (a hand-written 16-bit PNG little-endian, a PPM with a newline too many, a PFM headed grey, an HDR "
+           "with exponents biased by 127), materials (a glass sphere, the tetrahedron's normals smoothed, an ambient "
+           "term, the tetrahedron's colour decoded as sRGB), camera models (the far camera, up +y, jitter in x "
+           "only), light models (the light sampled on one quadrant, shadow rays blocked by the light itself, the "
+           "light sampled on its diagonal), resolution (a 2x render reduced in display codes or by sums, rows one "
+           "place up, the course's 100 x 100 resized by nearest pixels) and samples per pixel (rows of one seed, the median of "
+           "batches, two runs averaged with equal weights, a running mean halved each sample); from Mitsuba renders "
+           "of edited scenes, Mitsuba renders combined, or correct renders written as students' programs write "
+           "files. The correct ones come from Mitsuba and mcrt in ways no other class used. *Named right*, "
+           "*confidently wrong*, *partial or none*: as for the other classes. **Held-out** cases (marked H) were "
+           "fixed by the rule stated in the module (every other case of each category) before any case was graded.")
+
+
 def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta: dict, gradescope: list[dict],
                  klass: str = "scene") -> Path:
     """Write index.md and data.json under ``out``; returns the Markdown's path. ``klass`` is the class graded:
     'scene' (mcrt.grade.accuracy.cases), 'outside' (mcrt.grade.accuracy.outside), 'programs'
-    (mcrt.grade.accuracy.programs), 'fresh' (mcrt.grade.accuracy.fresh) or 'blind' (mcrt.grade.accuracy.blind); an
-    empty half (tuned on or held out) is left out of the rates table."""
-    from mcrt.grade.accuracy import blind, fresh, outside, programs
+    (mcrt.grade.accuracy.programs), 'fresh' (mcrt.grade.accuracy.fresh), 'blind' (mcrt.grade.accuracy.blind) or
+    'unseen' (mcrt.grade.accuracy.unseen); an empty half (tuned on or held out) is left out of the rates table."""
+    from mcrt.grade.accuracy import blind, fresh, outside, programs, unseen
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     tuned = [o for o in outcomes if not o.held_out]
@@ -108,7 +124,8 @@ def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta
     title = "Grading accuracy on a class of realistic hand-ins" + {
         "outside": ": mistakes outside the scene file", "programs": ": mistakes of students' programs",
         "fresh": ": mistakes no other class tried",
-        "blind": ": mistakes outside the scene file, written blind"}.get(klass, "")
+        "blind": ": mistakes outside the scene file, written blind",
+        "unseen": ": a sixth class of mistakes, written blind"}.get(klass, "")
     L = [f"# {title}", "",
          f"Written by `{command}` ({meta.get('date', '')}, {meta.get('seconds', 0):.0f} s). "
          f"Assignment: `{meta.get('assignment')}`; reference: {meta.get('reference')}.", "",
@@ -119,8 +136,9 @@ def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta
          "the mistake's cause (the explanation's family, or a criterion that names it: `linear` for an encoding, "
          "`exposure` for a constant factor, `camera` for misregistration). *Confidently wrong*: it names a cause, and "
          "not the right one; *also wrong*: it names the right cause and a wrong one beside it. **Held-out** cases (marked H) were not looked at while the diagnosis was tuned, with one exception: the last two rules of the grader (the camera not blamed beside a cause outside it; an explained wrong geometry, light placement, colour or camera scored as a major mistake) were added after the held-out results had been seen; and when the per-object structure test was added, the exemption of a blur's remainder where the detectors found a filter (a denoiser's kernel is no Gaussian) was added after the held-out `denoised` case had been seen to lose its name, and a rule (a claimed blur counted as a filtered image by itself) was dropped after the final run, with no held-out verdict changed."
-         if klass not in ("outside", "programs", "fresh", "blind") else {
-             "outside": _OUTSIDE, "programs": _PROGRAMS, "fresh": _FRESH, "blind": _BLIND}[klass], "",
+         if klass not in ("outside", "programs", "fresh", "blind", "unseen") else {
+             "outside": _OUTSIDE, "programs": _PROGRAMS, "fresh": _FRESH, "blind": _BLIND,
+             "unseen": _UNSEEN}[klass], "",
          "## Rates", "",
          "| | mistakes | detected (lost points) | named right | confidently wrong | partial or none | also wrong | "
          "major mistakes losing >= 25 % | correct renders | false alarms | correct named a bug |",
@@ -150,7 +168,7 @@ def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta
         L.append(f"| {o.name} | {'H' if o.held_out else ''} | {_cell(o.truth, 90)} | {o.spp} | {o.file} | "
                  f"{o.score:g}/{o.max_score:g} | {'yes' if o.wrong else 'no'} | {_cell(o.said) or '-'} | {o.seconds:.1f} |")
     causes = {"outside": outside.CAUSES, "programs": programs.CAUSES, "fresh": fresh.CAUSES,
-              "blind": blind.CAUSES}.get(klass, CAUSES)
+              "blind": blind.CAUSES, "unseen": unseen.CAUSES}.get(klass, CAUSES)
     L += ["", "Causes: " + "; ".join(f"`{k}` {v}" for k, v in causes.items()) + "."]
     L += _gradescope_section(gradescope, meta)
     path = out / "index.md"

@@ -113,7 +113,15 @@ SAME_MISTAKE: dict[str, tuple[str, ...]] = {
     # accepted: the light's radiance for a wrong light pdf (the light seen is right).
     "sharpen": ("blur",), "colour_grade": ("colour_space", "channels"), "code_range": ("encoding",),
     "row_stride": ("orientation",), "brdf_norm": ("albedo",), "light_shape": ("light_size",),
-    "resolution_crop": ("resampling",)}
+    "resolution_crop": ("resampling",),
+    # The unseen class (mcrt.grade.accuracy.unseen), fixed before any of it was graded: a bloom is a filter after
+    # rendering, as a blur is; a white balance scales each channel, as a light of another colour or a change of the
+    # colours after rendering does; jitter in one direction only changes each pixel's footprint, as a filter does (the
+    # catalogue's no-jitter is named a blur); shadow rays all blocked leave only the light seen, directly or after a
+    # mirror, which is what paths cut at depth 1 show; the median of batches removes fireflies' energy, as a clamp of
+    # samples does. An ambient term is no other mistake: no other cause is accepted for it.
+    "bloom": ("blur",), "white_balance": ("colour_grade", "light_radiance"), "pixel_footprint": ("blur",),
+    "shadow_self": ("depth",), "biased_estimator": ("sample_clamp",), "ambient": ()}
 
 
 def is_named(cause: str, named: list[str]) -> bool:
