@@ -16,7 +16,7 @@ import pytest
 import mcrt  # noqa: F401  (before mitsuba and drjit)
 from mcrt.grade.accuracy import blind, cases, fresh, outside, programs, unseen
 from mcrt.grade.accuracy.cases import build_class
-from mcrt.image_files import read_image, srgb_eotf, srgb_oetf
+from mcrt.image_files import ImageError, read_image, srgb_eotf, srgb_oetf
 
 W = H = 16
 
@@ -113,10 +113,14 @@ def test_wrong_writers_read_back_as_their_specs_say(tmp_path):
     r = read_image(unseen._write_ppm_extra_newline(x, tmp_path / "b"), linear_png=True).mean
     late = np.concatenate([[10], codes8.reshape(-1)[:-1]]).reshape(H, W, 3)
     np.testing.assert_allclose(r * 255, late, atol=1e-3)
-    # 'Pf': the first W H floats (from the bottom row up) read as grey pixels.
-    r = read_image(unseen._write_pfm_grey_header(x, tmp_path / "c")).mean
-    first = np.ascontiguousarray(x[::-1], np.float32).reshape(-1)[:H * W].reshape(H, W)[::-1]
-    np.testing.assert_allclose(r, np.repeat(first[..., None], 3, axis=2), rtol=1e-6)
+    # 'Pf' over the RGB floats (bottom row up): mcrt's reader refuses the file, naming the data its header lacks.
+    path = unseen._write_pfm_grey_header(x, tmp_path / "c")
+    data = path.read_bytes()
+    assert data.startswith(f"Pf\n{W} {H}\n".encode())
+    body = np.frombuffer(data[len(data) - H * W * 12:], "<f4").reshape(H, W, 3)[::-1]
+    np.testing.assert_allclose(body, x.astype(np.float32), rtol=1e-6)
+    with pytest.raises(ImageError, match="holds 3 times the data, as an RGB image does"):
+        read_image(path)
     # Exponents one lower: half of what the same writer gives with the right bias.
     half = read_image(unseen._write_hdr_bias_127(x, tmp_path / "d")).mean
     whole = read_image(fresh._write_hdr(x, tmp_path / "e")).mean

@@ -249,6 +249,20 @@ def test_pfm_truncated(tmp_path):
         read_pfm(path)
 
 
+def test_pfm_with_more_data_than_its_header_declares(tmp_path):
+    """An RGB image under a greyscale 'Pf' header (3 times the data) is an error that says so; a writer's trailing
+    newline is not."""
+    path = tmp_path / "t.pfm"
+    img = gradient()
+    h, w = img.shape[:2]
+    path.write_bytes(f"Pf\n{w} {h}\n-1.0\n".encode() + np.ascontiguousarray(img[::-1], "<f4").tobytes())
+    with pytest.raises(ImageError, match="t.pfm: PFM file holds .* more than its header declares .*write the header 'PF'"):
+        read_pfm(path)
+    write_pfm(path, img)
+    path.write_bytes(path.read_bytes() + b"\n")
+    np.testing.assert_array_equal(read_pfm(path), img.astype(np.float32))
+
+
 # --------------------------------------------------------------------------
 # Radiance HDR
 # --------------------------------------------------------------------------

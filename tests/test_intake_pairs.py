@@ -98,6 +98,35 @@ def test_a_pfm_with_some_nan_pixels_is_not_taken_for_a_byte_order_mistake(ctx, r
     assert _test(res, "finite").status == "failed"
 
 
+def _png16(path, img, byteorder: str) -> None:
+    """A 16-bit sRGB PNG written by hand (pypng's writer given the samples in ``byteorder``, as a program that
+    writes a uint16 buffer as it lies in memory does)."""
+    import png
+
+    from mcrt.image_files import srgb_oetf
+
+    codes = np.floor(np.clip(srgb_oetf(img), 0, 1) * 65535 + 0.5).astype(np.uint16)
+    if byteorder == "<":
+        codes = codes.byteswap()
+    h, w = codes.shape[:2]
+    with open(path, "wb") as f:
+        png.Writer(w, h, greyscale=False, bitdepth=16).write(f, codes.reshape(h, w * 3).tolist())
+
+
+@pytest.mark.parametrize("order", [">", "<"])
+def test_a_png16_written_little_endian_is_read_swapped_and_named(ctx, renders, tmp_path, order):
+    """A 16-bit PNG whose samples are little-endian resembles no view as read: the grader reads it byte-swapped,
+    grades that render and names the file mistake; a big-endian one (the spec) is left alone."""
+    res = _grade(ctx, tmp_path / "student", {"render.png": lambda q: _png16(q, renders[0], order)})
+    readable = _test(res, "readable")
+    if order == "<":
+        assert readable.status == "failed" and "samples are little-endian" in readable.output, readable.output
+        assert named_causes(res)[0] == ["file_format"]
+    else:
+        assert readable.status == "passed" and "byte_order" not in res.details
+    assert _test(res, "unbiased").status == "passed"
+
+
 def test_implausible_share_counts_what_no_radiance_is():
     x = np.array([0.0, 1e-3, 20.0, -0.01, np.nan, np.inf, 1e31, 1e-35, 1e-40], np.float64)
     assert implausible_share(x) == pytest.approx(5 / 9)

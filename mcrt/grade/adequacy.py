@@ -240,7 +240,7 @@ READINGS = (
     frozenset({"light_sampling", "catalogue:nee_no_area", "catalogue:nee_no_cos_light", "catalogue:nee_no_inv_dist2"}),
     frozenset({"direct_twice", "catalogue:double_count"}),
     frozenset({"light_facing", "catalogue:light_two_sided"}),
-    frozenset({"blur", "resampling", "sharpen", "catalogue:no_jitter"}),
+    frozenset({"blur", "resampling", "sharpen", "bloom", "catalogue:no_jitter"}),  # filters after rendering
     frozenset({"material", "reflectance", "catalogue:mirror_wrong_sign"}),  # the mirror sphere's material
 )
 #: A claimed cause must fit better than every adequate candidate of another reading by this many standard deviations
@@ -259,12 +259,13 @@ def reading_of(c) -> str:
 
 def unconfirmed(c, adequate: list, fit, named: list) -> list:
     """The adequate candidates of other readings than claimed c's (:data:`READINGS`; not a description, not a rival,
-    not ``named`` beside it) that c does not beat by :data:`CONFIRM_Z` (:func:`closeness` without the BIC's credit):
+    not a generalisation of c or nested in it, not ``named`` beside it) that c does not beat by :data:`CONFIRM_Z` (:func:`closeness` without the BIC's credit):
     another cause the image cannot tell from c's, the best of each reading."""
     out, seen = [], {reading_of(c)}
     for a in adequate:
         r = reading_of(a)
         if (r in seen or a in named or a.describes or a.family in c.rivals or c.family in a.rivals
+                or c.family in a.generalises or a.family in c.generalises
                 or closeness(fit, c, a, bic=False) >= CONFIRM_Z):
             continue
         seen.add(r)

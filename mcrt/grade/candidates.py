@@ -71,6 +71,9 @@ class Candidate:
     # (a curve on the values beside a per-sample clamp): named beside it where their remainder is noise too
     # (mcrt.grade.adequacy.claim_rule), whatever Occam's rule prefers.
     rivals: tuple[str, ...] = ()
+    # Families this one nests (a scale per channel nests one scale): it fitting as well is no other cause for them
+    # (mcrt.grade.adequacy.unconfirmed).
+    generalises: tuple[str, ...] = ()
     # A description of how the image differs rather than a mistake a program makes (any monotone curve through the
     # values, which a material or the light can mimic): it may leave noise, but it is said, never claimed.
     describes: bool = False

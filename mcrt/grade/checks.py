@@ -268,6 +268,16 @@ def _features(img: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return _ranks(x @ LUMINANCE), _ranks(x[..., 0] / s), _ranks(x[..., 1] / s)
 
 
+#: Luminance rank correlation with a view that an image must reach for its flip, rotation or camera to be claimed: a
+#: correct render reaches about 0.98, and a tone curve or a colour mistake keeps the ranks of luminance.
+RESEMBLES = 0.8
+
+
+def resemblance(img: np.ndarray, ref: np.ndarray) -> float:
+    """Luminance rank correlation (Spearman) of an image with a reference of its shape."""
+    return float(np.mean(_features(img)[0] * _features(ref)[0]))
+
+
 def detect_orientation(img: np.ndarray, refs: dict[str, np.ndarray], camera: str, margin: float) -> Orientation:
     """Which camera, and which flip or rotation of it, the image shows.
 
@@ -282,7 +292,10 @@ def detect_orientation(img: np.ndarray, refs: dict[str, np.ndarray], camera: str
     for an upside-down image). A candidate replaces (assigned camera, as
     handed in) only when its luminance correlation is higher by ``margin``,
     its chromaticity correlation is not lower, and its luminance correlation
-    exceeds 0.3; the best such candidate (sum of both) wins.
+    reaches :data:`RESEMBLES`; the best such candidate (sum of both) wins.
+    An image that resembles no view that well (a file read with the wrong
+    layout, noise) keeps the assigned camera as handed in: a flip that
+    raises a correlation from 0.2 to 0.4 is no evidence of a flip.
     """
     fl, fr, fg = _features(img)
     square = img.shape[0] == img.shape[1]
@@ -297,7 +310,7 @@ def detect_orientation(img: np.ndarray, refs: dict[str, np.ndarray], camera: str
     ident = (camera, "identity")
     table = {f"{c}/{t}": (round(lum[(c, t)], 4), round(chroma[(c, t)], 4)) for (c, t) in lum}
     eligible = [k for k in lum if k != ident and lum[k] >= lum[ident] + margin and chroma[k] >= chroma[ident]
-                and lum[k] > 0.3]
+                and lum[k] >= RESEMBLES]
     if eligible:
         best = max(eligible, key=lambda k: lum[k] + chroma[k])
         return Orientation(best[0], best[1], table, True)

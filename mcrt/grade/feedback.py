@@ -64,7 +64,7 @@ def summary(tests, score: float, max_score: float, *, blocked: str | None, headl
 #: The kinds of mistake the explanation families (mcrt.grade.explain.families.FAMILIES) try, in a student's words.
 _TRIED = ("No single mistake we tried (the catalogued bugs, the scene's colours, light, objects and camera, "
           "the path depth, encodings, tone curves, clamped samples, colour channels, light counted twice, a light "
-          "sample's weight, fall-offs, "
+          "sample's weight, fall-offs, bloom, "
           "resampling, materials, object sizes, a BRDF's normalisation, missing pixels and blur)")
 
 
@@ -150,7 +150,14 @@ def registration_text(reg, shape, min_shift: float) -> str:
 
 
 def filter_text(st, blur: bool, spp_eff: float, spp: int | None) -> str:
-    """The filter finding: correlated noise and softened edges."""
+    """The filter finding: correlated noise and softened edges (noise correlated along one direction alone: pixels
+    that share random numbers)."""
+    axis = getattr(st, "correlation_axis", "")
+    if axis and st.correlation > 0 and not blur:
+        return (f"neighbouring pixels' noise is correlated along the {axis} alone ({st.correlation:.2f}), not across "
+                f"them: pixels that share random numbers along the {axis} (one seed or random stream for every "
+                f"{axis[:-1]} or worker), or a filter along one axis; a Monte-Carlo render's pixels are independent: "
+                "give each pixel its own random numbers")
     how = [f"neighbouring pixels' noise is correlated ({st.correlation:.2f})"] if st.correlation > 0 else []
     if blur:
         how.append(f"edges are {'softened' if st.blur > 0 else 'sharpened'} as by a filter of about "

@@ -107,6 +107,7 @@ class Structure:
     correlation: float = 0.0  # lag-one correlation of the residual noise
     p_correlation: float = 1.0
     t_correlation: float = 0.0
+    correlation_axis: str = ""  # the direction the noise is correlated along: '' both, 'rows' or 'columns' alone
     pixel_p: np.ndarray | None = None  # (H, W, 3) lower-tail bounds (1 where not tested)
     pixel_effect: np.ndarray | None = None  # (H, W, 3) relative darkening
     notes: list[str] = field(default_factory=list)
@@ -243,7 +244,8 @@ def detect(resid: np.ndarray, ref: np.ndarray, mask: np.ndarray, var: np.ndarray
         e[m] = e_m
         e = e.reshape(h, w)
     pl = np.where(mask, pair @ LUMINANCE, 0.0) if pair is not None else None
-    out.t_correlation, out.p_correlation, out.correlation = noise_correlation(e, wt, mask, labels, pair=pl)
+    out.t_correlation, out.p_correlation, out.correlation, out.correlation_axis = noise_correlation(
+        e, wt, mask, labels, pair=pl)
 
     # Pixels darker than the non-negative lower-tail bound allows.
     with np.errstate(divide="ignore", invalid="ignore"):

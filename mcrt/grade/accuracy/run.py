@@ -48,7 +48,7 @@ CAUSE_OF: dict[str, tuple[str, ...]] = {
     # A smoothing's words name a blur, a denoiser and an enlargement from a lower resolution (bicubic enlarging is a
     # smoothing): either mistake is named by them.
     "encoding": ("encoding",), "blur": ("blur", "resampling"),
-    "sharpen": ("sharpen",),
+    "sharpen": ("sharpen",), "bloom": ("bloom",),
     "gamma_output": ("encoding",), "depth_off_by_one": ("depth",), "albedo_1pct": ("albedo",),
     "mirror_wrong_sign": ("albedo",), "no_jitter": ("blur",), "double_count": ("direct_twice",),
     # Families beyond the scene file (mcrt.grade.families).
@@ -177,8 +177,11 @@ def named_causes(res) -> tuple[list[str], str]:
         said.append(f"consistent with {m}")
     tests = {t.name: t for t in res.tests}
     readable = tests.get("readable")
-    if readable is not None and readable.status == "failed" and res.details.get("byte_order"):
-        causes.append("file_format")  # a PFM's header declaring the other byte order (stages.intake)
+    if readable is not None and readable.status == "failed" and (res.details.get("byte_order") or
+                                                                  not readable.output.startswith("no image")):
+        # A file in the other byte order than its format declares (stages.intake), or one that could not be read
+        # for what its bytes say (a header over the wrong amount of data): the file's format named.
+        causes.append("file_format")
         said.append(readable.output.split(";")[0])
     for crit, cause in (("linear", "encoding"), ("exposure", "light_radiance"), ("orientation", "orientation"),
                         ("finite", "bad_pixels")):
@@ -197,7 +200,10 @@ def named_causes(res) -> tuple[list[str], str]:
         causes.append("same_seed")  # two renders with one seed (stages.noise.same_pair)
         said.append(noise.output.split(";")[0])
         noise = None if "; also, " not in noise.output else noise
-    if noise is not None and noise.status == "failed" and any(w in noise.output for w in ("blur", "denois", "filter")):
+    if noise is not None and noise.status == "failed" and "share random numbers" in noise.output:
+        causes += ["same_seed", "blur"]  # noise correlated along one direction: shared random numbers, or a filter
+        said.append(noise.output.split(";")[0])
+    elif noise is not None and noise.status == "failed" and any(w in noise.output for w in ("blur", "denois", "filter")):
         causes.append("blur")
         said.append(noise.output.split(";")[0])
     elif noise is not None and noise.status == "failed" and "noisier" in noise.output:

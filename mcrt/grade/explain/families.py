@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from mcrt.grade.explain.basis import Basis, prepare_basis
+from mcrt.grade.explain.bloom import bloom
 from mcrt.grade.explain.camera import camera
 from mcrt.grade.explain.catalogue import catalogue
 from mcrt.grade.explain.colour import colour
@@ -22,11 +23,11 @@ from mcrt.grade.explain.tonecurve import tone_curve
 
 #: Every family the engine fits, in this order (ties keep it). The scene file's parameters (and the colours mixed by
 #: a matrix, a surface of the room black) and the catalogue; then what a student's program gets wrong beyond the
-#: scene file (a tone curve, each sample clamped, a fall-off, resampling, an object's material or size, every
+#: scene file (a tone curve, each sample clamped, a fall-off, resampling, bloom, an object's material or size, every
 #: diffuse reflectance off by one factor or squared, light counted twice, a light sample's weight, the light facing
 #: the wrong way, black pixels).
 FAMILIES = (scale, colour, curves, albedo, surface_black, rendered, camera, catalogue, tone_curve, sample_clamp,
-            falloff, resampling, material, object_size, reflectance_scale, reflectance_squared, light_twice,
+            falloff, resampling, bloom, material, object_size, reflectance_scale, reflectance_squared, light_twice,
             light_sampling, light_facing, bad_pixels)
 
 #: The families that are mistakes of the camera (what the misregistration test of mcrt.grade.structure also sees).

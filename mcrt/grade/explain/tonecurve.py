@@ -5,7 +5,11 @@ Named curves come first, each with an exposure scanned before it (a
 student's exposure slider): Reinhard's :math:`x/(1+x)`, the ACES filmic
 curve (Narkowicz's fit), Hable's filmic curve (Uncharted 2's constants and
 white point 11.2), each alone or followed by the sRGB curve, a clamp to
-[0, 1], and 8-bit rounding. Any other monotone curve is fitted as an
+[0, 1], and 8-bit rounding; Reinhard's extended curve
+:math:`x (1 + x / w^2) / (1 + x)` with its white point w scanned too; and
+Reinhard's curves, ACES and Hable's applied to the luminance L alone, each
+pixel's colour scaled by :math:`f(L) / L` (hue and saturation kept, as
+tone-mapping guides teach). Any other monotone curve is fitted as an
 isotonic regression of S on R per channel
 (:func:`scipy.optimize.isotonic_regression`) on :data:`BINS` quantile bins
 of R, each bin's level one parameter at most, and worded by the values it
@@ -27,6 +31,10 @@ from mcrt.grade.feedback import num as _num
 BINS = 64
 #: Exposures scanned before a named tone map (a student's exposure slider; 1 is none).
 EXPOSURES = (0.25, 0.35, 0.5, 0.7, 1.0, 1.4, 2.0, 2.8, 4.0)
+#: White points scanned for Reinhard's extended curve (the value that maps to 1).
+WHITES = (1.0, 2.0, 4.0, 8.0, 11.2, 16.0, 20.0, 32.0)
+#: The curves also applied to the luminance alone (the image's colours kept).
+ON_LUMINANCE = ("reinhard", "reinhard_ext", "aces", "hable")
 
 
 def _aces(x):
@@ -42,6 +50,22 @@ def _hable(x):
         return (v * (a * v + c * b) + d * e) / (v * (a * v + b) + d * f_) - e / f_
 
     return f(np.maximum(x, 0.0)) / f(11.2)
+
+
+def _reinhard_ext(x, w: float):
+    """Reinhard's extended curve, white point w (mapped to 1)."""
+    return x * (1.0 + x / (w * w)) / (1.0 + x)
+
+
+def _on_luminance(f):
+    """The curve f applied to each pixel's luminance (Rec. 709), the pixel's colour scaled by f(L) / L."""
+    from mcrt.grade.objects import LUMINANCE
+
+    def g(x):
+        lum = (x @ LUMINANCE)[..., None]
+        return x * np.where(lum > 0, f(lum) / np.maximum(lum, 1e-300), 0.0)
+
+    return g
 
 
 def _named_curves() -> dict[str, tuple[str, callable]]:
@@ -75,7 +99,35 @@ def tone_curve(fit: Fit, inputs: Inputs) -> list[Candidate]:
         exp = f" after an exposure of {_num(k)}" if k != 1.0 else ""
         out.append(Candidate("tone_curve", f"tone map {key}", f"the values {words}{exp} before saving",
                               errs[i], 1 if len(scan) > 1 else 0, value={"curve": key, "exposure": k}, change=f(k * R) - fit.R))
+    out += _reinhard_extended(fit, R)
     out.append(_isotonic(fit))
+    return out
+
+
+def _reinhard_extended(fit: Fit, R: np.ndarray) -> list[Candidate]:
+    """Reinhard's extended curve per channel and on the luminance, and the other curves of :data:`ON_LUMINANCE` on
+    the luminance: an exposure (and a white point) scanned for each."""
+    named = _named_curves()
+    curves = [("reinhard_ext", "put through Reinhard's extended tone map x (1 + x / w^2) / (1 + x)", w,
+               lambda x, w=w: _reinhard_ext(x, w)) for w in WHITES]
+    curves += [(f"{key} on luminance", f"{named[key][0]} applied to the luminance (colours kept)", None,
+                _on_luminance(named[key][1])) for key in ON_LUMINANCE if key in named]
+    curves += [("reinhard_ext on luminance", "put through Reinhard's extended tone map x (1 + x / w^2) / (1 + x) "
+                "applied to the luminance (colours kept)", w, _on_luminance(lambda x, w=w: _reinhard_ext(x, w)))
+               for w in WHITES]
+    best = {}
+    for key, words, w, f in curves:
+        for k in EXPOSURES:
+            err = fit.model(f(k * R))
+            if key not in best or err < best[key][0]:
+                best[key] = (err, words, w, k, f)
+    out = []
+    for key, (err, words, w, k, f) in best.items():
+        white = f" with white point {_num(w)}" if w is not None else ""
+        exp = f" after an exposure of {_num(k)}" if k != 1.0 else ""
+        out.append(Candidate("tone_curve", f"tone map {key}", f"the values {words}{white}{exp} before saving", err,
+                             1 + (w is not None), value={"curve": key, "exposure": k, "white": w},
+                             change=f(k * R) - fit.R))
     return out
 
 

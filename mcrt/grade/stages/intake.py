@@ -82,12 +82,15 @@ def implausible_share(img: np.ndarray) -> float:
 def _byte_order(g: Grading, paths: list[str], loaded) -> str | None:
     """A PFM whose header's sign declares the wrong byte order (little-endian data under a positive scale, as x86
     programs that write 1.0 produce): its data read as declared are implausible (over :data:`WRONG_ORDER_SHARE` of
-    the values) and in the other order every value is plausible. The render is replaced by the other order's
-    reading (a stated repair, as an undeclared encoding is decoded) and the message for ``readable`` returned."""
+    the values) and in the other order every value is plausible; or a 16-bit PNG written little-endian
+    (:func:`_png16_byte_order`). The render is replaced by the other order's reading (a stated repair, as an
+    undeclared encoding is decoded) and the message for ``readable`` returned."""
     from mcrt.image_files import ImageError, pfm_scale, read_pfm
 
     said = []
     for k, p in enumerate(paths[: len(loaded.images)]):
+        if loaded.fmt.startswith("png16"):
+            said += _png16_byte_order(g, p, loaded, k)
         if Path(p).suffix.lower() != ".pfm" or implausible_share(loaded.images[k]) <= WRONG_ORDER_SHARE:
             continue
         try:
@@ -105,6 +108,30 @@ def _byte_order(g: Grading, paths: list[str], loaded) -> str | None:
         said.append(f"{name}: the PFM's header scale {scale:.1f} declares {declared}-endian data, but the "
                     f"data are {actual}-endian: {fix}; graded as read {actual}-endian")
     return "; ".join(said) or None
+
+
+def _png16_byte_order(g: Grading, path: str, loaded, k: int) -> list[str]:
+    """A 16-bit PNG whose samples were written little-endian (a program's uint16 buffer written as it lies in an x86
+    machine's memory; PNG is big-endian): as read it resembles no view of the scene (its high bytes are the samples'
+    low bytes, noise), and byte-swapped it does (luminance rank correlation with the reference of at least
+    :data:`mcrt.grade.checks.RESEMBLES`). The render is replaced by the swapped reading and the message returned."""
+    from mcrt.image_files import ImageError, read_png
+
+    ref = g.ctx.references[g.a.camera].mean
+    if ref.shape != loaded.images[k].shape or ck.resemblance(loaded.images[k], ref) >= ck.RESEMBLES:
+        return []
+    try:
+        other = read_png(path, linear=loaded.fmt == "png16-linear", swap_byte_order=True)
+    except (ImageError, OSError, ValueError):
+        return []
+    if ck.resemblance(other, ref) < ck.RESEMBLES:
+        return []
+    loaded.images[k] = np.asarray(other, np.float64)
+    name = Path(loaded.files[k]).name
+    g.details.setdefault("byte_order", []).append({"file": name, "png16": "little-endian"})
+    return [f"{name}: the 16-bit PNG's samples are little-endian (each sample's two bytes swapped; PNG stores them "
+            "big-endian): write them with a PNG library, or byteswap() a uint16 array before writing; graded with "
+            "the bytes swapped back"]
 
 
 def in_memory(g: Grading, images, spp: int | None, fmt: str) -> Hand | None:
