@@ -438,3 +438,24 @@ def test_mistakes_of_the_unseen_class_are_named(ctx, case):
     assert not c.held_out
     (o,) = grade_cases([c], ctx)
     assert o.right and o.lost, (o.named, o.said)
+
+
+def test_a_brdf_normalisation_is_only_a_factor_a_program_gets_wrong():
+    """Every diffuse reflectance times k is fitted only at the factors a tracer gets wrong (1/pi, 1/2, ...): on a
+    reference 1 % darker (seed 6) its best is no 0.99, and on one at 1/pi it is 1/pi, with no free parameter."""
+    from mcrt.grade.candidates import Inputs
+    from mcrt.grade.explain.basis import Basis
+    from mcrt.grade.explain.fit import Fit
+    from mcrt.grade.explain.reflectance import FACTORS, NODES, reflectance_scale
+
+    R, S, noise, sc = _synthetic(6)
+    basis = Basis(camera="near", spp=1, base=R.astype(np.float32), var=np.zeros(R.shape, np.float32),
+                  fine=R.astype(np.float32), fine_tan=1.0, fov_deg=90.0, max_depth=8)
+    # A room whose light does not bounce: every pixel proportional to its reflectance (what the nodes interpolate).
+    basis.extra["reflectance_scale"] = (np.asarray(NODES), np.stack([k * R for k in NODES]).astype(np.float32))
+    for k, expect in ((0.99, None), (1 / np.pi, 1 / np.pi)):
+        fit = Fit(k * S, R, noise.model, np.ones((RES, RES, 1), bool), np.zeros_like(R))
+        (c,) = reflectance_scale(fit, Inputs(basis))
+        assert c.params == 0 and c.value["factor"] in [f for f, _ in FACTORS]
+        if expect is not None:
+            assert c.value["factor"] == pytest.approx(expect) and "1/pi applied twice" in c.text

@@ -26,7 +26,8 @@ _OUTSIDE = ("The wrong renders are mistakes made **outside the scene file** (mcr
             "with the course assignment. *Named right*: the feedback claims the mistake's cause. *Confidently "
             "wrong*: it claims a cause (\"It looks like ...\", or a criterion that names one) and not the right "
             "one. *Partial or none*: it claims no cause and says what it can (\"partly like X; something else is "
-            "wrong on ...\", or where the difference sits): neither right nor wrong. **Held-out** cases (marked H) "
+            "wrong on ...\", \"it could be X, or Y: the image cannot tell which\", or where the difference sits): "
+            "neither right nor wrong. **Held-out** cases (marked H) "
             "were chosen when the class was written and not graded until the rules were final, with one exception: "
             "after they were first graded, the monotone curve's fit was refined (64 bins, for curves outside both "
             "halves) and a family with more parameters was no longer named as an alternative beside a claimed "
@@ -86,8 +87,11 @@ _BLIND = ("The wrong renders are mistakes made **outside the scene file** that n
           "other case of each category) before any case was graded. The rules were changed on the tuning half only "
           "(a curve no program applies described, not claimed; the encoding finding not judged where nothing "
           "explains the decoded image; a BRDF's normalisation, an aspect ratio, an unsharp mask, a render one pixel "
-          "off, a bicubic enlargement, Hable's curve), and the held-out half was graded once, after the last change: "
-          "its row is the measure of rules that never saw it.")
+          "off, a bicubic enlargement, Hable's curve), and the held-out half was graded once, after the last change "
+          "(this report at commit 377bbf5). **The held-out half is held out no more**: the next round changed the "
+          "rules with that grading in view (a claim must fit better than a cause of another kind that fits too; a "
+          "light sample's weight, every reflectance squared, a diagonal field of view), so its row here is of "
+          "rules tuned on it.")
 
 
 _UNSEEN = ("The wrong renders are a sixth class of mistakes in students' tracers and their output that no other class "
@@ -103,7 +107,13 @@ _UNSEEN = ("The wrong renders are a sixth class of mistakes in students' tracers
            "of edited scenes, Mitsuba renders combined, or correct renders written as students' programs write "
            "files. The correct ones come from Mitsuba and mcrt in ways no other class used. *Named right*, "
            "*confidently wrong*, *partial or none*: as for the other classes. **Held-out** cases (marked H) were "
-           "fixed by the rule stated in the module (every other case of each category) before any case was graded.")
+           "fixed by the rule stated in the module (every other case of each category) before any case was graded. "
+           "The rules were changed on the tuning half only (tone curves on the luminance, a bloom, the light "
+           "sampled on a quarter, a 16-bit PNG's byte order, a PFM's data beyond its header, a flip claimed only for "
+           "an image that resembles a view, noise correlated along one direction), and the held-out half was graded "
+           "once, on the frozen rules: this report at commit c9f10bb. Two changes were made after that grading, with "
+           "it in view (a BRDF's normalisation only by a factor a program gets wrong, not any factor; a shift by a "
+           "whole pixel worded as an index off by one): the held-out row here is of rules that saw it.")
 
 
 def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta: dict, gradescope: list[dict],

@@ -141,6 +141,14 @@ def _diagonal(fov: float, f0: float, shape) -> str:
             if abs(fov - diag) <= 0.02 * diag else "")
 
 
+def _shift_causes(dx: float, dy: float) -> str:
+    """What shifts an image by (dx, dy) pixels: a whole pixel is an index off by one, a fraction the pixel centres."""
+    whole = max(abs(dx), abs(dy)) >= 0.75 and all(abs(v - round(v)) <= 0.1 for v in (dx, dy))
+    return ("rows or columns are written one place off (a row or column index off by one), or pixel centres are "
+            "off by a pixel" if whole else "pixel centres are not at (i + 0.5, j + 0.5), or an image resampled with "
+            "an offset")
+
+
 def camera(fit: Fit, inputs: Inputs) -> list[Candidate]:
     """The camera's field of view, its aspect, a pixel-centre offset, a rotation: each fitted by warping the fine image."""
     b = inputs.basis
@@ -159,9 +167,7 @@ def camera(fit: Fit, inputs: Inputs) -> list[Candidate]:
     p, chi, dm = _fit_camera(fit, wp, "pixel_offset", f0)
     dx, dy = float(p["dx"]), float(p["dy"])
     out.append(Candidate("pixel_offset", "pixel-centre offset", f"the image shifted by ({dx:+.2f}, {dy:+.2f}) pixel "
-                         "(x right, y down), as when pixel centres are not at (i + 0.5, j + 0.5), or an image "
-                         "resampled with an offset", chi, 2,
-                         value=(dx, dy), change=dm))
+                         f"(x right, y down), as when {_shift_causes(dx, dy)}", chi, 2, value=(dx, dy), change=dm))
     p, chi, dm = _fit_camera(fit, wp, "rotation", f0)
     ya, pi_, ro = (float(p[k]) for k in ("yaw", "pitch", "roll"))
     out.append(Candidate("rotation", "camera rotation", f"the camera rotated by yaw {ya:+.1f}, pitch {pi_:+.1f} and roll "

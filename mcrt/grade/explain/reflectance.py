@@ -12,8 +12,9 @@ The model image is mcrt's render with every Lambertian albedo (walls, floor,
 ceiling, tetrahedron) times k, through the nodes :data:`NODES` (1: the
 scene's own) by Lagrange interpolation; light transport is a polynomial in k
 of the path depth's degree, and the nodes' low-order interpolant follows it
-over their range, :data:`GRID`. One parameter, fitted in the student's
-terms: the factor.
+over their range. No free parameter: k is one of the factors a program
+gets wrong (:data:`FACTORS`); a factor fitted freely would mimic any small
+darkening of the room (0.99 is no BRDF's normalisation).
 
 A tracer that multiplies the albedo in twice (in the BRDF and again in the
 sample's weight) squares every reflectance instead: each colour channel
@@ -38,8 +39,11 @@ from mcrt.scene import Lambertian, Scene
 
 #: Factors rendered (1 is the basis itself): from black walls to twice the reflectance.
 NODES = (0.0, 0.25, 0.5, 0.75, 1.5, 2.0)
-#: Factors scanned; 1/pi (divided by pi twice) lies among them.
-GRID = np.unique(np.concatenate([np.linspace(0.0, 2.0, 161), [1.0 / np.pi]]))
+#: The factors tried, and what each means in a tracer.
+FACTORS = ((1.0 / np.pi, "1/pi: the BRDF's 1/pi applied twice"),
+           (0.5 / np.pi, "1/(2 pi): the BRDF's 1/pi applied twice and a hemisphere's 1/2 once"),
+           (0.5, "1/2: a factor of 2 missing (a pdf or weight off by 2)"),
+           (2.0, "2: a factor of 2 too many (a pdf or weight off by 2)"))
 
 
 
@@ -74,7 +78,8 @@ def _prepare_squared(a, scene: Scene, render) -> np.ndarray:
 
 
 def _scan(fit: Fit, inputs: Inputs, name: str, grid: np.ndarray):
-    """The best of ``grid`` through the family's nodes and the basis (at 1): (value, chi^2, change), or None."""
+    """The best of ``grid`` through the family's nodes and the basis (at 1) by Lagrange interpolation: (value, chi^2,
+    change), or None."""
     r = inputs.basis.extra.get(name)
     if r is None:
         return None
@@ -100,15 +105,15 @@ def reflectance_squared(fit: Fit, inputs: Inputs) -> list[Candidate]:
 
 
 def reflectance_scale(fit: Fit, inputs: Inputs) -> list[Candidate]:
-    """Every diffuse reflectance times one factor, scanned on :data:`GRID`."""
-    got = _scan(fit, inputs, reflectance_scale.name, GRID)
+    """Every diffuse reflectance times the best of :data:`FACTORS`."""
+    got = _scan(fit, inputs, reflectance_scale.name, np.array([k for k, _ in FACTORS]))
     if got is None:
         return []
     k, err, change = got
-    how = " (1/pi: the BRDF's 1/pi applied twice)" if abs(k - 1.0 / np.pi) < 0.005 else ""
-    text = (f"every diffuse surface's reflectance {_num(k)} times the scene's{how}: a Lambertian BRDF's "
+    how = next(words for f, words in FACTORS if f == k)
+    text = (f"every diffuse surface's reflectance {_num(k)} times the scene's ({how}): a Lambertian BRDF's "
             "normalisation (f = albedo / pi; a cosine-sampled path's weight is the albedo)")
-    return [Candidate("reflectance_scale", "reflectance scale", text, err, 1, value={"factor": k}, change=change)]
+    return [Candidate("reflectance_scale", "reflectance scale", text, err, 0, value={"factor": k}, change=change)]
 
 
 reflectance_scale.name, reflectance_scale.prepare = "reflectance_scale", _prepare
