@@ -610,9 +610,14 @@ _WORDS = {**cases.CAUSES, **outside.CAUSES, **programs.NEW_CAUSES, **fresh.NEW_C
 CAUSES: dict[str, str] = {c: _WORDS[c] for c in dict.fromkeys(s.cause for s in MISTAKES)}
 
 
-def held_out_rule(specs: tuple[Spec, ...] = SPECS) -> dict[str, bool]:
-    """Which cases the rule of the module docstring holds out, by name: the 2nd, 4th, ... of each category of
-    :data:`CATEGORIES` and of the correct hand-ins, in the order written."""
-    out = {n: k % 2 == 1 for names in CATEGORIES.values() for k, n in enumerate(names)}
+def alternating(categories: dict[str, tuple[str, ...]], specs: tuple[Spec, ...]) -> dict[str, bool]:
+    """Which cases are held out, by name: the 2nd, 4th, ... of each category and of the correct hand-ins (cause
+    None) of ``specs``, in the order written."""
+    out = {n: k % 2 == 1 for names in categories.values() for k, n in enumerate(names)}
     out.update({s.name: k % 2 == 1 for k, s in enumerate(x for x in specs if x.cause is None)})
     return out
+
+
+def held_out_rule(specs: tuple[Spec, ...] = SPECS) -> dict[str, bool]:
+    """Which cases the rule of the module docstring holds out (:func:`alternating` over :data:`CATEGORIES`)."""
+    return alternating(CATEGORIES, specs)

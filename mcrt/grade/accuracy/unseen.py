@@ -49,17 +49,12 @@ as the student's estimator combines its samples (a median of batches, a
 running mean halved), or correct renders post-processed and written with
 NumPy, SciPy, Pillow and pypng as students' programs do. mcrt renders only a correct hand-in.
 
-Causes use the words of the other classes where the mistake really is that
-cause (reworded for this class where the old words name only another
-instance: :data:`_REWORDED`); the keys new here (:data:`NEW_CAUSES`) describe
-mistakes no existing cause does.
-
-**Held out**, fixed when the class was written, before any case was graded:
-within each category above, in the order written, the 1st, 3rd, ... mistake
-is tuned on and the 2nd, 4th, ... held out; the correct hand-ins alternate
-the same way, the first tuned on. :func:`held_out_rule` states the rule as
-code (the categories are :data:`CATEGORIES`) and the tests check the specs
-against it.
+Causes and the held-out rule follow the blind class
+(:mod:`~mcrt.grade.accuracy.blind`): the other classes' words where the
+mistake is that cause (:data:`_REWORDED` where they name another instance),
+:data:`NEW_CAUSES` for the rest; and, fixed before any case was graded, the
+2nd, 4th, ... mistake of each of :data:`CATEGORIES` and correct hand-in
+held out (:func:`held_out_rule`, checked against the specs by the tests).
 """
 
 from __future__ import annotations
@@ -617,8 +612,6 @@ CAUSES: dict[str, str] = {c: _WORDS[c] for c in dict.fromkeys(s.cause for s in M
 
 
 def held_out_rule(specs: tuple[Spec, ...] = SPECS) -> dict[str, bool]:
-    """Which cases the rule of the module docstring holds out, by name: the 2nd, 4th, ... of each category of
-    :data:`CATEGORIES` and of the correct hand-ins, in the order written."""
-    out = {n: k % 2 == 1 for names in CATEGORIES.values() for k, n in enumerate(names)}
-    out.update({s.name: k % 2 == 1 for k, s in enumerate(x for x in specs if x.cause is None)})
-    return out
+    """Which cases the rule of the module docstring holds out (the blind class's rule,
+    :func:`mcrt.grade.accuracy.blind.alternating`, over :data:`CATEGORIES`)."""
+    return blind.alternating(CATEGORIES, specs)
