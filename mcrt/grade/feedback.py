@@ -87,11 +87,12 @@ def explanation_words(e: Explanation) -> tuple[str, str]:
                     + (f"; it changes the image {best.where}" if best.where else "") + ".")
         return sentence, f"It looks like {best.text}."
     if e.verdict == AMBIGUOUS:  # causes of other readings leave noise as well: the image cannot say which
-        alts = " or ".join(t for _, t, _ in e.adequacy.alternatives)
+        texts = [best.text] + [t for _, t, _ in e.adequacy.alternatives]
+        each = ", ".join(texts[:-1]) + ", or " + texts[-1]
         where_b = f"; the difference changes the image {best.where}" if best.where else ""
-        sentence = (f"It could be {best.text}, or {alts}: each leaves only noise and none fits significantly better, "
-                    f"so the image cannot tell which, and no cause is claimed{where_b}; check each of them.")
-        return sentence, f"It could be {best.text}, or {alts}: the image cannot tell which."
+        sentence = (f"It could be {each}: each leaves only noise and none fits significantly better, so the image "
+                    f"cannot tell which, and no cause is claimed{where_b}; check each of them.")
+        return sentence, f"It could be {each}: the image cannot tell which."
     if e.verdict == DESCRIBED:  # only a description leaves noise (Candidate.describes): how it differs, no cause
         where_b = f", changing the image {best.where}" if best.where else ""
         sentence = (f"The difference depends on each pixel's value alone, as {best.text} would make it (what is left "

@@ -49,7 +49,7 @@ def bloom(fit: Fit, inputs: Inputs) -> list[Candidate]:
         return []
     err, t, s, a, change = best
     text = (f"bloom added after rendering: what exceeds {_num(t)} blurred over about {_num(s)} pixels and added back "
-            f"at {_num(a)} times its value (a glare or bloom effect)")
+            f"at {a:.2g} times its value (a glare or bloom effect)")
     return [Candidate("bloom", "bloom", text, err, 3, value={"threshold": t, "sigma": s, "strength": a},
                       change=change)]
 

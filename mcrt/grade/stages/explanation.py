@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from mcrt.grade.candidates import Inputs
+from mcrt.grade.candidates import AMBIGUOUS, Inputs
 from mcrt.grade.explain.catalogue import catalogue_power, rank_mutants, rank_noise, rank_noise_level
 from mcrt.grade.adequacy import Scene2D, claim_rule
 from mcrt.grade.regions import change_region, rel_lum, short_text, signature_region, tile_means
@@ -79,7 +79,8 @@ def diagnose(g: Grading, hand: Hand, noise: Noise, *, pixel_level: bool = False)
 def explain(g: Grading, hand: Hand, img, mask, noise: Noise):
     """Fit the families of :mod:`mcrt.grade.explain` to the image; None without the engine's renders.
 
-    When the claim rule claims no cause the diagnosis is left empty: no bug is named.
+    When the claim rule claims no cause the diagnosis is left empty: no bug is named. Where causes of several
+    readings fit as well (AMBIGUOUS) they are the diagnosis, as the closest, none claimed.
     """
     from mcrt.grade.explain import explain as engine
     from mcrt.grade.objects import baseline_shares
@@ -114,7 +115,8 @@ def explain(g: Grading, hand: Hand, img, mask, noise: Noise):
         g.figures["mutant_rel_tiles"] = rel_lum(_tile_means(e.named.change, mask, tile), _tile_means(R, mask, tile))
         g.figures["mutant_name"] = e.named.name
     else:
-        g.diagnosis = []
+        said = {(f, t) for f, t, _ in e.adequacy.alternatives} if e.verdict == AMBIGUOUS else set()
+        g.diagnosis = [c.to_dict() for c in e.candidates if said and (c is e.best or (c.family, c.text) in said)][:5]
         g.figures.pop("mutant_rel_tiles", None)
         g.figures.pop("mutant_name", None)
     return e
