@@ -23,6 +23,17 @@ relevance threshold ``min_effect``), with the per-object tests of
   difference) to be mentioned: the objects the difference sits on are named
   instead, with how they differ.
 
+**A claim must beat every other reading that leaves noise.** Occam's rule
+picks among candidates; it does not say the image confirmed the pick. The
+BIC's credit for fewer parameters is largest where two predictions are
+nearly the same, where the image cannot tell them apart. So the claimed
+candidate must also fit better than every adequate candidate of another
+reading (:data:`READINGS`: families that name other mistakes, not a
+generalisation or rewording of it) by :data:`CONFIRM_Z`, by
+:func:`closeness` *without* that credit (:func:`unconfirmed`). Otherwise the
+verdict is AMBIGUOUS: "it could be X, or Y: the image cannot tell which",
+and no cause is claimed.
+
 **Which adequate candidate is claimed (Occam's rule).** Several candidates
 can leave noise: a small darkening of the room is a path cut one bounce
 short, a wall's three albedos, or a curve through the values. Adequacy says
@@ -259,12 +270,13 @@ def reading_of(c) -> str:
 
 def unconfirmed(c, adequate: list, fit, named: list) -> list:
     """The adequate candidates of other readings than claimed c's (:data:`READINGS`; not a description, not a rival,
-    not a generalisation of c or nested in it, not ``named`` beside it) that c does not beat by :data:`CONFIRM_Z` (:func:`closeness` without the BIC's credit):
-    another cause the image cannot tell from c's, the best of each reading."""
+    not a generalisation of c or nested in it, not ``named`` beside it) that c does not beat by :data:`CONFIRM_Z`
+    (:func:`closeness` without the BIC's credit): another cause the image cannot tell from c's, the best of each
+    reading."""
     out, seen = [], {reading_of(c)}
     for a in adequate:
         r = reading_of(a)
-        if (r in seen or a in named or a.describes or a.family in c.rivals or c.family in a.rivals
+        if (r in seen or any(a is x for x in named) or a.describes or a.family in c.rivals or c.family in a.rivals
                 or c.family in a.generalises or a.family in c.generalises
                 or closeness(fit, c, a, bic=False) >= CONFIRM_Z):
             continue
@@ -284,7 +296,10 @@ def claim_rule(S: np.ndarray, R: np.ndarray, mask: np.ndarray, noise: Noise, sc:
     tested; of those whose remainder is noise, the **simplest** is claimed
     (:func:`occam`: fewest parameters, unless one with more fits
     significantly better by :func:`closeness`), moved first, with the other
-    families that fit as well (:data:`AMBIGUOUS`); where that simplest is a
+    families that fit as well (:data:`AMBIGUOUS`), unless a candidate of
+    another reading fits as well (:func:`unconfirmed`: the verdict is then
+    :data:`mcrt.grade.candidates.AMBIGUOUS`, those candidates its
+    alternatives, nothing claimed); where that simplest is a
     description (:attr:`mcrt.grade.candidates.Candidate.describes`: any
     monotone curve), it is DESCRIBED, said but not claimed; else the best is PARTIAL,
     with where its remainder lies, if it explains :data:`PARTIAL_SHARE` of
