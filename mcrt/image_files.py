@@ -986,6 +986,20 @@ JPEG_REASON = ("JPEG is not accepted: its lossy compression changes the mean of 
                "same image as PNG (8 or 16 bit), PPM, BMP or TGA, or as OpenEXR, PFM or HDR")
 
 
+_WHITESPACE = b" \t\n\v\f\r"
+
+
+def _late_raster(path: str, raster: bytes, size: int) -> None:
+    """Refuse a binary netpbm raster that starts late: k bytes more than its header declares, the first k of them
+    whitespace and the last k not (a header ended by two newlines, where netpbm allows one; a trailing newline is
+    whitespace at the end instead, and is read right)."""
+    k = len(raster) - size
+    if 0 < k <= 4 and all(c in _WHITESPACE for c in raster[:k]) and not all(c in _WHITESPACE for c in raster[-k:]):
+        raise ImageError(f"{path}: the header is followed by {k + 1} whitespace bytes where netpbm allows one, so "
+                         f"every sample would be read {k} byte{'s' * (k > 1)} late (write the samples right after the "
+                         "single newline that ends the header)")
+
+
 def read_netpbm(path: PathLike, linear: bool = False) -> tuple[np.ndarray, int]:
     """Read a PPM (P3 plain or P6 binary) or PGM (P2/P5), 8 or 16 bit, as ((H, W, 3) float32 RGB, bits).
 
@@ -1004,6 +1018,8 @@ def read_netpbm(path: PathLike, linear: bool = False) -> tuple[np.ndarray, int]:
             _check_pixels(path, w, h)
             args = tile.args if tile is not None else None
             maxval = int(args[1]) if isinstance(args, tuple) and len(args) > 1 else (65535 if mode == "I" else 255)
+            if tile is not None and tile.codec_name != "ppm_plain":
+                _late_raster(path, data[tile.offset:], w * h * (3 if data[1:2] == b"6" else 1) * (1 + (maxval > 255)))
             if maxval <= 255:
                 if mode not in ("1", "L", "RGB"):
                     raise ImageError(f"{path}: unsupported netpbm pixel mode {mode}")

@@ -108,11 +108,13 @@ def test_wrong_writers_read_back_as_their_specs_say(tmp_path):
     codes16 = np.floor(srgb_oetf(x) * 65535 + 0.5).astype(np.uint16)
     r = read_image(unseen._write_png16_little_endian(x, tmp_path / "a"), linear_png=True).mean
     np.testing.assert_allclose(r * 65535, codes16.byteswap(), atol=0.02)
-    # Every sample one byte late: the newline (10) first, R from G's place, and so on.
+    # A newline too many after the header, then the codes: read as netpbm says, every sample would be one byte late;
+    # mcrt's reader refuses the file, naming the extra whitespace.
     codes8 = np.floor(srgb_oetf(x) * 255 + 0.5).astype(np.uint8)
-    r = read_image(unseen._write_ppm_extra_newline(x, tmp_path / "b"), linear_png=True).mean
-    late = np.concatenate([[10], codes8.reshape(-1)[:-1]]).reshape(H, W, 3)
-    np.testing.assert_allclose(r * 255, late, atol=1e-3)
+    path = unseen._write_ppm_extra_newline(x, tmp_path / "b")
+    assert path.read_bytes() == f"P6\n{W} {H}\n255\n\n".encode() + codes8.tobytes()
+    with pytest.raises(ImageError, match="followed by 2 whitespace bytes where netpbm allows one"):
+        read_image(path)
     # 'Pf' over the RGB floats (bottom row up): mcrt's reader refuses the file, naming the data its header lacks.
     path = unseen._write_pfm_grey_header(x, tmp_path / "c")
     data = path.read_bytes()

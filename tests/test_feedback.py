@@ -407,6 +407,89 @@ def test_a_claim_needs_to_fit_better_than_another_reading():
         assert unconfirmed(c, [c, same], fit, []) == []
 
 
+def test_a_surface_out_of_view_is_never_claimed_alone():
+    """A wall no pixel sees (wall FA, whose light reaches the right half only by reflection) and the floor, each fitted
+    by its albedo on a hand-in whose wall FA is darker (seed 5): the wall's candidate is marked out of view and worded
+    so, the floor's is not. Out of view, it does not confirm itself by fitting better: a candidate of another reading
+    that leaves noise is returned beside it, though the wall fits far better (at k = 30 % the depth's claim above stood
+    alone); and with nothing beside it the feedback claims no cause."""
+    from mcrt.grade.adequacy import unconfirmed
+    from mcrt.grade.candidates import AMBIGUOUS, Candidate, Explanation, Inputs
+    from mcrt.grade.explain.basis import Basis
+    from mcrt.grade.explain.fit import Fit
+    from mcrt.grade.explain.scene import albedo
+    from mcrt.grade.feedback import explanation_words
+
+    R, S, noise, sc = _synthetic(5)
+    right, floor = (sc.labels == 1)[..., None], (sc.labels == 2)[..., None]
+    nodes = np.array([0.0, 0.5, 1.0])
+    # Linear in the albedo: wall FA's light on the right half, the floor's own pixels.
+    fa = np.stack([R * (1 + np.where(right, a - 0.5, 0.0)) for a in nodes]).astype(np.float32)
+    fl = np.stack([R * (1 + np.where(floor, 2 * (a - 0.5), 0.0)) for a in nodes]).astype(np.float32)
+    basis = Basis(camera="near", spp=1, base=R.astype(np.float32), var=np.zeros(R.shape, np.float32),
+                  fine=R.astype(np.float32), fine_tan=1.0, fov_deg=90.0, max_depth=8,
+                  albedo={"wall FA": (nodes, fa, (0.5, 0.5, 0.5)), "the floor": (nodes, fl, (0.5, 0.5, 0.5))},
+                  values={"wall FA": ("albedo",), "the floor": ("albedo",)})
+    k = 0.3
+    fit = Fit(S * (1 - np.where(right, k, 0.0)), R, noise.model, np.ones((RES, RES, 3), bool), np.zeros_like(R))
+    names = ("wall AB (red)", "wall DE (blue)", "the floor", "the tetrahedron (orange)", "nothing")
+    wall, fl_c = albedo(fit, Inputs(basis, labels=sc.labels, label_names=names))
+    assert wall.out_of_view and "wall FA (not in view) with albedo" in wall.text, wall.text
+    assert not fl_c.out_of_view and "not in view" not in fl_c.text
+    assert wall.value[0] == pytest.approx(0.5 - k, abs=0.03)
+    ca = -k * np.where(right, R, 0.0) * (1 + np.linspace(-0.5, 0.5, RES)[None, :, None])
+    other = Candidate("depth", "depth", "paths cut short", fit.delta(ca), 1, change=ca)
+    assert unconfirmed(wall, [wall, other], fit, []) == [other]
+    e = Explanation([wall], 0.0, RES * RES * 3, np.zeros_like(R), verdict=AMBIGUOUS)
+    e.adequacy = type("A", (), {"alternatives": []})()
+    sentence, headline = explanation_words(e)
+    assert "no cause is claimed" in sentence and "cannot confirm" in headline, (sentence, headline)
+
+
+@pytest.mark.parametrize("up, named", [((0.0, 1.0, 0.0), ["orientation", "camera_rotation"]),
+                                       ((0.0, 0.0, -1.0), ["orientation"])])
+def test_a_quarter_turn_names_the_up_vector(ctx, up, named):
+    """A Mitsuba render whose camera's up vector is +y (a quarter turn; seed 54) is found turned, and the words send
+    the student to the up vector as well as to the writer's order of rows and columns; one whose up is -z (upside
+    down, a half turn) names the writer's order first, as a flip does."""
+    from mcrt.grade.accuracy.cases import _camera
+    from mcrt.grade.accuracy.run import named_causes
+
+    img = _render_spec(Spec("t", None, spp=256), _camera(load_scene(), up=up), width=RES, height=RES, max_depth=8,
+                       seed=54).mean
+    res = grade_image("up", ctx, [img], spp=256)
+    assert _output(res, "orientation").startswith("the image is rotated"), _output(res, "orientation")
+    assert named_causes(res)[0] == named, res.summary
+
+
+def test_rows_written_one_place_up_are_named_an_index_off_by_one(ctx):
+    """A Mitsuba render (seed 55, 1024 spp) with every row written one place up (the first at the bottom): the claim
+    is the image shifted by a whole pixel, worded as an index off by one, which names the row stride."""
+    from mcrt.grade.accuracy.run import is_named, named_causes
+
+    img = np.roll(_mitsuba(load_scene(), 55), -1, axis=0)
+    res = grade_image("rows", ctx, [img], spp=1024)
+    ex = res.details["explanation"]
+    assert ex["family"] == "pixel_offset" and "index off by one" in ex["sentence"], ex["sentence"]
+    assert is_named("row_stride", named_causes(res)[0])
+
+
+def test_a_render_reduced_by_nearest_pixels_is_named_with_its_resolution(ctx):
+    """A Mitsuba render at 64 x 64 (seed 56, 1024 spp) reduced to 32 x 32 by Pillow's NEAREST, channel by channel in
+    floats: the claim is the resampling family's reduction from 64 x 64, the library's centre convention (every
+    other pixel, from the second: not a shift of the 32 x 32 image, whose pixels would be means)."""
+    from PIL import Image
+
+    big = _mitsuba(load_scene(), 56, res=64).astype(np.float32)
+    img = np.stack([np.asarray(Image.fromarray(big[..., c], "F").resize((RES, RES), Image.NEAREST))
+                    for c in range(3)], axis=-1)
+    res = grade_image("nearest", ctx, [img], spp=1024)
+    ex = res.details["explanation"]
+    assert ex["family"] == "resampling", ex["sentence"]
+    assert ex["candidates"][0]["value"] == {"size": [64, 64], "method": "nearest", "centre": True}, ex["sentence"]
+    assert res.score < res.max_score
+
+
 def test_an_image_that_resembles_no_view_claims_no_flip(ctx):
     """An RGB render read as a greyscale file (its first third of floats as grey pixels, as a 'Pf' PFM header over RGB
     data makes it; Mitsuba, seed 51) resembles no view: no flip, rotation or camera is claimed for it, though one

@@ -263,6 +263,25 @@ def test_pfm_with_more_data_than_its_header_declares(tmp_path):
     np.testing.assert_array_equal(read_pfm(path), img.astype(np.float32))
 
 
+@pytest.mark.parametrize("maxval", [255, 65535])
+def test_ppm_whose_header_ends_with_two_newlines(tmp_path, maxval):
+    """A binary PPM written with a newline too many after its header (every sample a byte late, written here by hand)
+    is an error that says so, at 8 and 16 bits; the same raster with a trailing newline instead is read right, as is
+    one whose first sample is the code of a newline (10) and has no extra byte."""
+    codes = np.random.default_rng(7).integers(0, maxval + 1, (5, 6, 3)).astype(">u2" if maxval > 255 else "u1")
+    codes[-1, -1, -1] = 200  # the last sample no whitespace code
+    codes[0, 0, 0] = 10
+    head = f"P6\n6 5\n{maxval}\n".encode()
+    path = tmp_path / "t.ppm"
+    path.write_bytes(head + b"\n" + codes.tobytes())
+    with pytest.raises(ImageError, match="t.ppm: the header is followed by 2 whitespace bytes .* 1 byte late"):
+        image_files.read_netpbm(path, linear=True)
+    for raw in (head + codes.tobytes() + b"\n", head + codes.tobytes()):
+        path.write_bytes(raw)
+        img, _ = image_files.read_netpbm(path, linear=True)
+        np.testing.assert_allclose(img * maxval, codes.astype(np.float64), atol=1e-3 * maxval / 255)
+
+
 # --------------------------------------------------------------------------
 # Radiance HDR
 # --------------------------------------------------------------------------

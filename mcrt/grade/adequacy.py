@@ -32,7 +32,11 @@ reading (:data:`READINGS`: families that name other mistakes, not a
 generalisation or rewording of it) by :data:`CONFIRM_Z`, by
 :func:`closeness` *without* that credit (:func:`unconfirmed`). Otherwise the
 verdict is AMBIGUOUS: "it could be X, or Y: the image cannot tell which",
-and no cause is claimed.
+and no cause is claimed. A colour of a surface that no pixel sees directly
+(a wall behind the camera) is never claimed on a fit alone: it shows only in
+the light that surface reflects onto the rest, which other mistakes change
+alike (a biased estimate of each pixel, paths cut short), so its verdict is
+AMBIGUOUS too, beside whatever else leaves noise.
 
 **Which adequate candidate is claimed (Occam's rule).** Several candidates
 can leave noise: a small darkening of the room is a path cut one bounce
@@ -272,13 +276,14 @@ def unconfirmed(c, adequate: list, fit, named: list) -> list:
     """The adequate candidates of other readings than claimed c's (:data:`READINGS`; not a description, not a rival,
     not a generalisation of c or nested in it, not ``named`` beside it) that c does not beat by :data:`CONFIRM_Z`
     (:func:`closeness` without the BIC's credit): another cause the image cannot tell from c's, the best of each
-    reading."""
+    reading. For c a surface out of view (:attr:`mcrt.grade.candidates.Candidate.out_of_view`) every such candidate
+    that leaves noise is one: c rests on reflected light alone, so fitting it better confirms nothing."""
     out, seen = [], {reading_of(c)}
     for a in adequate:
         r = reading_of(a)
         if (r in seen or any(a is x for x in named) or a.describes or a.family in c.rivals or c.family in a.rivals
                 or c.family in a.generalises or a.family in c.generalises
-                or closeness(fit, c, a, bic=False) >= CONFIRM_Z):
+                or (not c.out_of_view and closeness(fit, c, a, bic=False) >= CONFIRM_Z)):
             continue
         seen.add(r)
         out.append(a)
@@ -343,7 +348,9 @@ def claim_rule(S: np.ndarray, R: np.ndarray, mask: np.ndarray, noise: Noise, sc:
                 _claim(e, c, tried[id(c)], others or alts, np.where(mask[..., None], S - R - c.change, 0.0))
                 e.adequacy.also_adequate = [(a.family if a.family != "catalogue" else a.name, a.params,
                                              round(closeness(fit, c, a, bic=False), 2)) for a in adequate if a is not c]
-                if others:  # another reading fits as well: the image cannot say which, no cause is claimed
+                # Another reading fits as well, or the cause is a surface out of view: the image cannot say which
+                # (or cannot confirm it), no cause is claimed.
+                if others or c.out_of_view:
                     e.verdict = e.adequacy.verdict = cd.AMBIGUOUS
                 return
         if best is not None and best.change is not None and best.explained >= PARTIAL_SHARE:

@@ -90,8 +90,15 @@ def explanation_words(e: Explanation) -> tuple[str, str]:
         texts = [best.text] + [t for _, t, _ in e.adequacy.alternatives]
         each = ", ".join(texts[:-1]) + ", or " + texts[-1]
         where_b = f"; the difference changes the image {best.where}" if best.where else ""
-        sentence = (f"It could be {each}: each leaves only noise and none fits significantly better, so the image "
-                    f"cannot tell which, and no cause is claimed{where_b}; check each of them.")
+        if len(texts) == 1:  # a surface out of view alone leaves noise (Candidate.out_of_view): nothing confirms it
+            sentence = (f"It could be {best.text}: what is left after it is consistent with noise, but no pixel sees "
+                        "that surface, only the light it reflects, which other mistakes change alike (a biased "
+                        f"estimate of each pixel, paths cut short), so no cause is claimed{where_b}.")
+            return sentence, f"It could be {best.text}, but the image cannot confirm it."
+        why = ("a surface no pixel sees shows only in the light it reflects, which the others change alike" if
+               best.out_of_view else "none fits significantly better")
+        sentence = (f"It could be {each}: each leaves only noise and {why}, so the image cannot tell which, and no "
+                    f"cause is claimed{where_b}; check each of them.")
         return sentence, f"It could be {each}: the image cannot tell which."
     if e.verdict == DESCRIBED:  # only a description leaves noise (Candidate.describes): how it differs, no cause
         where_b = f", changing the image {best.where}" if best.where else ""

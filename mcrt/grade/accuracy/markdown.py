@@ -111,9 +111,14 @@ _UNSEEN = ("The wrong renders are a sixth class of mistakes in students' tracers
            "The rules were changed on the tuning half only (tone curves on the luminance, a bloom, the light "
            "sampled on a quarter, a 16-bit PNG's byte order, a PFM's data beyond its header, a flip claimed only for "
            "an image that resembles a view, noise correlated along one direction), and the held-out half was graded "
-           "once, on the frozen rules: this report at commit c9f10bb. Two changes were made after that grading, with "
-           "it in view (a BRDF's normalisation only by a factor a program gets wrong, not any factor; a shift by a "
-           "whole pixel worded as an index off by one): the held-out row here is of rules that saw it.")
+           "once, on the frozen rules: this report at commit c9f10bb (4 of 12 named right, 4 confidently wrong). "
+           "Changes made after that grading, with it in view: a BRDF's normalisation only by a factor a program gets "
+           "wrong, not any factor; a shift by a whole pixel worded as an index off by one, which names the row "
+           "stride; a quarter turn's words naming the camera's up vector; a surface out of view never claimed on a "
+           "fit alone; a render reduced from a larger one by nearest pixels; a PPM's raster starting late refused; "
+           "and in the scoring, shadow rays blocked by the light's own surface accepted as the catalogue's shadow "
+           "rays not bounded by the light's distance (the same mistake). The held-out row here is of rules that saw "
+           "it.")
 
 
 def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta: dict, gradescope: list[dict],

@@ -49,10 +49,16 @@ class _Warp:
         self.identity = self.image()
 
     def image(self, fov: float | None = None, yaw=0.0, pitch=0.0, roll=0.0, dx=0.0, dy=0.0, aspect=1.0) -> np.ndarray:
+        return self.at(self.u + dx, self.v + dy, fov, yaw, pitch, roll, aspect)
+
+    def at(self, u: np.ndarray, v: np.ndarray, fov: float | None = None, yaw=0.0, pitch=0.0, roll=0.0,
+           aspect=1.0) -> np.ndarray:
+        """The image whose pixel (i, j) is the mean over samples (u, v)[j SUB:(j+1) SUB, i SUB:(i+1) SUB], given in
+        grade pixels of the scene's film (the other arguments as for :meth:`image`)."""
         ts = self.t if fov is None else math.tan(math.radians(fov) / 2)
         asp = aspect * self.h / self.w
-        sx = 2 * (self.u + dx) / self.w - 1
-        sy = 1 - 2 * (self.v + dy) / self.h
+        sx = 2 * u / self.w - 1
+        sy = 1 - 2 * v / self.h
         R = _rot(yaw, pitch, roll)
         x, y = sx * ts, sy * ts * asp
         X = R[0, 0] * x + R[0, 1] * y + R[0, 2]

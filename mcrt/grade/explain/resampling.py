@@ -11,7 +11,13 @@ A loop bound off by one renders the image at (W - 1) x (H - 1) or (W + 1) x
 (H + 1) and writes it from the top-left corner: the last row and column are
 black, or the render's are cut off; the model image is R box-filtered to
 that size (each new pixel the area-weighted mean of the grade pixels it
-covers), padded or cropped.
+covers), padded or cropped. An image rendered at a higher resolution N and
+reduced by picking the nearest pixel (an image library's NEAREST, or
+``img[i * N // W]``) keeps one of the render's pixels for each of its own:
+pixel i shows the film from k W/N to (k + 1) W/N, k = floor((i + 1/2) N/W)
+(a library's centre convention) or floor(i N/W) (an index scaled); its model
+image samples the basis's finer image (:class:`mcrt.grade.explain.camera._Warp`)
+over that footprint, for N in :data:`LARGER` or W times :data:`RATIOS`.
 """
 
 from __future__ import annotations
@@ -24,6 +30,10 @@ from mcrt.grade.explain.fit import Fit
 
 #: Resolution factors of the resampling family.
 FACTORS = (2, 4)
+#: Resolutions a render reduced by nearest pixels may have had: common image sizes (the course's 100 among them),
+#: and the image's own times each of RATIOS.
+LARGER = (80, 96, 100, 120, 128, 150, 160, 200, 256, 300, 320, 400, 512)
+RATIOS = (1.25, 1.5, 2.0, 2.5, 3.0, 4.0)
 
 
 def _blocks_equal(S: np.ndarray, k: int) -> float:
@@ -68,7 +78,37 @@ def resampling(fit: Fit, inputs: Inputs) -> list[Candidate]:
                               f"pixels (a loop bound off by one) and written from the top-left corner, {what}",
                               fit.model(off), 1, value={"size": [w + d, h + d], "method": "off by one"},
                               change=off - fit.R))
+    if inputs.basis is not None and getattr(inputs.basis, "fine", None) is not None:
+        out.append(_nearest_from_larger(fit, inputs))
     return out
+
+
+def _nearest_from_larger(fit: Fit, inputs: Inputs) -> Candidate:
+    """The best of the image rendered at N x N' (N in LARGER) and reduced by nearest pixels (module docstring)."""
+    from mcrt.grade.explain.basis import SUB
+    from mcrt.grade.explain.camera import _Warp
+
+    wp = _Warp(inputs.basis)
+    h, w = fit.R.shape[:2]
+    sub = (np.arange(SUB) + 0.5) / SUB
+    best = None
+    for n in sorted({n for n in LARGER if n > w} | {round(r * w) for r in RATIOS}):
+        m = max(round(n * h / w), 1)
+        for centre in (True, False):
+            kx = np.floor((np.arange(w) + 0.5 * centre) * n / w)
+            ky = np.floor((np.arange(h) + 0.5 * centre) * m / h)
+            u = ((kx[:, None] + sub[None, :]) * w / n).ravel()
+            v = ((ky[:, None] + sub[None, :]) * h / m).ravel()
+            change = wp.at(u[None, :], v[:, None]) - wp.identity
+            chi = fit.delta(change)
+            if best is None or chi < best[0]:
+                best = (chi, n, m, centre, change)
+    chi, n, m, centre, change = best
+    how = "an image library's nearest-pixel resize" if centre else "pixel i taken from the render's i N / W"
+    return Candidate("resampling", f"reduced from {n} x {m} (nearest)", f"the image rendered at {n} x {m} pixels and "
+                     f"reduced to {w} x {h} by keeping the nearest pixel ({how}): each pixel one of the render's, not "
+                     "the mean of those it covers", chi, 1,
+                     value={"size": [n, m], "method": "nearest", "centre": centre}, change=change)
 
 
 def _area_matrix(n: int, m: int) -> np.ndarray:

@@ -54,6 +54,7 @@ def albedo(fit: Fit, inputs: Inputs) -> list[Candidate]:
     b = inputs.basis
     grid = np.linspace(0.0, 1.0, 101)
     out = []
+    seen = _seen(inputs)
     for label, (nodes, imgs, scene_v) in b.albedo.items():
         fitted, dm = [], np.zeros_like(b.base, dtype=np.float64)
         for c in range(3):
@@ -71,11 +72,25 @@ def albedo(fit: Fit, inputs: Inputs) -> list[Candidate]:
             dm[..., c] = np.tensordot(lagrange(np.array([fitted[-1]]), xs), ys, axes=(1, 0))[0] - b.base[..., c]
         kind = b.values[label][0]
         word = "albedo" if kind == "albedo" else "reflectance"
-        fam, text = word, f"{label} with {word} {_fmt(fitted)} where the scene says {_fmt(scene_v)}"
-        if is_black(fitted):  # black in every channel: albedo 0 is one of its causes, not the only one
-            fam, text = black_family(label), black_words(label, scene_v, word)
-        out.append(Candidate(fam, f"{word} of {label}", text, fit.delta(dm), 3, value=tuple(fitted), change=dm))
+        hidden = seen is not None and label not in seen
+        fam, text = word, (f"{label}{' (not in view)' if hidden else ''} with {word} {_fmt(fitted)} where the scene "
+                           f"says {_fmt(scene_v)}")
+        # Black in every channel: albedo 0 is one of its causes, not the only one. Out of view too it may be claimed:
+        # the whole room's light drops, which no small bias mimics.
+        if is_black(fitted):
+            fam, text, hidden = black_family(label), black_words(label, scene_v, word), False
+        out.append(Candidate(fam, f"{word} of {label}", text, fit.delta(dm), 3, value=tuple(fitted), change=dm,
+                             out_of_view=hidden))
     return out
+
+
+def _seen(inputs: Inputs) -> set[str] | None:
+    """The albedo basis's labels of the surfaces some pixel sees directly ('wall DE', 'the floor'); None without
+    labels."""
+    if inputs.labels is None:
+        return None
+    names = [inputs.label_names[i] for i in np.unique(inputs.labels)]
+    return {n.split(" (")[0] for n in names}
 
 
 def rendered(fit: Fit, inputs: Inputs) -> list[Candidate]:

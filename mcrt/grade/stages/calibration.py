@@ -13,6 +13,16 @@ from mcrt.grade.score import quantisation_variance
 from mcrt.grade.stages.state import Grading, Hand
 
 
+def _orientation_causes(transform: str) -> str:
+    """What turns or flips an image: the writer's order of rows and columns, or the camera's vectors."""
+    if "90 degrees" in transform:  # a quarter turn is the camera rolled: the scene's up along another axis
+        return ("row 0 must be the top of the image and column 0 its left: check the camera's up vector (a quarter "
+                "turn is an up vector along another axis, such as +y where the scene's is +z) and the order in which "
+                "you write rows and columns")
+    return ("row 0 must be the top of the image and column 0 its left: check the order in which you write rows and "
+            "columns (and whether your camera's up and right vectors point the right way)")
+
+
 def orientation(g: Grading, hand: Hand, declared_camera: str | None) -> None:
     """The best of {cameras} x {flips, rotations} by rank correlation (``orientation``, ``camera``)."""
     a, rub = g.a, g.rubric
@@ -25,9 +35,7 @@ def orientation(g: Grading, hand: Hand, declared_camera: str | None) -> None:
         hand.imgs, hand.qvar, hand.mask = [inv(i) for i in hand.imgs], [inv(q) for q in hand.qvar], inv(hand.mask)
         rub.failed("orientation", f"the image is {ori.transform} compared with the reference (rank correlation "
                    f"{ori.correlations[f'{ori.camera}/{ori.transform}'][0]:.2f} after undoing it, "
-                   f"{ori.correlations[f'{a.camera}/identity'][0]:.2f} as handed in); row 0 must be the top of the "
-                   "image and column 0 its left: check the order in which you write rows and columns (and whether "
-                   "your camera's up and right vectors point the right way)")
+                   f"{ori.correlations[f'{a.camera}/identity'][0]:.2f} as handed in); {_orientation_causes(ori.transform)}")
         hand.corrected.append("orientation")
     elif not ori.resembles:
         rub.passed("orientation", "could not be checked: the image does not resemble the scene from any camera")
