@@ -121,7 +121,16 @@ SAME_MISTAKE: dict[str, tuple[str, ...]] = {
     # mirror, which is what paths cut at depth 1 show; the median of batches removes fireflies' energy, as a clamp of
     # samples does. An ambient term is no other mistake: no other cause is accepted for it.
     "bloom": ("blur",), "white_balance": ("colour_grade", "light_radiance"), "pixel_footprint": ("blur",),
-    "shadow_self": ("depth",), "biased_estimator": ("sample_clamp",), "ambient": ()}
+    "shadow_self": ("depth",), "biased_estimator": ("sample_clamp",), "ambient": (),
+    # The untried class (mcrt.grade.accuracy.untried), fixed before any of it was graded: values stretched from their
+    # minimum and maximum are a curve on the values (a straight one), and with the darkest pixel near 0 nearly a
+    # constant factor, which the light's radiance is too; codes wrapped past 255 are the step that turns values into
+    # codes done wrongly, as a quantisation, codes of another range, an encoding or a clamp before saving are; an
+    # object's shape wrong (a vertex misplaced, flat facets for a sphere) is the object's geometry wrong, as an object
+    # moved, resized or with a face missing is. Not accepted: normals for an object's shape.
+    "normalised": ("tone_map", "light_radiance"),
+    "code_overflow": ("quantisation", "code_range", "encoding", "tone_map"),
+    "object_shape": ("object_moved", "object_size", "mesh_face")}
 
 
 def is_named(cause: str, named: list[str]) -> bool:
