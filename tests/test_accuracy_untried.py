@@ -77,6 +77,7 @@ def test_new_causes_have_their_equivalences_fixed():
     assert set(untried.NEW_CAUSES) <= set(SAME_MISTAKE)
     assert is_named("normalised", ["tone_map"]) and is_named("normalised", ["light_radiance"])
     assert is_named("code_overflow", ["quantisation"]) and is_named("object_shape", ["object_moved"])
+    assert is_named("preview_kept", ["depth"]) and not is_named("preview_kept", ["spp_claim"])
     assert not is_named("object_shape", ["normals"]) and not is_named("code_overflow", ["bad_pixels"])
 
 
@@ -194,3 +195,13 @@ def test_png_batches_are_display_codes():
     case = _build(_by_name("batches_as_png"))
     codes = case.image * 255
     assert case.image.max() <= 1.0 and np.allclose(codes * 8, np.round(codes * 8), atol=1e-3)  # means of 8 codes
+
+
+def test_preview_pass_lowers_only_what_is_not_direct():
+    """A depth-2 preview kept in the mean: the light seen is unchanged, the rest a little darker, never brighter than
+    a full render beyond the noise."""
+    case, plain = _build(_by_name("preview_pass_kept"), 32), _plain(32)
+    seen, lit = plain.mean(axis=2) > 19.99, plain.mean(axis=2) < 10  # inside the light; not on it
+    np.testing.assert_allclose(case.image[seen], 20.0, rtol=1e-4)
+    ratio = case.image[lit].mean() / plain[lit].mean()
+    assert 0.85 < ratio < 0.99

@@ -127,11 +127,12 @@ _UNTRIED = ("The wrong renders are a seventh class of mistakes in students' trac
             "indices from 1, the far eye with the near field of view, the jitter drawn once per pixel), light models "
             "(the radiance taken for power, 29 of 30 shadow rays, the light coplanar with the ceiling), resolution "
             "and pixel sampling (strata on the diagonal, the centre of a 100 x 100 render, rows copied) and samples "
-            "per pixel (passes of one seed, batches averaged as 8-bit PNGs, a sum divided by n + 1); from Mitsuba "
-            "renders of edited scenes, Mitsuba renders combined, or correct renders written as students' programs "
-            "write files. The correct ones come from Mitsuba and mcrt in ways no other class used. *Named right*, "
-            "*confidently wrong*, *partial or none*: as for the other classes. **Held-out** cases (marked H) were "
-            "fixed by the rule stated in the module (every other case of each category) before any case was graded.")
+            "per pixel (a direct-light preview kept in the mean, batches averaged as 8-bit PNGs, a sum divided by n +"
+            " 1); from Mitsuba renders of edited scenes, Mitsuba renders combined, or correct renders written as "
+            "students' programs write files. The correct ones come from Mitsuba and mcrt in ways no other class used."
+            " *Named right*, *confidently wrong*, *partial or none*: as for the other classes. **Held-out** cases "
+            "(marked H) were fixed by the rule stated in the module (every other case of each category) before any "
+            "case was graded.")
 
 
 def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta: dict, gradescope: list[dict],

@@ -127,10 +127,12 @@ SAME_MISTAKE: dict[str, tuple[str, ...]] = {
     # constant factor, which the light's radiance is too; codes wrapped past 255 are the step that turns values into
     # codes done wrongly, as a quantisation, codes of another range, an encoding or a clamp before saving are; an
     # object's shape wrong (a vertex misplaced, flat facets for a sphere) is the object's geometry wrong, as an object
-    # moved, resized or with a face missing is. Not accepted: normals for an object's shape.
+    # moved, resized or with a face missing is; a preview pass of direct light only kept in the mean cuts some of each
+    # pixel's paths at depth 2, which is the path depth wrong for part of the samples. Not accepted: normals for an
+    # object's shape.
     "normalised": ("tone_map", "light_radiance"),
     "code_overflow": ("quantisation", "code_range", "encoding", "tone_map"),
-    "object_shape": ("object_moved", "object_size", "mesh_face")}
+    "object_shape": ("object_moved", "object_size", "mesh_face"), "preview_kept": ("depth",)}
 
 
 def is_named(cause: str, named: list[str]) -> bool:

@@ -39,8 +39,9 @@ from those of the six other classes (:mod:`~mcrt.grade.accuracy.cases`,
   equal to the column stratum (the pixel's diagonal); the centre 64 x 64 of
   the course's 100 x 100 render kept; every other row rendered and copied to
   the next;
-* **samples per pixel**: passes seeded with the same seed; batches written
-  as 8-bit PNGs and their codes averaged; the sum divided by n + 1.
+* **samples per pixel**: a preview pass (direct light only) kept in the
+  mean; batches written as 8-bit PNGs and their codes averaged; the sum
+  divided by n + 1.
 
 The correct hand-ins come in ways no class used: Mitsuba's ``volpathmis``
 integrator, a PFM with a trailing newline, a plain (ASCII) 16-bit PPM, a
@@ -85,6 +86,7 @@ NEW_CAUSES: dict[str, str] = {
     "code_overflow": "values past the top 8-bit code wrapped round (cast without a clip): the brightest pixels "
                      "dark",
     "object_shape": "an object's shape (a vertex in the wrong place, a sphere made of flat facets)",
+    "preview_kept": "a preview pass's samples (direct light only) kept in each pixel's mean",
 }
 
 
@@ -178,6 +180,14 @@ def _odd_rows_copied(x):
     out = x.copy()
     out[1::2] = x[0::2][: out[1::2].shape[0]]
     return out
+
+
+def _preview_kept(x, *, preview: int, full: int, seed: int):
+    """A preview pass of ``preview`` spp at max depth 2 (direct light only) left in the buffer that ``full`` spp at
+    the assignment's depth are added to, all divided by ``preview + full`` (two seeds)."""
+    h, w = x.shape[:2]
+    return (preview * _render(w, h, preview, seed, max_depth=2) + full * _render(w, h, full, seed + 1)) / (
+        preview + full)
 
 
 def _png_batches(x, *, batches: int, spp: int, seed: int):
@@ -410,7 +420,7 @@ CATEGORIES: dict[str, tuple[str, ...]] = {
     "camera": ("plane_half_width", "pixel_indices_from_1", "far_eye_near_fov", "jitter_once_per_pixel"),
     "light": ("light_radiance_as_power", "shadow_rays_29_of_30", "light_at_ceiling"),
     "resolution": ("strata_diagonal", "centre_of_100", "odd_rows_copied"),
-    "samples": ("passes_one_seed", "batches_as_png", "mean_over_n_plus_1"),
+    "samples": ("preview_pass_kept", "batches_as_png", "mean_over_n_plus_1"),
 }
 
 
@@ -524,9 +534,10 @@ def _pixels_and_samples() -> tuple[Spec, ...]:
         Spec("odd_rows_copied", "resampling", **_posted("odd_rows_copied", _odd_rows_copied),
              truth="only even rows rendered, each copied to the odd row below it (half the time)"),
         # Samples per pixel
-        Spec("passes_one_seed", "spp_claim", spp=32, declared_spp=256,
-             truth="8 passes of 32 spp, each pass's generator seeded with the same seed: one 32 spp render, 256 "
-             "declared"),
+        Spec("preview_pass_kept", "preview_kept", spp=256, **_posted("preview_kept", partial(
+            _preview_kept, preview=32, full=224, seed=c("preview_pass_kept"))),
+             truth="a 32 spp preview pass at max depth 2 (direct light only) kept in the buffer, 224 spp at depth 8 "
+             "added, divided by 256: indirect light 1/8 low"),
         Spec("batches_as_png", "sample_curve", held_out=True, writer=partial(fresh._write_png8, encode=False),
              file="png-srgb", **_posted("png_batches", partial(_png_batches, batches=8, spp=32,
                                                                seed=c("batches_as_png"))),
