@@ -137,7 +137,9 @@ _UNTRIED = ("The wrong renders are a seventh class of mistakes in students' trac
             "students' programs write files. The correct ones come from Mitsuba and mcrt in ways no other class used."
             " *Named right*, *confidently wrong*, *partial or none*: as for the other classes. **Held-out** cases "
             "(marked H) were fixed by the rule stated in the module (every other case of each category) before any "
-            "case was graded.")
+            "case was graded. The grader's rules were frozen at commit ac9cd66 before this class was graded, and "
+            "the whole class was graded once, on them: neither half was tuned on, so both rows measure rules that "
+            "had not seen these mistakes.")
 
 
 def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta: dict, gradescope: list[dict],
