@@ -121,13 +121,35 @@ _UNSEEN = ("The wrong renders are a sixth class of mistakes in students' tracers
            "it.")
 
 
+_UNTRIED = ("The wrong renders are a seventh class of mistakes in students' tracers, their scene input and their "
+            "output that no other class or the catalogue tried (mcrt.grade.accuracy.untried), written blind to the "
+            "grader's rules and not graded by their author: post-processing (a median filter, the render "
+            "sRGB-decoded, a min-max stretch, a Display P3 conversion), writing the file (16-bit samples under an "
+            "8-bit PPM header, 8-bit codes times 256 in a 16-bit PNG, a web palette, codes wrapped past 255), "
+            "materials (a Lambertian over 2 pi, the mirror tinted with the tetrahedron's colour, the light "
+            "reflecting), geometry (the sphere's radius taken for its diameter, the tetrahedron's apex mistyped, a "
+            "faceted sphere, the sphere's centre truncated), camera models (pixel coordinates in [-0.5, 0.5], pixel "
+            "indices from 1, the far eye with the near field of view, the jitter drawn once per pixel), light models "
+            "(the radiance taken for power, 29 of 30 shadow rays, the light coplanar with the ceiling), resolution "
+            "and pixel sampling (strata on the diagonal, the centre of a 100 x 100 render, rows copied) and samples "
+            "per pixel (a direct-light preview kept in the mean, batches averaged as 8-bit PNGs, a sum divided by n +"
+            " 1); from Mitsuba renders of edited scenes, Mitsuba renders combined, or correct renders written as "
+            "students' programs write files. The correct ones come from Mitsuba and mcrt in ways no other class used."
+            " *Named right*, *confidently wrong*, *partial or none*: as for the other classes. **Held-out** cases "
+            "(marked H) were fixed by the rule stated in the module (every other case of each category) before any "
+            "case was graded. The grader's rules were frozen at commit ac9cd66 before this class was graded, and "
+            "the whole class was graded once, on them: neither half was tuned on, so both rows measure rules that "
+            "had not seen these mistakes.")
+
+
 def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta: dict, gradescope: list[dict],
                  klass: str = "scene") -> Path:
     """Write index.md and data.json under ``out``; returns the Markdown's path. ``klass`` is the class graded:
     'scene' (mcrt.grade.accuracy.cases), 'outside' (mcrt.grade.accuracy.outside), 'programs'
-    (mcrt.grade.accuracy.programs), 'fresh' (mcrt.grade.accuracy.fresh), 'blind' (mcrt.grade.accuracy.blind) or
-    'unseen' (mcrt.grade.accuracy.unseen); an empty half (tuned on or held out) is left out of the rates table."""
-    from mcrt.grade.accuracy import blind, fresh, outside, programs, unseen
+    (mcrt.grade.accuracy.programs), 'fresh' (mcrt.grade.accuracy.fresh), 'blind' (mcrt.grade.accuracy.blind),
+    'unseen' (mcrt.grade.accuracy.unseen) or 'untried' (mcrt.grade.accuracy.untried); an empty half (tuned on or
+    held out) is left out of the rates table."""
+    from mcrt.grade.accuracy import blind, fresh, outside, programs, unseen, untried
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     tuned = [o for o in outcomes if not o.held_out]
@@ -140,7 +162,8 @@ def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta
         "outside": ": mistakes outside the scene file", "programs": ": mistakes of students' programs",
         "fresh": ": mistakes no other class tried",
         "blind": ": mistakes outside the scene file, written blind",
-        "unseen": ": a sixth class of mistakes, written blind"}.get(klass, "")
+        "unseen": ": a sixth class of mistakes, written blind",
+        "untried": ": a seventh class of mistakes, written blind"}.get(klass, "")
     L = [f"# {title}", "",
          f"Written by `{command}` ({meta.get('date', '')}, {meta.get('seconds', 0):.0f} s). "
          f"Assignment: `{meta.get('assignment')}`; reference: {meta.get('reference')}.", "",
@@ -151,9 +174,9 @@ def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta
          "the mistake's cause (the explanation's family, or a criterion that names it: `linear` for an encoding, "
          "`exposure` for a constant factor, `camera` for misregistration). *Confidently wrong*: it names a cause, and "
          "not the right one; *also wrong*: it names the right cause and a wrong one beside it. **Held-out** cases (marked H) were not looked at while the diagnosis was tuned, with one exception: the last two rules of the grader (the camera not blamed beside a cause outside it; an explained wrong geometry, light placement, colour or camera scored as a major mistake) were added after the held-out results had been seen; and when the per-object structure test was added, the exemption of a blur's remainder where the detectors found a filter (a denoiser's kernel is no Gaussian) was added after the held-out `denoised` case had been seen to lose its name, and a rule (a claimed blur counted as a filtered image by itself) was dropped after the final run, with no held-out verdict changed."
-         if klass not in ("outside", "programs", "fresh", "blind", "unseen") else {
+         if klass not in ("outside", "programs", "fresh", "blind", "unseen", "untried") else {
              "outside": _OUTSIDE, "programs": _PROGRAMS, "fresh": _FRESH, "blind": _BLIND,
-             "unseen": _UNSEEN}[klass], "",
+             "unseen": _UNSEEN, "untried": _UNTRIED}[klass], "",
          "## Rates", "",
          "| | mistakes | detected (lost points) | named right | confidently wrong | partial or none | also wrong | "
          "major mistakes losing >= 25 % | correct renders | false alarms | correct named a bug |",
@@ -183,7 +206,7 @@ def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta
         L.append(f"| {o.name} | {'H' if o.held_out else ''} | {_cell(o.truth, 90)} | {o.spp} | {o.file} | "
                  f"{o.score:g}/{o.max_score:g} | {'yes' if o.wrong else 'no'} | {_cell(o.said) or '-'} | {o.seconds:.1f} |")
     causes = {"outside": outside.CAUSES, "programs": programs.CAUSES, "fresh": fresh.CAUSES,
-              "blind": blind.CAUSES, "unseen": unseen.CAUSES}.get(klass, CAUSES)
+              "blind": blind.CAUSES, "unseen": unseen.CAUSES, "untried": untried.CAUSES}.get(klass, CAUSES)
     L += ["", "Causes: " + "; ".join(f"`{k}` {v}" for k, v in causes.items()) + "."]
     L += _gradescope_section(gradescope, meta)
     path = out / "index.md"

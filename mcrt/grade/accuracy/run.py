@@ -130,7 +130,18 @@ SAME_MISTAKE: dict[str, tuple[str, ...]] = {
     # shadow_unbounded added after the unseen class's held-out half was graded, with it in view: shadow rays that run
     # on to the light's own surface are the catalogue's shadow rays not bounded by the distance to the light, the same
     # mistake in the catalogue's words (the class's author had not read the catalogue).
-    "shadow_self": ("depth", "catalogue:shadow_unbounded")}
+    "shadow_self": ("depth", "catalogue:shadow_unbounded"),
+    # The untried class (mcrt.grade.accuracy.untried), fixed before any of it was graded: values stretched from their
+    # minimum and maximum are a curve on the values (a straight one), and with the darkest pixel near 0 nearly a
+    # constant factor, which the light's radiance is too; codes wrapped past 255 are the step that turns values into
+    # codes done wrongly, as a quantisation, codes of another range, an encoding or a clamp before saving are; an
+    # object's shape wrong (a vertex misplaced, flat facets for a sphere) is the object's geometry wrong, as an object
+    # moved, resized or with a face missing is; a preview pass of direct light only kept in the mean cuts some of each
+    # pixel's paths at depth 2, which is the path depth wrong for part of the samples. Not accepted: normals for an
+    # object's shape.
+    "normalised": ("tone_map", "light_radiance"),
+    "code_overflow": ("quantisation", "code_range", "encoding", "tone_map"),
+    "object_shape": ("object_moved", "object_size", "mesh_face"), "preview_kept": ("depth",)}
 
 
 def is_named(cause: str, named: list[str]) -> bool:
