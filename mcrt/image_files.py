@@ -992,8 +992,13 @@ _WHITESPACE = b" \t\n\v\f\r"
 def _late_raster(path: str, raster: bytes, size: int) -> None:
     """Refuse a binary netpbm raster that starts late: k bytes more than its header declares, the first k of them
     whitespace and the last k not (a header ended by two newlines, where netpbm allows one; a trailing newline is
-    whitespace at the end instead, and is read right)."""
+    whitespace at the end instead, and is read right); and one that holds twice the data or more (16-bit samples
+    under an 8-bit header, or the header's size wrong)."""
     k = len(raster) - size
+    if k >= size > 0:
+        raise ImageError(f"{path}: the netpbm file holds {len(raster) / size:.3g} times the data its header declares "
+                         "(a maxval of 255 or less means one byte a sample: for 16-bit samples write maxval 65535; "
+                         "else check the width and height in the header)")
     if 0 < k <= 4 and all(c in _WHITESPACE for c in raster[:k]) and not all(c in _WHITESPACE for c in raster[-k:]):
         raise ImageError(f"{path}: the header is followed by {k + 1} whitespace bytes where netpbm allows one, so "
                          f"every sample would be read {k} byte{'s' * (k > 1)} late (write the samples right after the "

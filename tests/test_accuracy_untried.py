@@ -18,7 +18,7 @@ import pytest
 import mcrt  # noqa: F401  (before mitsuba and drjit)
 from mcrt.grade.accuracy import blind, cases, fresh, outside, programs, unseen, untried
 from mcrt.grade.accuracy.cases import build_class
-from mcrt.image_files import read_image, srgb_eotf, srgb_oetf
+from mcrt.image_files import ImageError, read_image, srgb_eotf, srgb_oetf
 
 W = H = 16
 
@@ -118,11 +118,13 @@ def test_wrong_writers_read_back_as_their_specs_say(tmp_path):
     for d in "abcd":
         (tmp_path / d).mkdir()
     codes8 = np.floor(srgb_oetf(np.clip(x, 0, 1)) * 255 + 0.5).astype(np.uint8)
-    # Each 16-bit sample's two bytes read as two 8-bit samples: the first half of the data.
+    # The 16-bit samples (big-endian) under a maxval of 255: twice the data the header declares, which mcrt's reader
+    # refuses, naming the maxval.
     codes16 = np.floor(srgb_oetf(np.clip(x, 0, 1)) * 65535 + 0.5).astype(">u2")
-    r = read_image(untried._write_ppm_16bit_data(x, tmp_path / "a"), linear_png=True).mean
-    raw = np.frombuffer(codes16.tobytes(), np.uint8)[: H * W * 3].reshape(H, W, 3)
-    np.testing.assert_allclose(r * 255, raw, atol=1e-3)
+    path = untried._write_ppm_16bit_data(x, tmp_path / "a")
+    assert path.read_bytes() == f"P6\n{W} {H}\n255\n".encode() + codes16.tobytes()
+    with pytest.raises(ImageError, match="holds 2 times the data its header declares"):
+        read_image(path)
     # 8-bit codes times 256: white 65280 of 65535.
     r = read_image(untried._write_png16_times_256(x, tmp_path / "b"), linear_png=True).mean
     np.testing.assert_allclose(r * 65535, codes8.astype(np.float64) * 256, atol=0.02)

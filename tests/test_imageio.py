@@ -282,6 +282,16 @@ def test_ppm_whose_header_ends_with_two_newlines(tmp_path, maxval):
         np.testing.assert_allclose(img * maxval, codes.astype(np.float64), atol=1e-3 * maxval / 255)
 
 
+def test_ppm_with_16_bit_samples_under_an_8_bit_header(tmp_path):
+    """16-bit samples written under maxval 255 (twice the data the header declares, written here by hand) are an
+    error that names the maxval."""
+    codes = np.random.default_rng(8).integers(0, 65536, (5, 6, 3)).astype(">u2")
+    path = tmp_path / "t.ppm"
+    path.write_bytes(b"P6\n6 5\n255\n" + codes.tobytes())
+    with pytest.raises(ImageError, match="t.ppm: the netpbm file holds 2 times the data .* maxval 65535"):
+        image_files.read_netpbm(path)
+
+
 # --------------------------------------------------------------------------
 # Radiance HDR
 # --------------------------------------------------------------------------

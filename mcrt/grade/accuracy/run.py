@@ -95,6 +95,7 @@ _ACCEPTED.update({c: _CAMERA_CAUSES + ("resampling",) for c in ("pixel_offset", 
 # A quarter turn's words name the camera's up vector beside the order rows and columns are written in; a shift by a
 # whole pixel's name an index off by one beside pixel centres off by a pixel.
 _ACCEPTED["camera_rotation"] += ("orientation",)
+_ACCEPTED["pixel_offset"] += ("row_stride",)
 _ACCEPTED.update({"orientation": ("orientation", "camera_rotation"),
                   "row_stride": ("row_stride", "orientation") + _CAMERA_CAUSES + ("resampling",)})
 

@@ -24,7 +24,11 @@ def curves(fit: Fit, inputs: Inputs) -> list[Candidate]:
                      value="srgb-clipped", change=srgb_oetf(C) - fit.R),
            Candidate("encoding", "decoded twice", "the values decoded from sRGB once too often (linear values written "
                      "to a PNG that says sRGB, or decoded twice)", fit.model(srgb_eotf(C)), 0,
-                     value="srgb-inverse", change=srgb_eotf(C) - fit.R)]
+                     value="srgb-inverse", change=srgb_eotf(C) - fit.R),
+           # In a float file nothing clips: values above 1 (the light) go through the decoding's power law too.
+           Candidate("encoding", "decoded, float", "the values decoded from sRGB once too often (linear values "
+                     "taken for display values and decoded), in a float file where values above 1 are decoded too",
+                     fit.model(srgb_eotf(R)), 0, value="srgb-inverse-float", change=srgb_eotf(R) - fit.R)]
     exps = np.linspace(0.25, 2.5, 91)
     errs = np.array([fit.model(R**p) for p in exps])
     i = int(np.argmin(errs))

@@ -8,8 +8,10 @@ r"""An object's material and size, as a student's program gets them wrong.
   in every channel the object is black whatever its material, and is
   worded as black with every cause of that (:mod:`.surface_black`).
 * **object_size**: each object scaled about its centre (a sphere's radius,
-  a tetrahedron about its centroid) by the factors :data:`SIZES`, with the
-  scene's own; the model image is linear between two neighbouring sizes.
+  a tetrahedron about its centroid) by the factors :data:`SIZES` (halved
+  and doubled among them: a sphere's diameter given where its radius is
+  asked, or the other way), with the scene's own; the model image is
+  linear between two neighbouring sizes.
 
 Both render with mcrt at the basis's spp and seed
 (:func:`mcrt.grade.explain.basis.basis_settings`), so that a variation
@@ -38,7 +40,7 @@ MATERIAL_NODES = (0.0, 0.5, 1.0)
 #: Values scanned per channel for an object's albedo or reflectance.
 GRID = np.linspace(0.0, 1.0, 41)
 #: Scale factors of an object's size rendered (1 is the scene's own).
-SIZES = (0.8, 0.9, 0.95, 1.05, 1.1, 1.2)
+SIZES = (0.5, 0.8, 0.9, 0.95, 1.05, 1.1, 1.2, 2.0)
 
 
 def _with_object(scene: Scene, name: str, **changes) -> Scene:
@@ -130,7 +132,10 @@ def object_size(fit: Fit, inputs: Inputs) -> list[Candidate]:
                     best = (e, f0 + t * (f1 - f0), dm)
         e, f, dm = best
         what = "radius" if name == "sphere" else "size"
-        out.append(Candidate("object_size", f"size of the {name}", f"the {name}'s {what} {_num(f)} times the scene's",
+        why = {0.5: " (the scene's radius taken for a diameter and halved)",
+               2.0: " (the radius doubled, as when a diameter is used for it)"}
+        out.append(Candidate("object_size", f"size of the {name}", f"the {name}'s {what} {_num(f)} times the scene's"
+                             + next((w for k, w in why.items() if name == "sphere" and abs(f / k - 1) <= 0.1), ""),
                              e, 1, value={"object": name, "scale": f}, change=dm))
     return out
 

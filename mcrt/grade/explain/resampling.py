@@ -11,7 +11,8 @@ A loop bound off by one renders the image at (W - 1) x (H - 1) or (W + 1) x
 (H + 1) and writes it from the top-left corner: the last row and column are
 black, or the render's are cut off; the model image is R box-filtered to
 that size (each new pixel the area-weighted mean of the grade pixels it
-covers), padded or cropped. An image rendered at a higher resolution N and
+covers), padded or cropped. Only every other row (or column) rendered,
+each copied to the next, is R with its even rows (columns) doubled. An image rendered at a higher resolution N and
 reduced by picking the nearest pixel (an image library's NEAREST, or
 ``img[i * N // W]``) keeps one of the render's pixels for each of its own:
 pixel i shows the film from k W/N to (k + 1) W/N, k = floor((i + 1/2) N/W)
@@ -78,6 +79,13 @@ def resampling(fit: Fit, inputs: Inputs) -> list[Candidate]:
                               f"pixels (a loop bound off by one) and written from the top-left corner, {what}",
                               fit.model(off), 1, value={"size": [w + d, h + d], "method": "off by one"},
                               change=off - fit.R))
+    for axis, what in ((0, "row"), (1, "column")):  # a loop stepping by 2 that copies what it rendered onward
+        dup = np.repeat(np.take(fit.R, np.arange(0, fit.R.shape[axis], 2), axis=axis), 2, axis=axis)
+        dup = np.take(dup, np.arange(fit.R.shape[axis]), axis=axis)
+        out.append(Candidate("resampling", f"every other {what} copied", f"only every other {what} rendered, each "
+                             f"copied to the next {what} (a loop stepping by 2, or {what}s written twice)",
+                             fit.model(dup), 0, value={"copied": f"{what}s", "method": "every other"},
+                             change=dup - fit.R))
     if inputs.basis is not None and getattr(inputs.basis, "fine", None) is not None:
         out.append(_nearest_from_larger(fit, inputs))
     return out
