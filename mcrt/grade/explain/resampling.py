@@ -116,7 +116,11 @@ def _nearest_from_larger(fit: Fit, inputs: Inputs) -> Candidate:
     return Candidate("resampling", f"reduced from {n} x {m} (nearest)", f"the image rendered at {n} x {m} pixels and "
                      f"reduced to {w} x {h} by keeping the nearest pixel ({how}): each pixel one of the render's, not "
                      "the mean of those it covers", chi, 1,
-                     value={"size": [n, m], "method": "nearest", "centre": centre}, change=change)
+                     value={"size": [n, m], "method": "nearest", "centre": centre}, change=change,
+                     # Kept pixels of a larger render are pixels moved by a fraction of a pixel, with a smaller
+                     # footprint: the camera's families read such a misregistration too (the pixel offset's words
+                     # name an image resampled with an offset), so they are one reading of the image with this.
+                     generalises=("fov", "aspect", "pixel_offset", "rotation"))
 
 
 def _area_matrix(n: int, m: int) -> np.ndarray:
