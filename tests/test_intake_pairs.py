@@ -1,5 +1,6 @@
-"""Two file mistakes named at intake (issue 27): a PFM header declaring the other byte order, and a pair of renders
-made with one seed.
+"""File mistakes named at intake and calibration (issue 27): a PFM header declaring the other byte order, a 16-bit PNG
+little-endian or holding 8-bit codes times 256, 8-bit codes cast without a clip, and a pair of renders made with one
+seed.
 
 The hand-ins are Mitsuba renders (fixed seeds) written the way a student's program writes them; they are graded by
 the production grader with the 32x32 assignment of test_diagnose, prepared once per module in a temporary cache.
@@ -125,6 +126,55 @@ def test_a_png16_written_little_endian_is_read_swapped_and_named(ctx, renders, t
     else:
         assert readable.status == "passed" and "byte_order" not in res.details
     assert _test(res, "unbiased").status == "passed"
+
+
+def _png16_of_codes(path, img, times: int) -> None:
+    """A 16-bit PNG of 8-bit sRGB codes times ``times`` (257 fills 0 to 65535; 256, a shift by 8 bits, stops at
+    65280), written with pypng."""
+    import png
+
+    from mcrt.image_files import srgb_oetf
+
+    codes = np.rint(np.clip(srgb_oetf(img), 0, 1) * 255).astype(np.uint16) * times
+    h, w = codes.shape[:2]
+    with open(path, "wb") as f:
+        png.Writer(w, h, greyscale=False, bitdepth=16).write(f, codes.reshape(h, w * 3).tolist())
+
+
+@pytest.mark.parametrize("times", [256, 257])
+def test_8bit_codes_times_256_in_a_16bit_png_are_named(ctx, renders, tmp_path, times):
+    """Every code a multiple of 256: the 8-bit codes shifted by 8 bits (white 65280), named under ``linear`` and graded
+    as the 8-bit codes they are; times 257 is the exact widening, and passes."""
+    res = _grade(ctx, tmp_path / "student", {"render.png": lambda q: _png16_of_codes(q, renders[0], times)})
+    linear = _test(res, "linear")
+    if times == 256:
+        assert linear.status == "failed" and "8-bit codes times 256" in linear.output, linear.output
+        assert res.details["encoding"]["codes"] == ["times_256"] and named_causes(res)[0] == ["encoding"]
+    else:
+        assert linear.status == "passed" and "codes" not in res.details["encoding"]
+    assert _test(res, "unbiased").status == "passed"
+
+
+@pytest.mark.parametrize("clip", [False, True])
+def test_8bit_codes_cast_without_a_clip_are_named(ctx, renders, tmp_path, clip):
+    """``(v * 255).astype(np.uint8)`` without a clip: the light's pixels (20, far above 1) wrap round to code 155;
+    with the clip they are white and nothing is said."""
+    from PIL import Image
+
+    from mcrt.image_files import srgb_oetf
+
+    def write(q):
+        v = srgb_oetf(np.maximum(renders[0], 0.0))
+        v = np.clip(v, 0, 1) if clip else v
+        Image.fromarray((np.rint(v * 255).astype(np.int64) % 256).astype(np.uint8), "RGB").save(q)
+
+    res = _grade(ctx, tmp_path / "student", {"render.png": write})
+    linear = _test(res, "linear")
+    if clip:
+        assert linear.status == "passed" and res.score == res.max_score
+    else:
+        assert linear.status == "failed" and "wrap round past 255" in linear.output, linear.output
+        assert res.details["encoding"]["codes"] == ["wrapped"] and "encoding" in named_causes(res)[0]
 
 
 def test_implausible_share_counts_what_no_radiance_is():

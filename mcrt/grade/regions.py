@@ -80,7 +80,8 @@ def describe_tiles(rel: np.ndarray, chosen: np.ndarray, shape: tuple[int, int], 
         where = [names[i] for i in order[:3] if weights[i] >= 0.15 * total and names[i] != "nothing"]
         if not where:
             where = [names[order[0]]]
-        text = f"{word} (about {100 * eff / max(npx, 1):+.0f} %) on {_join(where)}"
+        pct = 100 * eff / max(npx, 1)
+        text = f"{word} (about {pct:+.{0 if abs(pct) >= 10 else 1}f} %) on {_join(where)}"
         share = dsum / wsum if wsum > 0 else 1.0
         if share < 0.45:
             text += f", where indirect light dominates ({100 * (1 - share):.0f} % of the light there is indirect)"

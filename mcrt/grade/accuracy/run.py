@@ -189,6 +189,8 @@ def named_causes(res) -> tuple[list[str], str]:
         causes += CAUSE_OF.get(fam, (f"catalogue:{fam}",))
         if fam == "pixel_offset" and "index off by one" in expl["sentence"]:
             causes.append("row_stride")  # a shift by a whole pixel, worded as rows or columns written one place off
+        if fam == "fov" and "a larger render cropped" in expl["sentence"]:
+            causes.append("resolution_crop")  # a narrower view, worded as the middle of a larger render as well
         for alt in (expl.get("adequacy") or {}).get("alternatives", []):  # named beside it as fitting as well
             causes += CAUSE_OF.get(alt, (alt,))
         said.append(expl["sentence"])

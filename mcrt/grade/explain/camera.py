@@ -73,7 +73,7 @@ class _Warp:
 
 #: The camera families: parameter names, start scans, finite-difference steps, bounds.
 _CAMERA = {
-    "fov": (("fov",), {"fov": (0.78, 0.9, 0.95, 1.05, 1.1)}, {"fov": 0.2}, {"fov": (0.7, 1.2)}),
+    "fov": (("fov",), {"fov": (0.62, 0.72, 0.78, 0.9, 0.95, 1.05, 1.1)}, {"fov": 0.2}, {"fov": (0.55, 1.2)}),
     "aspect": (("aspect",), {"aspect": (0.5625, 0.75, 0.8, 0.9, 1.1, 1.25, 1.333)}, {"aspect": 0.01},
                {"aspect": (0.5, 2.0)}),
     "pixel_offset": (("dx", "dy"), {"dx": (-1.0, -0.5, 0.5, 1.0), "dy": (-1.0, -0.5, 0.5, 1.0)},
@@ -147,6 +147,17 @@ def _diagonal(fov: float, f0: float, shape) -> str:
             if abs(fov - diag) <= 0.02 * diag else "")
 
 
+def _cropped(fov: float, f0: float, shape) -> str:
+    """Words for a narrower field of view as the middle of a larger render at the scene's ('' for a wider one): the
+    same view, by the pinhole's proportions (the image plane's half-width is tan(fov / 2))."""
+    h, w = shape[:2]
+    r = math.tan(math.radians(fov) / 2) / math.tan(math.radians(f0) / 2)
+    if r > 0.97:
+        return ""
+    return (f", or the same view as the middle {w} x {h} pixels of a {round(w / r)} x {round(h / r)} render at "
+            f"{_num(f0)} degrees (a larger render cropped)")
+
+
 def _shift_causes(dx: float, dy: float) -> str:
     """What shifts an image by (dx, dy) pixels: a whole pixel is an index off by one, a fraction the pixel centres."""
     whole = max(abs(dx), abs(dy)) >= 0.75 and all(abs(v - round(v)) <= 0.1 for v in (dx, dy))
@@ -163,7 +174,8 @@ def camera(fit: Fit, inputs: Inputs) -> list[Candidate]:
     out = []
     p, chi, dm = _fit_camera(fit, wp, "fov", f0)
     out.append(Candidate("fov", "field of view", f"the camera's field of view {p['fov']:.1f} degrees where the scene "
-                         f"says {_num(f0)}{_diagonal(float(p['fov']), f0, b.base.shape)}", chi, 1,
+                         f"says {_num(f0)}{_diagonal(float(p['fov']), f0, b.base.shape)}"
+                         f"{_cropped(float(p['fov']), f0, b.base.shape)}", chi, 1,
                          value=float(p["fov"]), change=dm))
     p, chi, dm = _fit_camera(fit, wp, "aspect", f0)
     out.append(Candidate("aspect", "aspect ratio", f"the image's height spanning {_num(float(p['aspect']))} times the "

@@ -22,7 +22,9 @@ def scale(fit: Fit, inputs: Inputs) -> list[Candidate]:
     den = np.sum(np.where(ok, R * R * w, 0.0), axis=(0, 1))
     kc = np.where(den > 0, num / np.maximum(den, 1e-300), 1.0)
     k1 = float(np.sum(num) / max(np.sum(den), 1e-300))
-    out = [Candidate("scale", "overall scale", f"the whole image {_num(k1)} times the reference (an exposure or "
+    # Near 1, three decimals: "1.005 times", never "1 times".
+    factor = f"{k1:.3f}" if abs(k1 - 1) < 0.1 else _num(k1)
+    out = [Candidate("scale", "overall scale", f"the whole image {factor} times the reference (an exposure or "
                      f"display scale, or the light's radiance {_fmt(np.asarray(values.get('light_radiance', (1, 1, 1))) * k1, 1)})",
                      fit.model(k1 * R), 1, value=k1, change=(k1 - 1) * R)]
     Le = np.asarray(values.get("light_radiance", (1.0, 1.0, 1.0)))

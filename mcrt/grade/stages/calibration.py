@@ -10,6 +10,7 @@ import numpy as np
 
 from mcrt.grade import checks as ck
 from mcrt.grade.score import quantisation_variance
+from mcrt.image_files import srgb_oetf
 from mcrt.grade.stages.state import Grading, Hand
 
 
@@ -60,10 +61,67 @@ def encoding(g: Grading, hand: Hand) -> None:
     a = g.a
     hand.base_tile = next((t for t in a.tiles if t > 0), 8)
     if hand.loaded.fmt.startswith("png"):
+        times_256 = _codes_times_256(hand.loaded)
         hand.png_safe = _png_unclipped(hand.R, g.ctx.model_var[hand.cam].astype(np.float64), hand.spp or a.min_spp)
         hand.imgs, hand.qvar = _png_curve(g, hand)
+        wrong = {k: v for k, v, found in (("times_256", TIMES_256, times_256), ("wrapped", WRAPPED, _wrapped(g, hand)))
+                 if found}
+        if wrong:  # the codes' mistakes come first, before what the curve's test said of the values
+            g.details.setdefault("encoding", {})["codes"] = list(wrong)
+            t = g.rubric.results.get("linear")
+            before = [t.output] if t is not None and t.status == "failed" else []
+            g.rubric.failed("linear", "; also, ".join(list(wrong.values()) + before))
     else:
         _hdr_encoding(g, hand)
+
+
+TIMES_256 = ("every 16-bit code is a multiple of 256: 8-bit codes times 256, where 16 bits hold them times 257 (white "
+             "is 65535, not 65280), so every value is 0.4 % dark and white is never reached; graded as the 8-bit "
+             "codes they are: write the render's values at 16 bits (round(v * 65535)), or the 8-bit codes times 257")
+WRAPPED = ("the pixels that should be white (the light and its reflections, far above 1) hold the codes that values "
+            "past 1 give when cast to 8 bits without a clip (they wrap round past 255): clip to [0, 1] before "
+            "converting to 8 bits")
+
+
+def _codes_times_256(loaded) -> bool:
+    """A 16-bit display file whose every code is a multiple of 256 (and not all 0): 8-bit codes times 256. A render
+    written at 16 bits has that by chance with probability 256^-N; the images are replaced by the 8-bit codes' reading
+    (``loaded.fmt`` png8), so quantisation and clipping are an 8-bit file's."""
+    if not loaded.fmt.startswith("png16"):
+        return False
+    codes = [np.rint(ck.png_codes(i, loaded.fmt) * 65535).astype(np.int64) for i in loaded.images]
+    if any(np.any(c % 256) for c in codes) or max(int(c.max()) for c in codes) == 0:
+        return False
+    decode = ck.PNG_CURVES["linear" if loaded.fmt.endswith("linear") else "srgb"][0]
+    loaded.images = [decode(c / (256 * 255.0)) for c in codes]
+    loaded.fmt = loaded.fmt.replace("png16", "png8")
+    return True
+
+
+#: The codes a transfer curve gives a value (the inverses of mcrt.grade.checks.PNG_CURVES' decodings).
+_ENCODE = {"srgb": srgb_oetf, "gamma2.2": lambda x: x ** (1 / 2.2), "gamma2": np.sqrt, "linear": lambda x: x}
+
+
+def _wrapped(g: Grading, hand: Hand) -> bool:
+    """8-bit codes cast without a clip: the pixels whose expected value is far above 1 (the reference minus 4 sd of a
+    hand-in pixel at least 1.5 in every channel, so a correct file holds the top code there) mostly do not hold it,
+    and hold the code ``round(encode(R) * 255) mod 256`` instead (within 2 codes and 3 sd). Only where at least 3
+    such pixels are seen at the grade resolution itself (each hand-in pixel is a grade pixel)."""
+    loaded, curve = hand.loaded, (g.details.get("encoding") or {}).get("detected")
+    if not loaded.fmt.startswith("png8") or hand.plan.down != 1 or curve not in _ENCODE:
+        return False
+    sd = np.sqrt(g.ctx.model_var[hand.cam].astype(np.float64) / max(hand.spp or g.a.min_spp, 1))
+    must = np.all(hand.R - 4 * sd >= 1.5, axis=2) & hand.mask
+    if np.count_nonzero(must) < 3:
+        return False
+    enc = _ENCODE[curve]
+    codes = np.rint(ck.TRANSFORMS[hand.transform][1](ck.png_codes(loaded.images[0], loaded.fmt)) * 255)[must]
+    R, s = hand.R[must], sd[must]
+    wrapped = np.rint(enc(R) * 255) % 256
+    tol = 2 + 3 * 255 * (enc(R + s) - enc(np.maximum(R - s, 0))) / 2
+    off = np.abs(codes - wrapped)
+    match = np.all(np.minimum(off, 256 - off) <= tol, axis=-1)
+    return bool(np.mean(np.any(codes < 250, axis=-1)) >= 0.5 and np.mean(match) >= 0.8)
 
 
 def _png_curve(g: Grading, hand: Hand):
