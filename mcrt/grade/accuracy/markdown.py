@@ -147,14 +147,32 @@ _UNTRIED = ("The wrong renders are a seventh class of mistakes in students' trac
             "are of rules that saw the class.")
 
 
+_NOVEL = ("The wrong renders are an eighth class of mistakes in students' tracers, their scene input and their output "
+          "that no other class or the catalogue tried (mcrt.grade.accuracy.novel), written blind to the grader's rules "
+          "and not graded by their author: post-processing (an automatic exposure, log1p of the values, a "
+          "chromatic-aberration effect, a Bradford adaptation to D50), writing the file (a JPEG on the way to the PNG, "
+          "float64 data under a PFM header, codes through an RGB565 framebuffer, an EXR of unsigned integers), "
+          "materials (a wall's channels rotated, every albedo read as its red channel, a Phong sphere half diffuse), "
+          "geometry (a room corner mistyped, the sphere's y negated, the sphere squashed to an ellipsoid, the "
+          "tetrahedron scaled about the origin), camera models (a field of view in radians read as degrees, the "
+          "camera looking at the sphere, a fisheye), light models (a spherical light, the light sampled on a "
+          "parallelogram, the light seen at half its radiance, the light's centre taken for its corner), pixel "
+          "sampling (offsets as the sum of two uniform numbers, Gaussian offsets, a constant offset) and samples per "
+          "pixel (strata in one loop, spp and depth swapped, passes declared as one); from Mitsuba renders of edited "
+          "scenes, Mitsuba renders combined, or correct renders written as students' programs write files. The "
+          "correct ones come from Mitsuba and mcrt in ways no other class used. *Named right*, *confidently wrong*, "
+          "*partial or none*: as for the other classes. **Held-out** cases (marked H) were fixed by the rule stated "
+          "in the module (every other case of each category) before any case was graded.")
+
+
 def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta: dict, gradescope: list[dict],
                  klass: str = "scene") -> Path:
     """Write index.md and data.json under ``out``; returns the Markdown's path. ``klass`` is the class graded:
     'scene' (mcrt.grade.accuracy.cases), 'outside' (mcrt.grade.accuracy.outside), 'programs'
     (mcrt.grade.accuracy.programs), 'fresh' (mcrt.grade.accuracy.fresh), 'blind' (mcrt.grade.accuracy.blind),
-    'unseen' (mcrt.grade.accuracy.unseen) or 'untried' (mcrt.grade.accuracy.untried); an empty half (tuned on or
-    held out) is left out of the rates table."""
-    from mcrt.grade.accuracy import blind, fresh, outside, programs, unseen, untried
+    'unseen' (mcrt.grade.accuracy.unseen), 'untried' (mcrt.grade.accuracy.untried) or 'novel'
+    (mcrt.grade.accuracy.novel); an empty half (tuned on or held out) is left out of the rates table."""
+    from mcrt.grade.accuracy import blind, fresh, novel, outside, programs, unseen, untried
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     tuned = [o for o in outcomes if not o.held_out]
@@ -168,7 +186,8 @@ def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta
         "fresh": ": mistakes no other class tried",
         "blind": ": mistakes outside the scene file, written blind",
         "unseen": ": a sixth class of mistakes, written blind",
-        "untried": ": a seventh class of mistakes, written blind"}.get(klass, "")
+        "untried": ": a seventh class of mistakes, written blind",
+        "novel": ": an eighth class of mistakes, written blind"}.get(klass, "")
     L = [f"# {title}", "",
          f"Written by `{command}` ({meta.get('date', '')}, {meta.get('seconds', 0):.0f} s). "
          f"Assignment: `{meta.get('assignment')}`; reference: {meta.get('reference')}.", "",
@@ -179,9 +198,9 @@ def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta
          "the mistake's cause (the explanation's family, or a criterion that names it: `linear` for an encoding, "
          "`exposure` for a constant factor, `camera` for misregistration). *Confidently wrong*: it names a cause, and "
          "not the right one; *also wrong*: it names the right cause and a wrong one beside it. **Held-out** cases (marked H) were not looked at while the diagnosis was tuned, with one exception: the last two rules of the grader (the camera not blamed beside a cause outside it; an explained wrong geometry, light placement, colour or camera scored as a major mistake) were added after the held-out results had been seen; and when the per-object structure test was added, the exemption of a blur's remainder where the detectors found a filter (a denoiser's kernel is no Gaussian) was added after the held-out `denoised` case had been seen to lose its name, and a rule (a claimed blur counted as a filtered image by itself) was dropped after the final run, with no held-out verdict changed."
-         if klass not in ("outside", "programs", "fresh", "blind", "unseen", "untried") else {
+         if klass not in ("outside", "programs", "fresh", "blind", "unseen", "untried", "novel") else {
              "outside": _OUTSIDE, "programs": _PROGRAMS, "fresh": _FRESH, "blind": _BLIND,
-             "unseen": _UNSEEN, "untried": _UNTRIED}[klass], "",
+             "unseen": _UNSEEN, "untried": _UNTRIED, "novel": _NOVEL}[klass], "",
          "## Rates", "",
          "| | mistakes | detected (lost points) | named right | confidently wrong | partial or none | also wrong | "
          "major mistakes losing >= 25 % | correct renders | false alarms | correct named a bug |",
@@ -211,7 +230,8 @@ def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta
         L.append(f"| {o.name} | {'H' if o.held_out else ''} | {_cell(o.truth, 90)} | {o.spp} | {o.file} | "
                  f"{o.score:g}/{o.max_score:g} | {'yes' if o.wrong else 'no'} | {_cell(o.said) or '-'} | {o.seconds:.1f} |")
     causes = {"outside": outside.CAUSES, "programs": programs.CAUSES, "fresh": fresh.CAUSES,
-              "blind": blind.CAUSES, "unseen": unseen.CAUSES, "untried": untried.CAUSES}.get(klass, CAUSES)
+              "blind": blind.CAUSES, "unseen": unseen.CAUSES, "untried": untried.CAUSES,
+              "novel": novel.CAUSES}.get(klass, CAUSES)
     L += ["", "Causes: " + "; ".join(f"`{k}` {v}" for k, v in causes.items()) + "."]
     L += _gradescope_section(gradescope, meta)
     path = out / "index.md"

@@ -142,7 +142,15 @@ SAME_MISTAKE: dict[str, tuple[str, ...]] = {
     # object's shape.
     "normalised": ("tone_map", "light_radiance"),
     "code_overflow": ("quantisation", "code_range", "encoding", "tone_map"),
-    "object_shape": ("object_moved", "object_size", "mesh_face"), "preview_kept": ("depth",)}
+    "object_shape": ("object_moved", "object_size", "mesh_face"), "preview_kept": ("depth",),
+    # The novel class (mcrt.grade.accuracy.novel), fixed before any of it was graded: colour channels magnified
+    # differently are each channel resampled (its pixels moved by a fraction of a pixel), as a resampling or a pixel
+    # offset moves them; a JPEG on the way quantises the values in blocks and smears the colours, a quantisation or a
+    # blur in other words; the light's own pixels at the wrong brightness is the light as the camera sees it, which a
+    # light not seen at all is too. Not accepted: the light's radiance for the light seen (its light on surfaces is
+    # right).
+    "channel_misaligned": ("resampling", "pixel_offset"), "lossy_compression": ("quantisation", "blur"),
+    "light_seen": ("light_hidden",)}
 
 
 def is_named(cause: str, named: list[str]) -> bool:
