@@ -162,7 +162,9 @@ _NOVEL = ("The wrong renders are an eighth class of mistakes in students' tracer
           "scenes, Mitsuba renders combined, or correct renders written as students' programs write files. The "
           "correct ones come from Mitsuba and mcrt in ways no other class used. *Named right*, *confidently wrong*, "
           "*partial or none*: as for the other classes. **Held-out** cases (marked H) were fixed by the rule stated "
-          "in the module (every other case of each category) before any case was graded.")
+          "in the module (every other case of each category) before any case was graded. The grader's rules were "
+          "frozen at commit 05d671d before this class was graded (the list of its mistakes had been read, not its code "
+          "or images), and the whole class was graded once, on them.")
 
 
 def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta: dict, gradescope: list[dict],
