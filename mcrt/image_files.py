@@ -548,7 +548,8 @@ def _exr_stack(path: str, channels: dict, names: tuple[str, ...], shape: tuple[i
             got = None if px is None else px.shape
             raise ImageError(f"{path}: channel {n} has shape {got}, expected {shape} (subsampled channels are not supported)")
         if px.dtype not in (np.float16, np.float32):
-            raise ImageError(f"{path}: channel {n} holds {px.dtype}, expected half or float")
+            cast = " (integers: the values cast to an integer type before writing)" if px.dtype.kind in "iu" else ""
+            raise ImageError(f"{path}: channel {n} holds {px.dtype}{cast}, expected half or float")
         planes.append(px.astype(np.float32))
     return np.stack(planes, axis=-1)
 

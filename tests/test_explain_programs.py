@@ -178,6 +178,20 @@ def test_a_render_shifted_by_a_quarter_pixel_is_claimed_as_a_shift(ctx):
     assert res.score < res.max_score
 
 
+def test_the_light_seen_at_half_its_radiance_is_named_with_its_factor(ctx):
+    """A Mitsuba render (seed 76) less half of Mitsuba's render cut at depth 1 (seed 77: the light where the camera
+    sees it directly): the light's own pixels at half its radiance, its light on the surfaces right, as an MIS weight
+    of 1/2 on emission at the first hit makes it. Named with its factor; the light black (k = 0) is not claimed."""
+    img = _mitsuba(76) - 0.5 * _mitsuba(77, max_depth=1)
+    res = grade_image("light_seen_half", ctx, [img], spp=1024)
+    ex = res.details.get("explanation") or {}
+    said = ex.get("sentence", res.summary)
+    assert ex.get("family") == "emitter_seen" and ex.get("verdict") in ("claimed", "ambiguous"), said
+    assert ex["candidates"][0]["value"] == pytest.approx(0.5, abs=0.03), said
+    assert "0.5 times as bright where the camera sees it directly" in said and "light_seen" in named_causes(res)[0]
+    assert res.score < res.max_score
+
+
 def test_a_flipped_render_names_the_orientation(ctx):
     """A Mitsuba render (seed 67) written upside down: the orientation criterion fails, and it is the cause named."""
     res = grade_image("flipped", ctx, [_mitsuba(67)[::-1]], spp=1024)

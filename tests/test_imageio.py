@@ -249,6 +249,23 @@ def test_pfm_truncated(tmp_path):
         read_pfm(path)
 
 
+def test_exr_of_integer_channels_is_refused_naming_the_cast(tmp_path):
+    """An EXR whose channels are unsigned integers (OpenEXR's UINT, ``image.astype(np.uint32)``): refused with one
+    line that names the cast; a float one written the same way is read."""
+    import OpenEXR
+
+    path = tmp_path / "t.exr"
+    img = gradient()
+    header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
+    OpenEXR.File(header, {c: np.ascontiguousarray(img[..., i].astype(np.uint32)) for i, c in enumerate("RGB")}).write(
+        str(path))
+    with pytest.raises(ImageError, match=r"t.exr: channel \w holds uint32 \(integers: the values cast to an integer "
+                                         r"type before writing\), expected half or float$"):
+        read_image(path)
+    OpenEXR.File(header, {c: np.ascontiguousarray(img[..., i]) for i, c in enumerate("RGB")}).write(str(path))
+    assert np.array_equal(read_image(path).mean, img)
+
+
 def test_pfm_with_more_data_than_its_header_declares(tmp_path):
     """An RGB image under a greyscale 'Pf' header (3 times the data) is an error that says so; a writer's trailing
     newline is not."""

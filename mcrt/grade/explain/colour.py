@@ -38,7 +38,9 @@ def common_matrices() -> dict[str, tuple[str, str, np.ndarray]]:
     for c, name in enumerate(_RGB):
         one = np.zeros((3, 3))
         one[:, c] = 1.0
-        out[f"grey {name}"] = ("colour_lost", f"colour lost: the {name} channel written to all three channels", one)
+        # Under a white light, albedos taken as one number (their first, red, value) give this image exactly.
+        out[f"grey {name}"] = ("colour_lost", f"colour lost: the {name} channel written to all three channels (or "
+                               f"every colour taken as one number, its {name} value, for all three channels)", one)
         zero = np.eye(3)
         zero[c, c] = 0.0
         out[f"{name} zeroed"] = ("colour_lost", f"the {name} channel written as 0", zero)
@@ -115,7 +117,9 @@ def colour(fit: Fit, inputs: Inputs) -> list[Candidate]:
         return out
     model = np.minimum(R @ M.T, top)
     rows = "; ".join(f"{_RGB[c]} = " + _terms(M[c]) for c in range(3))
-    out.append(Candidate("colour_matrix", "colour matrix", f"the colours mixed by a 3x3 matrix ({rows})",
+    out.append(Candidate("colour_matrix", "colour matrix", f"the colours mixed by a 3x3 matrix ({rows}): a change of colour "
+                         "space or primaries, a white balance or chromatic adaptation, or a saturation change after "
+                         "rendering",
                          fit.model(model), 9, value={"matrix": M.round(4).tolist()}, change=model - R))
     return out
 

@@ -115,7 +115,8 @@ def _nearest_from_larger(fit: Fit, inputs: Inputs) -> Candidate:
     how = "an image library's nearest-pixel resize" if centre else "pixel i taken from the render's i N / W"
     return Candidate("resampling", f"reduced from {n} x {m} (nearest)", f"the image rendered at {n} x {m} pixels and "
                      f"reduced to {w} x {h} by keeping the nearest pixel ({how}): each pixel one of the render's, not "
-                     "the mean of those it covers", chi, 1,
+                     "the mean of those it covers (as every sample of a pixel through one fixed point of it: the "
+                     "sub-pixel jitter constant or missing)", chi, 1,
                      value={"size": [n, m], "method": "nearest", "centre": centre}, change=change,
                      # Kept pixels of a larger render are pixels moved by a fraction of a pixel, with a smaller
                      # footprint: the camera's families read such a misregistration too (the pixel offset's words

@@ -149,7 +149,27 @@ def rendered(fit: Fit, inputs: Inputs) -> list[Candidate]:
         dm = -emit[1].astype(np.float64)
         out.append(Candidate("emitter_hidden", "the light not seen directly", "the light itself black where the camera "
                              "sees it directly (emission left out at the first hit)", fit.delta(dm), 0, change=dm))
+        out += _emitter_seen(fit, emit[1].astype(np.float64), v.get("light_radiance", (1.0, 1.0, 1.0)))
     return out
+
+
+def _emitter_seen(fit: Fit, E: np.ndarray, Le) -> list[Candidate]:
+    """The light seen directly at k times its radiance, its light on the surfaces right (the emission at the first
+    hit weighted, as by an MIS weight where no light sample competes): change (k - 1) E, E the image of paths cut at
+    depth 1, k by weighted least squares. None near k = 0 (the light black: ``emitter_hidden``) or k = 1."""
+    w = np.where(fit.ok, fit.w, 0.0)
+    den = float(np.sum(w * E * E))
+    if den <= 0:
+        return []
+    k = 1.0 + float(np.sum(w * fit.D * E)) / den
+    if k < 0.05 or abs(k - 1.0) < 0.02:
+        return []
+    dm = (k - 1.0) * E
+    Le = np.asarray(Le, np.float64)
+    return [Candidate("emitter_seen", "the light seen at a factor", f"the light itself {_num(k)} times as bright "
+                      f"where the camera sees it directly ({_fmt(Le * k, 1)} where the scene says {_fmt(Le, 1)}), its "
+                      "light on the surfaces right (the emission at the first hit weighted, as by an MIS weight there)",
+                      fit.delta(dm), 1, value=k, change=dm, generalises=("emitter_hidden",))]
 
 
 
