@@ -156,8 +156,7 @@ def _to_d50(x):
     return x @ D65_TO_D50.T
 
 
-def _posted(name: str, fn) -> dict:
-    return {"post": name, "post_fn": fn}
+_posted = unseen._posted
 
 
 # --------------------------------------------------------------------------

@@ -198,8 +198,7 @@ def _png_batches(x, *, batches: int, spp: int, seed: int):
     return codes / 255.0
 
 
-def _posted(name: str, fn) -> dict:
-    return {"post": name, "post_fn": fn}
+_posted = unseen._posted
 
 
 # --------------------------------------------------------------------------
