@@ -259,7 +259,8 @@ def test_a_curve_no_tone_map_has_is_fitted_as_a_monotone_curve(ctx):
     """A Mitsuba render (seed 48) through a knee no named curve has (linear to 0.3, a quarter of the slope above):
     a monotone curve that maps the brightest value (the light, 20) to about 5.2 is named, claimed or beside the
     claim as a reading the image cannot tell apart (at 32 x 32 the knee shows mostly on the light, which each sample
-    clamped at about 5 reads as well, with one parameter: Occam's rule claims that, and names the curve beside it)."""
+    clamped at about 5, or the light seen directly at about a quarter of its radiance, reads as well, with one
+    parameter: Occam's rule claims one of those, and names the curve beside it)."""
     img = _mitsuba(load_scene(), 48)
     res = grade_image("knee", ctx, [np.minimum(img, 0.3) + 0.25 * np.maximum(img - 0.3, 0.0)], spp=1024)
     ex = res.details["explanation"]

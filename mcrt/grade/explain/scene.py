@@ -169,7 +169,9 @@ def _emitter_seen(fit: Fit, E: np.ndarray, Le) -> list[Candidate]:
     return [Candidate("emitter_seen", "the light seen at a factor", f"the light itself {_num(k)} times as bright "
                       f"where the camera sees it directly ({_fmt(Le * k, 1)} where the scene says {_fmt(Le, 1)}), its "
                       "light on the surfaces right (the emission at the first hit weighted, as by an MIS weight there)",
-                      fit.delta(dm), 1, value=k, change=dm, generalises=("emitter_hidden",))]
+                      fit.delta(dm), 1, value=k, change=dm, generalises=("emitter_hidden",),
+                      # A curve on the values that changes mostly the light's own value reads the same image.
+                      rivals=("tone_curve",))]
 
 
 
