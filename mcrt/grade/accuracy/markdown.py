@@ -143,8 +143,10 @@ _UNTRIED = ("The wrong renders are a seventh class of mistakes in students' trac
             "the sphere missing). Changes made after that grading, with the whole class in view: an object's size "
             "halved or doubled, the eye moved by a whole unit, the sRGB decoding of a float file (values above 1 "
             "decoded too), every other row or column copied, a netpbm file with twice the data its header declares "
-            "refused, and in the scoring a shift by a whole pixel accepted as pixel indices off by one. Both rows here "
-            "are of rules that saw the class.")
+            "refused, and in the scoring a shift by a whole pixel accepted as pixel indices off by one; later, still "
+            "with it in view (commit 05d671d): 8-bit codes times 256 in a 16-bit PNG and 8-bit codes cast without a "
+            "clip named under linear, and the field of view scanned from 0.62 times the scene's and worded as the "
+            "middle of a larger render. Both rows here are of rules that saw the class.")
 
 
 _NOVEL = ("The wrong renders are an eighth class of mistakes in students' tracers, their scene input and their output "
@@ -164,7 +166,15 @@ _NOVEL = ("The wrong renders are an eighth class of mistakes in students' tracer
           "*partial or none*: as for the other classes. **Held-out** cases (marked H) were fixed by the rule stated "
           "in the module (every other case of each category) before any case was graded. The grader's rules were "
           "frozen at commit 05d671d before this class was graded (the list of its mistakes had been read, not its code "
-          "or images), and the whole class was graded once, on them.")
+          "or images), and the whole class was graded once, on them (report at commit ec929c9: held out, 2 of 12 named "
+          "right and 3 of 12 confidently wrong; all 28, 8 named right and 5 confidently wrong; one correct hand-in, "
+          "Mitsuba's prb_basic without light sampling, 36 times noisier than its spp allows). Changes made after "
+          "that grading, with the whole class in view (commits 7fee76d and 6f89570): the light seen directly at a "
+          "factor as a family; a free colour matrix's words naming a change of colour space, a white balance or a "
+          "chromatic adaptation (and the scoring accepting them for a white balance); one channel in all three "
+          "worded also as every colour taken as one number; kept pixels worded also as every sample through one "
+          "fixed point of its pixel; an EXR of integer channels refused naming the cast. Both rows here are of rules "
+          "that saw the class.")
 
 
 def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta: dict, gradescope: list[dict],
