@@ -10,8 +10,8 @@ import numpy as np
 
 from mcrt.grade import checks as ck
 from mcrt.grade.score import quantisation_variance
-from mcrt.image_files import srgb_oetf
 from mcrt.grade.stages.state import Grading, Hand
+from mcrt.image_files import srgb_oetf
 
 
 def _orientation_causes(transform: str) -> str:
@@ -79,8 +79,8 @@ TIMES_256 = ("every 16-bit code is a multiple of 256: 8-bit codes times 256, whe
              "is 65535, not 65280), so every value is 0.4 % dark and white is never reached; graded as the 8-bit "
              "codes they are: write the render's values at 16 bits (round(v * 65535)), or the 8-bit codes times 257")
 WRAPPED = ("the pixels that should be white (the light and its reflections, far above 1) hold the codes that values "
-            "past 1 give when cast to 8 bits without a clip (they wrap round past 255): clip to [0, 1] before "
-            "converting to 8 bits")
+           "past 1 give when cast to 8 bits without a clip (they wrap round past 255): clip to [0, 1] before "
+           "converting to 8 bits")
 
 
 def _codes_times_256(loaded) -> bool:
