@@ -9,25 +9,19 @@ seeds fixed per case.
 
 from __future__ import annotations
 
+from functools import partial
 from dataclasses import replace
 
 import numpy as np
 import pytest
 
 import mcrt  # noqa: F401  (before mitsuba and drjit)
+from accuracy_helpers import H, W, build as _build, by_name
 from mcrt.grade.accuracy import blind, cases, fresh, novel, outside, programs, unseen, untried
-from mcrt.grade.accuracy.cases import build_class, write_submission
+from mcrt.grade.accuracy.cases import write_submission
 from mcrt.image_files import read_image, srgb_eotf, srgb_oetf
 
-W = H = 16
-
-
-def _by_name(name):
-    return next(s for s in blind.SPECS if s.name == name)
-
-
-def _build(spec, size=W):
-    return build_class(width=size, height=size, specs=(spec,))[0]
+_by_name = partial(by_name, blind.SPECS)
 
 
 def test_specs_are_new_worded_and_in_categories():

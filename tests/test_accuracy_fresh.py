@@ -9,25 +9,19 @@ written to be held out). Mitsuba renders, seeds fixed per case.
 from __future__ import annotations
 
 import math
+from functools import partial
 from dataclasses import replace
 
 import numpy as np
 import pytest
 
 import mcrt  # noqa: F401  (before mitsuba and drjit)
+from accuracy_helpers import H, W, build as _build, by_name
 from mcrt.grade.accuracy import cases, fresh, outside, programs
-from mcrt.grade.accuracy.cases import build_class, write_submission
+from mcrt.grade.accuracy.cases import write_submission
 from mcrt.image_files import XYZ_TO_RGB, read_exr, read_hdr, read_image, read_netpbm, read_pfm, srgb_oetf
 
-W = H = 16
-
-
-def _by_name(name):
-    return next(s for s in fresh.SPECS if s.name == name)
-
-
-def _build(spec, size=W):
-    return build_class(width=size, height=size, specs=(spec,))[0]
+_by_name = partial(by_name, fresh.SPECS)
 
 
 def _pair(name, tmp_path, **plain_changes):

@@ -11,28 +11,18 @@ grader, with a held-out half). Mitsuba renders, seeds fixed per case.
 from __future__ import annotations
 
 import math
+from functools import partial
 
 import numpy as np
 import pytest
 
 import mcrt  # noqa: F401  (before mitsuba and drjit)
+from accuracy_helpers import H, W, build as _build, image as _image, by_name
 from mcrt.grade.accuracy import blind, cases, fresh, outside, programs, unseen, untried
 from mcrt.grade.accuracy.cases import build_class
 from mcrt.image_files import ImageError, read_image, srgb_eotf, srgb_oetf
 
-W = H = 16
-
-
-def _by_name(name):
-    return next(s for s in untried.SPECS if s.name == name)
-
-
-def _build(spec, size=W):
-    return build_class(width=size, height=size, specs=(spec,))[0]
-
-
-def _image(seed=3):
-    return np.random.default_rng(seed).random((H, W, 3)) * 0.9 + 0.05
+_by_name = partial(by_name, untried.SPECS)
 
 
 def test_specs_are_new_worded_and_in_categories():

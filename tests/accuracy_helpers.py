@@ -1,0 +1,25 @@
+"""What the accuracy classes' tests share: a case's spec by name, one hand-in built at a tiny size, and a random
+image for the post-processes and writers (the classes' modules are mcrt.grade.accuracy.*)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from mcrt.grade.accuracy.cases import build_class
+
+W = H = 16
+
+
+def by_name(specs, name: str):
+    """The spec called ``name`` among ``specs``."""
+    return next(s for s in specs if s.name == name)
+
+
+def build(spec, size: int = W):
+    """The hand-in of ``spec`` built at ``size`` x ``size`` pixels (never graded)."""
+    return build_class(width=size, height=size, specs=(spec,))[0]
+
+
+def image(seed: int = 3) -> np.ndarray:
+    """An (H, W, 3) image of values in [0.05, 0.95] from ``seed``."""
+    return np.random.default_rng(seed).random((H, W, 3)) * 0.9 + 0.05
