@@ -1,11 +1,6 @@
-"""The eighth class (mcrt.grade.accuracy.novel) is well formed and builds what its specs say.
-
-These check the specs (names, causes, the held-out rule), the writers (read
-back with mcrt's reader: equal where the file is meant to be correct, wrong
-in the way the spec says where it is not), the post-processes on small
-arrays, the scene edits, and the construction of a few hand-ins at a tiny
-resolution; they never grade them (the class was written blind to the
-grader, with a held-out half). Mitsuba renders, seeds fixed per case.
+"""The eighth class (mcrt.grade.accuracy.novel) is well formed and builds what its specs say: the same checks as
+test_accuracy_untried's (specs, writers read back, post-processes, scene edits, a few hand-ins built at 16 x 16, never
+graded), on this class's cases.
 """
 
 from __future__ import annotations

@@ -64,12 +64,9 @@ sub-pixel cells), a wide Mitsuba render resampled into the fisheye's pixels,
 or correct renders post-processed and written with NumPy, SciPy and Pillow
 as students' programs do. mcrt renders only a correct hand-in.
 
-Causes and the held-out rule follow the blind class
-(:mod:`~mcrt.grade.accuracy.blind`): the other classes' words where the
-mistake is that cause (:data:`_REWORDED` where they name another instance),
-:data:`NEW_CAUSES` for the rest; and, fixed before any case was graded, the
-2nd, 4th, ... mistake of each of :data:`CATEGORIES` and correct hand-in
-held out (:func:`held_out_rule`, checked against the specs by the tests).
+Causes (:data:`_REWORDED`, :data:`NEW_CAUSES`) and the held-out rule
+(:func:`held_out_rule` over :data:`CATEGORIES`) are as in
+:mod:`~mcrt.grade.accuracy.untried`, fixed before any case was graded.
 """
 
 from __future__ import annotations
