@@ -180,3 +180,16 @@ def test_hand_ins_build(name, tmp_path):
     assert read_image(path).mean.shape == (H, W, 3)
     spec = case.spec
     assert (tmp_path / "manifest.toml").read_text().startswith(f"spp = {spec.declared_spp or case.spp}")
+
+
+def test_film_filters_blur():
+    """The jitter mistakes are rendered with their film filter, not the box a scene dictionary's film is given: the
+    energy of the image's differences between neighbours (the light's edges, mostly) drops well below a box render's
+    (two seeds of the box differ by about 1 %)."""
+    def energy(x):
+        x = x.mean(axis=2)
+        return float((np.diff(x, axis=0) ** 2).sum() + (np.diff(x, axis=1) ** 2).sum())
+
+    plain = energy(_plain(32))
+    for name in ("jitter_sum_of_two", "jitter_gaussian"):
+        assert energy(_build(_by_name(name), 32).image) < 0.92 * plain, name

@@ -42,8 +42,12 @@ def curves(fit: Fit, inputs: Inputs) -> list[Candidate]:
     errs = np.array([fit.model(gaussian_filter(fit.R, (s, s, 0), mode="nearest")) for s in sig])
     i = int(np.argmin(errs))
     s = sig[i]
-    out.append(Candidate("blur", "blur", f"the image blurred, denoised or enlarged from a lower resolution: smoothed as by a "
-                         f"Gaussian of about {_num(s)} pixel", float(errs[i]), 1, value=float(s),
+    # A pixel whose samples reach into its neighbours (a film filter wider than the box, sub-pixel offsets
+    # outside 0 to 1) is a blur of the box-filtered image too, made while rendering.
+    out.append(Candidate("blur", "blur", f"the image blurred, denoised or enlarged from a lower resolution, or each "
+                         f"pixel's samples spread beyond its own square (a pixel filter wider than a box, or sub-pixel "
+                         f"offsets outside 0 to 1): smoothed as by a Gaussian of about {_num(s)} pixel",
+                         float(errs[i]), 1, value=float(s),
                          change=gaussian_filter(fit.R, (s, s, 0), mode="nearest") - fit.R))
     out.append(_unsharp(fit, gaussian_filter))
     return out
