@@ -113,7 +113,7 @@ class Scene2D:
     full_effect: float
     labels: np.ndarray  # (H, W) surface index
     names: tuple[str, ...]  # label names (the last is 'nothing')
-    shares: np.ndarray | None = None  # each object's share outside the noise's body in a correct render
+    shares: np.ndarray | None = None  # (K, tails) each object's share in each of the noise's tails in a correct render
     filtered: bool = False  # the blur or correlated-noise detector found a filter over the image
 
 
