@@ -153,7 +153,16 @@ SAME_MISTAKE: dict[str, tuple[str, ...]] = {
     # light not seen at all is too. Not accepted: the light's radiance for the light seen (its light on surfaces is
     # right).
     "channel_misaligned": ("resampling", "pixel_offset"), "lossy_compression": ("quantisation", "blur"),
-    "light_seen": ("light_hidden",)}
+    "light_seen": ("light_hidden",),
+    # The untold class (mcrt.grade.accuracy.untold), fixed before any of it was graded: a surface emitting light it
+    # should not adds light from nowhere on that surface, as an ambient term does, and words naming that surface's
+    # colour or material send the student to the line that is wrong; nothing seen in the mirror (a light tracer) is the
+    # mirror wrong in the image, which the sphere's material or colour words name (the catalogue's mirror of the wrong
+    # sign, black too, is named a colour); another render's samples left in the buffer are samples of another pass
+    # kept in each pixel's mean, as a preview pass's are. Not accepted: the light's radiance for a surface emitting,
+    # the camera's causes for another camera's samples in the buffer.
+    "object_emits": ("ambient", "albedo", "material"), "specular_unseen": ("material", "albedo"),
+    "buffer_reused": ("preview_kept",)}
 
 
 def is_named(cause: str, named: list[str]) -> bool:
