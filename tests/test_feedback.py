@@ -160,6 +160,28 @@ def test_the_structure_test_sees_a_change_that_averages_out_on_one_object():
     assert not multiscale_test(heavy - R, R, mask, noise, sc.tiles, **kw, extra=[fam]).extra["object_structure"].any()
 
 
+def test_the_structure_test_sees_a_few_pixels_far_off_on_a_small_object():
+    """Nine of the 36 pixels of one surface 6 noise deviations off, alternately up and down (seed 8; a glossy mirror
+    for a sharp one): above the image's upper quartile they are too few to tell from noise, in its outer tails
+    (90th and 97.5th percentiles) far too many; the structure test finds that surface alone, in the Holm family
+    (level 0.01), and its quartile alone (tails=1, the remainder test's) does not."""
+    from mcrt.grade.objects import structure_family
+
+    R, S, noise, sc = _synthetic(8)
+    sd = np.sqrt(noise.model)
+    rows, cols = np.nonzero(sc.labels == 3)
+    off = np.zeros(R.shape)
+    for i, (y, x) in enumerate(zip(rows[::4], cols[::4])):
+        off[y, x] = 6 * sd[y, x] * (1 if i % 2 == 0 else -1)
+    mask = np.ones((RES, RES), bool)
+    kw = {"alpha": sc.alpha, "min_effect": sc.min_effect, "full_effect": sc.full_effect}
+    for tails, found in ((None, [False, False, False, True]), (1, [False] * 4)):
+        fam = structure_family(S + off - R, R, mask, noise, sc.labels, 4, sc.min_effect,
+                               **({} if tails is None else {"tails": tails}))
+        bt = multiscale_test(S + off - R, R, mask, noise, sc.tiles, **kw, extra=[fam])
+        assert list(bt.extra["object_structure"]) == found, (tails, fam[1])
+
+
 def test_the_filter_test_ignores_a_bias_and_sees_a_filter():
     """A bias bound to one surface (a ramp and a step, 50 noise deviations) is not correlated noise; a
     Gaussian blur of 0.8 pixel of the noise is, in both directions; noise shared by neighbouring rows is, along the
@@ -290,6 +312,29 @@ def test_a_strongly_biased_image_is_not_read_as_noise(ctx):
                              progress=False).mean, 64)):
         ok = grade_image("correct", ctx, [np.asarray(img)], spp=spp)
         assert ok.score == ok.max_score, ok.summary
+
+
+def test_a_light_a_little_lower_is_not_read_as_fewer_samples(ctx):
+    """The light 0.09 lower (Mitsuba, seed 14, 256 spp): its outline's pixels differ by many noise deviations, which
+    the tile spreads read as far more noise than 256 spp gives; away from the light's edges the noise is right, so
+    the noise criterion fails naming the light's outline, not fewer samples or a catalogued noisy estimator."""
+    res = grade_image("light_z", ctx, [_mitsuba(light(move=(0.0, 0.0, -0.09))(load_scene()), 14, 256)], spp=256)
+    noise = next(t for t in res.tests if t.name == "noise")
+    assert noise.status == "failed" and "the light's outline" in noise.output, noise.output
+    assert "light_two_sided" not in noise.output and "spp_claim" not in named_causes(res)[0], noise.output
+
+
+def test_black_pixels_on_the_mirror_are_worded_as_the_mirror_black(ctx):
+    """The mirror sphere's pixels written 0 in a correct Mitsuba render (seed 15; a light tracer's image, whose
+    paths cannot reach the camera through a mirror): the black pixels are claimed, as the mirror sphere's, with what
+    blackens a mirror."""
+    img = np.asarray(_mitsuba(load_scene(), 15, 1024))
+    cam = ctx.assignment.camera
+    sphere = ctx.labels[cam] == ctx.label_names.index("the mirror sphere")
+    res = grade_image("mirror_black", ctx, [np.where(sphere[..., None], 0.0, img)], spp=1024)
+    ex = res.details["explanation"]
+    assert ex["family"] == "bad_pixels" and "the mirror sphere's pixels" in ex["sentence"], ex["sentence"]
+    assert "paths through the mirror to the camera never counted" in ex["sentence"]
 
 
 def test_a_glossy_sphere_loses_points_without_a_claimed_cause(ctx):

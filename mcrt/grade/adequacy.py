@@ -130,8 +130,10 @@ def remainder_test(S: np.ndarray, R: np.ndarray, delta: np.ndarray | float, mask
                pair=noise.pair)
     K = len(sc.names) - 1
     ot = obj.object_tests(resid, R, ok, nz, sc.labels, K)
+    # The body's edge only (the first tail): a remainder holds the fitted change's own errors (its renders' noise,
+    # known only roughly, and a first-order model's), which land in the outer tails of a bright or large change.
     name, p, rel, share = obj.structure_family(resid, R, ok, nz, sc.labels, K, sc.min_effect, sc.shares,
-                                                image=np.where(ok[..., None], S, 0.0))
+                                                image=np.where(ok[..., None], S, 0.0), tails=1)
     # Structure the candidate leaves counts where it left most of the object's difference (a glossy sphere read
     # as a blur), not where it fits the object but for a trace of its shape that high spp shows.
     rel = rel & (_energy(resid, ok, sc.labels, K) >= LEFT * _energy(np.where(ok[..., None], S - R, 0.0), ok, sc.labels, K))

@@ -50,9 +50,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import ndimage
 from scipy import stats as _sps
 
+from mcrt.grade.structure import beside_emitters
 from mcrt.stats import LUMINANCE_WEIGHTS
 
 LUMINANCE = np.asarray(LUMINANCE_WEIGHTS)
@@ -67,8 +67,6 @@ OUTSIDE = 0.25
 #: The image's upper tails each object's share is counted in (:func:`structure_family`): the body's edge, and two
 #: further out, where a small object with a changed material (a glossy mirror) puts many of its few pixels.
 TAILS = (OUTSIDE, 0.1, 0.025)
-#: A pixel whose noise variance is below this share of the image's median sees only an emitter (no noise).
-NOISELESS = 1e-3
 #: Fewest pixels an object needs to be tested on its own.
 MIN_PIXELS = 4
 #: Within an object, the reference's variation must be this many times its noise to speak of contrast or detail.
@@ -139,9 +137,7 @@ def _outside(resid: np.ndarray, var: np.ndarray, mask: np.ndarray, labels: np.nd
     # Pixels that see only an emitter have next to no noise, and a step at their edge that the noise model follows
     # badly at low spp: they and their neighbours are left to the object's mean test and the tiles (as in
     # mcrt.grade.structure).
-    if keep.any():
-        noiseless = keep & (var <= NOISELESS * float(np.median(var[keep])))
-        keep &= ~ndimage.binary_dilation(noiseless, structure=np.ones((3, 3), bool))
+    keep &= ~beside_emitters(var, mask & (labels < n_labels))
     r = resid @ LUMINANCE
     z2 = np.where(keep, r * r / np.where(keep, var, 1.0), 0.0)
     edges = np.quantile(z2[keep], 1.0 - np.asarray(TAILS)) if keep.any() else np.full(len(TAILS), np.inf)
@@ -186,7 +182,7 @@ def baseline_shares(ctx, cam: str, R: np.ndarray, ref, mask: np.ndarray) -> np.n
 
 def structure_family(resid: np.ndarray, ref: np.ndarray, mask: np.ndarray, noise, labels: np.ndarray,
                      n_labels: int, min_effect: float, shares: np.ndarray | None = None,
-                     image: np.ndarray | None = None) -> tuple[str, np.ndarray, np.ndarray, float]:
+                     image: np.ndarray | None = None, tails: int = len(TAILS)) -> tuple[str, np.ndarray, np.ndarray, float]:
     r"""Zero-mean structure within each object, as a family for :func:`mcrt.stats.onesample.multiscale_test`.
 
     A change that averages out over an object (a mirror's reflection
@@ -233,7 +229,7 @@ def structure_family(resid: np.ndarray, ref: np.ndarray, mask: np.ndarray, noise
         if n < MIN_PIXELS or not np.all(np.isfinite(edges)):
             continue
         out = np.count_nonzero(z2[sel][:, None] > edges[None, :], axis=0)
-        p[k] = min(1.0, len(TAILS) * float(np.min(_sps.binom.sf(out - 1, n, p0[k]))))
+        p[k] = min(1.0, tails * float(np.min(_sps.binom.sf(out[:tails] - 1, n, p0[k, :tails]))))
         rel[k] = (out[0] / n - p0[k, 0] >= MIN_EXCESS_SHARE
                   and float(np.median(np.abs(r[sel]))) >= min_effect * abs(float(np.mean(ref[sel] @ LUMINANCE))))
     return ("object_structure", p, rel, STRUCTURE_SHARE)

@@ -134,6 +134,19 @@ class Structure:
         return (self.pixel_effect >= min_pixel).ravel()
 
 
+#: A pixel whose noise variance is below this share of the image's median sees only an emitter (no noise).
+NOISELESS = 1e-3
+
+
+def beside_emitters(v: np.ndarray, mask: np.ndarray) -> np.ndarray:
+    """(H, W) the pixels that see only an emitter (luminance variance ``v`` below :data:`NOISELESS` of the
+    median over ``mask``) and their 8 neighbours: no noise, and a step at the emitter's edge that the noise model
+    follows badly (a sub-pixel change of the edge is many noise deviations there)."""
+    pos = v[mask & (v > 0)]
+    floor = float(np.median(pos)) * NOISELESS if pos.size else 1e-12
+    return ndimage.binary_dilation(mask & (v <= floor), structure=np.ones((3, 3), bool))
+
+
 def _gradients(b: np.ndarray):
     """Central differences of an (H, W) image (one-sided at the border), and the 4-neighbour Laplacian."""
     p = np.pad(b, 1, mode="edge")
@@ -215,11 +228,11 @@ def detect(resid: np.ndarray, ref: np.ndarray, mask: np.ndarray, var: np.ndarray
     h, w = resid.shape[:2]
     v = np.maximum(var @ (LUMINANCE**2), 0.0)
     pos = v[mask & (v > 0)]
-    floor = float(np.median(pos)) * 1e-3 if pos.size else 1e-12
+    floor = float(np.median(pos)) * NOISELESS if pos.size else 1e-12
     # Pixels that see only an emitter have no noise and a step at their edge that no first-order
     # term follows: they and their neighbours are left to the tile test (which compares them exactly).
     pixel_mask = mask
-    mask = mask & ~ndimage.binary_dilation(v <= floor, structure=np.ones((3, 3), bool))
+    mask = mask & ~beside_emitters(v, mask)
     r = np.where(mask, resid @ LUMINANCE, 0.0)
     wt = np.where(mask, 1.0 / np.maximum(v, floor), 0.0)
     e = r
