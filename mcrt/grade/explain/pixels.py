@@ -27,6 +27,9 @@ from mcrt.stats import LUMINANCE_WEIGHTS
 DARK = 0.05
 #: Largest share of the image's pixels the family explains as bad pixels.
 MOST = 0.25
+#: Black pixels are worded as one object's when this share of them is on it, and they cover most of its pixels
+#: (not all: its edge pixels see something else too).
+ONE_OBJECT = 0.9
 
 
 def black_pixels(fit: Fit) -> np.ndarray:
@@ -54,7 +57,11 @@ def bad_pixels(fit: Fit, inputs: Inputs) -> list[Candidate]:
         return []
     change = np.where(bad[..., None], -fit.R, 0.0)
     box = _block(bad)
-    if box is not None:
+    obj = _on_one_object(bad, inputs)
+    if obj:  # one object's pixels: neither a tile left out nor NaNs scattered, first of all that object
+        text = (f"{n} pixels ({100 * n / bad.size:.2g} % of the image) black where the scene is not{obj}; or a NaN or "
+                "infinite sample written as 0 on it (a division by a zero pdf or cosine there)")
+    elif box is not None:
         t, b, l, r = box
         text = (f"a block of {b - t + 1} x {r - l + 1} pixels (rows {t} to {b}, columns {l} to {r}) left black: "
                 "a tile or part of the image never rendered or never written")
@@ -66,6 +73,26 @@ def bad_pixels(fit: Fit, inputs: Inputs) -> list[Candidate]:
     rows, cols = np.nonzero(bad)
     return [Candidate("bad_pixels", "black pixels", text, fit.delta(change), 1,
                       value={"pixels": n, "block": box, "first": [int(rows[0]), int(cols[0])]}, change=change)]
+
+
+def _on_one_object(bad: np.ndarray, inputs: Inputs) -> str:
+    """Words for black pixels that are (nearly) all of one object's: which, and for a mirror what blackens it ('' when
+    they are spread over several objects or cover little of one)."""
+    if inputs.labels is None:
+        return ""
+    ks, counts = np.unique(inputs.labels[bad], return_counts=True)
+    k = int(ks[np.argmax(counts)])
+    seen = int(np.count_nonzero(inputs.labels == k))
+    if counts.max() < ONE_OBJECT * bad.sum() or 2 * counts.max() < seen:
+        return ""
+    name = inputs.label_names[k].split(" (")[0]
+    words = f": {name}'s pixels, most of them, {name} rendered black"
+    if "mirror" in name:
+        # Black where the camera sees the mirror: no path through it reaches the camera.
+        words += (" (paths through the mirror to the camera never counted: a light tracer, whose paths cannot reach "
+                  "the camera through a mirror, a path ended at the first specular hit, or the mirror's "
+                  "reflectance 0)")
+    return words
 
 
 bad_pixels.name = "bad_pixels"

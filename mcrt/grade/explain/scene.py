@@ -155,20 +155,25 @@ def rendered(fit: Fit, inputs: Inputs) -> list[Candidate]:
 
 def _emitter_seen(fit: Fit, E: np.ndarray, Le) -> list[Candidate]:
     """The light seen directly at k times its radiance, its light on the surfaces right (the emission at the first
-    hit weighted, as by an MIS weight where no light sample competes): change (k - 1) E, E the image of paths cut at
-    depth 1, k by weighted least squares. None near k = 0 (the light black: ``emitter_hidden``) or k = 1."""
+    hit weighted, as by an MIS weight where no light sample competes, or clamped to 1 where the camera sees it):
+    change (k - 1) E, E the image of paths cut at depth 1, k by weighted least squares. None near k = 0 (the light
+    black: ``emitter_hidden``) or k = 1."""
     w = np.where(fit.ok, fit.w, 0.0)
     den = float(np.sum(w * E * E))
     if den <= 0:
         return []
     k = 1.0 + float(np.sum(w * fit.D * E)) / den
-    if k < 0.05 or abs(k - 1.0) < 0.02:
+    # Down to 1/20 of the radiance of 20 (the light seen clamped to 1, so as not to blow out the image).
+    if k < 0.02 or abs(k - 1.0) < 0.02:
         return []
     dm = (k - 1.0) * E
     Le = np.asarray(Le, np.float64)
+    # Seen at about 1: the emission clamped to the display's white where the camera sees it.
+    clamped = ", or clamped to 1 where the camera sees it" if abs(float(np.max(Le)) * k - 1.0) < 0.05 else ""
     return [Candidate("emitter_seen", "the light seen at a factor", f"the light itself {_num(k)} times as bright "
                       f"where the camera sees it directly ({_fmt(Le * k, 1)} where the scene says {_fmt(Le, 1)}), its "
-                      "light on the surfaces right (the emission at the first hit weighted, as by an MIS weight there)",
+                      "light on the surfaces right (the emission at the first hit weighted, as by an MIS weight there"
+                      f"{clamped})",
                       fit.delta(dm), 1, value=k, change=dm, generalises=("emitter_hidden",),
                       # A curve on the values that changes mostly the light's own value reads the same image.
                       rivals=("tone_curve",))]

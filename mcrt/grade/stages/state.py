@@ -83,6 +83,8 @@ class Level:
     verdict: tuple[str, str, bool]  # (status, text, firm) before the bias test is known
     noise: Noise | None = None
     spp_broad: float = float("inf")  # spp_eff with the noisiest tiles left out (stages.noise.BIAS_TILES)
+    spp_away: float = float("inf")  # spp_eff away from the light's edges (stages.noise.measure)
+    edge_excess: bool = False  # the excess noise lies on the light's outline alone (stages.noise.edge_text)
 
     @property
     def samples(self) -> int:
