@@ -255,15 +255,15 @@ def named_causes(res) -> tuple[list[str], str]:
         causes.append("same_seed")  # two renders with one seed (stages.noise.same_pair)
         said.append(noise.output.split(";")[0])
         noise = None if "; also, " not in noise.output else noise
-    if noise is not None and noise.status == "failed" and "share random numbers" in noise.output:
+    if noise is not None and noise.status == "failed" and "the light's outline" in noise.output:
+        # The words name the light's geometry and a filter of its bright pixels (added after untold was graded).
+        causes += ["light_position", "light_size", "light_shape", "blur"]
+        said.append(noise.output.split(";")[0])
+    elif noise is not None and noise.status == "failed" and "share random numbers" in noise.output:
         causes += ["same_seed", "blur"]  # noise correlated along one direction: shared random numbers, or a filter
         said.append(noise.output.split(";")[0])
     elif noise is not None and noise.status == "failed" and any(w in noise.output for w in ("blur", "denois", "filter")):
         causes.append("blur")
-        said.append(noise.output.split(";")[0])
-    elif noise is not None and noise.status == "failed" and "the light's outline" in noise.output:
-        # The words name the light's geometry and a filter of its bright pixels (added after untold was graded).
-        causes += ["light_position", "light_size", "light_shape", "blur"]
         said.append(noise.output.split(";")[0])
     elif noise is not None and noise.status == "failed" and "noisier" in noise.output:
         causes.append("spp_claim")
