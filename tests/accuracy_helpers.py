@@ -23,3 +23,21 @@ def build(spec, size: int = W):
 def image(seed: int = 3) -> np.ndarray:
     """An (H, W, 3) image of values in [0.05, 0.95] from ``seed``."""
     return np.random.default_rng(seed).random((H, W, 3)) * 0.9 + 0.05
+
+
+def check_held_out_rule(klass, *, first_kept: bool = True) -> None:
+    """Class module ``klass``'s held-out flags are its rule's: half of each category (never its first case when
+    ``first_kept``) and half of its correct hand-ins."""
+    assert {s.name: s.held_out for s in klass.SPECS} == klass.held_out_rule()
+    held = {s.name for s in klass.SPECS if s.held_out}
+    for names in klass.CATEGORIES.values():
+        assert len(held & set(names)) == len(names) // 2
+        assert not first_kept or names[0] not in held
+    assert sum(s.held_out for s in klass.CORRECT) == len(klass.CORRECT) // 2
+
+
+def check_not_catalogued(klass) -> None:
+    """No case of class module ``klass`` bears the name of a catalogued bug."""
+    from mcrt.mutants import CATALOGUE
+
+    assert not set(CATALOGUE) & {s.name for s in klass.SPECS}
