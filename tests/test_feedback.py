@@ -626,3 +626,16 @@ def test_a_brdf_normalisation_is_only_a_factor_a_program_gets_wrong():
         assert c.params == 0 and c.value["factor"] in [f for f, _ in FACTORS]
         if expect is not None:
             assert c.value["factor"] == pytest.approx(expect) and "1/pi applied twice" in c.text
+
+
+def test_too_much_noise_names_passes_that_repeat_one_seed(ctx):
+    """A correct mcrt render at 16 spp declared as 256 (seed 54): the noise criterion fails, and its words name
+    fewer samples and passes that repeat one seed, the two mistakes that give such an image."""
+    from mcrt.render import render
+
+    s = load_scene()
+    img = render(s, s.settings(camera="near", width=RES, height=RES, spp=16, max_depth=8), seed=54, progress=False).mean
+    res = grade_image("claims_256", ctx, [np.asarray(img)], spp=256)
+    noise = next(t for t in res.tests if t.name == "noise")
+    assert noise.status == "failed" and "noisier than 256 spp" in noise.output, noise.output
+    assert {"spp_claim", "same_seed"} <= set(named_causes(res)[0]), noise.output

@@ -200,8 +200,9 @@ def claim_text(var_ratio: float, spp: int, spp_eff: float, max_ratio: float) -> 
     times = f"{var_ratio:.1f}" if var_ratio < 10 else f"{var_ratio:.0f}"
     return (f"about {times}x noisier than {spp} spp should be: like about {spp_text(spp_eff)} spp (noise "
             f"variance against mcrt's at {spp} spp; up to {max_ratio:g}x is accepted, for estimators less efficient "
-            "than mcrt's); render more samples, check the spp you declared, or reduce your estimator's variance "
-            "(next-event estimation)")
+            "than mcrt's); render more samples, check the spp you declared and that each pass or batch draws new random "
+            "numbers (a seed of its own: passes that repeat one seed add no information), or reduce your estimator's "
+            "variance (next-event estimation)")
 
 
 def edge_text(var_ratio: float, spp: int, spp_eff: float, spp_away: float) -> str:
