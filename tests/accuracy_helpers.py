@@ -41,3 +41,29 @@ def check_not_catalogued(klass) -> None:
     from mcrt.mutants import CATALOGUE
 
     assert not set(CATALOGUE) & {s.name for s in klass.SPECS}
+
+
+def check_specs(klass, earlier, *, mistakes: int) -> None:
+    """Class module ``klass`` is well formed beside the ``earlier`` class modules: new case names and new causes,
+    every mistake's cause worded, correct hand-ins without one, 8 categories of 3 to 5 that list every mistake, at
+    least ``mistakes`` mistakes and 8 correct hand-ins."""
+    from mcrt.grade.accuracy import cases, outside
+
+    names = [s.name for s in klass.SPECS]
+    assert len(names) == len(set(names))
+    assert not {s.name for m in earlier for s in m.SPECS} & set(names)
+    assert all(s.cause in klass.CAUSES and klass.CAUSES[s.cause] for s in klass.MISTAKES)
+    assert all(s.cause is None for s in klass.CORRECT)
+    old = set(cases.CAUSES) | set(outside.CAUSES) | {c for m in earlier for c in getattr(m, "NEW_CAUSES", ())}
+    assert not old & set(klass.NEW_CAUSES) and set(klass.NEW_CAUSES) <= set(klass.CAUSES)
+    listed = [n for names in klass.CATEGORIES.values() for n in names]
+    assert sorted(listed) == sorted(s.name for s in klass.MISTAKES)
+    assert len(klass.CATEGORIES) == 8 and all(3 <= len(v) <= 5 for v in klass.CATEGORIES.values())
+    assert len(klass.MISTAKES) >= mistakes and len(klass.CORRECT) == 8
+
+
+def plain(size: int, spp: int = 256) -> np.ndarray:
+    """A correct Mitsuba render (the accuracy classes' default spec) at ``size`` x ``size`` pixels, ``spp`` samples."""
+    from mcrt.grade.accuracy.cases import Spec
+
+    return build_class(width=size, height=size, specs=(Spec("plain", None, spp=spp),))[0].image

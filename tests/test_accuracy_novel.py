@@ -13,30 +13,15 @@ import pytest
 
 import mcrt  # noqa: F401  (before mitsuba and drjit)
 from accuracy_helpers import (H, W, build as _build, by_name, check_held_out_rule,
-                              check_not_catalogued, image as _image)
+                              check_not_catalogued, check_specs, image as _image, plain as _plain)
 from mcrt.grade.accuracy import blind, cases, fresh, novel, outside, programs, unseen, untried
-from mcrt.grade.accuracy.cases import build_class
 from mcrt.image_files import ImageError, read_image, srgb_eotf, srgb_oetf
 
 _by_name = partial(by_name, novel.SPECS)
 
 
 def test_specs_are_new_worded_and_in_categories():
-    names = [s.name for s in novel.SPECS]
-    assert len(names) == len(set(names))
-    others = {s.name for s in cases.SPECS + outside.SPECS + programs.SPECS + fresh.SPECS + blind.SPECS
-              + unseen.SPECS + untried.SPECS}
-    assert not others & set(names)
-    assert all(s.cause in novel.CAUSES and novel.CAUSES[s.cause] for s in novel.MISTAKES)
-    assert all(s.cause is None for s in novel.CORRECT)
-    old = (set(cases.CAUSES) | set(outside.CAUSES) | set(programs.NEW_CAUSES) | set(fresh.NEW_CAUSES)
-           | set(blind.NEW_CAUSES) | set(unseen.NEW_CAUSES) | set(untried.NEW_CAUSES))
-    assert not old & set(novel.NEW_CAUSES)
-    assert set(novel.NEW_CAUSES) <= set(novel.CAUSES)
-    listed = [n for names in novel.CATEGORIES.values() for n in names]
-    assert sorted(listed) == sorted(s.name for s in novel.MISTAKES)
-    assert len(novel.CATEGORIES) == 8 and all(3 <= len(v) <= 5 for v in novel.CATEGORIES.values())
-    assert len(novel.MISTAKES) >= 24 and len(novel.CORRECT) == 8
+    check_specs(novel, (cases, outside, programs, fresh, blind, unseen, untried), mistakes=24)
 
 
 def test_no_mistake_is_a_catalogued_bug_by_name():
@@ -140,10 +125,6 @@ def test_scene_edits():
     assert f[1] > 0 and f[2] < 0 and np.linalg.norm(f) == pytest.approx(1.0)
     sph = next(o for o in _by_name("sphere_y_negated").edit(s).objects if o.name == "sphere")
     assert sph.center == pytest.approx((9.5, -2.0, -3.3))
-
-
-def _plain(size, spp=256):
-    return build_class(width=size, height=size, specs=(cases.Spec("plain", None, spp=spp),))[0].image
 
 
 def test_correct_reductions_agree_with_a_plain_render():

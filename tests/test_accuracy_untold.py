@@ -12,9 +12,8 @@ import pytest
 
 import mcrt  # noqa: F401  (before mitsuba and drjit)
 from accuracy_helpers import (H, W, build as _build, by_name, check_held_out_rule,
-                              check_not_catalogued, image as _image)
+                              check_not_catalogued, check_specs, image as _image, plain as _plain)
 from mcrt.grade.accuracy import blind, cases, fresh, novel, outside, programs, unseen, untold, untried
-from mcrt.grade.accuracy.cases import build_class
 from mcrt.image_files import ImageError, read_image, srgb_eotf, srgb_oetf
 
 _by_name = partial(by_name, untold.SPECS)
@@ -22,19 +21,7 @@ _OTHERS = (cases, outside, programs, fresh, blind, unseen, untried, novel)
 
 
 def test_specs_are_new_worded_and_in_categories():
-    names = [s.name for s in untold.SPECS]
-    assert len(names) == len(set(names))
-    others = {s.name for m in _OTHERS for s in m.SPECS}
-    assert not others & set(names)
-    assert all(s.cause in untold.CAUSES and untold.CAUSES[s.cause] for s in untold.MISTAKES)
-    assert all(s.cause is None for s in untold.CORRECT)
-    old = set(cases.CAUSES) | set(outside.CAUSES) | {c for m in _OTHERS[2:] for c in m.NEW_CAUSES}
-    assert not old & set(untold.NEW_CAUSES)
-    assert set(untold.NEW_CAUSES) <= set(untold.CAUSES)
-    listed = [n for names in untold.CATEGORIES.values() for n in names]
-    assert sorted(listed) == sorted(s.name for s in untold.MISTAKES)
-    assert len(untold.CATEGORIES) == 8 and all(3 <= len(v) <= 5 for v in untold.CATEGORIES.values())
-    assert len(untold.MISTAKES) >= 28 and len(untold.CORRECT) == 8
+    check_specs(untold, _OTHERS, mistakes=28)
 
 
 def test_no_mistake_is_a_catalogued_bug_by_name():
@@ -135,10 +122,6 @@ def test_scene_edits():
     assert sph.radius == pytest.approx(1.5 ** 0.5)
     assert _by_name("eye_at_image_plane").edit(s).cameras["near"].eye == pytest.approx((0.0, 0.0, 0.0))
     assert _by_name("light_height_4_9").edit(s).light.center[2] == pytest.approx(4.9)
-
-
-def _plain(size, spp=256):
-    return build_class(width=size, height=size, specs=(cases.Spec("plain", None, spp=spp),))[0].image
 
 
 def test_correct_combinations_agree_with_a_plain_render():
