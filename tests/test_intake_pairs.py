@@ -1,5 +1,6 @@
 """File mistakes named at intake and calibration (issue 27): a PFM header declaring the other byte order, a 16-bit PNG
-little-endian or holding 8-bit codes times 256, 8-bit codes cast without a clip, and a pair of renders made with one
+little-endian or holding 8-bit codes times 256, 8-bit codes cast without a clip, linear values rounded to 8 bits
+before the sRGB curve, and a pair of renders made with one
 seed.
 
 The hand-ins are Mitsuba renders (fixed seeds) written the way a student's program writes them; they are graded by
@@ -175,6 +176,36 @@ def test_8bit_codes_cast_without_a_clip_are_named(ctx, renders, tmp_path, clip):
     else:
         assert linear.status == "failed" and "wrap round past 255" in linear.output, linear.output
         assert res.details["encoding"]["codes"] == ["wrapped"] and "encoding" in named_causes(res)[0]
+
+
+@pytest.mark.parametrize("first", ["rounded", "encoded", "cast"])
+def test_linear_values_rounded_to_8_bits_before_the_curve_are_named(ctx, renders, tmp_path, first):
+    """A 256-entry sRGB table applied to linear values rounded to 8 bits: no dark code but 13, 22, 28, ...; the bias
+    test alone does not see it (the rounding averages out). Encoded from the floats, then rounded, nothing is said.
+    Cast to integers before the scaling by 255, every code is 0 or 255, and the words say so."""
+    from PIL import Image
+
+    from mcrt.image_files import srgb_oetf
+
+    def write(q):
+        if first == "cast":  # the encoded values clipped, cast, then scaled: the light alone reaches 1
+            c = np.clip(srgb_oetf(np.maximum(renders[0], 0)), 0, 1).astype(np.uint8) * 255
+        else:
+            v = np.clip(renders[0], 0, 1)
+            v = np.rint(v * 255) / 255 if first == "rounded" else v
+            c = np.rint(srgb_oetf(v) * 255).astype(np.uint8)
+        Image.fromarray(c, "RGB").save(q)
+
+    res = _grade(ctx, tmp_path / "student", {"render.png": write})
+    linear = _test(res, "linear")
+    if first == "encoded":
+        assert linear.status == "passed" and "codes" not in res.details["encoding"], linear.output
+    else:
+        words, code = {"rounded": ("rounded to 8 bits before the curve", "rounded_first"),
+                       "cast": ("cast to integers before they were scaled", "cast_first")}[first]
+        assert linear.status == "failed" and words in linear.output, linear.output
+        assert code in res.details["encoding"]["codes"] and "encoding" in named_causes(res)[0]
+        assert res.score < res.max_score
 
 
 def test_implausible_share_counts_what_no_radiance_is():

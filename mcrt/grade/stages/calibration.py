@@ -64,7 +64,9 @@ def encoding(g: Grading, hand: Hand) -> None:
         times_256 = _codes_times_256(hand.loaded)
         hand.png_safe = _png_unclipped(hand.R, g.ctx.model_var[hand.cam].astype(np.float64), hand.spp or a.min_spp)
         hand.imgs, hand.qvar = _png_curve(g, hand)
-        wrong = {k: v for k, v, found in (("times_256", TIMES_256, times_256), ("wrapped", WRAPPED, _wrapped(g, hand)))
+        wrong = {k: v for k, v, found in (("times_256", TIMES_256, times_256), ("wrapped", WRAPPED, _wrapped(g, hand)),
+                                          ("rounded_first", ROUNDED_FIRST, _rounded_first(g, hand)),
+                                          ("cast_first", CAST_FIRST, _cast_first(hand.loaded)))
                  if found}
         if wrong:  # the codes' mistakes come first, before what the curve's test said of the values
             g.details.setdefault("encoding", {})["codes"] = list(wrong)
@@ -81,6 +83,16 @@ TIMES_256 = ("every 16-bit code is a multiple of 256: 8-bit codes times 256, whe
 WRAPPED = ("the pixels that should be white (the light and its reflections, far above 1) hold the codes that values "
            "past 1 give when cast to 8 bits without a clip (they wrap round past 255): clip to [0, 1] before "
            "converting to 8 bits")
+
+ROUNDED_FIRST = ("the dark codes are only those that linear values rounded to 8 bits give through the curve (none of "
+                 "1-12 where the sRGB curve is the file's, then 13, 22, 28, ...): the values were rounded to 8 bits "
+                 "before the curve (a 256-entry table on 8-bit linear values), so the shadows are in coarse steps; "
+                 "apply the curve to the floating-point values, then round to 8 bits")
+CAST_FIRST = ("every code is 0 or 255: the values were cast to integers before they were scaled by 255 (a cast turns "
+              "everything below 1 into 0, and the light into 1); scale by 255, round, then cast")
+
+#: The dark codes the test of :func:`_rounded_first` looks at, and how many it needs.
+_DARK_CODES, _MIN_DARK = (1, 40), 20
 
 
 def _codes_times_256(loaded) -> bool:
@@ -122,6 +134,30 @@ def _wrapped(g: Grading, hand: Hand) -> bool:
     off = np.abs(codes - wrapped)
     match = np.all(np.minimum(off, 256 - off) <= tol, axis=-1)
     return bool(np.mean(np.any(codes < 250, axis=-1)) >= 0.5 and np.mean(match) >= 0.8)
+
+
+def _rounded_first(g: Grading, hand: Hand) -> bool:
+    """An 8-bit file whose dark codes (1 to 40, in any channel) all lie among ``round(255 encode(k / 255))``: linear
+    values rounded to 8 bits before the curve. Through the sRGB curve that leaves 5 of the 40 codes (13, 22, 28, 34,
+    38), so a render encoded from floats has all of at least 20 such values there with a chance below 0.2^20 (its dark
+    codes fall about as often on the others). Only for a curve that bends the dark codes (not a linear file)."""
+    loaded, curve = hand.loaded, (g.details.get("encoding") or {}).get("detected")
+    if not loaded.fmt.startswith("png8") or curve not in _ENCODE or curve == "linear":
+        return False
+    lo, hi = _DARK_CODES
+    allowed = np.unique(np.rint(_ENCODE[curve](np.arange(256) / 255.0) * 255))
+    codes = np.concatenate([np.rint(ck.png_codes(i, loaded.fmt) * 255).ravel() for i in loaded.images])
+    dark = codes[(codes >= lo) & (codes <= hi)]
+    return dark.size >= _MIN_DARK and bool(np.all(np.isin(dark, allowed)))
+
+
+def _cast_first(loaded) -> bool:
+    """An 8-bit file whose every code is 0 or 255, with both present: values cast to integers, then scaled. A render
+    of the room has most of its pixels in between."""
+    if not loaded.fmt.startswith("png8"):
+        return False
+    codes = np.concatenate([np.rint(ck.png_codes(i, loaded.fmt) * 255).ravel() for i in loaded.images])
+    return bool(np.all((codes == 0) | (codes == 255)) and np.any(codes == 0) and np.any(codes == 255))
 
 
 def _png_curve(g: Grading, hand: Hand):
