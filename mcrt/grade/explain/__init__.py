@@ -20,7 +20,9 @@ light          the light moved along x, y, z; its size      mcrt renders at a fe
 camera         field of view, rotation, pixel-centre offset a 4x finer mcrt image warped by the
                                                             pinhole homography, box-filtered
 eye            the camera's eye moved                       mcrt renders at a few offsets
-object         missing, or moved along x, y, z              mcrt renders
+object         missing, moved along x, y, z, or its         mcrt renders
+               coordinates read in another order
+plane          the floor or the ceiling at another height   mcrt renders at a few offsets
 depth          paths cut at depth k                         mcrt renders at max depth k
 emitter        the light black where seen directly          R minus the max-depth-1 image
 encoding       sRGB or a power curve on the values          closed form on R

@@ -29,6 +29,11 @@ OBJECT_OFFSETS = (-1.5, -1.0, -0.5, 0.5, 1.0, 1.5)
 EYE_OFFSETS = (-1.0, -0.5, -0.3, -0.2, -0.1, 0.1, 0.2, 0.3, 0.5, 1.0)
 DEPTHS = (1, 2, 3, 4, 5, 6, 7, 9, 10, 12, -1)
 AXES = "xyz"
+#: The orders in which a program can read an object's coordinates (a y-up habit reads (x, z, y)), the scene's own
+#: (0, 1, 2) aside.
+SWAPS = ((0, 2, 1), (1, 0, 2), (2, 1, 0), (1, 2, 0), (2, 0, 1))
+#: Offsets (scene units) of the floor's and the ceiling's heights, as a value typed wrong.
+PLANE_OFFSETS = (-1.0, -0.5, 0.5, 1.0)
 
 
 @dataclass
@@ -121,6 +126,30 @@ def _object_variants(scene: Scene) -> dict[str, list[tuple[object, Scene]]]:
                 if ok:
                     vs.append((d, replace(scene, objects=tuple(moved if x.name == o.name else x for x in scene.objects))))
             out[f"moved:{o.name}:{AXES[axis]}"] = vs
+        swaps = []
+        for order in SWAPS:
+            if hasattr(o, "center"):
+                moved = replace(o, center=tuple(float(o.center[i]) for i in order))
+                ok = scene.room.contains(moved.center, moved.radius)
+            else:
+                moved = replace(o, vertices=tuple(tuple(float(v[i]) for i in order) for v in o.vertices))
+                ok = all(scene.room.contains(v, 0.0) for v in moved.vertices)
+            if ok:
+                swaps.append((order, replace(scene, objects=tuple(moved if x.name == o.name else x for x in scene.objects))))
+        out[f"swapped:{o.name}"] = swaps
+    return out
+
+
+def _plane_variants(scene: Scene) -> dict[str, list[tuple[float, Scene]]]:
+    """The floor and the ceiling at other heights (the light stays below the ceiling, the eyes inside the room)."""
+    room, out = scene.room, {}
+    for plane in ("floor_z", "ceiling_z"):
+        vs = []
+        for d in PLANE_OFFSETS:
+            moved = replace(scene, room=replace(room, **{plane: getattr(room, plane) + d}))
+            if _light_inside(moved) and all(moved.room.contains(c.eye, 1e-3) for c in scene.cameras.values()):
+                vs.append((d, moved))
+        out[f"plane:{plane[:-2]}"] = vs
     return out
 
 
@@ -171,14 +200,14 @@ def prepare_basis(a, scene: Scene, render) -> Basis:
         imgs = [img(edit((v, v, v))) for v in nodes]
         b.albedo[label] = (np.asarray(nodes, np.float64), np.stack(imgs), tuple(value))
         b.values[label] = (kind, tuple(value))
-    for fam in (_light_variants(scene), _object_variants(scene), _eye_variants(scene, cam)):
+    for fam in (_light_variants(scene), _object_variants(scene), _plane_variants(scene), _eye_variants(scene, cam)):
         for key, vs in fam.items():
             if vs:
                 b.nodes[key] = [(v, img(s)) for v, s in vs]
     b.nodes["depth"] = [(k, img(scene, depth=k)) for k in DEPTHS if k != d]
     lt, c = scene.light, scene.cameras[cam]
     b.values.update(light_center=tuple(lt.center), light_size=tuple(lt.size), light_radiance=tuple(lt.radiance),
-                    eye=tuple(c.eye), objects={o.name: tuple(float(x) for x in (o.center if hasattr(o, "center")
+                    eye=tuple(c.eye), floor=scene.room.floor_z, ceiling=scene.room.ceiling_z, objects={o.name: tuple(float(x) for x in (o.center if hasattr(o, "center")
                                                                             else np.mean(o.vertices, axis=0)))
                                                 for o in scene.objects})
     b.prepare_time = time.perf_counter() - t0

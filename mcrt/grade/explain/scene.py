@@ -131,6 +131,22 @@ def rendered(fit: Fit, inputs: Inputs) -> list[Candidate]:
             cand.change = dm
             best_moved[name] = cand
             continue
+        elif fam == "swapped":
+            name = key.split(":")[1]
+            order = "(" + ", ".join(AXES[i] for i in val) + ")"
+            cand = Candidate("object_moved", f"{name}'s axes swapped", f"the {name}'s coordinates read in the order "
+                             f"{order} (x, y and z mixed up, as a program written for y up does)", scores[i], 0,
+                             value=(name, order))
+            if name in best_moved and best_moved[name].chi2 <= cand.chi2:
+                continue
+            cand.change = dm
+            best_moved[name] = cand
+            continue
+        elif fam == "plane":
+            name = key.split(":")[1]
+            z = v[name] + val
+            cand = Candidate("object_moved", f"the {name}'s height", f"the {name} at z = {_num(z)} where the scene says "
+                             f"{_num(v[name])}", scores[i], 1, value=(name, z))
         elif key.startswith("eye_"):
             cand = Candidate("eye", "the camera's eye", f"the camera's eye moved by {val:+g} along {key[-1]} (at "
                              f"{_fmt(_shift(v['eye'], AXES.index(key[-1]), val), 2)} where the scene says "

@@ -9,7 +9,8 @@ white point 11.2), each alone or followed by the sRGB curve, a clamp to
 :math:`x (1 + x / w^2) / (1 + x)` with its white point w scanned too; and
 Reinhard's curves, ACES and Hable's applied to the luminance L alone, each
 pixel's colour scaled by :math:`f(L) / L` (hue and saturation kept, as
-tone-mapping guides teach). Any other monotone curve is fitted as an
+tone-mapping guides teach); and a constant subtracted from every value,
+clipped at 0 (a black level), or added. Any other monotone curve is fitted as an
 isotonic regression of S on R per channel
 (:func:`scipy.optimize.isotonic_regression`) on :data:`BINS` quantile bins
 of R, each bin's level one parameter at most, and worded by the values it
@@ -100,8 +101,24 @@ def tone_curve(fit: Fit, inputs: Inputs) -> list[Candidate]:
         out.append(Candidate("tone_curve", f"tone map {key}", f"the values {words}{exp} before saving",
                               errs[i], 1 if len(scan) > 1 else 0, value={"curve": key, "exposure": k}, change=f(k * R) - fit.R))
     out += _reinhard_extended(fit, R)
+    out.append(_offset(fit, R))
     out.append(_isotonic(fit))
     return out
+
+
+def _offset(fit: Fit, R: np.ndarray) -> Candidate:
+    """A constant b subtracted from every value and clipped at 0 (a black level), or added (b < 0): b fitted within
+    half the image's median value, one parameter."""
+    from scipy.optimize import minimize_scalar
+
+    bound = 0.5 * float(np.median(R[fit.ok])) if fit.ok.any() else 0.0
+    b = float(minimize_scalar(lambda b: fit.model(np.maximum(R - b, 0.0)), bounds=(-bound, bound),
+                              method="bounded", options={"xatol": 1e-3 * max(bound, 1e-12)}).x) if bound > 0 else 0.0
+    words = (f"a black level of {_num(b)} subtracted from every value (clipped at 0)" if b >= 0 else
+             f"a constant {_num(-b)} added to every value")
+    change = np.maximum(R - b, 0.0) - fit.R
+    return Candidate("tone_curve", "offset", f"the values with {words} before saving", fit.delta(change), 1,
+                     value={"curve": "offset", "offset": -b}, change=change)
 
 
 def _reinhard_extended(fit: Fit, R: np.ndarray) -> list[Candidate]:
