@@ -42,6 +42,8 @@ CAUSE_OF: dict[str, tuple[str, ...]] = {
     # The image's height spanning another view than its width (an aspect ratio hard-coded) is the field of view
     # wrong in one direction.
     "aspect": ("camera_fov",),
+    # Another camera model than the pinhole (a panorama, a fisheye, a lens's distortion; added after untold was graded).
+    "camera_model": ("camera_model",),
     # A shift of the image by a fraction of a pixel is what a small rotation does too; the words name an image
     # resampled with an offset (every other pixel kept) beside pixel centres off.
     "pixel_offset": ("pixel_offset", "camera_rotation", "resampling"), "depth": ("depth",), "emitter_hidden": ("light_hidden",),

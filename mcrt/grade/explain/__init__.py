@@ -17,8 +17,10 @@ albedo         each surface's albedo per channel            mcrt renders at albe
                                                             interpolation per channel
 reflectance    the mirror's reflectance per channel         the same with 0, 1/2 and 1
 light          the light moved along x, y, z; its size      mcrt renders at a few offsets
-camera         field of view, rotation, pixel-centre offset a 4x finer mcrt image warped by the
-                                                            pinhole homography, box-filtered
+camera         field of view, rotation, pixel-centre offset, a 4x finer mcrt image warped by the
+               aspect; another camera model (cylinder,      pinhole homography (or the other
+               latitude-longitude, fisheye, a lens's        model's rays), box-filtered
+               radial distortion)
 eye            the camera's eye moved                       mcrt renders at a few offsets
 object         missing, moved along x, y, z, or its         mcrt renders
                coordinates read in another order

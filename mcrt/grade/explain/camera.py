@@ -1,14 +1,16 @@
-"""The camera families: field of view, aspect ratio, pixel-centre offset and rotation, fitted by warping a finer image."""
+"""The camera families: field of view, aspect ratio, pixel-centre offset and rotation, another camera model (a
+cylindrical, equirectangular or fisheye camera, a radial lens distortion), fitted by warping a finer image."""
 
 from __future__ import annotations
 
 import math
+from functools import partial
 
 import numpy as np
 
 from mcrt.grade.candidates import Candidate, Inputs
 from mcrt.grade.explain.basis import SUB, Basis
-from mcrt.grade.explain.fit import Fit
+from mcrt.grade.explain.fit import Fit, refine
 from mcrt.grade.feedback import num as _num
 
 
@@ -52,18 +54,20 @@ class _Warp:
         return self.at(self.u + dx, self.v + dy, fov, yaw, pitch, roll, aspect)
 
     def at(self, u: np.ndarray, v: np.ndarray, fov: float | None = None, yaw=0.0, pitch=0.0, roll=0.0,
-           aspect=1.0) -> np.ndarray:
+           aspect=1.0, project=None) -> np.ndarray:
         """The image whose pixel (i, j) is the mean over samples (u, v)[j SUB:(j+1) SUB, i SUB:(i+1) SUB], given in
-        grade pixels of the scene's film (the other arguments as for :meth:`image`)."""
+        grade pixels of the scene's film (the other arguments as for :meth:`image`). ``project(sx, sy, t, t_y)``
+        gives another camera model's ray (x, y, z) in the camera frame for film coordinates in [-1, 1] and the
+        half-width's and half-height's tangents (default: the pinhole's (sx t, sy t_y, 1))."""
         ts = self.t if fov is None else math.tan(math.radians(fov) / 2)
         asp = aspect * self.h / self.w
         sx = 2 * u / self.w - 1
         sy = 1 - 2 * v / self.h
         R = _rot(yaw, pitch, roll)
-        x, y = sx * ts, sy * ts * asp
-        X = R[0, 0] * x + R[0, 1] * y + R[0, 2]
-        Y = R[1, 0] * x + R[1, 1] * y + R[1, 2]
-        Z = np.maximum(R[2, 0] * x + R[2, 1] * y + R[2, 2], 1e-9)
+        x, y, z = (sx * ts, sy * ts * asp, 1.0) if project is None else project(sx, sy, ts, ts * asp)
+        X = R[0, 0] * x + R[0, 1] * y + R[0, 2] * z
+        Y = R[1, 0] * x + R[1, 1] * y + R[1, 2] * z
+        Z = np.maximum(R[2, 0] * x + R[2, 1] * y + R[2, 2] * z, 1e-9)
         px = (X / Z / self.tf + 1) * self.Wf / 2 - 0.5
         py = (1 - Y / Z / (self.tf * self.Hf / self.Wf)) * self.Hf / 2 - 0.5
         coords = np.stack([py.ravel(), px.ravel()])
@@ -185,6 +189,80 @@ def _aspect(fit: Fit, wp: _Warp) -> Candidate:
                      "width and height swapped in it)", chi, 1, value=a, change=dm)
 
 
+def _cylindrical(sx, sy, t, ty):
+    """The horizontal angle linear in the column (a cylinder's film), the height as the pinhole's at the centre."""
+    a = sx * math.atan(t)
+    return np.sin(a), sy * ty, np.cos(a)
+
+
+def _equirectangular(sx, sy, t, ty):
+    """Both angles linear in the pixel (longitude and latitude), spanning the pinhole's field of view."""
+    a, e = sx * math.atan(t), sy * math.atan(ty)
+    return np.sin(a) * np.cos(e), np.sin(e), np.cos(a) * np.cos(e)
+
+
+def _fisheye(sx, sy, t, ty):
+    """The angle from the axis linear in the distance from the image's centre (an equidistant fisheye), the pinhole's
+    horizontal field of view across."""
+    r = np.hypot(sx, sy * ty / t)
+    theta = r * math.atan(t)
+    k = np.where(r > 0, np.sin(theta) / np.maximum(r, 1e-12), math.atan(t))
+    return k * sx, k * sy * ty / t, np.cos(theta)
+
+
+#: Camera models a program implements instead of the pinhole: key -> (words, ray of film coordinates).
+PROJECTIONS = {
+    "cylindrical": ("a cylindrical panorama: the horizontal angle linear in the column (not its tangent)", _cylindrical),
+    "equirectangular": ("an equirectangular (latitude-longitude) camera: both angles linear in the pixel (not their "
+                        "tangents)", _equirectangular),
+    "fisheye": ("an equidistant fisheye: the angle from the view's centre linear in the distance from the image's "
+                "centre", _fisheye),
+}
+#: Radial distortion coefficients scanned (the film point scaled by 1 + k r^2, r^2 = sx^2 + sy^2): k > 0 a barrel.
+RADIAL = tuple(np.round(np.arange(-0.3, 0.31, 0.025), 3))
+
+
+def _projection(fit: Fit, wp: _Warp) -> list[Candidate]:
+    """Each of :data:`PROJECTIONS` (no parameter), and a radial lens distortion (k scanned, refined by a parabola):
+    in the camera's rays, or applied to the finished image (each pixel resampled bilinearly, as a lens effect for the
+    look is)."""
+    out = []
+    for key, (words, f) in PROJECTIONS.items():
+        dm = wp.at(wp.u, wp.v, project=f) - wp.identity
+        out.append(Candidate("camera_model", key, f"the camera {words}, where the assignment's is a pinhole", fit.delta(dm),
+                             0, value=key, change=dm))
+
+    def rays(k):
+        return wp.at(wp.u, wp.v, project=lambda sx, sy, t, ty: (sx * t * (1 + k * (sx * sx + sy * sy)),
+                                                                 sy * ty * (1 + k * (sx * sx + sy * sy)), 1.0)) - wp.identity
+
+    for where, img in (("in the camera's rays", rays), ("applied to the finished image", partial(_radial_image, fit))):
+        ks = [k for k in RADIAL if k != 0]
+        errs = [fit.delta(img(k)) for k in ks]
+        i = int(np.argmin(errs))
+        k = float(refine(np.asarray(ks), np.asarray(errs), i))
+        dm = img(k)
+        kind = "a barrel distortion (the edges drawn in)" if k > 0 else "a pincushion distortion (the edges pushed out)"
+        out.append(Candidate("camera_model", f"radial distortion {where}", f"a lens's radial distortion {where}, "
+                             f"{kind}: each pixel showing what lies at 1 {'+' if k > 0 else '-'} {_num(abs(k))} r^2 "
+                             "times its distance r from the centre (1 at the middle of a side)", fit.delta(dm), 1,
+                             value=k, change=dm))
+    return out
+
+
+def _radial_image(fit: Fit, k: float) -> np.ndarray:
+    """The reference resampled bilinearly at radius r (1 + k r^2) about the image's centre, minus the reference."""
+    from scipy.ndimage import map_coordinates
+
+    R = fit.R
+    h, w = R.shape[:2]
+    yy, xx = np.mgrid[0:h, 0:w].astype(np.float64)
+    ny, nx = (yy - (h - 1) / 2) / (h / 2), (xx - (w - 1) / 2) / (w / 2)
+    f = 1.0 + k * (nx * nx + ny * ny)
+    coords = np.stack([(h - 1) / 2 + ny * f * h / 2, (w - 1) / 2 + nx * f * w / 2])
+    return np.stack([map_coordinates(R[..., c], coords, order=1, mode="nearest") for c in range(3)], axis=-1) - R
+
+
 def camera(fit: Fit, inputs: Inputs) -> list[Candidate]:
     """The camera's field of view, its aspect, a pixel-centre offset, a rotation: each fitted by warping the fine image."""
     b = inputs.basis
@@ -206,7 +284,7 @@ def camera(fit: Fit, inputs: Inputs) -> list[Candidate]:
     out.append(Candidate("rotation", "camera rotation", f"the camera rotated by yaw {ya:+.1f}, pitch {pi_:+.1f} and roll "
                          f"{ro:+.1f} degrees (left, up and anticlockwise positive), as when its forward or up vector is "
                          "off", chi, 3, value=(ya, pi_, ro), change=dm))
-    return out
+    return out + _projection(fit, wp)
 
 
 

@@ -31,7 +31,7 @@ FAMILIES = (scale, colour, curves, albedo, surface_black, rendered, camera, cata
             light_sampling, light_facing, bad_pixels)
 
 #: The families that are mistakes of the camera (what the misregistration test of mcrt.grade.structure also sees).
-CAMERA_FAMILIES = frozenset({"fov", "aspect", "pixel_offset", "rotation", "eye"})
+CAMERA_FAMILIES = frozenset({"fov", "aspect", "pixel_offset", "rotation", "eye", "camera_model"})
 #: The families a TA counts as major mistakes whatever their share of the image: the camera, the scene's geometry
 #: (an object or the light missing, moved or resized) and its colours (mcrt.grade.scoring.unbiased_loss).
 MAJOR_FAMILIES = CAMERA_FAMILIES | {"object_missing", "object_moved", "light_position", "light_size", "albedo", "channels",
