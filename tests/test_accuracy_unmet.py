@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import mcrt  # noqa: F401  (before mitsuba and drjit)
-from accuracy_helpers import (H, W, build as _build, by_name, check_held_out_rule,
+from accuracy_helpers import (H, W, build as _build, by_name, check_builds, check_held_out_rule,
                               check_not_catalogued, check_specs, image as _image, plain as _plain)
 from mcrt.grade.accuracy import blind, cases, fresh, novel, outside, programs, unmet, unseen, untold, untried
 from mcrt.image_files import read_image, srgb_eotf, srgb_oetf
@@ -85,7 +85,8 @@ def test_post_processes_do_what_they_say():
     d = grain - x
     np.testing.assert_allclose(d[..., 0], d[..., 1], atol=1e-12)  # one number a pixel, in all channels
     eq = unmet._equalised(x)
-    assert eq.shape == x.shape and eq.max() == pytest.approx(1.0) and np.all(np.diff(eq.ravel()[np.argsort(x.ravel())]) >= 0)
+    order = np.argsort(x.ravel())
+    assert eq.shape == x.shape and eq.max() == pytest.approx(1.0) and np.all(np.diff(eq.ravel()[order]) >= 0)
     k = unmet._soft_knee(np.array([0.5, 0.8, 1.0, 20.0]))
     assert k[0] == 0.5 and k[1] == pytest.approx(0.8) and 0.8 < k[2] < k[3] < 1.0
     flat = np.full((H, W, 3), 0.3)
@@ -134,11 +135,4 @@ def test_first_hit_unlit_darkens_what_the_camera_sees():
                                   "mirror_cosine_weighted", "squares_written", "ok_mcrt_bidirectional",
                                   "ok_mcrt_plugin", "ok_mcrt_sobol"])
 def test_hand_ins_build(name, tmp_path):
-    from mcrt.grade.accuracy.cases import write_submission
-
-    case = _build(_by_name(name))
-    assert case.image.shape == (H, W, 3) and np.all(np.isfinite(case.image)) and case.image.min() >= -1e-3
-    path = write_submission(case, tmp_path)
-    assert read_image(path).mean.shape == (H, W, 3)
-    spec = case.spec
-    assert (tmp_path / "manifest.toml").read_text().startswith(f"spp = {spec.declared_spp or case.spp}")
+    check_builds(_by_name(name), tmp_path)
