@@ -62,6 +62,19 @@ def check_specs(klass, earlier, *, mistakes: int) -> None:
     assert len(klass.MISTAKES) >= mistakes and len(klass.CORRECT) == 8
 
 
+def check_builds(spec, folder, *, floor: float = -1e-3) -> None:
+    """``spec``'s hand-in builds at W x H (finite, no value under ``floor``), is written as a student's folder under
+    ``folder`` whose image reads back at that size, and its manifest declares the spp the spec does."""
+    from mcrt.grade.accuracy.cases import write_submission
+    from mcrt.image_files import read_image
+
+    case = build(spec)
+    assert case.image.shape == (H, W, 3) and np.all(np.isfinite(case.image)) and case.image.min() >= floor
+    path = write_submission(case, folder)
+    assert read_image(path).mean.shape == (H, W, 3)
+    assert (folder / "manifest.toml").read_text().startswith(f"spp = {spec.declared_spp or case.spp}")
+
+
 def plain(size: int, spp: int = 256) -> np.ndarray:
     """A correct Mitsuba render (the accuracy classes' default spec) at ``size`` x ``size`` pixels, ``spp`` samples."""
     from mcrt.grade.accuracy.cases import Spec

@@ -13,7 +13,7 @@ DEFAULT_ASSIGNMENT = "course2023"
 #: The classes by --class name: the module (under mcrt.grade.accuracy) holding its SPECS and CAUSES.
 CLASSES = {"scene": "cases", "outside": "outside", "programs": "programs", "fresh": "fresh",
            "blind": "blind", "unseen": "unseen", "untried": "untried",
-           "novel": "novel", "untold": "untold"}
+           "novel": "novel", "untold": "untold", "unmet": "unmet"}
 
 
 def register(sub) -> None:
@@ -29,9 +29,10 @@ def register(sub) -> None:
                    "fixed by category, mcrt.grade.accuracy.blind), 'unseen' (a sixth class of such mistakes, in "
                    "tracers and their output, written blind, mcrt.grade.accuracy.unseen), 'untried' (a seventh, in "
                    "tracers, scene input and output, written blind, mcrt.grade.accuracy.untried), 'novel' (an "
-                   "eighth, in tracers, scene input and output, written blind, mcrt.grade.accuracy.novel) or "
+                   "eighth, in tracers, scene input and output, written blind, mcrt.grade.accuracy.novel), "
                    "'untold' (a ninth class of such mistakes, in tracers, scene input and output, written blind, "
-                   "mcrt.grade.accuracy.untold) (default: scene)")
+                   "mcrt.grade.accuracy.untold) or 'unmet' (a tenth, in tracers, scene input and output, written "
+                   "blind, mcrt.grade.accuracy.unmet) (default: scene)")
     p.add_argument("--held-out", choices=("all", "only", "none"), default="all",
                    help="grade all cases, only the held-out ones, or none of them (default: all)")
     p.add_argument("--out", default=None, help=f"report folder (default: {DEFAULT_OUT}, or {DEFAULT_OUT}/CLASS "

@@ -164,7 +164,16 @@ SAME_MISTAKE: dict[str, tuple[str, ...]] = {
     # kept in each pixel's mean, as a preview pass's are. Not accepted: the light's radiance for a surface emitting,
     # the camera's causes for another camera's samples in the buffer.
     "object_emits": ("ambient", "albedo", "material"), "specular_unseen": ("material", "albedo"),
-    "buffer_reused": ("preview_kept",)}
+    "buffer_reused": ("preview_kept",),
+    # The unmet class (mcrt.grade.accuracy.unmet), fixed before any of it was graded: noise added after rendering is a
+    # step after rendering, as a blur or a sharpening filter is, in the same lines; no light sampled at the first hit
+    # is the light sampled wrongly (its light on surfaces wrong, the light seen right), behind a depth condition; a
+    # mirror's reflection weighted by a cosine is the mirror's material or colour wrong in the image; each pixel's
+    # sum divided by a nominal count is the sample count wrong in the mean; the buffer of squared samples written is
+    # a curve on the values (near the mean squared) at the line that saves them. Not accepted: the sample count for
+    # noise added after rendering (the count is right), the light's radiance for direct light missing.
+    "grain": ("blur", "sharpen"), "direct_missing": ("light_pdf", "depth"), "specular_weight": ("material", "albedo"),
+    "sample_count": ("spp_claim",), "wrong_buffer": ("tone_map", "encoding")}
 
 
 def is_named(cause: str, named: list[str]) -> bool:
