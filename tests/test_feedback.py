@@ -639,3 +639,73 @@ def test_too_much_noise_names_passes_that_repeat_one_seed(ctx):
     noise = next(t for t in res.tests if t.name == "noise")
     assert noise.status == "failed" and "noisier than 256 spp" in noise.output, noise.output
     assert {"spp_claim", "same_seed"} <= set(named_causes(res)[0]), noise.output
+
+
+def _floor_raised(s):
+    return replace(s, room=replace(s.room, floor_z=s.room.floor_z + 1.0))
+
+
+def _tetra_about_origin(s):
+    t = next(o for o in s.objects if o.name == "tetrahedron")
+    c = np.mean(t.vertices, axis=0)
+    return _objects(s, "tetrahedron", vertices=tuple(tuple(float(x) for x in np.asarray(v) - c) for v in t.vertices))
+
+
+def _tetra_yz(s):
+    t = next(o for o in s.objects if o.name == "tetrahedron")
+    return _objects(s, "tetrahedron", vertices=tuple((float(v[0]), float(v[2]), float(v[1])) for v in t.vertices))
+
+
+def _looking_back(s):
+    c = s.cameras["near"]
+    return replace(s, cameras={**s.cameras, "near": replace(c, forward=tuple(-float(x) for x in c.forward))})
+
+
+@pytest.mark.parametrize("case, seed, family, words", [
+    ("floor_raised", 70, "object_moved", "the floor at z ="),
+    ("tetra_about_origin", 71, "object_moved", "the tetrahedron about the origin"),
+    ("tetra_yz", 72, "object_moved", "read in the order (x, z, y)"),
+    ("looking_back", 73, "rotation", "the camera looking the opposite way"),
+])
+def test_geometry_typed_wrong_is_named(ctx, case, seed, family, words):
+    """Mitsuba renders (1024 spp) of the scene with the floor 1 higher, the tetrahedron left about the origin (model
+    space), its vertices read (x, z, y), and the camera's forward vector negated: each is claimed, in those words."""
+    edit = {"floor_raised": _floor_raised, "tetra_about_origin": _tetra_about_origin, "tetra_yz": _tetra_yz,
+            "looking_back": _looking_back}[case]
+    res = grade_image(case, ctx, [_mitsuba(edit(load_scene()), seed)], spp=1024)
+    ex = res.details["explanation"]
+    assert ex["verdict"] == "claimed" and ex["family"] == family and words in ex["sentence"], ex["sentence"]
+    assert res.score < res.max_score
+
+
+def test_the_direct_light_left_out_is_named(ctx):
+    """Mitsuba's renders (seed 74, 1024 spp) at path depth 8 minus its depth-2 render plus its depth-1 render: the
+    image of a tracer that samples no light at the first surface hit. Claimed as the direct light missing."""
+    s = load_scene()
+    d = {k: _render_spec(Spec("t", None, spp=1024), s, width=RES, height=RES, max_depth=k, seed=74 + i).mean
+         for i, k in enumerate((8, 2, 1))}
+    res = grade_image("no_direct", ctx, [d[8] - d[2] + d[1]], spp=1024)
+    ex = res.details["explanation"]
+    assert ex["verdict"] == "claimed" and ex["family"] == "direct_missing", ex["sentence"]
+    assert named_causes(res)[0] == ["direct_missing"]
+
+
+@pytest.mark.parametrize("post, family, words", [
+    ("black_level", "tone_curve", "a black level of 0.01 subtracted"),
+    ("barrel", "camera_model", "barrel distortion"),
+    ("cylindrical", "camera_model", "cylindrical panorama"),
+])
+def test_post_processing_and_camera_models_are_named(ctx, post, family, words):
+    """A Mitsuba render (seed 76, 1024 spp) with a black level of 0.01 subtracted, or put through the untold class's
+    barrel distortion (k = 0.06, written blind to the grader); and its cylindrical panorama of the scene (Mitsuba,
+    seed 77): each is claimed, in its words."""
+    from mcrt.grade.accuracy import untold
+
+    if post == "cylindrical":
+        img = untold._cylindrical(np.zeros((RES, RES, 3)), spp=256, seed=77)
+    else:
+        img = _mitsuba(load_scene(), 76)
+        img = np.maximum(img - 0.01, 0.0) if post == "black_level" else untold._barrel(img)
+    res = grade_image(post, ctx, [img], spp=256 if post == "cylindrical" else 1024)
+    ex = res.details["explanation"]
+    assert ex["verdict"] == "claimed" and ex["family"] == family and words in ex["sentence"], ex["sentence"]

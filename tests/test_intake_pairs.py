@@ -1,6 +1,6 @@
 """File mistakes named at intake and calibration (issue 27): a PFM header declaring the other byte order, a 16-bit PNG
 little-endian or holding 8-bit codes times 256, 8-bit codes cast without a clip, linear values rounded to 8 bits
-before the sRGB curve, and a pair of renders made with one
+before the sRGB curve, float values rounded to decimals, a PNG of sRGB's exponent alone, and a pair of renders made with one
 seed.
 
 The hand-ins are Mitsuba renders (fixed seeds) written the way a student's program writes them; they are graded by
@@ -206,6 +206,36 @@ def test_linear_values_rounded_to_8_bits_before_the_curve_are_named(ctx, renders
         assert linear.status == "failed" and words in linear.output, linear.output
         assert code in res.details["encoding"]["codes"] and "encoding" in named_causes(res)[0]
         assert res.score < res.max_score
+
+
+@pytest.mark.parametrize("decimals", [2, None])
+def test_values_rounded_to_decimals_are_named(ctx, renders, tmp_path, decimals):
+    """A float file of np.round(render, 2): every value a multiple of 0.01, which the bias test does not see (the
+    rounding averages out); named under the linear criterion. The render as it is: nothing said."""
+    from mcrt.image_files import write_pfm
+
+    img = renders[0] if decimals is None else np.round(renders[0], decimals)
+    res = _grade(ctx, tmp_path / "student", {"render.pfm": lambda q: write_pfm(q, img.astype(np.float32))})
+    linear = _test(res, "linear")
+    if decimals is None:
+        assert linear.status == "passed" and "codes" not in res.details["encoding"], linear.output
+    else:
+        assert linear.status == "failed" and "rounded to 2 decimals" in linear.output, linear.output
+        assert res.details["encoding"]["codes"] == ["decimals_2"] and "encoding" in named_causes(res)[0]
+        assert res.score < res.max_score
+
+
+def test_a_png_of_the_srgb_exponent_alone_loses_the_encoding_points(ctx, renders, tmp_path):
+    """An 8-bit PNG of v ** (1 / 2.4) (sRGB's exponent without its linear segment): the curve is found and named, and
+    it loses the criterion's points although the course accepts a gamma of 2.2 (png_gamma_loss 0)."""
+    from PIL import Image
+
+    codes = np.rint(np.clip(renders[0], 0, 1) ** (1 / 2.4) * 255).astype(np.uint8)
+    res = _grade(ctx, tmp_path / "student", {"render.png": lambda q: Image.fromarray(codes, "RGB").save(q)})
+    linear = _test(res, "linear")
+    assert res.details["encoding"]["detected"] == "gamma2.4"
+    assert linear.status == "failed" and "a gamma of 2.4" in linear.output and "encoding" in named_causes(res)[0]
+    assert res.score < res.max_score
 
 
 def test_implausible_share_counts_what_no_radiance_is():

@@ -396,6 +396,9 @@ PNG_CURVES = {
     "srgb": (srgb_eotf, "the sRGB curve"),
     "gamma2.2": (lambda c: c**2.2, "a gamma of 2.2 (x^(1/2.2))"),
     "gamma2": (lambda c: c * c, "a gamma of 2 (a square root)"),
+    # sRGB's exponent without its linear segment and offset (x^(1/2.4)), as a program that copies the exponent alone.
+    "gamma2.4": (lambda c: c**2.4, "a gamma of 2.4 (x^(1/2.4): the sRGB curve's exponent without its linear segment "
+                 "and offset)"),
     "linear": (lambda c: c, "no curve (linear values)"),
 }
 

@@ -44,6 +44,8 @@ CAUSE_OF: dict[str, tuple[str, ...]] = {
     "aspect": ("camera_fov",),
     # Another camera model than the pinhole (a panorama, a fisheye, a lens's distortion; added after untold was graded).
     "camera_model": ("camera_model",),
+    # Added after unmet was graded: the direct light missing at the first hit.
+    "direct_missing": ("direct_missing",),
     # A shift of the image by a fraction of a pixel is what a small rotation does too; the words name an image
     # resampled with an offset (every other pixel kept) beside pixel centres off.
     "pixel_offset": ("pixel_offset", "camera_rotation", "resampling"), "depth": ("depth",), "emitter_hidden": ("light_hidden",),

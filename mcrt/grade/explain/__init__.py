@@ -17,13 +17,14 @@ albedo         each surface's albedo per channel            mcrt renders at albe
                                                             interpolation per channel
 reflectance    the mirror's reflectance per channel         the same with 0, 1/2 and 1
 light          the light moved along x, y, z; its size      mcrt renders at a few offsets
-camera         field of view, rotation, pixel-centre offset, a 4x finer mcrt image warped by the
-               aspect; another camera model (cylinder,      pinhole homography (or the other
-               latitude-longitude, fisheye, a lens's        model's rays), box-filtered
-               radial distortion)
-eye            the camera's eye moved                       mcrt renders at a few offsets
-object         missing, moved along x, y, z, or its         mcrt renders
-               coordinates read in another order
+camera         field of view, rotation, pixel-centre        a 4x finer mcrt image warped by the
+               offset, aspect; another camera model         pinhole homography (or the other
+               (cylinder, latitude-longitude, fisheye, a    model's rays), box-filtered
+               lens's radial distortion)
+eye            the camera's eye moved; looking back         mcrt renders at a few offsets
+object         missing, moved along x, y, z, its            mcrt renders
+               coordinates read in another order, or left
+               about the origin
 plane          the floor or the ceiling at another height   mcrt renders at a few offsets
 depth          paths cut at depth k                         mcrt renders at max depth k
 emitter        the light black where seen directly          R minus the max-depth-1 image
@@ -37,7 +38,8 @@ resampling     rendered at 1/k the resolution and enlarged  closed form on R
 material       an object rendered with the other material   mcrt renders at 0, 1/2, 1
 object_size    an object's size                             mcrt renders at a few scales
 surface_black  a surface black (missing, albedo 0, normals) the albedo renders at 0
-light_twice    direct light, or all light, counted twice    the path-depth renders 1 and 2
+light_twice    direct light, or all light, counted twice;   the path-depth renders 1 and 2
+               the direct light missing
 light_facing   the light emitting on its other side         one mcrt render
 bad_pixels     pixels (or a block) written as 0             closed form on R
 ============== ============================================ ===================================

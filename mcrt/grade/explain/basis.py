@@ -137,6 +137,13 @@ def _object_variants(scene: Scene) -> dict[str, list[tuple[object, Scene]]]:
             if ok:
                 swaps.append((order, replace(scene, objects=tuple(moved if x.name == o.name else x for x in scene.objects))))
         out[f"swapped:{o.name}"] = swaps
+        # Left in model space: the object about the origin, its placement never applied.
+        centre = np.asarray(o.center if hasattr(o, "center") else np.mean(o.vertices, axis=0), float)
+        if np.any(centre != 0) and scene.room.contains((0.0, 0.0, 0.0), getattr(o, "radius", 0.0)):
+            moved = (replace(o, center=(0.0, 0.0, 0.0)) if hasattr(o, "center") else
+                     replace(o, vertices=tuple(tuple(float(x) for x in np.asarray(v) - centre) for v in o.vertices)))
+            out[f"origin:{o.name}"] = [(None, replace(scene, objects=tuple(moved if x.name == o.name else x
+                                                                         for x in scene.objects)))]
     return out
 
 
@@ -163,6 +170,9 @@ def _eye_variants(scene: Scene, camera: str) -> dict[str, list[tuple[float, Scen
             if scene.room.contains(c2.eye, 1e-3 * scene.room.size()):
                 vs.append((d, replace(scene, cameras={**scene.cameras, camera: c2})))
         out[f"eye_{AXES[axis]}"] = vs
+    # The forward vector's sign flipped: the camera looking back (its right vector flips with it).
+    out["eye_back"] = [("back", replace(scene, cameras={**scene.cameras, camera: replace(
+        c, forward=tuple(-float(x) for x in c.forward))}))]
     return out
 
 

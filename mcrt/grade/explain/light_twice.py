@@ -1,5 +1,5 @@
 r"""Light counted twice: a direct-lighting pass added to a path tracer that has one, or light sampling and
-emitter hits both counted at every bounce (no MIS).
+emitter hits both counted at every bounce (no MIS); or the direct light left out.
 
 With :math:`D_k` mcrt's render cut at depth k (the basis's path-depth
 renders, Mitsuba's convention: :math:`D_1` is the light seen directly,
@@ -8,7 +8,9 @@ model images are
 
 * direct light counted again: :math:`R + (D_2 - D_1)`;
 * light counted twice at every bounce: :math:`R + (R - D_1)`, every
-  path's light doubled but the light seen directly (it has no light sample).
+  path's light doubled but the light seen directly (it has no light sample);
+* the direct light missing (no light sample at the first surface hit):
+  :math:`R - (D_2 - D_1)`.
 
 Neither has a free parameter: a free weight k of the added part would fit
 any change of the indirect light (a path depth off by one is k = -1 %),
@@ -47,6 +49,10 @@ def light_twice(fit: Fit, inputs: Inputs) -> list[Candidate]:
             ("light twice every bounce", base - d1, "the light counted twice at every bounce (light sampling and "
              "paths that hit the light both counted, with no MIS weights), all but the light seen directly")):
         out.append(Candidate("direct_twice", name, what, fit.delta(change), 0, value={"counted": 2}, change=change))
+    change = d1 - d2
+    out.append(Candidate("direct_missing", "direct light missing", "the direct light missing (no light sample at the "
+                         "first surface the camera sees: it is lit only by light that has bounced)", fit.delta(change),
+                         0, value={"counted": 0}, change=change))
     return out
 
 

@@ -102,6 +102,9 @@ def rendered(fit: Fit, inputs: Inputs) -> list[Candidate]:
     v = b.values
     best_moved: dict[str, Candidate] = {}
     for key, nodes in b.nodes.items():
+        if key == "eye_back":
+            out.append(_looking_back(fit, b.base, nodes[0][1]))
+            continue
         scores = [fit.delta(img.astype(np.float64) - b.base) for _, img in nodes]
         i = int(np.argmin(scores))
         val, img = nodes[i]
@@ -147,6 +150,16 @@ def rendered(fit: Fit, inputs: Inputs) -> list[Candidate]:
             z = v[name] + val
             cand = Candidate("object_moved", f"the {name}'s height", f"the {name} at z = {_num(z)} where the scene says "
                              f"{_num(v[name])}", scores[i], 1, value=(name, z))
+        elif fam == "origin":
+            name = key.split(":")[1]
+            cand = Candidate("object_moved", f"{name} at the origin", f"the {name} about the origin (its coordinates "
+                             "taken in model space: its placement in the room never applied)", scores[i], 0,
+                             value=(name, "origin"))
+            if name in best_moved and best_moved[name].chi2 <= cand.chi2:
+                continue
+            cand.change = dm
+            best_moved[name] = cand
+            continue
         elif key.startswith("eye_"):
             cand = Candidate("eye", "the camera's eye", f"the camera's eye moved by {val:+g} along {key[-1]} (at "
                              f"{_fmt(_shift(v['eye'], AXES.index(key[-1]), val), 2)} where the scene says "
@@ -167,6 +180,22 @@ def rendered(fit: Fit, inputs: Inputs) -> list[Candidate]:
                              "sees it directly (emission left out at the first hit)", fit.delta(dm), 0, change=dm))
         out += _emitter_seen(fit, emit[1].astype(np.float64), v.get("light_radiance", (1.0, 1.0, 1.0)))
     return out
+
+
+def _looking_back(fit: Fit, base: np.ndarray, back: np.ndarray) -> Candidate:
+    """The camera looking the opposite way: its render, as it is or mirrored left to right (a right vector that did
+    not flip with the forward one), whichever fits better."""
+    best = None
+    for mirrored, img in ((False, back), (True, back[:, ::-1])):
+        dm = img.astype(np.float64) - base
+        chi = fit.delta(dm)
+        if best is None or chi < best[0]:
+            best = (chi, mirrored, dm)
+    chi, mirrored, dm = best
+    return Candidate("rotation", "the camera looking back", "the camera looking the opposite way (its forward vector's "
+                     "sign flipped, so the image shows the room behind it" + (", mirrored left to right)" if mirrored
+                                                                            else ")"),
+                     chi, 0, value="back", change=dm)
 
 
 def _emitter_seen(fit: Fit, E: np.ndarray, Le) -> list[Candidate]:

@@ -75,6 +75,12 @@ def encoding(g: Grading, hand: Hand) -> None:
             g.rubric.failed("linear", "; also, ".join(list(wrong.values()) + before))
     else:
         _hdr_encoding(g, hand)
+        k = _decimals(hand.loaded)
+        if k:
+            g.details.setdefault("encoding", {})["codes"] = [f"decimals_{k}"]
+            t = g.rubric.results.get("linear")
+            before = [t.output] if t is not None and t.status == "failed" else []
+            g.rubric.failed("linear", "; also, ".join([DECIMALS.format(k=k, step=f"{10.0 ** -k:g}")] + before))
 
 
 TIMES_256 = ("every 16-bit code is a multiple of 256: 8-bit codes times 256, where 16 bits hold them times 257 (white "
@@ -90,6 +96,9 @@ ROUNDED_FIRST = ("the dark codes are only those that linear values rounded to 8 
                  "apply the curve to the floating-point values, then round to 8 bits")
 CAST_FIRST = ("every code is 0 or 255: the values were cast to integers before they were scaled by 255 (a cast turns "
               "everything below 1 into 0, and the light into 1); scale by 255, round, then cast")
+
+DECIMALS = ("every value is a multiple of {step}: the values were rounded to {k} decimals before saving (as "
+            "round(v, {k}) does), so the shadows are in steps of {step}; save the floating-point values as they are")
 
 #: The dark codes the test of :func:`_rounded_first` looks at, and how many it needs.
 _DARK_CODES, _MIN_DARK = (1, 40), 20
@@ -110,8 +119,13 @@ def _codes_times_256(loaded) -> bool:
     return True
 
 
+#: Curves that are the sRGB curve copied wrongly, not a display encoding chosen: they lose the criterion's points
+#: whatever ``png_gamma_loss`` (which accepts a gamma of 2.2 or 2) says.
+MISTAKEN_CURVES = ("gamma2.4",)
+
 #: The codes a transfer curve gives a value (the inverses of mcrt.grade.checks.PNG_CURVES' decodings).
-_ENCODE = {"srgb": srgb_oetf, "gamma2.2": lambda x: x ** (1 / 2.2), "gamma2": np.sqrt, "linear": lambda x: x}
+_ENCODE = {"srgb": srgb_oetf, "gamma2.2": lambda x: x ** (1 / 2.2), "gamma2": np.sqrt,
+           "gamma2.4": lambda x: x ** (1 / 2.4), "linear": lambda x: x}
 
 
 def _wrapped(g: Grading, hand: Hand) -> bool:
@@ -134,6 +148,26 @@ def _wrapped(g: Grading, hand: Hand) -> bool:
     off = np.abs(codes - wrapped)
     match = np.all(np.minimum(off, 256 - off) <= tol, axis=-1)
     return bool(np.mean(np.any(codes < 250, axis=-1)) >= 0.5 and np.mean(match) >= 0.8)
+
+
+def _decimals(loaded) -> int:
+    """k where a float file's every value is a multiple of 10^-k (k = 1, 2, 3), within its precision, and at least
+    50 non-zero values are small enough (below 10^(2-k)) for that to be no accident of the precision: values rounded
+    to k decimals. A render's values are such a multiple, to a half float's precision, with a chance of about 1 in
+    50 each. 0 where none."""
+    if loaded.fmt not in ("float", "half"):
+        return 0
+    x = np.concatenate([np.asarray(i, np.float64).ravel() for i in loaded.images])
+    x = np.abs(x[np.isfinite(x) & (x != 0)])
+    for k in (1, 2, 3):
+        step = 10.0 ** -k
+        small = x[x < 100 * step]
+        if small.size < 50:
+            continue
+        off = np.abs(small / step - np.rint(small / step)) * step
+        if np.all(off <= small * 2.0 ** -10 + 1e-7):
+            return k
+    return 0
 
 
 def _rounded_first(g: Grading, hand: Hand) -> bool:
@@ -187,7 +221,10 @@ def _png_curve(g: Grading, hand: Hand):
     else:
         text = (f"written with {what} rather than the sRGB curve; decoded with it (the sRGB curve is the standard "
                 "one for 8-bit files)")
-        if th.png_gamma_loss > 0:
+        if curve in MISTAKEN_CURVES:  # no display encoding a program chooses: the sRGB curve copied wrongly
+            rub.failed("linear", text)
+            hand.corrected.append("linear")
+        elif th.png_gamma_loss > 0:
             rub.failed("linear", text, loss=th.png_gamma_loss)
             hand.corrected.append("linear")
         else:
