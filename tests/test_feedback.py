@@ -709,3 +709,14 @@ def test_post_processing_and_camera_models_are_named(ctx, post, family, words):
     res = grade_image(post, ctx, [img], spp=256 if post == "cylindrical" else 1024)
     ex = res.details["explanation"]
     assert ex["verdict"] == "claimed" and ex["family"] == family and words in ex["sentence"], ex["sentence"]
+
+
+def test_the_light_below_the_floor_is_named_its_height_sign(ctx):
+    """A Mitsuba render (seed 78, 1024 spp) with the light's height typed -4.99 for 4.99 (just above the floor, lighting
+    it): claimed as the light's z of the wrong sign, not as a darker image."""
+    c = load_scene().light.center
+    img = _mitsuba(light(move=(0.0, 0.0, -2.0 * c[2]))(load_scene()), 78)
+    res = grade_image("light_sign", ctx, [img], spp=1024)
+    ex = res.details["explanation"]
+    assert ex["verdict"] == "claimed" and "the light's z typed with the wrong sign" in ex["sentence"], ex["sentence"]
+    assert named_causes(res)[0] == ["light_position"]

@@ -195,7 +195,11 @@ _UNTOLD = ("The wrong renders are a ninth class of mistakes in students' tracers
            "samples; the noise words naming passes that repeat one seed; black pixels that are one object's worded "
            "as that object black (for a mirror, paths through it never counted); the aspect family only at aspects "
            "a program hard-codes (4:3, 16:9, ...), not a free factor; the light seen directly at down to 1/50 of its "
-           "radiance (clamped to 1). Both rows here are of rules that saw the class.")
+           "radiance (clamped to 1); and, in the round after (commits a65f5db to d63c25f, before the unmet class was "
+           "graded): 8-bit codes of linear values rounded before the curve, or cast before the scaling by 255; a black "
+           "level subtracted; an object's coordinates read in another order; the floor or the ceiling at another "
+           "height; a cylindrical, equirectangular or fisheye camera and a radial lens distortion. Both rows here are "
+           "of rules that saw the class.")
 
 
 _UNMET = ("The wrong renders are a tenth class of mistakes in students' tracers, their scene input and their output "
@@ -205,8 +209,14 @@ _UNMET = ("The wrong renders are a tenth class of mistakes in students' tracers,
           "combined, or correct renders written as students' programs write files. The correct ones come from Mitsuba "
           "and mcrt in ways no other class used. *Named right*, *confidently wrong*, *partial or none*: as for the "
           "other classes. **Held-out** cases (marked H) were fixed by the rule stated in the module (every other case "
-          "of each category) before any case was graded. Its author reported counts only (no mistake named); the "
-          "class is to be graded once, on the grader's rules as they were frozen before that grading.")
+          "of each category) before any case was graded. Its author reported counts only (no mistake named) before "
+          "the grader's rules were frozen at commit 089af9b (after a false-alarm report on them: 0 of 153); the whole "
+          "class was then graded once, on them (report at commit af65c93: held out, 2 of 12 named right, 0 of 12 "
+          "confidently wrong, 10 of 12 detected; all 28, 3 named right, 1 confidently wrong, 24 detected; 0 of 8 "
+          "correct hand-ins lost points). Changes made after that grading, with the whole class in view: the direct "
+          "light missing at the first surface hit; an object left about the origin (model space); the camera looking "
+          "back; float values rounded to decimals, and a PNG of the sRGB curve's exponent alone, named under the "
+          "encoding criterion (the latter losing its points). Both rows here are of rules that saw the class.")
 
 
 def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta: dict, gradescope: list[dict],

@@ -16,7 +16,8 @@ albedo         each surface's albedo per channel            mcrt renders at albe
                                                             and the scene's, Lagrange
                                                             interpolation per channel
 reflectance    the mirror's reflectance per channel         the same with 0, 1/2 and 1
-light          the light moved along x, y, z; its size      mcrt renders at a few offsets
+light          the light moved along x, y, z; its size; a   mcrt renders at a few offsets
+               coordinate of its centre of the wrong sign
 camera         field of view, rotation, pixel-centre        a 4x finer mcrt image warped by the
                offset, aspect; another camera model         pinhole homography (or the other
                (cylinder, latitude-longitude, fisheye, a    model's rays), box-filtered

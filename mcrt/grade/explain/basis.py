@@ -102,6 +102,10 @@ def _light_variants(scene: Scene) -> dict[str, list[tuple[float, Scene]]]:
         out[f"light_{AXES[axis]}"] = [(d, replace(scene, light=replace(lt, center=_shift(lt.center, axis, d))))
                                       for d in offsets]
     out["light_size"] = [(f, replace(scene, light=replace(lt, size=(lt.size[0] * f, lt.size[1] * f)))) for f in LIGHT_SIZES]
+    # A coordinate of the centre typed with the wrong sign (its height -4.99 for 4.99).
+    out["light_sign"] = [(axis, replace(scene, light=replace(lt, center=tuple(-float(x) if i == axis else float(x)
+                                                                          for i, x in enumerate(lt.center)))))
+                         for axis in range(3) if lt.center[axis] != 0]
     return {k: [(d, s) for d, s in v if _light_inside(s)] for k, v in out.items()}
 
 

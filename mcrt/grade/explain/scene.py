@@ -110,12 +110,17 @@ def rendered(fit: Fit, inputs: Inputs) -> list[Candidate]:
         val, img = nodes[i]
         dm = img.astype(np.float64) - b.base
         fam = key.split(":")[0]
-        if key.startswith("light_") and key != "light_size":
+        if key.startswith("light_") and key not in ("light_size", "light_sign"):
             axis = AXES.index(key[-1])
             c = _shift(v["light_center"], axis, val)
             text = (f"the light moved by {val:+g} along {key[-1]} (centre {_fmt(c, 2)} where the scene says "
                     f"{_fmt(v['light_center'], 2)})")
             cand = Candidate("light_position", f"light moved along {key[-1]}", text, scores[i], 1, value=c)
+        elif key == "light_sign":
+            c = tuple(-x if k == val else x for k, x in enumerate(v["light_center"]))
+            cand = Candidate("light_position", "the light's coordinate's sign", f"the light's {AXES[val]} typed with "
+                             f"the wrong sign (centre {_fmt(c, 2)} where the scene says {_fmt(v['light_center'], 2)})",
+                             scores[i], 0, value=c)
         elif key == "light_size":
             s = tuple(x * val for x in v["light_size"])
             cand = Candidate("light_size", "the light's size", f"the light's size {_num(s[0])} x {_num(s[1])} where "
