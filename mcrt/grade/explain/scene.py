@@ -109,73 +109,16 @@ def rendered(fit: Fit, inputs: Inputs) -> list[Candidate]:
         i = int(np.argmin(scores))
         val, img = nodes[i]
         dm = img.astype(np.float64) - b.base
+        cand = _node_candidate(key, val, scores[i], v, b.max_depth)
+        if cand is None:
+            continue
         fam = key.split(":")[0]
-        if key.startswith("light_") and key not in ("light_size", "light_sign"):
-            axis = AXES.index(key[-1])
-            c = _shift(v["light_center"], axis, val)
-            text = (f"the light moved by {val:+g} along {key[-1]} (centre {_fmt(c, 2)} where the scene says "
-                    f"{_fmt(v['light_center'], 2)})")
-            cand = Candidate("light_position", f"light moved along {key[-1]}", text, scores[i], 1, value=c)
-        elif key == "light_sign":
-            c = tuple(-x if k == val else x for k, x in enumerate(v["light_center"]))
-            cand = Candidate("light_position", "the light's coordinate's sign", f"the light's {AXES[val]} typed with "
-                             f"the wrong sign (centre {_fmt(c, 2)} where the scene says {_fmt(v['light_center'], 2)})",
-                             scores[i], 0, value=c)
-        elif key == "light_size":
-            s = tuple(x * val for x in v["light_size"])
-            cand = Candidate("light_size", "the light's size", f"the light's size {_num(s[0])} x {_num(s[1])} where "
-                             f"the scene says {_num(v['light_size'][0])} x {_num(v['light_size'][1])} (same radiance)",
-                             scores[i], 1, value=s)
-        elif fam == "missing":
-            name = key.split(":")[1]
-            cand = Candidate("object_missing", f"{name} missing", f"the {name} missing from the image", scores[i], 0,
-                             value=name)
-        elif fam == "moved":
-            name, ax = key.split(":")[1:]
-            cand = Candidate("object_moved", f"{name} moved", f"the {name} moved by {val:+g} along {ax}", scores[i], 1,
-                             value=(name, ax, val))
-            if name in best_moved and best_moved[name].chi2 <= cand.chi2:
-                continue
-            cand.change = dm
-            best_moved[name] = cand
-            continue
-        elif fam == "swapped":
-            name = key.split(":")[1]
-            order = "(" + ", ".join(AXES[i] for i in val) + ")"
-            cand = Candidate("object_moved", f"{name}'s axes swapped", f"the {name}'s coordinates read in the order "
-                             f"{order} (x, y and z mixed up, as a program written for y up does)", scores[i], 0,
-                             value=(name, order))
-            if name in best_moved and best_moved[name].chi2 <= cand.chi2:
-                continue
-            cand.change = dm
-            best_moved[name] = cand
-            continue
-        elif fam == "plane":
-            name = key.split(":")[1]
-            z = v[name] + val
-            cand = Candidate("object_moved", f"the {name}'s height", f"the {name} at z = {_num(z)} where the scene says "
-                             f"{_num(v[name])}", scores[i], 1, value=(name, z))
-        elif fam == "origin":
-            name = key.split(":")[1]
-            cand = Candidate("object_moved", f"{name} at the origin", f"the {name} about the origin (its coordinates "
-                             "taken in model space: its placement in the room never applied)", scores[i], 0,
-                             value=(name, "origin"))
-            if name in best_moved and best_moved[name].chi2 <= cand.chi2:
-                continue
-            cand.change = dm
-            best_moved[name] = cand
-            continue
-        elif key.startswith("eye_"):
-            cand = Candidate("eye", "the camera's eye", f"the camera's eye moved by {val:+g} along {key[-1]} (at "
-                             f"{_fmt(_shift(v['eye'], AXES.index(key[-1]), val), 2)} where the scene says "
-                             f"{_fmt(v['eye'], 2)})", scores[i], 1, value=val)
-        elif key == "depth":
-            cand = Candidate("depth", "path depth", f"paths cut at depth {'unbounded' if val == -1 else val} "
-                             f"(Mitsuba's convention, where the assignment asks for {b.max_depth})", scores[i], 1,
-                             value=val)
-        else:
-            continue
         cand.change = dm
+        if fam in ("moved", "swapped", "origin"):  # one placement of each object: the best
+            name = key.split(":")[1]
+            if name not in best_moved or cand.chi2 < best_moved[name].chi2:
+                best_moved[name] = cand
+            continue
         out.append(cand)
     out += list(best_moved.values())
     emit = dict(b.nodes.get("depth", []))
@@ -185,6 +128,63 @@ def rendered(fit: Fit, inputs: Inputs) -> list[Candidate]:
                              "sees it directly (emission left out at the first hit)", fit.delta(dm), 0, change=dm))
         out += _emitter_seen(fit, emit[1].astype(np.float64), v.get("light_radiance", (1.0, 1.0, 1.0)))
     return out
+
+
+def _node_candidate(key: str, val, chi2: float, v: dict, max_depth: int) -> Candidate | None:
+    """The candidate of one rendered variation (a basis node's key and value, its chi^2), in words; None for a key
+    no family words."""
+    fam = key.split(":")[0]
+    if key.startswith("light_") and key not in ("light_size", "light_sign"):
+        axis = AXES.index(key[-1])
+        c = _shift(v["light_center"], axis, val)
+        text = (f"the light moved by {val:+g} along {key[-1]} (centre {_fmt(c, 2)} where the scene says "
+                f"{_fmt(v['light_center'], 2)})")
+        cand = Candidate("light_position", f"light moved along {key[-1]}", text, chi2, 1, value=c)
+    elif key == "light_sign":
+        c = tuple(-x if k == val else x for k, x in enumerate(v["light_center"]))
+        cand = Candidate("light_position", "the light's coordinate's sign", f"the light's {AXES[val]} typed with "
+                         f"the wrong sign (centre {_fmt(c, 2)} where the scene says {_fmt(v['light_center'], 2)})",
+                         chi2, 0, value=c)
+    elif key == "light_size":
+        s = tuple(x * val for x in v["light_size"])
+        cand = Candidate("light_size", "the light's size", f"the light's size {_num(s[0])} x {_num(s[1])} where "
+                         f"the scene says {_num(v['light_size'][0])} x {_num(v['light_size'][1])} (same radiance)",
+                         chi2, 1, value=s)
+    elif fam == "missing":
+        name = key.split(":")[1]
+        cand = Candidate("object_missing", f"{name} missing", f"the {name} missing from the image", chi2, 0,
+                         value=name)
+    elif fam == "moved":
+        name, ax = key.split(":")[1:]
+        cand = Candidate("object_moved", f"{name} moved", f"the {name} moved by {val:+g} along {ax}", chi2, 1,
+                         value=(name, ax, val))
+    elif fam == "swapped":
+        name = key.split(":")[1]
+        order = "(" + ", ".join(AXES[i] for i in val) + ")"
+        cand = Candidate("object_moved", f"{name}'s axes swapped", f"the {name}'s coordinates read in the order "
+                         f"{order} (x, y and z mixed up, as a program written for y up does)", chi2, 0,
+                         value=(name, order))
+    elif fam == "plane":
+        name = key.split(":")[1]
+        z = v[name] + val
+        cand = Candidate("object_moved", f"the {name}'s height", f"the {name} at z = {_num(z)} where the scene says "
+                         f"{_num(v[name])}", chi2, 1, value=(name, z))
+    elif fam == "origin":
+        name = key.split(":")[1]
+        cand = Candidate("object_moved", f"{name} at the origin", f"the {name} about the origin (its coordinates "
+                         "taken in model space: its placement in the room never applied)", chi2, 0,
+                         value=(name, "origin"))
+    elif key.startswith("eye_"):
+        cand = Candidate("eye", "the camera's eye", f"the camera's eye moved by {val:+g} along {key[-1]} (at "
+                         f"{_fmt(_shift(v['eye'], AXES.index(key[-1]), val), 2)} where the scene says "
+                         f"{_fmt(v['eye'], 2)})", chi2, 1, value=val)
+    elif key == "depth":
+        cand = Candidate("depth", "path depth", f"paths cut at depth {'unbounded' if val == -1 else val} "
+                         f"(Mitsuba's convention, where the assignment asks for {max_depth})", chi2, 1,
+                         value=val)
+    else:
+        return None
+    return cand
 
 
 def _looking_back(fit: Fit, base: np.ndarray, back: np.ndarray) -> Candidate:

@@ -101,24 +101,28 @@ def tone_curve(fit: Fit, inputs: Inputs) -> list[Candidate]:
         out.append(Candidate("tone_curve", f"tone map {key}", f"the values {words}{exp} before saving",
                               errs[i], 1 if len(scan) > 1 else 0, value={"curve": key, "exposure": k}, change=f(k * R) - fit.R))
     out += _reinhard_extended(fit, R)
-    out.append(_offset(fit, R))
+    out += _offset(fit, R)
     out.append(_isotonic(fit))
     return out
 
 
-def _offset(fit: Fit, R: np.ndarray) -> Candidate:
+def _offset(fit: Fit, R: np.ndarray) -> list[Candidate]:
     """A constant b subtracted from every value and clipped at 0 (a black level), or added (b < 0): b fitted within
-    half the image's median value, one parameter."""
+    half the image's median value, one parameter; none where b is below 1 % of that bound."""
     from scipy.optimize import minimize_scalar
 
     bound = 0.5 * float(np.median(R[fit.ok])) if fit.ok.any() else 0.0
+    if bound <= 0:
+        return []
     b = float(minimize_scalar(lambda b: fit.model(np.maximum(R - b, 0.0)), bounds=(-bound, bound),
-                              method="bounded", options={"xatol": 1e-3 * max(bound, 1e-12)}).x) if bound > 0 else 0.0
+                              method="bounded", options={"xatol": 1e-3 * bound}).x)
+    if abs(b) < 0.01 * bound:  # below 0.5 % of the median value: no offset a program applies, and no change to name
+        return []
     words = (f"a black level of {_num(b)} subtracted from every value (clipped at 0)" if b >= 0 else
              f"a constant {_num(-b)} added to every value")
     change = np.maximum(R - b, 0.0) - fit.R
-    return Candidate("tone_curve", "offset", f"the values with {words} before saving", fit.delta(change), 1,
-                     value={"curve": "offset", "offset": -b}, change=change)
+    return [Candidate("tone_curve", "offset", f"the values with {words} before saving", fit.delta(change), 1,
+                      value={"curve": "offset", "offset": -b}, change=change)]
 
 
 def _reinhard_extended(fit: Fit, R: np.ndarray) -> list[Candidate]:
