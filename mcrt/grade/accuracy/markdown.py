@@ -179,15 +179,20 @@ _NOVEL = ("The wrong renders are an eighth class of mistakes in students' tracer
           "mistakes, at full marks in the frozen-rules report; they are rendered with their filter since.")
 
 
-_UNTOLD = ("The wrong renders are a ninth class of mistakes in students' tracers, their scene input and their output "
-           "that no other class or the catalogue tried (mcrt.grade.accuracy.untold), written blind to the grader's rules "
-           "and not graded by their author: post-processing, writing the file, materials, geometry, camera and light "
-           "models, the integrator, and samples and passes; from Mitsuba renders of edited scenes, Mitsuba renders "
-           "combined, or correct renders written as students' programs write files. The correct ones come from Mitsuba "
-           "and mcrt in ways no other class used. *Named right*, *confidently wrong*, *partial or none*: as for the "
-           "other classes. **Held-out** cases (marked H) were fixed by the rule stated in the module (every other case "
-           "of each category) before any case was graded. Its author reported counts only (no mistake named) before "
-           "the grader's rules were frozen at commit 7f6f516; the whole class was then graded once, on them (report "
+def _written_blind(nth: str, module: str) -> str:
+    """The first sentences of the intro of a class written blind and graded once on frozen rules (untold, unmet)."""
+    return (f"The wrong renders are a {nth} class of mistakes in students' tracers, their scene input and their output "
+            f"that no other class or the catalogue tried (mcrt.grade.accuracy.{module}), written blind to the grader's "
+            "rules and not graded by their author: post-processing, writing the file, materials, geometry, camera and "
+            "light models, the integrator, and samples and passes; from Mitsuba renders of edited scenes, Mitsuba "
+            "renders combined, or correct renders written as students' programs write files. The correct ones come "
+            "from Mitsuba and mcrt in ways no other class used. *Named right*, *confidently wrong*, *partial or none*: "
+            "as for the other classes. **Held-out** cases (marked H) were fixed by the rule stated in the module (every "
+            "other case of each category) before any case was graded. Its author reported counts only (no mistake "
+            "named) before the grader's rules were frozen at commit ")
+
+
+_UNTOLD = _written_blind("ninth", "untold") + ("7f6f516; the whole class was then graded once, on them (report "
            "at commit eaed105: held out, 4 of 12 named right, 2 of 12 confidently wrong, 11 of 12 detected; all 28, "
            "8 named right, 4 confidently wrong, 26 detected; 0 of 8 correct hand-ins lost points). Changes made after "
            "that grading, with the whole class in view: noise in excess only on the light's outline worded as the "
@@ -202,15 +207,7 @@ _UNTOLD = ("The wrong renders are a ninth class of mistakes in students' tracers
            "of rules that saw the class.")
 
 
-_UNMET = ("The wrong renders are a tenth class of mistakes in students' tracers, their scene input and their output "
-          "that no other class or the catalogue tried (mcrt.grade.accuracy.unmet), written blind to the grader's rules "
-          "and not graded by their author: post-processing, writing the file, materials, geometry, camera and light "
-          "models, the integrator, and samples and passes; from Mitsuba renders of edited scenes, Mitsuba renders "
-          "combined, or correct renders written as students' programs write files. The correct ones come from Mitsuba "
-          "and mcrt in ways no other class used. *Named right*, *confidently wrong*, *partial or none*: as for the "
-          "other classes. **Held-out** cases (marked H) were fixed by the rule stated in the module (every other case "
-          "of each category) before any case was graded. Its author reported counts only (no mistake named) before "
-          "the grader's rules were frozen at commit 089af9b (after a false-alarm report on them: 0 of 153); the whole "
+_UNMET = _written_blind("tenth", "unmet") + ("089af9b (after a false-alarm report on them: 0 of 153); the whole "
           "class was then graded once, on them (report at commit af65c93: held out, 2 of 12 named right, 0 of 12 "
           "confidently wrong, 10 of 12 detected; all 28, 3 named right, 1 confidently wrong, 24 detected; 0 of 8 "
           "correct hand-ins lost points). Changes made after that grading, with the whole class in view: the direct "

@@ -68,19 +68,22 @@ def encoding(g: Grading, hand: Hand) -> None:
                                           ("rounded_first", ROUNDED_FIRST, _rounded_first(g, hand)),
                                           ("cast_first", CAST_FIRST, _cast_first(hand.loaded)))
                  if found}
-        if wrong:  # the codes' mistakes come first, before what the curve's test said of the values
-            g.details.setdefault("encoding", {})["codes"] = list(wrong)
-            t = g.rubric.results.get("linear")
-            before = [t.output] if t is not None and t.status == "failed" else []
-            g.rubric.failed("linear", "; also, ".join(list(wrong.values()) + before))
+        _codes_failed(g, wrong)
     else:
         _hdr_encoding(g, hand)
         k = _decimals(hand.loaded)
-        if k:
-            g.details.setdefault("encoding", {})["codes"] = [f"decimals_{k}"]
-            t = g.rubric.results.get("linear")
-            before = [t.output] if t is not None and t.status == "failed" else []
-            g.rubric.failed("linear", "; also, ".join([DECIMALS.format(k=k, step=f"{10.0 ** -k:g}")] + before))
+        _codes_failed(g, {f"decimals_{k}": DECIMALS.format(k=k, step=f"{10.0 ** -k:g}")} if k else {})
+
+
+def _codes_failed(g: Grading, wrong: dict[str, str]) -> None:
+    """Fail ``linear`` for the file's code mistakes (key -> words), put before what the curve's test said of the
+    values; nothing where there are none."""
+    if not wrong:
+        return
+    g.details.setdefault("encoding", {})["codes"] = list(wrong)
+    t = g.rubric.results.get("linear")
+    before = [t.output] if t is not None and t.status == "failed" else []
+    g.rubric.failed("linear", "; also, ".join(list(wrong.values()) + before))
 
 
 TIMES_256 = ("every 16-bit code is a multiple of 256: 8-bit codes times 256, where 16 bits hold them times 257 (white "
