@@ -191,3 +191,26 @@ def test_the_adequacy_rule_tries_what_chi2_cannot_tell_from_the_best():
     tried = [c.family for c in tried_candidates(cands, within=60.0)]
     assert tried == ["rotation", "albedo", "pixel_offset", "blur"], tried
     assert [c.family for c in tried_candidates(cands)] == ["rotation", "albedo", "pixel_offset"]
+
+
+def test_a_candidate_no_better_than_no_change_is_never_tried():
+    """A difference close to noise: a fitted change that gains less chi^2 over the reference than its parameters times
+    ln n (BIC's price) is neither tried nor listed as a possibility, whatever its chi^2 beside the best's; one that
+    gains more is tried."""
+    import math
+
+    from mcrt.grade.adequacy import beats_no_change, tried_candidates
+    from mcrt.grade.explain.fit import Fit
+
+    rng = np.random.default_rng(7)
+    R = np.ones((16, 16, 3))
+    fit = Fit(R + 0.1 * rng.standard_normal(R.shape), R, np.full(R.shape, 0.01), np.ones(R.shape, bool), 0.0)
+    price = math.log(fit.n)
+    z = np.zeros(R.shape)
+    strong = Candidate("reflectance", "r", "r", fit.chi0 - 4 * price, 3, explained=1.0, change=z)
+    weak = Candidate("fov", "f", "f", fit.chi0 - 0.5 * price, 1, explained=0.2, change=z)
+    worse = Candidate("blur", "b", "b", fit.chi0 + 1.0, 1, explained=-0.1, change=z)
+    assert beats_no_change(strong, fit) and not beats_no_change(weak, fit) and not beats_no_change(worse, fit)
+    within = 6 * price  # all three within noise's spread of the best
+    assert [c.family for c in tried_candidates([strong, weak, worse], within)] == ["reflectance", "fov", "blur"]
+    assert [c.family for c in tried_candidates([strong, weak, worse], within, fit=fit)] == ["reflectance"]

@@ -48,6 +48,10 @@ the fewest fitted parameters (:func:`occam`), unless one with more fits
 significantly better, by Vuong's closeness test for models that are not
 nested (:func:`closeness`: the BIC-adjusted sum of the term-by-term
 differences of their chi-squares over its spread, against :data:`OCCAM_Z`).
+A candidate that does not fit better than no change at all, by the same
+criterion (:func:`beats_no_change`), is never tried: where the difference is
+close to noise, a field of view fitted to the scene's own or a blur of a
+tenth of a pixel leaves noise too, and must not be named as a possibility.
 A more complex family that fits only insignificantly better is not claimed,
 nor named beside the claim; another family with no more parameters that
 explains as much (:data:`AMBIGUOUS`) and leaves noise too is named beside it:
@@ -212,7 +216,15 @@ def occam(adequate: list, fit):
     return None
 
 
-def tried_candidates(cands: list, within: float = 0.0) -> list:
+def beats_no_change(c, fit) -> bool:
+    """Whether candidate ``c`` fits better than no change at all by the criterion :func:`closeness` compares
+    candidates by (the Bayesian information criterion): its gain in chi^2 over the reference's above its parameters
+    times ln n. A candidate that gains less fits noise as well as the difference: however close to noise the
+    difference is, the image gives no reason to name it, as a claim or as a possibility."""
+    return fit.chi0 - c.chi2 > c.params * math.log(max(fit.n, 2))
+
+
+def tried_candidates(cands: list, within: float = 0.0, *, fit=None) -> list:
     """The candidates whose remainder is tested: the best (explaining at least :data:`mcrt.grade.explain.NAMED`,
     or with a chi^2 within ``within`` of the best's, with a predicted change) in rank order until :data:`TRIED`
     readings are among them, at most :data:`MAX_TRIED`.
@@ -220,13 +232,15 @@ def tried_candidates(cands: list, within: float = 0.0) -> list:
     ``within`` is the spread of noise's chi^2 (the share rule's GAIN_SIGMAS sqrt(2 n)): a candidate the chi^2
     cannot tell from the best fits as well as far as chi^2 can say, whatever share of a small difference it has,
     and its remainder decides. The camera's families are one reading (:func:`_reading`): a shift by a fraction of
-    a pixel and a small rotation are one misregistration, and do not crowd another cause out."""
+    a pixel and a small rotation are one misregistration, and do not crowd another cause out. With ``fit``, a
+    candidate that does not fit better than no change (:func:`beats_no_change`) is never tried."""
     from mcrt.grade.explain.claim import NAMED
 
     best = next((c.chi2 for c in cands if c.change is not None), None)
     out, readings = [], set()
     for c in cands:
-        if c.change is None or (c.explained < NAMED and not c.chi2 - best <= within):
+        if c.change is None or (c.explained < NAMED and not c.chi2 - best <= within) or (
+                fit is not None and not beats_no_change(c, fit)):
             continue
         if _reading(c.family) not in readings:
             if len(readings) == TRIED:
@@ -330,7 +344,7 @@ def claim_rule(S: np.ndarray, R: np.ndarray, mask: np.ndarray, noise: Noise, sc:
         best = e.best
         tried = {}
         if e.verdict in (cd.CLAIMED, cd.INDISTINCT):  # a share of NAMED; a small gain over noise is no objection
-            pool = tried_candidates(e.candidates, GAIN_SIGMAS * math.sqrt(2 * fit.n))
+            pool = tried_candidates(e.candidates, GAIN_SIGMAS * math.sqrt(2 * fit.n), fit=fit)
             for c in pool:
                 tried[id(c)] = test(c)
             adequate = [c for c in pool if tried[id(c)].verdict == "adequate"]
