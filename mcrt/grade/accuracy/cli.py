@@ -13,7 +13,8 @@ DEFAULT_ASSIGNMENT = "course2023"
 #: The classes by --class name: the module (under mcrt.grade.accuracy) holding its SPECS and CAUSES.
 CLASSES = {"scene": "cases", "outside": "outside", "programs": "programs", "fresh": "fresh",
            "blind": "blind", "unseen": "unseen", "untried": "untried",
-           "novel": "novel", "untold": "untold", "unmet": "unmet"}
+           "novel": "novel", "untold": "untold", "unmet": "unmet",
+           "unheard": "unheard"}
 
 
 def register(sub) -> None:
@@ -31,8 +32,9 @@ def register(sub) -> None:
                    "tracers, scene input and output, written blind, mcrt.grade.accuracy.untried), 'novel' (an "
                    "eighth, in tracers, scene input and output, written blind, mcrt.grade.accuracy.novel), "
                    "'untold' (a ninth class of such mistakes, in tracers, scene input and output, written blind, "
-                   "mcrt.grade.accuracy.untold) or 'unmet' (a tenth, in tracers, scene input and output, written "
-                   "blind, mcrt.grade.accuracy.unmet) (default: scene)")
+                   "mcrt.grade.accuracy.untold), 'unmet' (a tenth, in tracers, scene input and output, written "
+                   "blind, mcrt.grade.accuracy.unmet) or 'unheard' (an eleventh, in tracers, scene input and output, "
+                   "written blind, mcrt.grade.accuracy.unheard) (default: scene)")
     p.add_argument("--held-out", choices=("all", "only", "none"), default="all",
                    help="grade all cases, only the held-out ones, or none of them (default: all)")
     p.add_argument("--out", default=None, help=f"report folder (default: {DEFAULT_OUT}, or {DEFAULT_OUT}/CLASS "

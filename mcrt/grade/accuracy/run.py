@@ -175,7 +175,13 @@ SAME_MISTAKE: dict[str, tuple[str, ...]] = {
     # a curve on the values (near the mean squared) at the line that saves them. Not accepted: the sample count for
     # noise added after rendering (the count is right), the light's radiance for direct light missing.
     "grain": ("blur", "sharpen"), "direct_missing": ("light_pdf", "depth"), "specular_weight": ("material", "albedo"),
-    "sample_count": ("spp_claim",), "wrong_buffer": ("tone_map", "encoding")}
+    "sample_count": ("spp_claim",), "wrong_buffer": ("tone_map", "encoding"),
+    # The unheard class (mcrt.grade.accuracy.unheard), fixed before any of it was graded: the indirect light off by a
+    # factor (a bounce's rays summed, not averaged; the cosine pdf without its 1/pi) is a diffuse bounce's weight
+    # wrong, which the words of a Lambertian's normalisation name at the same lines. Not accepted: the light's radiance
+    # (the direct light is right), the path depth (the paths are as long as they should be), Russian roulette (no
+    # path is stopped).
+    "indirect_scale": ("brdf_norm",)}
 
 
 def is_named(cause: str, named: list[str]) -> bool:
