@@ -217,7 +217,8 @@ _UNMET = _written_blind("tenth", "unmet") + ("089af9b (after a false-alarm repor
           "encoding criterion (the latter losing its points). Both rows here are of rules that saw the class.")
 
 
-_UNHEARD = _written_blind("eleventh", "unheard") + ("<COMMIT>; the whole class was then graded once, on them.")
+_UNHEARD = _written_blind("eleventh", "unheard") + ("8ccc50a (after a false-alarm report on them: 0 of 153); the "
+            "whole class was then graded once, on them.")
 
 
 def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta: dict, gradescope: list[dict],
