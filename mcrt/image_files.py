@@ -990,12 +990,17 @@ JPEG_REASON = ("JPEG is not accepted: its lossy compression changes the mean of 
 _WHITESPACE = b" \t\n\v\f\r"
 
 
-def _late_raster(path: str, raster: bytes, size: int) -> None:
+def _late_raster(path: str, raster: bytes, size: int, rgb8: bool) -> None:
     """Refuse a binary netpbm raster that starts late: k bytes more than its header declares, the first k of them
     whitespace and the last k not (a header ended by two newlines, where netpbm allows one; a trailing newline is
-    whitespace at the end instead, and is read right); and one that holds twice the data or more (16-bit samples
-    under an 8-bit header, or the header's size wrong)."""
+    whitespace at the end instead, and is read right); one that holds twice the data or more (16-bit samples
+    under an 8-bit header, or the header's size wrong); and an 8-bit RGB one (``rgb8``) that holds exactly 4/3 of
+    it (a program's RGBA buffer, 4 bytes a pixel, written whole: read as RGB, every pixel after the first would be
+    read from the wrong bytes)."""
     k = len(raster) - size
+    if rgb8 and k == size // 3 > 4:  # (k <= 4 is a late raster's, below)
+        raise ImageError(f"{path}: the netpbm file holds 4 bytes a pixel where its RGB header declares 3: an RGBA "
+                         "buffer written whole (write each pixel's red, green and blue bytes, leaving out alpha)")
     if k >= size > 0:
         raise ImageError(f"{path}: the netpbm file holds {len(raster) / size:.3g} times the data its header declares "
                          "(a maxval of 255 or less means one byte a sample: for 16-bit samples write maxval 65535; "
@@ -1025,7 +1030,9 @@ def read_netpbm(path: PathLike, linear: bool = False) -> tuple[np.ndarray, int]:
             args = tile.args if tile is not None else None
             maxval = int(args[1]) if isinstance(args, tuple) and len(args) > 1 else (65535 if mode == "I" else 255)
             if tile is not None and tile.codec_name != "ppm_plain":
-                _late_raster(path, data[tile.offset:], w * h * (3 if data[1:2] == b"6" else 1) * (1 + (maxval > 255)))
+                rgb = data[1:2] == b"6"
+                _late_raster(path, data[tile.offset:], w * h * (3 if rgb else 1) * (1 + (maxval > 255)),
+                             rgb and maxval <= 255)
             if maxval <= 255:
                 if mode not in ("1", "L", "RGB"):
                     raise ImageError(f"{path}: unsupported netpbm pixel mode {mode}")

@@ -694,18 +694,20 @@ def test_the_direct_light_left_out_is_named(ctx):
     ("black_level", "tone_curve", "a black level of 0.01 subtracted"),
     ("barrel", "camera_model", "barrel distortion"),
     ("cylindrical", "camera_model", "cylindrical panorama"),
+    ("contrast", "tone_curve", "saved as 1.3 (v - 0.3) + 0.3, clipped at 0"),
 ])
 def test_post_processing_and_camera_models_are_named(ctx, post, family, words):
-    """A Mitsuba render (seed 76, 1024 spp) with a black level of 0.01 subtracted, or put through the untold class's
-    barrel distortion (k = 0.06, written blind to the grader); and its cylindrical panorama of the scene (Mitsuba,
-    seed 77): each is claimed, in its words."""
+    """A Mitsuba render (seed 76, 1024 spp) with a black level of 0.01 subtracted, through a contrast slider
+    (1.3 (v - 0.3) + 0.3, clipped at 0), or put through the untold class's barrel distortion (k = 0.06, written blind
+    to the grader); and its cylindrical panorama of the scene (Mitsuba, seed 77): each is claimed, in its words."""
     from mcrt.grade.accuracy import untold
 
     if post == "cylindrical":
         img = untold._cylindrical(np.zeros((RES, RES, 3)), spp=256, seed=77)
     else:
         img = _mitsuba(load_scene(), 76)
-        img = np.maximum(img - 0.01, 0.0) if post == "black_level" else untold._barrel(img)
+        img = {"black_level": lambda x: np.maximum(x - 0.01, 0.0), "contrast": lambda x: np.maximum(
+            1.3 * (x - 0.3) + 0.3, 0.0)}.get(post, untold._barrel)(img)
     res = grade_image(post, ctx, [img], spp=256 if post == "cylindrical" else 1024)
     ex = res.details["explanation"]
     assert ex["verdict"] == "claimed" and ex["family"] == family and words in ex["sentence"], ex["sentence"]
@@ -720,3 +722,23 @@ def test_the_light_below_the_floor_is_named_its_height_sign(ctx):
     ex = res.details["explanation"]
     assert ex["verdict"] == "claimed" and "the light's z typed with the wrong sign" in ex["sentence"], ex["sentence"]
     assert named_causes(res)[0] == ["light_position"]
+
+
+@pytest.mark.parametrize("shape, weights, words", [
+    # 4 rays traced on from the first hit and summed: paths of 3 segments or more 4 times over.
+    ("once", lambda j: 4.0 if j >= 3 else 1.0, "4 rays traced on from it summed"),
+    # Russian roulette from the 2nd hit with survival 0.5 and no division: each later continuation halved.
+    ("from", lambda j: 0.5 ** max(j - 3, 0), "Russian roulette's survivors divided by the wrong probability"),
+])
+def test_a_path_weight_off_from_a_bounce_on_is_named(ctx, shape, weights, words):
+    """Mitsuba's paths of each length (same-seed renders cut at depths 1 to 8, seed 79, 1024 spp; max depth k minus
+    k - 1) weighted as a mistake in carrying a path on weighs them: claimed as the path's weight off, in its
+    words, with the shape that made them."""
+    by_depth = [_render_spec(Spec("t", None, spp=1024), load_scene(), width=RES, height=RES, max_depth=k,
+                             seed=79).mean.astype(np.float64) for k in range(1, 9)]
+    lengths = np.diff(np.array(by_depth), axis=0, prepend=0.0)
+    img = sum(weights(j) * lengths[j - 1] for j in range(1, 9))
+    res = grade_image(f"path_weight_{shape}", ctx, [img], spp=1024)
+    ex = res.details["explanation"]
+    assert ex["verdict"] == "claimed" and ex["family"] == "path_weight", ex["sentence"]
+    assert words in ex["sentence"] and "indirect_scale" in named_causes(res)[0], ex["sentence"]

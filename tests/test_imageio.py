@@ -299,6 +299,20 @@ def test_ppm_whose_header_ends_with_two_newlines(tmp_path, maxval):
         np.testing.assert_allclose(img * maxval, codes.astype(np.float64), atol=1e-3 * maxval / 255)
 
 
+def test_ppm_holding_an_rgba_buffer_is_refused_naming_it(tmp_path):
+    """An 8-bit RGBA buffer written whole under a P6 header (as a program that keeps alpha writes it) is refused with
+    words that name the 4 bytes a pixel; the same pixels as RGB are read right."""
+    rgba = np.random.default_rng(3).integers(0, 256, (5, 6, 4)).astype("u1")
+    head = b"P6\n6 5\n255\n"
+    path = tmp_path / "t.ppm"
+    path.write_bytes(head + rgba.tobytes())
+    with pytest.raises(ImageError, match="t.ppm: .*4 bytes a pixel where its RGB header declares 3: an RGBA buffer"):
+        image_files.read_netpbm(path, linear=True)
+    path.write_bytes(head + rgba[..., :3].tobytes())
+    img, _ = image_files.read_netpbm(path, linear=True)
+    np.testing.assert_allclose(img * 255, rgba[..., :3].astype(np.float64), atol=1e-3)
+
+
 def test_ppm_with_16_bit_samples_under_an_8_bit_header(tmp_path):
     """16-bit samples written under maxval 255 (twice the data the header declares, written here by hand) are an
     error that names the maxval."""

@@ -1,7 +1,7 @@
 """File mistakes named at intake and calibration (issue 27): a PFM header declaring the other byte order, a 16-bit PNG
 little-endian or holding 8-bit codes times 256, 8-bit codes cast without a clip, linear values rounded to 8 bits
-before the sRGB curve, float values rounded to decimals, a PNG of sRGB's exponent alone, and a pair of renders made with one
-seed.
+before the sRGB curve, float values rounded to decimals, a PNG of sRGB's exponent alone or of the gamma the wrong way
+round, and a pair of renders made with one seed.
 
 The hand-ins are Mitsuba renders (fixed seeds) written the way a student's program writes them; they are graded by
 the production grader with the 32x32 assignment of test_diagnose, prepared once per module in a temporary cache.
@@ -236,6 +236,20 @@ def test_a_png_of_the_srgb_exponent_alone_loses_the_encoding_points(ctx, renders
     assert res.details["encoding"]["detected"] == "gamma2.4"
     assert linear.status == "failed" and "a gamma of 2.4" in linear.output and "encoding" in named_causes(res)[0]
     assert res.score < res.max_score
+
+
+def test_a_png_of_the_gamma_applied_the_wrong_way_round_is_named(ctx, renders, tmp_path):
+    """An 8-bit PNG of v ** 2.2 (the display gamma applied where its inverse belongs; Pillow writes it): the curve is
+    found and named under the encoding criterion, not taken for linear values rounded before the curve (a darkening
+    curve reaches every dark code), and the criterion's points are lost."""
+    from PIL import Image
+
+    codes = np.rint(np.clip(renders[0], 0, 1) ** 2.2 * 255).astype(np.uint8)
+    res = _grade(ctx, tmp_path / "student", {"render.png": lambda q: Image.fromarray(codes, "RGB").save(q)})
+    linear = _test(res, "linear")
+    assert res.details["encoding"]["detected"] == "inverted2.2" and "codes" not in res.details["encoding"]
+    assert linear.status == "failed" and "the gamma applied the wrong way round" in linear.output
+    assert "encoding" in named_causes(res)[0] and res.score < res.max_score
 
 
 def test_implausible_share_counts_what_no_radiance_is():

@@ -265,7 +265,7 @@ def _reading(family: str) -> str:
 READINGS = (
     frozenset({"scale", "light_radiance", "colour_matrix", "colour_lost", "channels", "encoding", "tone_curve",
                "sample_clamp", "catalogue:gamma_output"}),  # the values through a function of each pixel's colour
-    frozenset({"depth", "catalogue:depth_off_by_one", "catalogue:rr_no_divide"}),
+    frozenset({"depth", "catalogue:depth_off_by_one", "catalogue:rr_no_divide", "path_weight"}),
     frozenset({"albedo", "surface_black", "catalogue:albedo_1pct"}),
     frozenset({"reflectance_scale", "reflectance_squared", "catalogue:brdf_no_inv_pi", "catalogue:uniform_as_cosine"}),
     frozenset({"light_sampling", "catalogue:nee_no_area", "catalogue:nee_no_cos_light", "catalogue:nee_no_inv_dist2"}),

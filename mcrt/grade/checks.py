@@ -400,6 +400,9 @@ PNG_CURVES = {
     "gamma2.4": (lambda c: c**2.4, "a gamma of 2.4 (x^(1/2.4): the sRGB curve's exponent without its linear segment "
                  "and offset)"),
     "linear": (lambda c: c, "no curve (linear values)"),
+    # The gamma applied the wrong way round (x^2.2 for x^(1/2.2)), as a program that raises to the display's gamma.
+    "inverted2.2": (lambda c: c ** (1 / 2.2), "the gamma applied the wrong way round (x^2.2 where x^(1/2.2) "
+                    "belongs: the image darkened where the curve should brighten it)"),
 }
 
 

@@ -47,8 +47,10 @@ CAUSE_OF: dict[str, tuple[str, ...]] = {
     # Added after unmet was graded: the direct light missing at the first hit.
     "direct_missing": ("direct_missing",),
     # A shift of the image by a fraction of a pixel is what a small rotation does too; the words name an image
-    # resampled with an offset (every other pixel kept) beside pixel centres off.
-    "pixel_offset": ("pixel_offset", "camera_rotation", "resampling"), "depth": ("depth",), "emitter_hidden": ("light_hidden",),
+    # resampled with an offset (every other pixel kept) beside pixel centres off, and (added after the unheard class
+    # was graded) sub-pixel offsets not spread over the pixel's square.
+    "pixel_offset": ("pixel_offset", "camera_rotation", "resampling", "pixel_footprint"), "depth": ("depth",),
+    "emitter_hidden": ("light_hidden",),
     "emitter_seen": ("light_seen",),
     # A smoothing's words name a blur, a denoiser and an enlargement from a lower resolution (bicubic enlarging is a
     # smoothing): either mistake is named by them.
@@ -78,6 +80,9 @@ CAUSE_OF: dict[str, tuple[str, ...]] = {
     # its normals facing away under one-sided shading looks the same, and the words name every cause; an object
     # black is not missing (what lies behind it would show).
     "surface_black": ("object_missing", "albedo", "normals"), "object_black": ("albedo", "normals"),
+    # Added after the unheard class was graded: a path's weight off by a constant from a bounce on (a pdf off by a
+    # constant; roulette where its words say so, named_causes).
+    "path_weight": ("indirect_scale",),
 }
 
 
@@ -233,7 +238,9 @@ def named_causes(res) -> tuple[list[str], str]:
                                 ("colour_lost", "every colour taken as one number", "albedo"),  # albedos as one number
                                 ("resampling", "through one fixed point", "pixel_offset"),  # the jitter constant
                                 # black pixels that are a mirror's (added after the untold class was graded)
-                                ("bad_pixels", "paths through the mirror", "specular_unseen")):
+                                ("bad_pixels", "paths through the mirror", "specular_unseen"),
+                                # roulette's divisor, where the words name it (added after unheard was graded)
+                                ("path_weight", "Russian roulette", "roulette")):
             if fam == f and words in expl["sentence"]:
                 causes.append(cause)
         for alt in (expl.get("adequacy") or {}).get("alternatives", []):  # named beside it as fitting as well
@@ -254,6 +261,8 @@ def named_causes(res) -> tuple[list[str], str]:
         causes.append("file_format")
         if "cast to an integer type" in readable.output:
             causes.append("quantisation")  # an EXR of integer channels: the values cast to integers, in those words
+        if "an RGBA buffer" in readable.output:
+            causes.append("row_stride")  # pixels stored 4 bytes apart under an RGB header (added after unheard)
         said.append(readable.output.split(";")[0])
     for crit, cause in (("linear", "encoding"), ("exposure", "light_radiance"), ("orientation", "orientation"),
                         ("finite", "bad_pixels")):

@@ -161,11 +161,12 @@ def _cropped(fov: float, f0: float, shape) -> str:
 
 
 def _shift_causes(dx: float, dy: float) -> str:
-    """What shifts an image by (dx, dy) pixels: a whole pixel is an index off by one, a fraction the pixel centres."""
+    """What shifts an image by (dx, dy) pixels: a whole pixel is an index off by one, a fraction the pixel centres or
+    the sub-pixel offsets (samples spread over [0, s) with s != 1 have their mean s / 2 off the centre)."""
     whole = max(abs(dx), abs(dy)) >= 0.75 and all(abs(v - round(v)) <= 0.1 for v in (dx, dy))
     return ("rows or columns are written one place off (a row or column index off by one), or pixel centres are "
-            "off by a pixel" if whole else "pixel centres are not at (i + 0.5, j + 0.5), or an image resampled with "
-            "an offset")
+            "off by a pixel" if whole else "pixel centres are not at (i + 0.5, j + 0.5), each pixel's sub-pixel "
+            "offsets are not spread over 0 to 1 (their mean off its centre), or an image resampled with an offset")
 
 
 #: The aspects a program hard-codes (height over width of a common screen or photo, either way round): the aspect

@@ -13,6 +13,7 @@ from mcrt.grade.explain.light_facing import light_facing
 from mcrt.grade.explain.light_sampling import light_sampling
 from mcrt.grade.explain.light_twice import light_twice
 from mcrt.grade.explain.objects import material, object_size
+from mcrt.grade.explain.path_weight import path_weight
 from mcrt.grade.explain.pixels import bad_pixels
 from mcrt.grade.explain.reflectance import reflectance_squared, reflectance_scale
 from mcrt.grade.explain.resampling import resampling
@@ -24,11 +25,11 @@ from mcrt.grade.explain.tonecurve import tone_curve
 #: Every family the engine fits, in this order (ties keep it). The scene file's parameters (and the colours mixed by
 #: a matrix, a surface of the room black) and the catalogue; then what a student's program gets wrong beyond the
 #: scene file (a tone curve, each sample clamped, a fall-off, resampling, bloom, an object's material or size, every
-#: diffuse reflectance off by one factor or squared, light counted twice, a light sample's weight, the light facing
-#: the wrong way, black pixels).
+#: diffuse reflectance off by one factor or squared, light counted twice, a path's weight off from a bounce on, a
+#: light sample's weight, the light facing the wrong way, black pixels).
 FAMILIES = (scale, colour, curves, albedo, surface_black, rendered, camera, catalogue, tone_curve, sample_clamp,
             falloff, resampling, bloom, material, object_size, reflectance_scale, reflectance_squared, light_twice,
-            light_sampling, light_facing, bad_pixels)
+            path_weight, light_sampling, light_facing, bad_pixels)
 
 #: The families that are mistakes of the camera (what the misregistration test of mcrt.grade.structure also sees).
 CAMERA_FAMILIES = frozenset({"fov", "aspect", "pixel_offset", "rotation", "eye", "camera_model"})

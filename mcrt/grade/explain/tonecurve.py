@@ -102,6 +102,7 @@ def tone_curve(fit: Fit, inputs: Inputs) -> list[Candidate]:
                               errs[i], 1 if len(scan) > 1 else 0, value={"curve": key, "exposure": k}, change=f(k * R) - fit.R))
     out += _reinhard_extended(fit, R)
     out += _offset(fit, R)
+    out += _contrast(fit, R)
     out.append(_isotonic(fit))
     return out
 
@@ -123,6 +124,26 @@ def _offset(fit: Fit, R: np.ndarray) -> list[Candidate]:
     change = np.maximum(R - b, 0.0) - fit.R
     return [Candidate("tone_curve", "offset", f"the values with {words} before saving", fit.delta(change), 1,
                       value={"curve": "offset", "offset": -b}, change=change)]
+
+
+def _contrast(fit: Fit, R: np.ndarray) -> list[Candidate]:
+    """A contrast control: every value v saved as c (v - p) + p, clipped at 0 (an image editor's or a tutorial's
+    contrast slider, about the pivot p), two parameters fitted from no change; none where c is within 2 % of 1
+    (the offset and the scale say that)."""
+    from scipy.optimize import minimize
+
+    def model(ab):
+        return np.maximum(ab[0] * R + ab[1], 0.0)
+
+    a, b = (float(v) for v in minimize(lambda ab: fit.model(model(ab)), x0=(1.0, 0.0), method="Nelder-Mead",
+                                       options={"xatol": 1e-4, "fatol": 1e-3}).x)
+    if abs(a - 1.0) < 0.02:
+        return []
+    pivot = b / (1.0 - a)
+    change = model((a, b)) - fit.R
+    return [Candidate("tone_curve", "contrast", f"the values through a contrast control before saving: each value v "
+                      f"saved as {_num(a)} (v - {_num(pivot)}) + {_num(pivot)}, clipped at 0", fit.delta(change), 2,
+                      value={"curve": "contrast", "contrast": a, "pivot": pivot}, change=change)]
 
 
 def _reinhard_extended(fit: Fit, R: np.ndarray) -> list[Candidate]:

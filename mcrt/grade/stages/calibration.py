@@ -124,11 +124,11 @@ def _codes_times_256(loaded) -> bool:
 
 #: Curves that are the sRGB curve copied wrongly, not a display encoding chosen: they lose the criterion's points
 #: whatever ``png_gamma_loss`` (which accepts a gamma of 2.2 or 2) says.
-MISTAKEN_CURVES = ("gamma2.4",)
+MISTAKEN_CURVES = ("gamma2.4", "inverted2.2")
 
 #: The codes a transfer curve gives a value (the inverses of mcrt.grade.checks.PNG_CURVES' decodings).
 _ENCODE = {"srgb": srgb_oetf, "gamma2.2": lambda x: x ** (1 / 2.2), "gamma2": np.sqrt,
-           "gamma2.4": lambda x: x ** (1 / 2.4), "linear": lambda x: x}
+           "gamma2.4": lambda x: x ** (1 / 2.4), "linear": lambda x: x, "inverted2.2": lambda x: x ** 2.2}
 
 
 def _wrapped(g: Grading, hand: Hand) -> bool:
@@ -177,12 +177,15 @@ def _rounded_first(g: Grading, hand: Hand) -> bool:
     """An 8-bit file whose dark codes (1 to 40, in any channel) all lie among ``round(255 encode(k / 255))``: linear
     values rounded to 8 bits before the curve. Through the sRGB curve that leaves 5 of the 40 codes (13, 22, 28, 34,
     38), so a render encoded from floats has all of at least 20 such values there with a chance below 0.2^20 (its dark
-    codes fall about as often on the others). Only for a curve that bends the dark codes (not a linear file)."""
+    codes fall about as often on the others). Only for a curve that spreads the dark codes apart, leaving most of them
+    out: not a linear file, nor a curve that darkens, which reaches every dark code (the test would have no power)."""
     loaded, curve = hand.loaded, (g.details.get("encoding") or {}).get("detected")
-    if not loaded.fmt.startswith("png8") or curve not in _ENCODE or curve == "linear":
+    if not loaded.fmt.startswith("png8") or curve not in _ENCODE:
         return False
     lo, hi = _DARK_CODES
     allowed = np.unique(np.rint(_ENCODE[curve](np.arange(256) / 255.0) * 255))
+    if np.isin(np.arange(lo, hi + 1), allowed).mean() > 0.5:
+        return False
     codes = np.concatenate([np.rint(ck.png_codes(i, loaded.fmt) * 255).ravel() for i in loaded.images])
     dark = codes[(codes >= lo) & (codes <= hi)]
     return dark.size >= _MIN_DARK and bool(np.all(np.isin(dark, allowed)))

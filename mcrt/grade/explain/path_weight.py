@@ -1,0 +1,103 @@
+r"""The weight a path carries on from a surface hit off by a constant: at one hit, or at every hit from one on.
+
+With :math:`D_k` the basis's render cut at depth k (Mitsuba's convention:
+:math:`D_1` the light seen directly, :math:`D_2 - D_1` the direct light on
+the first surface seen) and :math:`L_j = D_j - D_{j-1}` the light of paths of
+exactly j segments, a path of j segments has carried on (been continued by a
+sampled ray) from hits 1 to j - 2; the light sampled at each hit is not
+touched. The model images are
+
+* **once**, the weight of the ray traced on from hit s scaled by q (n rays
+  from the first hit summed where they should be averaged is q = n, s = 1):
+  :math:`R + (q - 1)(R - D_{s+1})`;
+* **from s on**, every continuation from hit s on scaled by q (a sampling
+  pdf off by a constant: the cosine pdf without its 1/pi is q = 1/pi, s = 1;
+  Russian roulette whose survivors are divided by the wrong probability, or
+  by none, from hit s): :math:`R + \sum_{j \ge s+2} (q^{\,j-1-s} - 1) L_j`.
+
+q = 0 is the path depth cut at s + 1 (:mod:`mcrt.grade.explain.scene`'s
+depth family, one parameter fewer: Occam's rule prefers it where it fits as
+well). Two parameters each (s scanned, q fitted); nothing is rendered: the
+depth renders are the basis's, with its seed, so the L_j share its random
+numbers.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy.optimize import minimize_scalar
+
+from mcrt.grade.candidates import Candidate, Inputs
+from mcrt.grade.explain.fit import Fit
+from mcrt.grade.explain.light_twice import _depth
+
+#: The surface hits s the scale may start at.
+HITS = (1, 2, 3, 4, 5)
+#: The bounds of q: from paths nearly stopped to each bounce weighing several times its due.
+Q_BOUNDS = {"once": (0.0, 8.0), "from": (0.0, 4.0)}
+
+
+def _ordinal(n: int) -> str:
+    return {1: "first", 2: "second", 3: "third", 4: "fourth", 5: "fifth"}.get(n, f"{n}th")
+
+
+#: Where the two shapes differ most, in the deepest paths, the basis's own noise is largest (the deep paths' light
+#: times q^6): the shape that fits best is no evidence of which mistake it is, and either's words name the mistakes of
+#: both, the likeliest first.
+ROULETTE = "Russian roulette's survivors divided by the wrong probability (the probability of stopping, or none)"
+
+
+def _once_words(q: float, s: int) -> str:
+    n = round(q)
+    summed = f"{n} rays traced on from it summed where their mean belongs, " if n >= 2 and abs(q - n) <= 0.1 * n else ""
+    return (f"the light that bounces on from the {_ordinal(s)} surface hit {q:.2f} times what it should be (the light "
+            f"sampled there right): as with {summed}a weight off by a constant at that bounce (a pdf or a BRDF factor "
+            f"there), or {ROULETTE}")
+
+
+def _from_words(q: float, s: int) -> str:
+    why = ("the cosine-weighted pdf written cos(theta) without its 1/pi (each diffuse bounce weighing albedo / pi), "
+           if abs(q - 1 / math.pi) <= 0.03 else "a pdf with pi where 1/pi belongs, " if abs(q - math.pi) <= 0.3 else "")
+    return (f"the weight a path carries on with {q:.2f} times what it should be at every surface hit from the "
+            f"{_ordinal(s)} on (the light sampled at each hit right): as with {why}a sampling pdf off by a constant, "
+            f"or {ROULETTE}")
+
+
+def path_weight(fit: Fit, inputs: Inputs) -> list[Candidate]:
+    """The best start s of each shape (once, from s on), q fitted for each (the module docstring)."""
+    b = inputs.basis
+    depths = [_depth(b, k) for k in range(1, b.max_depth + 1)]
+    if any(d is None for d in depths):
+        return []
+    L = [depths[0]] + [depths[j] - depths[j - 1] for j in range(1, len(depths))]  # L[j - 1]: paths of j segments
+    R = depths[-1]
+
+    def once(s):
+        rest = R - depths[s]  # the light of paths of s + 2 segments or more
+        return lambda q: (q - 1.0) * rest
+
+    def from_on(s):
+        return lambda q: sum((q ** (j - 1 - s) - 1.0) * L[j - 1] for j in range(s + 2, len(L) + 1))
+
+    out = []
+    for shape, model, words in (("once", once, _once_words), ("from", from_on, _from_words)):
+        best = None
+        for s in HITS:
+            if s + 2 > len(L):
+                break
+            change_of = model(s)
+            q = float(minimize_scalar(lambda q: fit.delta(change_of(q)), bounds=Q_BOUNDS[shape], method="bounded",
+                                      options={"xatol": 1e-3}).x)
+            chi = fit.delta(change_of(q))
+            if best is None or chi < best[0]:
+                best = (chi, s, q, change_of(q))
+        if best is not None:
+            chi, s, q, change = best
+            out.append(Candidate("path_weight", f"path weight {shape}", words(q, s), chi, 2,
+                                 value={"shape": shape, "hit": s, "factor": q}, change=change))
+    return out
+
+
+path_weight.name = "path_weight"
