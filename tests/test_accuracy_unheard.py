@@ -78,15 +78,17 @@ def test_wrong_writers_read_back_as_their_specs_say(tmp_path):
     r = read_image(unheard._write_exr_red_everywhere(x, tmp_path / "a")).mean
     for c in range(3):
         np.testing.assert_allclose(r[..., c], x[..., 0], rtol=1e-6)
-    # An RGBA buffer under an RGB header: 4 bytes a pixel in the file; read as RGB, pixel 1 is (A, R, G) of the
-    # buffer's pixel 0 and 1.
+    # An RGBA buffer under an RGB header: 4 bytes a pixel in the file, each pixel's sRGB codes then an opaque alpha;
+    # the reader refuses it, naming the buffer (since 79507c1, after the class was graded: it read it as RGB, pixel 1
+    # the (A, R, G) of the buffer's pixels 0 and 1).
     path = unheard._write_ppm_rgba(x, tmp_path / "b")
     header = unheard._ppm_header(W, H)
-    assert len(path.read_bytes()) == len(header) + 4 * W * H
-    r = read_image(path).mean
-    px = blind._srgb8(x)
-    np.testing.assert_allclose(r[0, 0], srgb_eotf(px[0, 0] / 255.0), atol=1e-6)
-    np.testing.assert_allclose(r[0, 1], srgb_eotf(np.array([255, px[0, 1, 0], px[0, 1, 1]]) / 255.0), atol=1e-6)
+    raster = np.frombuffer(path.read_bytes()[len(header):], np.uint8)
+    assert raster.size == 4 * W * H
+    np.testing.assert_array_equal(raster.reshape(H, W, 4), np.concatenate(
+        [blind._srgb8(x), np.full((H, W, 1), 255)], axis=2))
+    with pytest.raises(ImageError, match="4 bytes a pixel where its RGB header declares 3: an RGBA buffer"):
+        read_image(path)
     # The gamma the wrong way: darker than sRGB's codes between 0 and 1, equal at both ends.
     v = np.array([0.0, 0.01, 0.2, 0.7, 1.0])
     g = unheard._gamma_inverted(v)
@@ -182,7 +184,7 @@ def test_ray_height_from_column_repeats_the_diagonal():
     assert case.image.mean(axis=2).std(axis=0)[lit].mean() < 0.5 * plain.mean(axis=2).std(axis=0)[lit].mean()
 
 
-@pytest.mark.parametrize("name", ["pp_bilateral", "file_ppm_rgba_buffer", "tetra_debug_colours",
+@pytest.mark.parametrize("name", ["pp_bilateral", "tetra_debug_colours",
                                   "tetra_parallelogram_faces", "floor_at_ceiling_height", "wall_quads_half",
                                   "strata_offsets_undivided", "light_samples_at_centre", "light_diamond",
                                   "no_light_after_mirror", "roulette_over_kill_probability",

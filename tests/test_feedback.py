@@ -742,3 +742,16 @@ def test_a_path_weight_off_from_a_bounce_on_is_named(ctx, shape, weights, words)
     ex = res.details["explanation"]
     assert ex["verdict"] == "claimed" and ex["family"] == "path_weight", ex["sentence"]
     assert words in ex["sentence"] and "indirect_scale" in named_causes(res)[0], ex["sentence"]
+
+
+def test_the_direct_light_missing_after_a_mirror_is_named(ctx):
+    """The unheard class's builder (written blind to the grader: Mitsuba's paths eye, sphere, surface, light taken
+    out of the cells whose camera ray meets the sphere; seed 80, 64 spp a cell) at this resolution: claimed as the
+    direct light missing at the surfaces seen in the mirror, not as a darker mirror."""
+    from mcrt.grade.accuracy import unheard
+
+    img = unheard._no_light_after_mirror(np.zeros((RES, RES, 3)), spp=64, seed=80)
+    res = grade_image("after_mirror", ctx, [img], spp=1024)
+    ex = res.details["explanation"]
+    assert ex["verdict"] == "claimed" and ex["family"] == "direct_missing", ex["sentence"]
+    assert "the surfaces seen in the mirror" in ex["sentence"], ex["sentence"]

@@ -10,7 +10,12 @@ model images are
 * light counted twice at every bounce: :math:`R + (R - D_1)`, every
   path's light doubled but the light seen directly (it has no light sample);
 * the direct light missing (no light sample at the first surface hit):
-  :math:`R - (D_2 - D_1)`.
+  :math:`R - (D_2 - D_1)`;
+* the direct light missing at the surfaces seen in a mirror (no light sample
+  at the vertex after a mirror bounce, a specular flag read one bounce
+  late): :math:`R - m (D_3 - D_2)`, with m the pixels whose first surface is
+  a mirror (there the paths of three segments are eye, mirror, surface,
+  light sample).
 
 Neither has a free parameter: a free weight k of the added part would fit
 any change of the indirect light (a path depth off by one is k = -1 %),
@@ -36,7 +41,8 @@ def _depth(basis, k: int) -> np.ndarray | None:
 
 
 def light_twice(fit: Fit, inputs: Inputs) -> list[Candidate]:
-    """The direct light counted again, and the light counted twice at every bounce (the module docstring)."""
+    """The direct light counted again, the light counted twice at every bounce, the direct light missing at the first
+    hit or after a mirror (the module docstring)."""
     b = inputs.basis
     d1, d2 = _depth(b, 1), _depth(b, 2)
     if d1 is None or d2 is None:
@@ -53,7 +59,22 @@ def light_twice(fit: Fit, inputs: Inputs) -> list[Candidate]:
     out.append(Candidate("direct_missing", "direct light missing", "the direct light missing (no light sample at the "
                          "first surface the camera sees: it is lit only by light that has bounced)", fit.delta(change),
                          0, value={"counted": 0}, change=change))
+    lost = _after_mirror(inputs, d2)
+    if lost is not None:
+        out.append(Candidate("direct_missing", "direct light missing after a mirror", "the direct light missing at "
+                             "the surfaces seen in the mirror (no light sample at the vertex after a mirror bounce: a "
+                             "specular flag read one bounce late), the room in the mirror lit only by light that has "
+                             "bounced", fit.delta(-lost), 0, value={"counted": 0, "after": "mirror"}, change=-lost))
     return out
+
+
+def _after_mirror(inputs: Inputs, d2: np.ndarray) -> np.ndarray | None:
+    """The direct light on the surfaces seen in a mirror (the module docstring), None without depth 3 or labels."""
+    d3 = _depth(inputs.basis, 3)
+    if d3 is None or inputs.labels is None:
+        return None
+    mirror = np.isin(inputs.labels, [i for i, n in enumerate(inputs.label_names) if "mirror" in n])
+    return np.where(mirror[..., None], d3 - d2, 0.0) if mirror.any() else None
 
 
 light_twice.name = "light_twice"

@@ -129,7 +129,8 @@ def _offset(fit: Fit, R: np.ndarray) -> list[Candidate]:
 def _contrast(fit: Fit, R: np.ndarray) -> list[Candidate]:
     """A contrast control: every value v saved as c (v - p) + p, clipped at 0 (an image editor's or a tutorial's
     contrast slider, about the pivot p), two parameters fitted from no change; none where c is within 2 % of 1
-    (the offset and the scale say that)."""
+    (the offset and the scale say that), nor outside what a slider sets (c between 1/2 and 2, p in [0, 1]): a
+    near-constant image (c of 0.05) fits an image whose pixels are scrambled, and is no contrast anyone chose."""
     from scipy.optimize import minimize
 
     def model(ab):
@@ -137,9 +138,9 @@ def _contrast(fit: Fit, R: np.ndarray) -> list[Candidate]:
 
     a, b = (float(v) for v in minimize(lambda ab: fit.model(model(ab)), x0=(1.0, 0.0), method="Nelder-Mead",
                                        options={"xatol": 1e-4, "fatol": 1e-3}).x)
-    if abs(a - 1.0) < 0.02:
+    pivot = b / (1.0 - a) if a != 1.0 else 0.0
+    if abs(a - 1.0) < 0.02 or not (0.5 <= a <= 2.0 and 0.0 <= pivot <= 1.0):
         return []
-    pivot = b / (1.0 - a)
     change = model((a, b)) - fit.R
     return [Candidate("tone_curve", "contrast", f"the values through a contrast control before saving: each value v "
                       f"saved as {_num(a)} (v - {_num(pivot)}) + {_num(pivot)}, clipped at 0", fit.delta(change), 2,
