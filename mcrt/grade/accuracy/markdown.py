@@ -222,7 +222,8 @@ _UNHEARD = _written_blind("eleventh", "unheard") + ("8ccc50a (after a false-alar
             "12 confidently wrong, 12 of 12 detected; all 28, 10 named right, 1 confidently wrong, 28 detected; 0 of 8 "
             "correct hand-ins lost points). Changes made after that grading, with the whole class in view: a path's "
             "weight off by a constant from a bounce on (rays summed where their mean belongs, a pdf off by a "
-            "constant, roulette's survivors divided wrongly); a contrast control among the tone curves; a PNG of the "
+            "constant, roulette's survivors divided wrongly); the direct light missing at the surfaces seen in the mirror; "
+            "a contrast control among the tone curves; a PNG of the "
             "gamma applied the wrong way round, named under the encoding criterion; a PPM holding an RGBA buffer "
             "refused, naming it; the pixel-shift words naming sub-pixel offsets not spread over the pixel. Both rows "
             "here are of rules that saw the class.")
