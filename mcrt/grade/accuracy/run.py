@@ -108,6 +108,9 @@ _ACCEPTED["camera_rotation"] += ("orientation",)
 _ACCEPTED["pixel_offset"] += ("row_stride",)
 _ACCEPTED.update({"orientation": ("orientation", "camera_rotation"),
                   "row_stride": ("row_stride", "orientation") + _CAMERA_CAUSES + ("resampling",)})
+# A shift's words name sub-pixel offsets not spread over the pixel beside the pixel centres (since unheard).
+for _c in ("pixel_offset", "camera_rotation", "row_stride"):
+    _ACCEPTED[_c] += ("pixel_footprint",)
 
 #: Causes of the fresh class (mcrt.grade.accuracy.fresh) that another cause word names as the same mistake, fixed
 #: before the class was graded: the feedback sends the student to the line that is wrong. Truncated 8-bit codes

@@ -15,11 +15,15 @@ touched. The model images are
   Russian roulette whose survivors are divided by the wrong probability, or
   by none, from hit s): :math:`R + \sum_{j \ge s+2} (q^{\,j-1-s} - 1) L_j`.
 
-q = 0 is the path depth cut at s + 1 (:mod:`mcrt.grade.explain.scene`'s
-depth family, one parameter fewer: Occam's rule prefers it where it fits as
-well). Two parameters each (s scanned, q fitted); nothing is rendered: the
-depth renders are the basis's, with its seed, so the L_j share its random
-numbers.
+q is not fitted freely: a free factor near 1 fits any small change of the
+indirect light (a biased estimator's, a shadow ray's bug, a path depth off
+by one), which is no weight a program gets wrong. It is one of the factors
+programs produce (:data:`FACTORS`): n rays summed, pi or 1/pi, and
+roulette's weights for the usual survival probabilities p (p without a
+division, 1/p with the losers not stopped, p / (1 - p) divided by the
+probability of stopping). One parameter each (s and the factor scanned);
+nothing is rendered: the depth renders are the basis's, with its seed, so
+the L_j share its random numbers.
 """
 
 from __future__ import annotations
@@ -27,7 +31,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy.optimize import minimize_scalar
 
 from mcrt.grade.candidates import Candidate, Inputs
 from mcrt.grade.explain.fit import Fit
@@ -35,8 +38,12 @@ from mcrt.grade.explain.light_twice import _depth
 
 #: The surface hits s the scale may start at.
 HITS = (1, 2, 3, 4, 5)
-#: The bounds of q: from paths nearly stopped to each bounce weighing several times its due.
-Q_BOUNDS = {"once": (0.0, 8.0), "from": (0.0, 4.0)}
+#: Roulette's usual survival probabilities.
+_SURVIVAL = (0.5, 0.75, 0.8)
+#: The factors q a program's mistake gives a path's weight: n rays summed where their mean belongs, a pi too many
+#: or too few, and roulette's survivors weighed p, 1/p or p / (1 - p) (the module docstring).
+FACTORS = tuple(sorted({2.0, 3.0, 4.0, 8.0, 16.0, math.pi, 1.0 / math.pi}
+                       | {round(q, 6) for p in _SURVIVAL for q in (p, 1.0 / p, p / (1.0 - p))} - {1.0}))
 
 
 def _ordinal(n: int) -> str:
@@ -50,8 +57,7 @@ ROULETTE = "Russian roulette's survivors divided by the wrong probability (the p
 
 
 def _once_words(q: float, s: int) -> str:
-    n = round(q)
-    summed = f"{n} rays traced on from it summed where their mean belongs, " if n >= 2 and abs(q - n) <= 0.1 * n else ""
+    summed = f"{q:.0f} rays traced on from it summed where their mean belongs, " if q in (2.0, 3.0, 4.0, 8.0, 16.0) else ""
     return (f"the light that bounces on from the {_ordinal(s)} surface hit {q:.2f} times what it should be (the light "
             f"sampled there right): as with {summed}a weight off by a constant at that bounce (a pdf or a BRDF factor "
             f"there), or {ROULETTE}")
@@ -66,7 +72,7 @@ def _from_words(q: float, s: int) -> str:
 
 
 def path_weight(fit: Fit, inputs: Inputs) -> list[Candidate]:
-    """The best start s of each shape (once, from s on), q fitted for each (the module docstring)."""
+    """The best start s and factor q of :data:`FACTORS` for each shape (once, from s on; the module docstring)."""
     b = inputs.basis
     depths = [_depth(b, k) for k in range(1, b.max_depth + 1)]
     if any(d is None for d in depths):
@@ -83,19 +89,11 @@ def path_weight(fit: Fit, inputs: Inputs) -> list[Candidate]:
 
     out = []
     for shape, model, words in (("once", once, _once_words), ("from", from_on, _from_words)):
-        best = None
-        for s in HITS:
-            if s + 2 > len(L):
-                break
-            change_of = model(s)
-            q = float(minimize_scalar(lambda q: fit.delta(change_of(q)), bounds=Q_BOUNDS[shape], method="bounded",
-                                      options={"xatol": 1e-3}).x)
-            chi = fit.delta(change_of(q))
-            if best is None or chi < best[0]:
-                best = (chi, s, q, change_of(q))
-        if best is not None:
-            chi, s, q, change = best
-            out.append(Candidate("path_weight", f"path weight {shape}", words(q, s), chi, 2,
+        fits = [(fit.delta(change), s, q, change) for s in HITS if s + 2 <= len(L) for q in FACTORS
+                for change in (model(s)(q),)]
+        if fits:
+            chi, s, q, change = min(fits, key=lambda t: t[0])
+            out.append(Candidate("path_weight", f"path weight {shape}", words(q, s), chi, 1,
                                  value={"shape": shape, "hit": s, "factor": q}, change=change))
     return out
 
