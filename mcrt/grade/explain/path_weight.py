@@ -40,9 +40,11 @@ from mcrt.grade.explain.light_twice import _depth
 HITS = (1, 2, 3, 4, 5)
 #: Roulette's usual survival probabilities.
 _SURVIVAL = (0.5, 0.75, 0.8)
+#: The numbers of rays a program traces on from a hit (and may sum where their mean belongs).
+SUMMED = (2.0, 3.0, 4.0, 8.0, 16.0)
 #: The factors q a program's mistake gives a path's weight: n rays summed where their mean belongs, a pi too many
 #: or too few, and roulette's survivors weighed p, 1/p or p / (1 - p) (the module docstring).
-FACTORS = tuple(sorted({2.0, 3.0, 4.0, 8.0, 16.0, math.pi, 1.0 / math.pi}
+FACTORS = tuple(sorted({*SUMMED, math.pi, 1.0 / math.pi}
                        | {round(q, 6) for p in _SURVIVAL for q in (p, 1.0 / p, p / (1.0 - p))} - {1.0}))
 
 
@@ -57,7 +59,7 @@ ROULETTE = "Russian roulette's survivors divided by the wrong probability (the p
 
 
 def _once_words(q: float, s: int) -> str:
-    summed = f"{q:.0f} rays traced on from it summed where their mean belongs, " if q in (2.0, 3.0, 4.0, 8.0, 16.0) else ""
+    summed = f"{q:.0f} rays traced on from it summed where their mean belongs, " if q in SUMMED else ""
     return (f"the light that bounces on from the {_ordinal(s)} surface hit {q:.2f} times what it should be (the light "
             f"sampled there right): as with {summed}a weight off by a constant at that bounce (a pdf or a BRDF factor "
             f"there), or {ROULETTE}")
