@@ -755,3 +755,55 @@ def test_the_direct_light_missing_after_a_mirror_is_named(ctx):
     ex = res.details["explanation"]
     assert ex["verdict"] == "claimed" and ex["family"] == "direct_missing", ex["sentence"]
     assert "the surfaces seen in the mirror" in ex["sentence"], ex["sentence"]
+
+
+def _walls_exchanged(s):
+    w = s.room.walls
+    return replace(s, room=replace(s.room, walls=(replace(w[0], albedo=w[3].albedo),) + w[1:3]
+                                   + (replace(w[3], albedo=w[0].albedo),) + w[4:]))
+
+
+def _materials_exchanged(s):
+    mats = {o.name: o.material for o in s.objects}
+    return replace(s, objects=tuple(replace(o, material=mats["sphere" if o.name == "tetrahedron" else "tetrahedron"])
+                                    for o in s.objects))
+
+
+def _walls_one_off(s):
+    w = s.room.walls
+    return replace(s, room=replace(s.room, walls=tuple(replace(x, albedo=w[i - 1].albedo) for i, x in enumerate(w))))
+
+
+def _albedos(s, f):
+    """Every Lambertian albedo of scene s through f (a function of the colour, a NumPy array)."""
+    def c(v):
+        return tuple(float(x) for x in f(np.asarray(v)))
+
+    r = s.room
+    return replace(s, room=replace(r, floor_albedo=c(r.floor_albedo), ceiling_albedo=c(r.ceiling_albedo),
+                                   walls=tuple(replace(w, albedo=c(w.albedo)) for w in r.walls)),
+                   objects=tuple(replace(o, material=Lambertian(c(o.material.albedo)))
+                                 if isinstance(o.material, Lambertian) else o for o in s.objects))
+
+
+@pytest.mark.parametrize("case, seed, family, words, cause", [
+    ("walls_exchanged", 81, "albedo_swap", "the colours of wall AB and wall DE exchanged", "albedo"),
+    ("materials_exchanged", 82, "material_swap", "the materials of the sphere and the tetrahedron exchanged",
+     "material"),
+    ("walls_one_off", 83, "albedo_swap", "every wall with the colour of the wall before it", "albedo"),
+    ("absorption", 84, "reflectance_complement", "reflectance 1 - albedo", "albedo"),
+    ("normalised", 85, "reflectance_normalised", "albedo divided by its length", "albedo"),
+])
+def test_colours_given_to_the_wrong_surfaces_are_named(ctx, case, seed, family, words, cause):
+    """Mitsuba renders (1024 spp) of the scene with walls AB's and DE's colours exchanged, the sphere's and the
+    tetrahedron's materials exchanged, every wall given the colour of the wall before it (edited here, not by the
+    family's own scene builder), every albedo its complement, and every albedo divided by its length: each is
+    claimed, in those words, as a major mistake."""
+    edit = {"walls_exchanged": _walls_exchanged, "materials_exchanged": _materials_exchanged,
+            "walls_one_off": _walls_one_off, "absorption": lambda s: _albedos(s, lambda v: 1.0 - v),
+            "normalised": lambda s: _albedos(s, lambda v: v / np.linalg.norm(v))}[case]
+    res = grade_image(case, ctx, [_mitsuba(edit(load_scene()), seed)], spp=1024)
+    ex = res.details["explanation"]
+    assert ex["verdict"] == "claimed" and ex["family"] == family and words in ex["sentence"], ex["sentence"]
+    assert named_causes(res)[0] == [cause]
+    assert res.score <= 0.75 * res.max_score

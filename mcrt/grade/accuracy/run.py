@@ -66,6 +66,11 @@ CAUSE_OF: dict[str, tuple[str, ...]] = {
     "reflectance_scale": ("brdf_norm", "albedo"),
     # Every diffuse reflectance squared (the albedo multiplied in twice): every surface's colour wrong.
     "reflectance_squared": ("albedo", "brdf_norm"),
+    # Added before the twelfth class was graded: every diffuse reflectance its complement (colours read as what a
+    # surface absorbs) or divided by its length, two surfaces' colours or two objects' materials exchanged, the
+    # walls' colours one wall off.
+    "reflectance_complement": ("albedo",), "reflectance_normalised": ("albedo",), "albedo_swap": ("albedo",),
+    "material_swap": ("material",),
     # Mistakes of students' programs (mcrt.grade.accuracy.programs): a colour matrix that loses colour (grey, a
     # channel zeroed) and one that mixes the channels otherwise, light counted twice, the light facing the wrong
     # way, black pixels.

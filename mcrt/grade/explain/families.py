@@ -15,21 +15,23 @@ from mcrt.grade.explain.light_twice import light_twice
 from mcrt.grade.explain.objects import material, object_size
 from mcrt.grade.explain.path_weight import path_weight
 from mcrt.grade.explain.pixels import bad_pixels
-from mcrt.grade.explain.reflectance import reflectance_squared, reflectance_scale
+from mcrt.grade.explain.reflectance import reflectance_remapped, reflectance_scale
 from mcrt.grade.explain.resampling import resampling
 from mcrt.grade.explain.sample_clamp import sample_clamp
 from mcrt.grade.explain.scene import albedo, rendered, scale
 from mcrt.grade.explain.surface_black import surface_black
+from mcrt.grade.explain.swap import swap
 from mcrt.grade.explain.tonecurve import tone_curve
 
 #: Every family the engine fits, in this order (ties keep it). The scene file's parameters (and the colours mixed by
 #: a matrix, a surface of the room black) and the catalogue; then what a student's program gets wrong beyond the
-#: scene file (a tone curve, each sample clamped, a fall-off, resampling, bloom, an object's material or size, every
-#: diffuse reflectance off by one factor or squared, light counted twice, a path's weight off from a bounce on, a
-#: light sample's weight, the light facing the wrong way, black pixels).
+#: scene file (a tone curve, each sample clamped, a fall-off, resampling, bloom, an object's material or size,
+#: colours or materials given to the wrong surfaces, every diffuse reflectance off by one factor, squared or its
+#: complement, light counted twice, a path's weight off from a bounce on, a light sample's weight, the light facing
+#: the wrong way, black pixels).
 FAMILIES = (scale, colour, curves, albedo, surface_black, rendered, camera, catalogue, tone_curve, sample_clamp,
-            falloff, resampling, bloom, material, object_size, reflectance_scale, reflectance_squared, light_twice,
-            path_weight, light_sampling, light_facing, bad_pixels)
+            falloff, resampling, bloom, material, object_size, swap, reflectance_scale, reflectance_remapped,
+            light_twice, path_weight, light_sampling, light_facing, bad_pixels)
 
 #: The families that are mistakes of the camera (what the misregistration test of mcrt.grade.structure also sees).
 CAMERA_FAMILIES = frozenset({"fov", "aspect", "pixel_offset", "rotation", "eye", "camera_model"})
@@ -37,7 +39,8 @@ CAMERA_FAMILIES = frozenset({"fov", "aspect", "pixel_offset", "rotation", "eye",
 #: (an object or the light missing, moved or resized) and its colours (mcrt.grade.scoring.unbiased_loss).
 MAJOR_FAMILIES = CAMERA_FAMILIES | {"object_missing", "object_moved", "light_position", "light_size", "albedo", "channels",
                                     "material", "object_size", "colour_lost", "light_facing", "surface_black",
-                                    "object_black", "reflectance_scale", "reflectance_squared"}
+                                    "object_black", "reflectance_scale", "reflectance_squared",
+                                    "reflectance_complement", "reflectance_normalised", "albedo_swap", "material_swap"}
 
 
 def prepare(a, scene, render) -> Basis:

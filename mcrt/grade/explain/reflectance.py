@@ -21,7 +21,11 @@ sample's weight) squares every reflectance instead: each colour channel
 darkens by its own albedo, a saturated wall more than a grey one. The second
 family is that render (every Lambertian albedo squared), with no free
 parameter: a power fitted freely would mimic any small darkening of the room
-(a power of 1.02 is no program's mistake).
+(a power of 1.02 is no program's mistake). A tracer that takes the scene's
+colours for what a surface absorbs (weighing a bounce by 1 - albedo) renders
+every Lambertian albedo as its complement; one that normalises a colour as
+it would a direction divides each albedo by its length. The third and fourth
+families are those renders, with no free parameter either.
 """
 
 from __future__ import annotations
@@ -49,9 +53,10 @@ FACTORS = ((1.0 / np.pi, "1/pi: the BRDF's 1/pi applied twice"),
 
 
 def remapped_reflectance(scene: Scene, f) -> Scene:
-    """``scene`` with every Lambertian albedo (the room's faces and diffuse objects) channel by channel through f."""
+    """``scene`` with every Lambertian albedo (the room's faces and diffuse objects) through f, a function of the
+    colour (an array of its three channels)."""
     def g(v):
-        return tuple(float(f(x)) for x in v)
+        return tuple(float(x) for x in f(np.asarray(v, np.float64)))
 
     room = scene.room
     room = replace(room, floor_albedo=g(room.floor_albedo), ceiling_albedo=g(room.ceiling_albedo),
@@ -72,9 +77,20 @@ def _prepare(a, scene: Scene, render) -> tuple[np.ndarray, np.ndarray]:
     return np.asarray(NODES), np.stack([img(scaled_reflectance(scene, k)) for k in NODES])
 
 
-def _prepare_squared(a, scene: Scene, render) -> np.ndarray:
-    """The render with every Lambertian albedo squared, at the basis's spp and seed."""
-    return basis_renderer(a, render)(remapped_reflectance(scene, lambda x: x * x))
+#: The fixed remappings of every Lambertian albedo: (family, the remapping, what it is in words).
+REMAPS = (("reflectance_squared", lambda x: x * x, "every diffuse surface's reflectance squared, channel by channel: "
+           "the albedo multiplied in twice (in the BRDF and again in the sample's weight)"),
+          ("reflectance_complement", lambda x: 1.0 - x, "every diffuse surface's reflectance 1 - albedo, channel by "
+           "channel: the scene's colours taken for what a surface absorbs (a red wall cyan)"),
+          ("reflectance_normalised", lambda x: x / max(float(np.linalg.norm(x)), 1e-12), "every diffuse surface's "
+           "albedo divided by its length (a colour normalised as if it were a direction): every surface brighter, a "
+           "grey one most"))
+
+
+def _prepare_remapped(a, scene: Scene, render) -> dict[str, np.ndarray]:
+    """{family: the render with every Lambertian albedo remapped (:data:`REMAPS`)}, at the basis's spp and seed."""
+    img = basis_renderer(a, render)
+    return {fam: img(remapped_reflectance(scene, f)) for fam, f, _ in REMAPS}
 
 
 def _scan(fit: Fit, inputs: Inputs, name: str, grid: np.ndarray):
@@ -92,16 +108,15 @@ def _scan(fit: Fit, inputs: Inputs, name: str, grid: np.ndarray):
     return float(grid[i]), errs[i], curves[i]
 
 
-def reflectance_squared(fit: Fit, inputs: Inputs) -> list[Candidate]:
-    """Every diffuse reflectance squared (the module docstring)."""
-    img = inputs.basis.extra.get(reflectance_squared.name)
-    if img is None:
-        return []
-    change = img.astype(np.float64) - inputs.basis.base.astype(np.float64)
-    text = ("every diffuse surface's reflectance squared, channel by channel: the albedo multiplied in twice (in the "
-            "BRDF and again in the sample's weight)")
-    return [Candidate("reflectance_squared", "reflectance squared", text, fit.delta(change), 0, value={"power": 2},
-                      change=change)]
+def reflectance_remapped(fit: Fit, inputs: Inputs) -> list[Candidate]:
+    """Every diffuse reflectance squared, or its complement (the module docstring, :data:`REMAPS`)."""
+    imgs = inputs.basis.extra.get(reflectance_remapped.name) or {}
+    out = []
+    for fam, _, text in REMAPS:
+        if fam in imgs:
+            change = imgs[fam].astype(np.float64) - inputs.basis.base.astype(np.float64)
+            out.append(Candidate(fam, fam.replace("_", " "), text, fit.delta(change), 0, change=change))
+    return out
 
 
 def reflectance_scale(fit: Fit, inputs: Inputs) -> list[Candidate]:
@@ -117,4 +132,4 @@ def reflectance_scale(fit: Fit, inputs: Inputs) -> list[Candidate]:
 
 
 reflectance_scale.name, reflectance_scale.prepare = "reflectance_scale", _prepare
-reflectance_squared.name, reflectance_squared.prepare = "reflectance_squared", _prepare_squared
+reflectance_remapped.name, reflectance_remapped.prepare = "reflectance_remapped", _prepare_remapped
