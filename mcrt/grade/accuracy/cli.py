@@ -14,7 +14,7 @@ DEFAULT_ASSIGNMENT = "course2023"
 CLASSES = {"scene": "cases", "outside": "outside", "programs": "programs", "fresh": "fresh",
            "blind": "blind", "unseen": "unseen", "untried": "untried",
            "novel": "novel", "untold": "untold", "unmet": "unmet",
-           "unheard": "unheard"}
+           "unheard": "unheard", "unsaid": "unsaid"}
 
 
 def register(sub) -> None:
@@ -33,8 +33,9 @@ def register(sub) -> None:
                    "eighth, in tracers, scene input and output, written blind, mcrt.grade.accuracy.novel), "
                    "'untold' (a ninth class of such mistakes, in tracers, scene input and output, written blind, "
                    "mcrt.grade.accuracy.untold), 'unmet' (a tenth, in tracers, scene input and output, written "
-                   "blind, mcrt.grade.accuracy.unmet) or 'unheard' (an eleventh, in tracers, scene input and output, "
-                   "written blind, mcrt.grade.accuracy.unheard) (default: scene)")
+                   "blind, mcrt.grade.accuracy.unmet), 'unheard' (an eleventh, in tracers, scene input and output, "
+                   "written blind, mcrt.grade.accuracy.unheard) or 'unsaid' (a twelfth, in tracers, scene input and "
+                   "output, written blind, mcrt.grade.accuracy.unsaid) (default: scene)")
     p.add_argument("--held-out", choices=("all", "only", "none"), default="all",
                    help="grade all cases, only the held-out ones, or none of them (default: all)")
     p.add_argument("--out", default=None, help=f"report folder (default: {DEFAULT_OUT}, or {DEFAULT_OUT}/CLASS "
