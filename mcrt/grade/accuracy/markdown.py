@@ -229,7 +229,8 @@ _UNHEARD = _written_blind("eleventh", "unheard") + ("8ccc50a (after a false-alar
             "here are of rules that saw the class.")
 
 
-_UNSAID = _written_blind("twelfth", "unsaid") + ("<COMMIT>; the whole class was then graded once, on them.")
+_UNSAID = _written_blind("twelfth", "unsaid") + ("eef00ea (after a false-alarm report on them: 0 of 153); the "
+           "whole class was then graded once, on them.")
 
 
 def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta: dict, gradescope: list[dict],
