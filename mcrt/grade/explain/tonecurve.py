@@ -4,7 +4,8 @@ The model image is :math:`f_c(R)` with :math:`f_c` monotone per channel.
 Named curves come first, each with an exposure scanned before it (a
 student's exposure slider): Reinhard's :math:`x/(1+x)`, the ACES filmic
 curve (Narkowicz's fit), Hable's filmic curve (Uncharted 2's constants and
-white point 11.2), each alone or followed by the sRGB curve, a clamp to
+white point 11.2), the exponential curve :math:`1 - e^{-x}` (tutorials'
+"exposure" tone map), each alone or followed by the sRGB curve, a clamp to
 [0, 1], and 8-bit rounding; Reinhard's extended curve
 :math:`x (1 + x / w^2) / (1 + x)` with its white point w scanned too; and
 Reinhard's curves, ACES and Hable's applied to the luminance L alone, each
@@ -83,6 +84,9 @@ def _named_curves() -> dict[str, tuple[str, callable]]:
         "hable": ("put through Hable's filmic tone map (Uncharted 2)", _hable),
         "hable+srgb": ("put through Hable's filmic tone map (Uncharted 2), then the sRGB curve",
                        lambda x: srgb_oetf(_hable(x))),
+        "exponential": ("put through the exponential tone map 1 - exp(-x)", lambda x: -np.expm1(-x)),
+        "exponential+srgb": ("put through the exponential tone map 1 - exp(-x), then the sRGB curve",
+                             lambda x: srgb_oetf(-np.expm1(-x))),
         "clamp": ("clamped to [0, 1]", lambda x: np.clip(x, 0.0, 1.0)),
         "quantised": ("clamped to [0, 1] and rounded to 8 bits (linear)", q8),
     }

@@ -215,6 +215,48 @@ def edge_text(var_ratio: float, spp: int, spp_eff: float, spp_away: float) -> st
             "firefly or outlier filter, a clamp)")
 
 
+#: A row (or column) matches a neighbouring row of the reference better than its own by this many standard deviations
+#: of its chi^2 (sqrt(2 m) for m terms): noise never does (a neighbouring row holds the same noise against the
+#: image's gradient between rows); a row written one place off does wherever the image changes between rows.
+LINE_Z = 5.0
+#: Lines so misplaced, at least this many and this share of them, before the image is said to hold them out of order.
+LINES_MIN, LINES_SHARE = 3, 0.05
+
+
+def misplaced_lines(img: np.ndarray, R: np.ndarray, var: np.ndarray, mask: np.ndarray) -> tuple[str, int, int] | None:
+    """('rows' or 'columns', how many, of how many) of the lines of img that match a neighbouring line of R better
+    than their own by :data:`LINE_Z` (a pool's rows stored in the order they finished, an index off by one for
+    some lines), or None when fewer than :data:`LINES_MIN` and :data:`LINES_SHARE` of them do. Of rows and
+    columns, the direction with the larger share: lines of one direction out of order make a few lines of the
+    other match their neighbours better too, where those cross an edge."""
+    w = np.where(mask[..., None] & np.isfinite(img), 1.0 / np.maximum(var, 1e-30), 0.0)
+    S = np.where(w > 0, img, 0.0)
+    found = []
+    for axis, word in ((0, "rows"), (1, "columns")):
+        S_, R_, w_ = (np.moveaxis(x, axis, 0) for x in (S, R, w))
+        m = np.count_nonzero(w_, axis=(1, 2))
+
+        def chi(shift):
+            return np.sum((S_ - np.roll(R_, shift, axis=0)) ** 2 * w_, axis=(1, 2))
+
+        before, after = chi(1), chi(-1)  # against the line before it, and the line after it
+        nb = np.minimum(before, after)
+        nb[0], nb[-1] = after[0], before[-1]  # the ends' neighbours within the image (no wrapping round)
+        own = chi(0)
+        z = (own - nb) / np.sqrt(2.0 * np.maximum(m, 1))
+        k = int(np.count_nonzero(z > LINE_Z))
+        if k >= max(LINES_MIN, LINES_SHARE * len(z)):
+            found.append((word, k, len(z)))
+    return max(found, key=lambda f: f[1] / f[2], default=None)
+
+
+def lines_text(word: str, k: int, n: int) -> str:
+    """The noise criterion's failure where lines of the image are out of order (:func:`misplaced_lines`)."""
+    return (f"{k} of the image's {n} {word} match a neighbouring {word[:-1]} of the reference better than their own, "
+            f"by far more than noise: {word} stored out of order (written in the order a pool of workers finished "
+            f"them, or an index off by one for some of them), not noise of fewer samples")
+
+
 def _undeclared(g: Grading, lvl: Level) -> None:
     a, th, spp_eff = g.a, g.th, lvl.spp_eff
     lvl.var_ratio = var_ratio = a.min_spp / spp_eff if np.isfinite(spp_eff) else 0.0
@@ -242,6 +284,12 @@ def verdict(g: Grading, hand: Hand, lvl: Level, bt, found: dict[str, str], flagg
     if same:  # a pair with one seed loses the noise points whatever else is found; a firm finding is kept beside it
         g.rubric.set("noise", "failed", same + (f"; also, {text}" if status == "failed" and firm else ""))
         return
+    if status == "failed" and not firm:  # the excess is lines out of order, biased or not: no noise of fewer samples
+        lines = misplaced_lines(lvl.img, hand.R, lvl.model_ps / (lvl.spp_nominal * lvl.per) + lvl.ref_noise + lvl.q,
+                                lvl.clip_mask)
+        if lines is not None:
+            g.rubric.set("noise", status, lines_text(*lines))
+            return
     if status == "failed" and not firm and flagged:
         status, text = "passed", (f"not judged: the image is biased, so its noise cannot be compared with a correct "
                                   f"renderer's (it is like mcrt with about {spp_text(lvl.spp_eff)} spp)")
