@@ -820,10 +820,10 @@ def _pairs_swapped(img, axis):
 
 @pytest.mark.parametrize("axis, word", [(0, "rows"), (1, "columns")])
 def test_lines_out_of_order_are_named_not_noise(ctx, axis, word):
-    """A Mitsuba render (seed 86, 1024 spp) with every eighth pair of rows (or columns) exchanged: the tiles' means
-    hold the bias test's tiles nearly right, and the noise criterion fails naming the lines out of order, not fewer
-    samples. (At this size the explanation may claim a sub-pixel warp of the camera beside it: a known defect.)"""
-    res = grade_image(f"lines_{word}", ctx, [_pairs_swapped(_mitsuba(load_scene(), 86), axis)], spp=1024)
+    """A Mitsuba render (seed 86, 256 spp) with every eighth pair of rows (or columns) exchanged: the bias test's
+    tiles hold nearly the right means and pass, and the noise criterion fails naming the lines out of order, not
+    fewer samples (the check runs where the bias test passed; at 1024 spp this image is flagged biased instead)."""
+    res = grade_image(f"lines_{word}", ctx, [_pairs_swapped(_mitsuba(load_scene(), 86, spp=256), axis)], spp=256)
     text = _output(res, "noise")
     assert f"{word} stored out of order" in text, text
     assert "row_stride" in named_causes(res)[0] and "spp_claim" not in named_causes(res)[0]

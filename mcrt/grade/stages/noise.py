@@ -284,7 +284,9 @@ def verdict(g: Grading, hand: Hand, lvl: Level, bt, found: dict[str, str], flagg
     if same:  # a pair with one seed loses the noise points whatever else is found; a firm finding is kept beside it
         g.rubric.set("noise", "failed", same + (f"; also, {text}" if status == "failed" and firm else ""))
         return
-    if status == "failed" and not firm:  # the excess is lines out of order, biased or not: no noise of fewer samples
+    # The excess is lines out of order: no noise of fewer samples. Only where the bias test passed: against a biased
+    # image every line's chi^2 is large, and a neighbour's may be smaller by chance of the gradient.
+    if status == "failed" and not firm and not flagged:
         lines = misplaced_lines(lvl.img, hand.R, lvl.model_ps / (lvl.spp_nominal * lvl.per) + lvl.ref_noise + lvl.q,
                                 lvl.clip_mask)
         if lines is not None:
