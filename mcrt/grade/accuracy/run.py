@@ -252,8 +252,7 @@ def named_causes(res) -> tuple[list[str], str]:
                                 ("bad_pixels", "paths through the mirror", "specular_unseen"),
                                 # roulette's divisor, where the words name it (added after unheard was graded)
                                 ("path_weight", "Russian roulette", "roulette"),
-                                # a mirror passing rays on unchanged (added after unsaid was graded)
-                                ("object_missing", "rays passing through it", "material")):
+                                ("object_missing", "rays passing through it", "material")):  # a mirror (since unsaid)
             if fam == f and words in expl["sentence"]:
                 causes.append(cause)
         for alt in (expl.get("adequacy") or {}).get("alternatives", []):  # named beside it as fitting as well

@@ -219,34 +219,37 @@ def edge_text(var_ratio: float, spp: int, spp_eff: float, spp_away: float) -> st
 #: of its chi^2 (sqrt(2 m) for m terms): noise never does (a neighbouring row holds the same noise against the
 #: image's gradient between rows); a row written one place off does wherever the image changes between rows.
 LINE_Z = 5.0
+#: How many places away a line may have been stored (a pool of four workers' rows, each at most three places off).
+NEAR = 3
 #: Lines so misplaced, at least this many and this share of them, before the image is said to hold them out of order.
 LINES_MIN, LINES_SHARE = 3, 0.05
 
 
 def misplaced_lines(img: np.ndarray, R: np.ndarray, var: np.ndarray, mask: np.ndarray) -> tuple[str, int, int] | None:
-    """('rows' or 'columns', how many, of how many) of the lines of img that match a neighbouring line of R better
-    than their own by :data:`LINE_Z` (a pool's rows stored in the order they finished, an index off by one for
-    some lines), or None when fewer than :data:`LINES_MIN` and :data:`LINES_SHARE` of them do. Of rows and
-    columns, the direction with the larger share: lines of one direction out of order make a few lines of the
-    other match their neighbours better too, where those cross an edge."""
+    """('rows' or 'columns', how many, of how many) of the lines of img that match a line of R up to :data:`NEAR`
+    places away better than their own, by :data:`LINE_Z` and by more than half their own excess over noise (a pool's
+    rows stored in the order they finished, an index off for some lines), or None when fewer than :data:`LINES_MIN`
+    and :data:`LINES_SHARE` of them do. Against a biased image every line's chi^2 is large and another line's may be
+    the smaller by chance of the gradient; it takes away little of the excess. Of rows and columns, the direction
+    with the larger share: lines of one direction out of order make a few lines of the other match better too."""
     w = np.where(mask[..., None] & np.isfinite(img), 1.0 / np.maximum(var, 1e-30), 0.0)
     S = np.where(w > 0, img, 0.0)
     found = []
     for axis, word in ((0, "rows"), (1, "columns")):
         S_, R_, w_ = (np.moveaxis(x, axis, 0) for x in (S, R, w))
-        m = np.count_nonzero(w_, axis=(1, 2))
-
-        def chi(shift):
-            return np.sum((S_ - np.roll(R_, shift, axis=0)) ** 2 * w_, axis=(1, 2))
-
-        before, after = chi(1), chi(-1)  # against the line before it, and the line after it
-        nb = np.minimum(before, after)
-        nb[0], nb[-1] = after[0], before[-1]  # the ends' neighbours within the image (no wrapping round)
-        own = chi(0)
-        z = (own - nb) / np.sqrt(2.0 * np.maximum(m, 1))
-        k = int(np.count_nonzero(z > LINE_Z))
-        if k >= max(LINES_MIN, LINES_SHARE * len(z)):
-            found.append((word, k, len(z)))
+        n = len(S_)
+        m = np.maximum(np.count_nonzero(w_, axis=(1, 2)), 1)
+        own = np.sum((S_ - R_) ** 2 * w_, axis=(1, 2))
+        nb = np.full(n, np.inf)
+        for d in range(-NEAR, NEAR + 1):
+            if d:
+                r = np.clip(np.arange(n) + d, 0, n - 1)  # the line d places away, within the image
+                e = np.sum((S_ - R_[r]) ** 2 * w_, axis=(1, 2))
+                nb = np.where(r != np.arange(n), np.minimum(nb, e), nb)
+        gain = own - nb
+        k = int(np.count_nonzero((gain > LINE_Z * np.sqrt(2.0 * m)) & (gain > 0.5 * (own - m))))
+        if k >= max(LINES_MIN, LINES_SHARE * n):
+            found.append((word, k, n))
     return max(found, key=lambda f: f[1] / f[2], default=None)
 
 
@@ -284,9 +287,10 @@ def verdict(g: Grading, hand: Hand, lvl: Level, bt, found: dict[str, str], flagg
     if same:  # a pair with one seed loses the noise points whatever else is found; a firm finding is kept beside it
         g.rubric.set("noise", "failed", same + (f"; also, {text}" if status == "failed" and firm else ""))
         return
-    # The excess is lines out of order: no noise of fewer samples. Only where the bias test passed: against a biased
-    # image every line's chi^2 is large, and a neighbour's may be smaller by chance of the gradient.
-    if status == "failed" and not firm and not flagged:
+    # The excess is lines out of order: no noise of fewer samples. Only where the bias test and the exposure passed:
+    # against a biased or darker image every line's chi^2 is large, and a darker line's may be the smaller.
+    biased = flagged or any(r.status == "failed" for n, r in g.rubric.results.items() if n in ("unbiased", "exposure"))
+    if status == "failed" and not firm and not biased:
         lines = misplaced_lines(lvl.img, hand.R, lvl.model_ps / (lvl.spp_nominal * lvl.per) + lvl.ref_noise + lvl.q,
                                 lvl.clip_mask)
         if lines is not None:
