@@ -215,9 +215,9 @@ def edge_text(var_ratio: float, spp: int, spp_eff: float, spp_away: float) -> st
             "firefly or outlier filter, a clamp)")
 
 
-#: A row (or column) matches a neighbouring row of the reference better than its own by this many standard deviations
-#: of its chi^2 (sqrt(2 m) for m terms): noise never does (a neighbouring row holds the same noise against the
-#: image's gradient between rows); a row written one place off does wherever the image changes between rows.
+#: A row (or column) matches a row of the reference up to NEAR places away better than its own by this many standard
+#: deviations of its chi^2 (sqrt(2 m) for m terms): noise never does (another row holds the same noise against the
+#: image's gradient between rows); a row written a few places off does wherever the image changes between rows.
 LINE_Z = 5.0
 #: How many places away a line may have been stored (a pool of four workers' rows, each at most three places off).
 NEAR = 3
