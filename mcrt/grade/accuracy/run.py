@@ -71,6 +71,9 @@ CAUSE_OF: dict[str, tuple[str, ...]] = {
     # walls' colours one wall off.
     "reflectance_complement": ("albedo",), "reflectance_normalised": ("albedo",), "albedo_swap": ("albedo",),
     "material_swap": ("material",),
+    # Values stored at the wrong places (added after unsaid was graded): rows (or columns) out of order, a pool's
+    # finishing order; a row's or the image's channels one after another.
+    "lines_order": ("row_stride",), "layout": ("channels", "row_stride"), "reflectance_rounded": ("albedo",),
     # Mistakes of students' programs (mcrt.grade.accuracy.programs): a colour matrix that loses colour (grey, a
     # channel zeroed) and one that mixes the channels otherwise, light counted twice, the light facing the wrong
     # way, black pixels.

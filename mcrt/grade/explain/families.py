@@ -9,6 +9,7 @@ from mcrt.grade.explain.catalogue import catalogue
 from mcrt.grade.explain.colour import colour
 from mcrt.grade.explain.curves import curves
 from mcrt.grade.explain.falloff import falloff
+from mcrt.grade.explain.layout import layout
 from mcrt.grade.explain.light_facing import light_facing
 from mcrt.grade.explain.light_sampling import light_sampling
 from mcrt.grade.explain.light_twice import light_twice
@@ -26,11 +27,11 @@ from mcrt.grade.explain.tonecurve import tone_curve
 #: Every family the engine fits, in this order (ties keep it). The scene file's parameters (and the colours mixed by
 #: a matrix, a surface of the room black) and the catalogue; then what a student's program gets wrong beyond the
 #: scene file (a tone curve, each sample clamped, a fall-off, resampling, bloom, an object's material or size,
-#: colours or materials given to the wrong surfaces, every diffuse reflectance off by one factor, squared or its
-#: complement, light counted twice, a path's weight off from a bounce on, a light sample's weight, the light facing
-#: the wrong way, black pixels).
+#: values stored at the wrong places, colours or materials given to the wrong surfaces, every diffuse reflectance off
+#: by one factor, squared or its complement, light counted twice, a path's weight off from a bounce on, a light
+#: sample's weight, the light facing the wrong way, black pixels).
 FAMILIES = (scale, colour, curves, albedo, surface_black, rendered, camera, catalogue, tone_curve, sample_clamp,
-            falloff, resampling, bloom, material, object_size, swap, reflectance_scale, reflectance_remapped,
+            falloff, resampling, layout, bloom, material, object_size, swap, reflectance_scale, reflectance_remapped,
             light_twice, path_weight, light_sampling, light_facing, bad_pixels)
 
 #: The families that are mistakes of the camera (what the misregistration test of mcrt.grade.structure also sees).
@@ -40,7 +41,8 @@ CAMERA_FAMILIES = frozenset({"fov", "aspect", "pixel_offset", "rotation", "eye",
 MAJOR_FAMILIES = CAMERA_FAMILIES | {"object_missing", "object_moved", "light_position", "light_size", "albedo", "channels",
                                     "material", "object_size", "colour_lost", "light_facing", "surface_black",
                                     "object_black", "reflectance_scale", "reflectance_squared",
-                                    "reflectance_complement", "reflectance_normalised", "albedo_swap", "material_swap"}
+                                    "reflectance_complement", "reflectance_normalised", "reflectance_rounded",
+                                    "albedo_swap", "material_swap"}
 
 
 def prepare(a, scene, render) -> Basis:

@@ -215,42 +215,15 @@ def edge_text(var_ratio: float, spp: int, spp_eff: float, spp_away: float) -> st
             "firefly or outlier filter, a clamp)")
 
 
-#: A row (or column) matches a row of the reference up to NEAR places away better than its own by this many standard
-#: deviations of its chi^2 (sqrt(2 m) for m terms): noise never does (another row holds the same noise against the
-#: image's gradient between rows); a row written a few places off does wherever the image changes between rows.
-LINE_Z = 5.0
-#: How many places away a line may have been stored (a pool of four workers' rows, each at most three places off).
-NEAR = 3
-#: Lines so misplaced, at least this many and this share of them, before the image is said to hold them out of order.
-LINES_MIN, LINES_SHARE = 3, 0.05
-
-
 def misplaced_lines(img: np.ndarray, R: np.ndarray, var: np.ndarray, mask: np.ndarray) -> tuple[str, int, int] | None:
-    """('rows' or 'columns', how many, of how many) of the lines of img that match a line of R up to :data:`NEAR`
-    places away better than their own, by :data:`LINE_Z` and by more than half their own excess over noise (a pool's
-    rows stored in the order they finished, an index off for some lines), or None when fewer than :data:`LINES_MIN`
-    and :data:`LINES_SHARE` of them do. Against a biased image every line's chi^2 is large and another line's may be
-    the smaller by chance of the gradient; it takes away little of the excess. Of rows and columns, the direction
-    with the larger share: lines of one direction out of order make a few lines of the other match better too."""
+    """('rows' or 'columns', how many, of how many) of the lines of img that match a line of R a few places away
+    better than their own (:func:`mcrt.grade.explain.layout.moved_lines`), or None where too few do."""
+    from mcrt.grade.explain.layout import moved_lines
+
     w = np.where(mask[..., None] & np.isfinite(img), 1.0 / np.maximum(var, 1e-30), 0.0)
-    S = np.where(w > 0, img, 0.0)
-    found = []
-    for axis, word in ((0, "rows"), (1, "columns")):
-        S_, R_, w_ = (np.moveaxis(x, axis, 0) for x in (S, R, w))
-        n = len(S_)
-        m = np.maximum(np.count_nonzero(w_, axis=(1, 2)), 1)
-        own = np.sum((S_ - R_) ** 2 * w_, axis=(1, 2))
-        nb = np.full(n, np.inf)
-        for d in range(-NEAR, NEAR + 1):
-            if d:
-                r = np.clip(np.arange(n) + d, 0, n - 1)  # the line d places away, within the image
-                e = np.sum((S_ - R_[r]) ** 2 * w_, axis=(1, 2))
-                nb = np.where(r != np.arange(n), np.minimum(nb, e), nb)
-        gain = own - nb
-        k = int(np.count_nonzero((gain > LINE_Z * np.sqrt(2.0 * m)) & (gain > 0.5 * (own - m))))
-        if k >= max(LINES_MIN, LINES_SHARE * n):
-            found.append((word, k, n))
-    return max(found, key=lambda f: f[1] / f[2], default=None)
+    found = moved_lines(np.where(w > 0, img, 0.0), R, w)
+    return None if found is None else (found[0], int(np.count_nonzero(found[1] != np.arange(len(found[1])))),
+                                       len(found[1]))
 
 
 def lines_text(word: str, k: int, n: int) -> str:

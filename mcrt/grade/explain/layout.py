@@ -1,0 +1,102 @@
+r"""Values stored at the wrong places: lines out of order, a row's channels one after another.
+
+Rows (or columns) stored out of order (a pool of workers' rows kept in the
+order they finished, an index off for some lines) are R with each such line
+replaced by the line of R it matches (:func:`moved_lines`); each moved line
+is one parameter. A file writer whose loops run channel before column
+writes a row's reds, then its greens, then its blues; read as the format's
+interleaved samples, pixel i of the row holds samples 3 i to 3 i + 2 of
+that run. The same order over the whole image (every red first, a planar
+array written as it lies in memory) is the other fixed layout. Neither has
+a free parameter.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from mcrt.grade.candidates import Candidate, Inputs
+from mcrt.grade.explain.fit import Fit
+
+#: A row (or column) matches a row of the reference up to NEAR places away better than its own by this many standard
+#: deviations of its chi^2 (sqrt(2 m) for m terms): noise never does (another row holds the same noise against the
+#: image's gradient between rows); a row written a few places off does wherever the image changes between rows.
+LINE_Z = 5.0
+#: How many places away a line may have been stored (a pool of four workers' rows, each at most three places off).
+NEAR = 3
+#: Lines so misplaced, at least this many and this share of them, before the image is said to hold them out of order.
+LINES_MIN, LINES_SHARE = 3, 0.05
+
+
+def moved_lines(S: np.ndarray, R: np.ndarray, w: np.ndarray) -> tuple[str, np.ndarray] | None:
+    """('rows' or 'columns', for each line of S the line of R it shows) where lines of S match a line of R up to
+    :data:`NEAR` places away better than their own, by :data:`LINE_Z` and by more than half their own excess over
+    noise (``w``: each term's weight, 1 / variance; 0 where not compared), and whose line of R is so misplaced
+    too (lines exchanged, not one line like its neighbour), in at least :data:`LINES_MIN` and :data:`LINES_SHARE` of
+    them; else None. Against a biased image every line's chi^2 is large and another line's
+    may be the smaller by chance of the gradient; it takes away little of the excess. Of rows and columns, the
+    direction with the larger share: lines of one direction out of order make a few lines of the other match better
+    too."""
+    found = []
+    for axis, word in ((0, "rows"), (1, "columns")):
+        S_, R_, w_ = (np.moveaxis(x, axis, 0) for x in (S, R, w))
+        n = len(S_)
+        m = np.maximum(np.count_nonzero(w_, axis=(1, 2)), 1)
+        own = np.sum((S_ - R_) ** 2 * w_, axis=(1, 2))
+        nb, src = np.full(n, np.inf), np.arange(n)
+        for d in range(-NEAR, NEAR + 1):
+            r = np.clip(np.arange(n) + d, 0, n - 1)  # the line d places away, within the image
+            e = np.where(r != np.arange(n), np.sum((S_ - R_[r]) ** 2 * w_, axis=(1, 2)), np.inf)
+            src, nb = np.where(e < nb, r, src), np.minimum(nb, e)
+        gain = own - nb
+        ok = (gain > LINE_Z * np.sqrt(2.0 * m)) & (gain > 0.5 * (own - m))
+        ok &= ok[src]  # lines exchanged: the line it shows is at another place too (a change on one object is not)
+        k = int(np.count_nonzero(ok))
+        if k >= max(LINES_MIN, LINES_SHARE * n):
+            found.append((k / n, word, np.where(ok, src, np.arange(n))))
+    if not found:
+        return None
+    _, word, src = max(found, key=lambda f: f[0])
+    return word, src
+
+
+def planar_rows(R: np.ndarray) -> np.ndarray:
+    """R written a row at a time with the channel loop outside the column loop, read back interleaved."""
+    h, w, c = R.shape
+    return np.ascontiguousarray(np.swapaxes(R, 1, 2)).reshape(h, w, c)
+
+
+def planar_image(R: np.ndarray) -> np.ndarray:
+    """R written channel by channel over the whole image (a planar array), read back interleaved."""
+    h, w, c = R.shape
+    return np.ascontiguousarray(np.moveaxis(R, 2, 0)).reshape(h, w, c)
+
+
+def layout(fit: Fit, inputs: Inputs) -> list[Candidate]:
+    """Lines out of order, and a row's or the image's channels written one after another (the module docstring)."""
+    out = []
+    lines = moved_lines(fit.S, fit.R, fit.w)
+    if lines is not None:
+        word, src = lines
+        k = int(np.count_nonzero(src != np.arange(len(src))))
+        moved = np.take(fit.R, src, axis=0 if word == "rows" else 1)
+        out.append(Candidate("lines_order", f"{word} out of order", f"{word} stored out of order: {k} of the image's "
+                             f"{len(src)} {word} show the render's {word[:-1]} up to {NEAR} places away (written in the "
+                             f"order a pool of workers finished them, or an index off for some of them)",
+                             fit.model(moved), k, value={"lines": word, "moved": k, "of": len(src)},
+                             change=moved - fit.R,
+                             # A shift by whole lines and lines copied onward are lines of R at other places too.
+                             generalises=("pixel_offset", "resampling")))
+    for name, f, text in (("planar rows", planar_rows, "each row's samples written channel by channel (the row's reds, "
+                           "then its greens, then its blues: the channel loop outside the column loop) where the "
+                           "format interleaves them"),
+                          ("planar image", planar_image, "the image's samples written channel by channel (every red, "
+                           "then every green, then every blue: a planar array written as it lies in memory) where the "
+                           "format interleaves them")):
+        # A file that holds no value above 1 clipped them before they were moved (the light's pixels at 1).
+        M = f(np.minimum(fit.R, 1.0) if float(np.max(fit.S)) <= 1.0 else fit.R)
+        out.append(Candidate("layout", name, text, fit.model(M), 0, value=name, change=M - fit.R))
+    return out
+
+
+layout.name = "layout"
