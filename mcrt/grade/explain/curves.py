@@ -1,4 +1,4 @@
-"""Closed-form families on the reference: encoding curves, a blur and a sharpening."""
+"""Closed-form families on the reference: encoding curves, a blur, a 3 x 3 filter after rendering, a sharpening."""
 
 from __future__ import annotations
 
@@ -28,7 +28,11 @@ def curves(fit: Fit, inputs: Inputs) -> list[Candidate]:
            # In a float file nothing clips: values above 1 (the light) go through the decoding's power law too.
            Candidate("encoding", "decoded, float", "the values decoded from sRGB once too often (linear values "
                      "taken for display values and decoded), in a float file where values above 1 are decoded too",
-                     fit.model(srgb_eotf(R)), 0, value="srgb-inverse-float", change=srgb_eotf(R) - fit.R)]
+                     fit.model(srgb_eotf(R)), 0, value="srgb-inverse-float", change=srgb_eotf(R) - fit.R),
+           # Another standard's camera curve where the file says sRGB (the reader decodes it with sRGB's).
+           Candidate("encoding", "BT.709 curve", "the values encoded with BT.709's camera curve (4.5 x below 0.018, "
+                     "1.099 x^0.45 - 0.099 above) where the file's sRGB curve belongs", fit.model(srgb_eotf(bt709(C))),
+                     0, value="bt709", change=srgb_eotf(bt709(C)) - fit.R)]
     exps = np.linspace(0.25, 2.5, 91)
     errs = np.array([fit.model(R**p) for p in exps])
     i = int(np.argmin(errs))
@@ -49,8 +53,55 @@ def curves(fit: Fit, inputs: Inputs) -> list[Candidate]:
                          f"offsets outside 0 to 1): smoothed as by a Gaussian of about {_num(s)} pixel",
                          float(errs[i]), 1, value=float(s),
                          change=gaussian_filter(fit.R, (s, s, 0), mode="nearest") - fit.R))
+    out += _three_by_three(fit)
     out.append(_unsharp(fit, gaussian_filter))
     return out
+
+
+def bt709(x: np.ndarray) -> np.ndarray:
+    """BT.709's camera curve (its OETF) of linear values in [0, 1]."""
+    return np.where(x < 0.018, 4.5 * x, 1.099 * np.power(np.maximum(x, 0.018), 0.45) - 0.099)
+
+
+#: Kernels of 3 x 3 filters written by hand, with the sum of their weights: a filter divided by another count (a
+#: binomial's 16 taken for a box's 9) scales the image by the ratio.
+KERNELS = {"box": (np.ones((3, 3)), "a 3 x 3 box (mean) filter"),
+           "binomial": (np.outer([1.0, 2.0, 1.0], [1.0, 2.0, 1.0]), "a 3 x 3 binomial filter (weights 1 2 1 by 1 2 1)")}
+
+
+def _three_by_three(fit: Fit) -> list[Candidate]:
+    """3 x 3 filters after rendering: a median, a maximum and a minimum filter (each pixel the median, largest or
+    smallest of its 3 x 3 neighbourhood, channel by channel: a despeckle, a dilation, an erosion), none with a free
+    parameter (of R: a filter of the noisy image differs by more where the noise is large, which the remainder
+    shows); and the best of :data:`KERNELS` with its weights' sum fitted (1: a correct filter; their count where
+    their sum belongs: the sum over it)."""
+    from scipy.ndimage import convolve, maximum_filter, median_filter, minimum_filter
+
+    out = []
+    for name, f, what in (("median", median_filter, "a median filter (each pixel the median of its 3 x 3 "
+                           "neighbourhood, a despeckle)"),
+                          ("maximum", maximum_filter, "a maximum filter (each pixel the largest of its 3 x 3 "
+                           "neighbourhood, a dilation that fills dark speckles)"),
+                          ("minimum", minimum_filter, "a minimum filter (each pixel the smallest of its 3 x 3 "
+                           "neighbourhood, an erosion that removes bright speckles)")):
+        M = f(fit.R, size=(3, 3, 1), mode="nearest")
+        out.append(Candidate("blur", f"{name} filter", f"the image filtered after rendering by {what}", fit.model(M),
+                             0, value={"filter": name, "size": 3}, change=M - fit.R))
+    best = None
+    for name, (k, what) in KERNELS.items():
+        F = convolve(fit.R, (k / k.sum())[..., None], mode="nearest")
+        wts = fit.w * F
+        g = float(np.sum(wts * fit.S) / max(float(np.sum(wts * F)), 1e-300))  # the gain by weighted least squares
+        e = fit.model(g * F)
+        if best is None or e < best[0]:
+            best = (e, name, what, g, g * F, float(k.sum()))
+    e, name, what, g, M, total = best
+    count = next((c for c in (9.0, 16.0, 8.0, 4.0) if abs(total / c - g) < 0.02 * g), None)
+    why = (f" (its weights divided by {count:g} where their sum {total:g} belongs)" if count and count != total
+           else "")
+    return out + [Candidate("blur", f"{name} filter times {g:.2f}", f"the image filtered after rendering by {what} "
+                            f"whose weights sum to {g:.2f}, not 1{why}", e, 1,
+                            value={"filter": name, "size": 3, "gain": g}, change=M - fit.R)]
 
 
 #: Radii (Gaussian standard deviations, pixels) and amounts of the unsharp masks tried.
