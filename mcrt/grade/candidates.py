@@ -81,6 +81,9 @@ class Candidate:
     # surface reflects onto what is seen, which other mistakes change alike (a biased estimator, a path cut short).
     # It may leave noise, but it is never claimed on that alone (mcrt.grade.adequacy.claim_rule).
     out_of_view: bool = False
+    # The change multiplies light the program renders with its noise (a light sample's or a path's weight off by a
+    # factor): the hand-in's noise grows with it, which the remainder test allows (mcrt.grade.stages.explanation).
+    gain: bool = False
 
     def to_dict(self) -> dict:
         if self.ranked:

@@ -17,7 +17,8 @@ specular bounce, not a light sample, yet it is scaled with the rest: an
 approximation confined to a few of the sphere's pixels.
 
 No free parameter: k is one of the factors a program gets wrong
-(:func:`factors`: the light's area A or 1/A, 2 or 1/2); a weight fitted
+(:func:`factors`: the light's area A or 1/A, 2 or 1/2, the number of shadow
+rays a point sums where their mean belongs); a weight fitted
 freely would mimic any small change of the light on the room (an adaptive
 sampler's bias of -1 % is no light sample's weight of 0.99).
 
@@ -40,12 +41,18 @@ from mcrt.grade.explain.light_twice import _depth
 from mcrt.grade.feedback import num as _num
 
 
+#: Shadow rays a program may trace from each point and sum, not average: a few powers of 2, ten, and the 30 of the
+#: course report's renders.
+SHADOW_RAYS = (4, 8, 10, 16, 30, 32)
+
+
 def factors(area: float) -> tuple[tuple[float, str], ...]:
     """(k, what it means) of the light sample weights programs get wrong, for a light of ``area``."""
     return ((1.0 / area, f"1/A = {_num(1.0 / area)}: the light's pdf taken as 1, not 1/A"),
             (area, f"A = {_num(area)}: the light's area applied twice (its pdf taken as 1/A^2)"),
             (0.5, "1/2: half the light's surface sampled (one of its two triangles) with the whole light's pdf"),
-            (2.0, "2: the light sampled with half its pdf (two triangles' samples both counted)"))
+            (2.0, "2: the light sampled with half its pdf (two triangles' samples both counted)"),
+            *((float(n), f"{n}: {n} shadow rays a point summed where their mean belongs") for n in SHADOW_RAYS))
 
 
 def _quadrants(scene):
@@ -100,7 +107,7 @@ def light_sampling(fit: Fit, inputs: Inputs) -> list[Candidate]:
     text = (f"the light reaching surfaces {_num(k)} times what it should be, the light itself seen right: a light "
             f"sample weighted wrongly (k = {words})")
     out = [Candidate("light_sampling", "light sample's weight", text, err, 0, value={"factor": k},
-                     change=(k - 1.0) * x)]
+                     change=(k - 1.0) * x, gain=True)]
     quarter = _quadrant(fit, inputs, x)
     return out + ([quarter] if quarter is not None else [])
 

@@ -96,7 +96,7 @@ def path_weight(fit: Fit, inputs: Inputs) -> list[Candidate]:
         if fits:
             chi, s, q, change = min(fits, key=lambda t: t[0])
             out.append(Candidate("path_weight", f"path weight {shape}", words(q, s), chi, 1,
-                                 value={"shape": shape, "hit": s, "factor": q}, change=change))
+                                 value={"shape": shape, "hit": s, "factor": q}, change=change, gain=True))
     return out
 
 

@@ -26,12 +26,20 @@ from mcrt.stats.onesample import Noise, multiscale_test, scale_stats
 CLAIM_RULE = claim_rule
 
 
-def _change_var(g: Grading, c, basis) -> np.ndarray:
-    """The noise of a candidate's predicted change: its expected images' (a catalogued bug) or the basis renders'."""
+def _change_var(g: Grading, c, basis, noise: Noise, R: np.ndarray) -> np.ndarray:
+    """The noise of a candidate's predicted change: its expected images' (a catalogued bug) or the basis renders';
+    for a gain (:attr:`mcrt.grade.candidates.Candidate.gain`) the basis renders' grown with the factor it puts on
+    them, (M / R - 1)^2 times theirs (M the model image), and the hand-in's own noise grown with it, a correct
+    render's times (M / R)^2 - 1 where M is brighter than R."""
     if c.catalogue and c.name in g.ctx.mutants:
         m, b = g.ctx.mutants[c.name], g.ctx.baseline
         return m.var.astype(np.float64) / m.spp + b.var.astype(np.float64) / b.spp
-    return basis.var.astype(np.float64) / basis.spp
+    var = basis.var.astype(np.float64) / basis.spp
+    if c.gain and c.change is not None:
+        ratio = np.where(R > 0, (R + c.change) / np.where(R > 0, R, 1.0), 1.0)
+        var = (var * np.maximum((ratio - 1.0) ** 2, 1.0)
+               + np.asarray(noise.model, np.float64) * np.maximum(ratio**2 - 1.0, 0.0))
+    return var
 
 
 def _tile_means(x, mask, tile):
@@ -104,7 +112,7 @@ def explain(g: Grading, hand: Hand, img, mask, noise: Noise):
     sc = Scene2D(tuple(a.tiles), th.alpha, th.min_effect, th.full_effect, labels, names,
                  shares=baseline_shares(ctx, cam, R, hand.ref, mask),
                  filtered=any(g.details.get("structure", {}).get("penalised", {}).get(k, 0) for k in ("blur", "correlation")))
-    rule = CLAIM_RULE(img, R, mask, noise, sc, extra_var=lambda c: _change_var(g, c, basis))
+    rule = CLAIM_RULE(img, R, mask, noise, sc, extra_var=lambda c: _change_var(g, c, basis, noise, R))
     e = engine(img, R, noise.model + noise.reference, mask, inputs, claim=rule, tile=tile)
     g.explanation = e
     g.details["explanation"] = e.to_dict()
