@@ -252,7 +252,9 @@ def describe(S: np.ndarray, R: np.ndarray, mask: np.ndarray, noise_var: np.ndarr
     v = noise_var[sel] @ LUMINANCE**2
     out = []
     ms, mr = float(s.mean()), float(r.mean())
-    if mr > 0 and abs(ms / mr - 1) >= 0.01:
+    if mr > 0 and ms <= 0:  # a remainder below zero: what it is compared with holds more light than the image
+        out.append("black or darker (no light left)")
+    elif mr > 0 and abs(ms / mr - 1) >= 0.01:
         out.append(f"{'darker' if ms < mr else 'brighter'} by {100 * abs(ms / mr - 1):.0f} %")
     rc, sc = r - mr, s - ms
     if float(np.sum(rc * rc)) > MIN_STRUCTURE**2 * float(np.sum(v)):

@@ -24,8 +24,9 @@ parameter: a power fitted freely would mimic any small darkening of the room
 (a power of 1.02 is no program's mistake). A tracer that takes the scene's
 colours for what a surface absorbs (weighing a bounce by 1 - albedo) renders
 every Lambertian albedo as its complement; one that normalises a colour as
-it would a direction divides each albedo by its length. The third and fourth
-families are those renders, with no free parameter either.
+it would a direction divides each albedo by its length; a parser that rounds
+what it reads keeps one decimal of each. The third to fifth families are
+those renders, with no free parameter either.
 """
 
 from __future__ import annotations
@@ -84,7 +85,10 @@ REMAPS = (("reflectance_squared", lambda x: x * x, "every diffuse surface's refl
            "channel: the scene's colours taken for what a surface absorbs (a red wall cyan)"),
           ("reflectance_normalised", lambda x: x / max(float(np.linalg.norm(x)), 1e-12), "every diffuse surface's "
            "albedo divided by its length (a colour normalised as if it were a direction): every surface brighter, a "
-           "grey one most"))
+           "grey one most"),
+          # Python's round (a parser's round(a, 1)): 0.15 is 0.1499... in binary and rounds down, 0.75 to even.
+          ("reflectance_rounded", lambda x: np.array([round(float(v), 1) for v in x]), "every diffuse surface's "
+           "albedo rounded to one decimal, channel by channel (a parser's or a format's round(a, 1))"))
 
 
 def _prepare_remapped(a, scene: Scene, render) -> dict[str, np.ndarray]:
@@ -109,7 +113,7 @@ def _scan(fit: Fit, inputs: Inputs, name: str, grid: np.ndarray):
 
 
 def reflectance_remapped(fit: Fit, inputs: Inputs) -> list[Candidate]:
-    """Every diffuse reflectance squared, or its complement (the module docstring, :data:`REMAPS`)."""
+    """Every diffuse reflectance through each fixed remapping of :data:`REMAPS` (the module docstring)."""
     imgs = inputs.basis.extra.get(reflectance_remapped.name) or {}
     out = []
     for fam, _, text in REMAPS:
