@@ -259,3 +259,21 @@ def test_a_clamp_in_another_renderer_is_a_sample_clamp_not_a_tone_curve(ctx):
     assert fam in ("sample_clamp", "emitter_seen") and "sample_clamp" in named, said
     assert set(named) <= {"sample_clamp", "light_seen", "tone_map", "encoding"}, named
     assert res.score < res.max_score
+
+
+def test_shadow_rays_summed_are_fitted_by_their_count(ctx):
+    """30 shadow rays a point summed, not averaged (the course report's count): Mitsuba's light seen directly (cut
+    at depth 1) plus 30 times the rest (the full render), one seed (96) so the two share their camera samples. The
+    light sample's weight fitted on the grading basis is 30 of its factors, and it leaves the least chi^2 of them
+    (the claim is the engine's: at 32 x 32 a monotone curve describes the image as well)."""
+    from mcrt.grade.candidates import Inputs
+    from mcrt.grade.explain.fit import Fit
+    from mcrt.grade.explain.light_sampling import light_sampling
+
+    d1 = _mitsuba(96, max_depth=1)
+    S = d1 + 30.0 * (_mitsuba(96) - d1)
+    R = ctx.references["near"].mean.astype(np.float64)
+    V = ctx.model_var["near"].astype(np.float64) / 1024
+    fit = Fit(S, R, V, np.ones(S.shape, bool), ctx.explain.var.astype(np.float64) / ctx.explain.spp)
+    best = light_sampling(fit, Inputs(ctx.explain))[0]
+    assert best.value == {"factor": 30.0} and "30 shadow rays a point summed" in best.text, best.text

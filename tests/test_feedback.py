@@ -822,11 +822,21 @@ def _pairs_swapped(img, axis):
 def test_lines_out_of_order_are_named_not_noise(ctx, axis, word):
     """A Mitsuba render (seed 86, 256 spp) with every eighth pair of rows (or columns) exchanged: the bias test's
     tiles hold nearly the right means and pass, and the noise criterion fails naming the lines out of order, not
-    fewer samples (the check runs where the bias test passed; at 1024 spp this image is flagged biased instead)."""
+    fewer samples (the check runs where the bias test passed; at 1024 spp: the next test)."""
     res = grade_image(f"lines_{word}", ctx, [_pairs_swapped(_mitsuba(load_scene(), 86, spp=256), axis)], spp=256)
     text = _output(res, "noise")
     assert f"{word} stored out of order" in text, text
     assert "row_stride" in named_causes(res)[0] and "spp_claim" not in named_causes(res)[0]
+
+
+def test_lines_out_of_order_in_a_biased_image_are_the_explanation(ctx):
+    """The same exchange of rows at 1024 spp (seed 86): the bias test flags it, and the explanation claims the rows
+    out of order (once a sub-pixel pincushion distortion was claimed for it), with no other cause beside it."""
+    res = grade_image("lines_biased", ctx, [_pairs_swapped(_mitsuba(load_scene(), 86), 0)], spp=1024)
+    ex = res.details["explanation"]
+    assert ex["verdict"] == "claimed" and ex["family"] == "lines_order", ex["sentence"]
+    assert "rows stored out of order" in ex["sentence"], ex["sentence"]
+    assert named_causes(res)[0] == ["row_stride"]
 
 
 def test_the_exponential_tone_map_is_named(ctx):
@@ -846,3 +856,94 @@ def test_a_mirror_missing_names_rays_passing_through_it(ctx):
     assert ex["verdict"] == "claimed" and ex["family"] == "object_missing", ex["sentence"]
     assert "rays passing through it unchanged" in ex["sentence"], ex["sentence"]
     assert named_causes(res)[0] == ["object_missing", "material"]
+
+
+# --------------------------------------------------------------------------
+# Mistakes of students' programs added after the unsaid class was graded, as hand-ins made here (not the class's)
+# --------------------------------------------------------------------------
+
+
+def _grade_file(ctx, folder, name: str, data: bytes, spp: int = 1024):
+    from mcrt.grade.grader import grade_submission
+    from mcrt.grade.submissions import discover
+
+    folder.mkdir()
+    (folder / name).write_bytes(data)
+    (folder / "manifest.toml").write_text(f"spp = {spp}\n")
+    return grade_submission(discover(folder, single=True, student=folder.name)[0], ctx)
+
+
+def _srgb8(x):
+    """8-bit sRGB codes of linear values, by the standard's formula."""
+    x = np.clip(x, 0.0, 1.0)
+    v = np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1 / 2.4) - 0.055)
+    return np.floor(v * 255 + 0.5).astype(np.uint8)
+
+
+def test_a_row_written_channel_by_channel_is_named(ctx, tmp_path):
+    """A binary PPM written by hand from a Mitsuba render (seed 91), its loops channel before column within each row
+    (the row's reds, then its greens, then its blues): the layout is claimed and named as the channels' order."""
+    codes = _srgb8(_mitsuba(load_scene(), 91))
+    body = b"".join(bytes(codes[y, :, c]) for y in range(RES) for c in range(3))
+    res = _grade_file(ctx, tmp_path / "planar", "render.ppm", f"P6\n{RES} {RES}\n255\n".encode() + body)
+    ex = res.details["explanation"]
+    assert ex["verdict"] == "claimed" and ex["family"] == "layout", ex["sentence"]
+    assert "each row's samples written channel by channel" in ex["sentence"]
+    assert "channels" in named_causes(res)[0]
+
+
+def test_another_standards_curve_is_named(ctx, tmp_path):
+    """An 8-bit PNG of a Mitsuba render (seed 92) encoded with BT.709's camera curve where sRGB's belongs: the
+    encoding criterion or the explanation names the encoding, the curve by its standard."""
+    import io
+
+    from PIL import Image
+
+    x = np.clip(_mitsuba(load_scene(), 92), 0.0, 1.0)
+    v = np.where(x < 0.018, 4.5 * x, 1.099 * np.power(x, 0.45) - 0.099)
+    buf = io.BytesIO()
+    Image.fromarray(np.floor(v * 255 + 0.5).astype(np.uint8), "RGB").save(buf, format="PNG")
+    res = _grade_file(ctx, tmp_path / "bt709", "render.png", buf.getvalue())
+    ex = res.details["explanation"]
+    assert ex["verdict"] == "claimed" and "BT.709's camera curve" in ex["sentence"], ex["sentence"]
+    assert named_causes(res)[0] == ["encoding"]
+
+
+def _binomial_over_nine(img):
+    p = np.pad(img, ((1, 1), (1, 1), (0, 0)), mode="edge")
+    h, w = img.shape[:2]
+    k = (1.0, 2.0, 1.0)
+    return sum(k[i] * k[j] * p[i:i + h, j:j + w] for i in range(3) for j in range(3)) / 9.0
+
+
+@pytest.mark.parametrize("post, words", [
+    (lambda x: _binomial_over_nine(x), "whose weights sum to 1.78, not 1 (its weights divided by 9 where their sum 16"),
+    (lambda x: np.stack([np.median(np.stack([np.pad(x[..., c], 1, mode="edge")[i:i + RES, j:j + RES]
+                                             for i in range(3) for j in range(3)]), axis=0) for c in range(3)], -1),
+     "a median filter")])
+def test_a_three_by_three_filter_is_named(ctx, post, words):
+    """A Mitsuba render (seed 93) through a 3 x 3 filter written by hand: a binomial kernel divided by 9 (a box's
+    count) where its sum 16 belongs, or the median of each pixel's neighbourhood: the filter is claimed, with the
+    weights' sum where it is not 1."""
+    res = grade_image("three", ctx, [post(_mitsuba(load_scene(), 93))], spp=1024)
+    ex = res.details["explanation"]
+    assert ex["verdict"] == "claimed" and ex["family"] == "blur" and words in ex["sentence"], ex["sentence"]
+    assert "blur" in named_causes(res)[0]
+
+
+def test_albedos_rounded_to_one_decimal_are_named(ctx):
+    """A Mitsuba render (seed 96) of the scene with every diffuse albedo rounded to one decimal as a parser's
+    round(a, 1) does (0.75 to 0.8, 0.15 to 0.1, 0.45 to 0.5): the rounding is claimed, no other surface named."""
+    s = load_scene()
+
+    def r(v):
+        return tuple(round(float(c), 1) for c in v)
+
+    room = replace(s.room, floor_albedo=r(s.room.floor_albedo), ceiling_albedo=r(s.room.ceiling_albedo),
+                   walls=tuple(replace(w, albedo=r(w.albedo)) for w in s.room.walls))
+    objects = tuple(replace(o, material=Lambertian(r(o.material.albedo))) if isinstance(o.material, Lambertian)
+                    else o for o in s.objects)
+    res = grade_image("rounded", ctx, [_mitsuba(replace(s, room=room, objects=objects), 96)], spp=1024)
+    ex = res.details["explanation"]
+    assert ex["verdict"] == "claimed" and ex["family"] == "reflectance_rounded", ex["sentence"]
+    assert named_causes(res)[0] == ["albedo"]
