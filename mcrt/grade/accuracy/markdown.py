@@ -181,7 +181,7 @@ _NOVEL = ("The wrong renders are an eighth class of mistakes in students' tracer
 
 def _written_blind(nth: str, module: str) -> str:
     """The first sentences of the intro of a class written blind and graded once on frozen rules (untold, unmet,
-    unheard, unsaid)."""
+    unheard, unsaid, unasked)."""
     return (f"The wrong renders are a {nth} class of mistakes in students' tracers, their scene input and their output "
             f"that no other class or the catalogue tried (mcrt.grade.accuracy.{module}), written blind to the grader's "
             "rules and not graded by their author: post-processing, writing the file, materials, geometry, camera and "
@@ -238,14 +238,17 @@ _UNSAID = _written_blind("twelfth", "unsaid") + ("eef00ea (after a false-alarm r
            "rules that saw the class.")
 
 
+_UNASKED = _written_blind("thirteenth", "unasked") + ("<COMMIT>; the whole class was then graded once, on them.")
+
+
 def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta: dict, gradescope: list[dict],
                  klass: str = "scene") -> Path:
     """Write index.md and data.json under ``out``; returns the Markdown's path. ``klass`` is the class graded:
     'scene' (mcrt.grade.accuracy.cases) or another name of :data:`mcrt.grade.accuracy.cli.CLASSES` ('outside',
-    'programs', 'fresh', ..., 'unheard', 'unsaid': the module of that name under mcrt.grade.accuracy); an empty half
+    'programs', 'fresh', ..., 'unsaid', 'unasked': the module of that name under mcrt.grade.accuracy); an empty half
     (tuned on or held out) is left out of the rates table."""
-    from mcrt.grade.accuracy import (blind, fresh, novel, outside, programs, unheard, unmet, unsaid, unseen, untold,
-                                     untried)
+    from mcrt.grade.accuracy import (blind, fresh, novel, outside, programs, unasked, unheard, unmet, unsaid, unseen,
+                                     untold, untried)
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     tuned = [o for o in outcomes if not o.held_out]
@@ -264,7 +267,8 @@ def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta
         "untold": ": a ninth class of mistakes, written blind",
         "unmet": ": a tenth class of mistakes, written blind",
         "unheard": ": an eleventh class of mistakes, written blind",
-        "unsaid": ": a twelfth class of mistakes, written blind"}.get(klass, "")
+        "unsaid": ": a twelfth class of mistakes, written blind",
+        "unasked": ": a thirteenth class of mistakes, written blind"}.get(klass, "")
     L = [f"# {title}", "",
          f"Written by `{command}` ({meta.get('date', '')}, {meta.get('seconds', 0):.0f} s). "
          f"Assignment: `{meta.get('assignment')}`; reference: {meta.get('reference')}.", "",
@@ -276,10 +280,11 @@ def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta
          "`exposure` for a constant factor, `camera` for misregistration). *Confidently wrong*: it names a cause, and "
          "not the right one; *also wrong*: it names the right cause and a wrong one beside it. **Held-out** cases (marked H) were not looked at while the diagnosis was tuned, with one exception: the last two rules of the grader (the camera not blamed beside a cause outside it; an explained wrong geometry, light placement, colour or camera scored as a major mistake) were added after the held-out results had been seen; and when the per-object structure test was added, the exemption of a blur's remainder where the detectors found a filter (a denoiser's kernel is no Gaussian) was added after the held-out `denoised` case had been seen to lose its name, and a rule (a claimed blur counted as a filtered image by itself) was dropped after the final run, with no held-out verdict changed."
          if klass not in ("outside", "programs", "fresh", "blind", "unseen", "untried", "novel", "untold", "unmet",
-                          "unheard", "unsaid") else {
+                          "unheard", "unsaid", "unasked") else {
              "outside": _OUTSIDE, "programs": _PROGRAMS, "fresh": _FRESH, "blind": _BLIND,
              "unseen": _UNSEEN, "untried": _UNTRIED, "novel": _NOVEL,
-             "untold": _UNTOLD, "unmet": _UNMET, "unheard": _UNHEARD, "unsaid": _UNSAID}[klass], "",
+             "untold": _UNTOLD, "unmet": _UNMET, "unheard": _UNHEARD, "unsaid": _UNSAID,
+             "unasked": _UNASKED}[klass], "",
          "## Rates", "",
          "| | mistakes | detected (lost points) | named right | confidently wrong | partial or none | also wrong | "
          "major mistakes losing >= 25 % | correct renders | false alarms | correct named a bug |",
@@ -311,7 +316,7 @@ def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta
     causes = {"outside": outside.CAUSES, "programs": programs.CAUSES, "fresh": fresh.CAUSES,
               "blind": blind.CAUSES, "unseen": unseen.CAUSES, "untried": untried.CAUSES,
               "novel": novel.CAUSES, "untold": untold.CAUSES, "unmet": unmet.CAUSES,
-              "unheard": unheard.CAUSES, "unsaid": unsaid.CAUSES}.get(klass, CAUSES)
+              "unheard": unheard.CAUSES, "unsaid": unsaid.CAUSES, "unasked": unasked.CAUSES}.get(klass, CAUSES)
     L += ["", "Causes: " + "; ".join(f"`{k}` {v}" for k, v in causes.items()) + "."]
     L += _gradescope_section(gradescope, meta)
     path = out / "index.md"
