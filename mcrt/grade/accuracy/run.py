@@ -72,8 +72,8 @@ CAUSE_OF: dict[str, tuple[str, ...]] = {
     "reflectance_complement": ("albedo",), "reflectance_normalised": ("albedo",), "albedo_swap": ("albedo",),
     "material_swap": ("material",),
     # Values stored at the wrong places (added after unsaid was graded): rows (or columns) out of order, a pool's
-    # finishing order; a row's or the image's channels one after another.
-    "lines_order": ("row_stride",), "layout": ("channels", "row_stride"), "reflectance_rounded": ("albedo",),
+    # finishing order; a row's or the image's channels one after another (the words name the channels' order).
+    "lines_order": ("row_stride",), "layout": ("channels",), "reflectance_rounded": ("albedo",),
     # Mistakes of students' programs (mcrt.grade.accuracy.programs): a colour matrix that loses colour (grey, a
     # channel zeroed) and one that mixes the channels otherwise, light counted twice, the light facing the wrong
     # way, black pixels.
@@ -237,29 +237,38 @@ class Outcome:
         return dict(asdict(self), lost=self.lost)
 
 
+def _explanation_causes(expl: dict) -> list[str]:
+    """The causes a named explanation names: its family's, those its words name beside them, and its
+    alternatives'."""
+    fam = expl["family"] if expl["family"] != "catalogue" else expl["named"]
+    causes = list(CAUSE_OF.get(fam, (f"catalogue:{fam}",)))
+    if fam == "blur" and expl["sentence"].startswith("It looks like the image filtered after rendering by"):
+        causes.remove("resampling")  # a 3 x 3 filter, in words that name no resampling (added after unsaid)
+    if fam == "pixel_offset" and "index off by one" in expl["sentence"]:
+        causes.append("row_stride")  # a shift by a whole pixel, worded as rows or columns written one place off
+    # Words that name a second mistake beside the family's own (added after the novel class was graded):
+    for f, words, cause in (("fov", "a larger render cropped", "resolution_crop"),  # the middle of a larger render
+                            ("colour_lost", "every colour taken as one number", "albedo"),  # albedos as one number
+                            ("resampling", "through one fixed point", "pixel_offset"),  # the jitter constant
+                            # black pixels that are a mirror's (added after the untold class was graded)
+                            ("bad_pixels", "paths through the mirror", "specular_unseen"),
+                            # roulette's divisor, where the words name it (added after unheard was graded)
+                            ("path_weight", "Russian roulette", "roulette"),
+                            ("object_missing", "rays passing through it", "material")):  # a mirror (since unsaid)
+        if fam == f and words in expl["sentence"]:
+            causes.append(cause)
+    for alt in (expl.get("adequacy") or {}).get("alternatives", []):  # named beside it as fitting as well
+        causes += CAUSE_OF.get(alt, (alt,))
+    return causes
+
+
 def named_causes(res) -> tuple[list[str], str]:
     """The causes a graded result's feedback names, and the words that name them (see the module docstring)."""
     causes: list[str] = []
     said: list[str] = []
     expl = res.details.get("explanation")
     if expl and expl.get("named"):
-        fam = expl["family"] if expl["family"] != "catalogue" else expl["named"]
-        causes += CAUSE_OF.get(fam, (f"catalogue:{fam}",))
-        if fam == "pixel_offset" and "index off by one" in expl["sentence"]:
-            causes.append("row_stride")  # a shift by a whole pixel, worded as rows or columns written one place off
-        # Words that name a second mistake beside the family's own (added after the novel class was graded):
-        for f, words, cause in (("fov", "a larger render cropped", "resolution_crop"),  # the middle of a larger render
-                                ("colour_lost", "every colour taken as one number", "albedo"),  # albedos as one number
-                                ("resampling", "through one fixed point", "pixel_offset"),  # the jitter constant
-                                # black pixels that are a mirror's (added after the untold class was graded)
-                                ("bad_pixels", "paths through the mirror", "specular_unseen"),
-                                # roulette's divisor, where the words name it (added after unheard was graded)
-                                ("path_weight", "Russian roulette", "roulette"),
-                                ("object_missing", "rays passing through it", "material")):  # a mirror (since unsaid)
-            if fam == f and words in expl["sentence"]:
-                causes.append(cause)
-        for alt in (expl.get("adequacy") or {}).get("alternatives", []):  # named beside it as fitting as well
-            causes += CAUSE_OF.get(alt, (alt,))
+        causes += _explanation_causes(expl)
         said.append(expl["sentence"])
     elif expl:
         said.append(expl["sentence"])

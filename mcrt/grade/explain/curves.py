@@ -74,7 +74,9 @@ def _three_by_three(fit: Fit) -> list[Candidate]:
     smallest of its 3 x 3 neighbourhood, channel by channel: a despeckle, a dilation, an erosion), none with a free
     parameter (of R: a filter of the noisy image differs by more where the noise is large, which the remainder
     shows); and the best of :data:`KERNELS` with its weights' sum fitted (1: a correct filter; their count where
-    their sum belongs: the sum over it)."""
+    their sum belongs: the sum over it). That one has two parameters, the gain and the kernel chosen: where noise
+    hides the filter (a dark image), it is a constant factor with a choice more, which Occam's rule does not name
+    beside the factor."""
     from scipy.ndimage import convolve, maximum_filter, median_filter, minimum_filter
 
     out = []
@@ -100,7 +102,7 @@ def _three_by_three(fit: Fit) -> list[Candidate]:
     why = (f" (its weights divided by {count:g} where their sum {total:g} belongs)" if count and count != total
            else "")
     return out + [Candidate("blur", f"{name} filter times {g:.2f}", f"the image filtered after rendering by {what} "
-                            f"whose weights sum to {g:.2f}, not 1{why}", e, 1,
+                            f"whose weights sum to {g:.2f}, not 1{why}", e, 2,
                             value={"filter": name, "size": 3, "gain": g}, change=M - fit.R)]
 
 
