@@ -234,11 +234,18 @@ _UNSAID = _written_blind("twelfth", "unsaid") + ("eef00ea (after a false-alarm r
            "12 confidently wrong, 12 of 12 detected; all 28, 5 named right, 2 confidently wrong, 27 detected; 0 of 8 "
            "correct hand-ins lost points). Changes made after that grading, with the whole class in view: lines of "
            "the image out of order named by the noise criterion (not as fewer samples); a mirror missing worded with "
-           "rays passing through it unchanged; the exponential tone map among the named curves. Both rows here are of "
-           "rules that saw the class.")
+           "rays passing through it unchanged; the exponential tone map among the named curves; and, in the round after "
+           "(commits 36411d8 to c074e24, before the unasked class was graded): lines out of order fitted by the lines "
+           "moved, and a row's or the image's channels written one after another; BT.709's curve; 3 x 3 filters "
+           "(median, maximum, minimum, and box or binomial weights that do not sum to 1); albedos rounded to one "
+           "decimal; N shadow rays summed where their mean belongs, with the noise a light sample's or a path's weight "
+           "multiplies allowed in the remainder. Both rows here are of rules that saw the class.")
 
 
-_UNASKED = _written_blind("thirteenth", "unasked") + ("<COMMIT>; the whole class was then graded once, on them.")
+_UNASKED = _written_blind("thirteenth", "unasked") + ("c074e24 (after a false-alarm report on them: 0 of 153); "
+           "the whole class was then graded once, on them: the rows here are that grading's. Before the freeze a "
+           "search of the source showed the grader's author some of the module's lines (among them two mistakes' "
+           "names); the one change made after it came from a run over the other classes.")
 
 
 def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta: dict, gradescope: list[dict],
