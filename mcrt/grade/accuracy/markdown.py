@@ -254,7 +254,6 @@ def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta
     'scene' (mcrt.grade.accuracy.cases) or another name of :data:`mcrt.grade.accuracy.cli.CLASSES` ('outside',
     'programs', 'fresh', ..., 'unsaid', 'unasked': the module of that name under mcrt.grade.accuracy); an empty half
     (tuned on or held out) is left out of the rates table."""
-    from mcrt.grade.accuracy.cli import CLASSES
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     tuned = [o for o in outcomes if not o.held_out]
@@ -319,7 +318,7 @@ def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta
             continue
         L.append(f"| {o.name} | {'H' if o.held_out else ''} | {_cell(o.truth, 90)} | {o.spp} | {o.file} | "
                  f"{o.score:g}/{o.max_score:g} | {'yes' if o.wrong else 'no'} | {_cell(o.said) or '-'} | {o.seconds:.1f} |")
-    causes = import_module(f"mcrt.grade.accuracy.{CLASSES.get(klass, 'cases')}").CAUSES
+    causes = import_module(f"mcrt.grade.accuracy.{'cases' if klass == 'scene' else klass}").CAUSES
     L += ["", "Causes: " + "; ".join(f"`{k}` {v}" for k, v in causes.items()) + "."]
     L += _gradescope_section(gradescope, meta)
     path = out / "index.md"
