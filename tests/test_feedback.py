@@ -338,6 +338,30 @@ def test_black_pixels_on_the_mirror_are_worded_as_the_mirror_black(ctx):
     assert "paths through the mirror to the camera never counted" in ex["sentence"]
 
 
+def test_a_patch_of_black_pixels_on_one_surface_is_worded_as_a_hole(ctx):
+    """A disc of the floor's pixels written 0 in a correct Mitsuba render (seed 16; a hole cut in the floor, nothing
+    behind it) is worded as a hole in the floor and counted as a missing face; the same number of floor pixels
+    scattered (every one apart) is not: NaNs written as 0."""
+    from scipy.ndimage import distance_transform_edt
+
+    img = np.asarray(_mitsuba(load_scene(), 16, 1024))
+    floor = ctx.labels[ctx.assignment.camera] == ctx.label_names.index("the floor")
+    depth = distance_transform_edt(floor)
+    cy, cx = np.unravel_index(np.argmax(depth), floor.shape)
+    yy, xx = np.mgrid[:RES, :RES]
+    disc = floor & ((yy - cy) ** 2 + (xx - cx) ** 2 <= 2.5 ** 2)
+    apart = np.argwhere(floor & (yy % 2 == 0) & (xx % 2 == 0))[:int(disc.sum())]  # no two touching
+    scattered = np.zeros_like(floor)
+    scattered[apart[:, 0], apart[:, 1]] = True
+    hole = grade_image("floor_hole", ctx, [np.where(disc[..., None], 0.0, img)], spp=1024)
+    ex = hole.details["explanation"]
+    assert ex["family"] == "bad_pixels" and "a hole in the floor" in ex["sentence"], ex["sentence"]
+    assert "mesh_face" in named_causes(hole)[0]
+    nans = grade_image("floor_nans", ctx, [np.where(scattered[..., None], 0.0, img)], spp=1024)
+    ex = nans.details["explanation"]
+    assert ex["family"] == "bad_pixels" and "hole" not in ex["sentence"] and "NaN" in ex["sentence"], ex["sentence"]
+
+
 def test_a_glossy_sphere_loses_points_without_a_claimed_cause(ctx):
     """The mirror sphere rendered as Mitsuba's rough conductor (alpha 0.5; seed 53, 256 spp): its reflection is
     blurred more than darkened, and the mean tests see nothing; the structure test does. The image loses points, no

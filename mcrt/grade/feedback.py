@@ -25,8 +25,12 @@ def spp_text(spp: float) -> str:
 
 
 def fmt_values(v, digits: int = 2) -> str:
-    """One value, or an RGB triple when its channels differ: '0.60', '(0.74, 0.20, 0.15)'."""
+    """One value, or an RGB triple when its channels differ: '0.60', '(0.74, 0.20, 0.15)'; with more decimals where
+    the smallest would show as 0 ('0.0042', not '0.00')."""
     v = tuple(float(x) for x in v)
+    small = min((abs(x) for x in v if x != 0), default=1.0)
+    if small < 0.5 * 10.0 ** -digits:
+        digits = 1 - math.floor(math.log10(small))
     if len(set(round(x, digits) for x in v)) == 1:
         return f"{v[0]:.{digits}f}"
     return "(" + ", ".join(f"{x:.{digits}f}" for x in v) + ")"

@@ -101,8 +101,8 @@ def _three_by_three(fit: Fit) -> list[Candidate]:
     count = next((c for c in (9.0, 16.0, 8.0, 4.0) if abs(total / c - g) < 0.02 * g), None)
     why = (f" (its weights divided by {count:g} where their sum {total:g} belongs)" if count and count != total
            else "")
-    return out + [Candidate("blur", f"{name} filter times {g:.2f}", f"the image filtered after rendering by {what} "
-                            f"whose weights sum to {g:.2f}, not 1{why}", e, 2,
+    return out + [Candidate("blur", f"{name} filter times {_num(g)}", f"the image filtered after rendering by {what} "
+                            f"whose weights sum to {_num(g)}, not 1{why}", e, 2,
                             value={"filter": name, "size": 3, "gain": g}, change=M - fit.R)]
 
 

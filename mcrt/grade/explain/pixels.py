@@ -6,7 +6,8 @@ reference is brighter than :data:`DARK` of the image's median luminance
 (every surface of the closed room sees light; a pixel's noise, heavy-tailed,
 says less about a single value than this does). A student's program writes
 0 where a sample was NaN (``np.nan_to_num``), where a worker's tile was
-never rendered, or where a pixel was skipped. The
+never rendered, or where a pixel was skipped; a patch of them on one surface
+is a hole in it (a face missing or cut out), which the words name too. The
 model image is R with those pixels 0: it changes nothing else, so the
 remainder test says whether the rest of the image is right. The pixels are
 chosen by that property of the hand-in, not fitted (one parameter, the
@@ -58,9 +59,14 @@ def bad_pixels(fit: Fit, inputs: Inputs) -> list[Candidate]:
     change = np.where(bad[..., None], -fit.R, 0.0)
     box = _block(bad)
     obj = _on_one_object(bad, inputs)
+    hole = _hole(bad, inputs) if not obj and box is None else ""
     if obj:  # one object's pixels: neither a tile left out nor NaNs scattered, first of all that object
         text = (f"{n} pixels ({100 * n / bad.size:.2g} % of the image) black where the scene is not{obj}; or a NaN or "
                 "infinite sample written as 0 on it (a division by a zero pdf or cosine there)")
+    elif hole:
+        text = (f"a patch of {n} pixels ({100 * n / bad.size:.2g} % of the image) black on {hole}, all touching: a hole "
+                f"in {hole} (a face missing or cut out, the rays through it finding nothing behind), or NaN samples "
+                "written as 0 there (a division by a zero pdf or cosine)")
     elif box is not None:
         t, b, l, r = box
         text = (f"a block of {b - t + 1} x {r - l + 1} pixels (rows {t} to {b}, columns {l} to {r}) left black: "
@@ -73,6 +79,18 @@ def bad_pixels(fit: Fit, inputs: Inputs) -> list[Candidate]:
     rows, cols = np.nonzero(bad)
     return [Candidate("bad_pixels", "black pixels", text, fit.delta(change), 1,
                       value={"pixels": n, "block": box, "first": [int(rows[0]), int(cols[0])]}, change=change)]
+
+
+def _hole(bad: np.ndarray, inputs: Inputs) -> str:
+    """The object's name where the black pixels are one patch of at least 2 x 2, touching one another (not NaNs
+    scattered), inside one object's pixels and covering less of it than :func:`_on_one_object` words; else ''."""
+    from scipy.ndimage import binary_erosion, label
+
+    if inputs.labels is None or label(bad, structure=np.ones((3, 3)))[1] != 1 or not binary_erosion(
+            bad, np.ones((2, 2))).any():
+        return ""
+    ks = np.unique(inputs.labels[bad])
+    return inputs.label_names[int(ks[0])].split(" (")[0] if len(ks) == 1 else ""
 
 
 def _on_one_object(bad: np.ndarray, inputs: Inputs) -> str:
