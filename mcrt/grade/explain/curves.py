@@ -103,7 +103,10 @@ def _three_by_three(fit: Fit) -> list[Candidate]:
            else "")
     return out + [Candidate("blur", f"{name} filter times {_num(g)}", f"the image filtered after rendering by {what} "
                             f"whose weights sum to {_num(g)}, not 1{why}", e, 2,
-                            value={"filter": name, "size": 3, "gain": g}, change=M - fit.R)]
+                            value={"filter": name, "size": 3, "gain": g}, change=M - fit.R,
+                            # A filter with a gain is a scale with a filter: where noise hides the filter it is no
+                            # other cause beside the scale (a dark image left ambiguous between the two otherwise).
+                            generalises=("scale",))]
 
 
 #: Radii (Gaussian standard deviations, pixels) and amounts of the unsharp masks tried.
