@@ -249,7 +249,8 @@ _UNASKED = _written_blind("thirteenth", "unasked") + ("c074e24 (after a false-al
            "of the module's lines (among them two mistakes' names); the one change made after it came from a run over "
            "the other classes. Changes made after that grading, with the whole class in view: a factor two decimals "
            "would print as 0 given two significant digits; a patch of black pixels on one surface, all touching, "
-           "worded as a hole in it. Both rows here are of rules that saw the class.")
+           "worded as a hole in it; a 3 x 3 filter with a gain no other reading beside the overall scale it "
+           "generalises (found by the fresh-clone suite). Both rows here are of rules that saw the class.")
 
 
 def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta: dict, gradescope: list[dict],
