@@ -14,7 +14,8 @@ DEFAULT_ASSIGNMENT = "course2023"
 CLASSES = {"scene": "cases", "outside": "outside", "programs": "programs", "fresh": "fresh",
            "blind": "blind", "unseen": "unseen", "untried": "untried",
            "novel": "novel", "untold": "untold", "unmet": "unmet",
-           "unheard": "unheard", "unsaid": "unsaid", "unasked": "unasked"}
+           "unheard": "unheard", "unsaid": "unsaid", "unasked": "unasked",
+           "unsought": "unsought"}
 
 
 def register(sub) -> None:
@@ -35,8 +36,9 @@ def register(sub) -> None:
                    "mcrt.grade.accuracy.untold), 'unmet' (a tenth, in tracers, scene input and output, written "
                    "blind, mcrt.grade.accuracy.unmet), 'unheard' (an eleventh, in tracers, scene input and output, "
                    "written blind, mcrt.grade.accuracy.unheard), 'unsaid' (a twelfth, in tracers, scene input and "
-                   "output, written blind, mcrt.grade.accuracy.unsaid) or 'unasked' (a thirteenth, in tracers, scene "
-                   "input and output, written blind, mcrt.grade.accuracy.unasked) (default: scene)")
+                   "output, written blind, mcrt.grade.accuracy.unsaid), 'unasked' (a thirteenth, in tracers, scene "
+                   "input and output, written blind, mcrt.grade.accuracy.unasked) or 'unsought' (a fourteenth, in "
+                   "tracers, scene input and output, written blind, mcrt.grade.accuracy.unsought) (default: scene)")
     p.add_argument("--held-out", choices=("all", "only", "none"), default="all",
                    help="grade all cases, only the held-out ones, or none of them (default: all)")
     p.add_argument("--out", default=None, help=f"report folder (default: {DEFAULT_OUT}, or {DEFAULT_OUT}/CLASS "
