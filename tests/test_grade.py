@@ -585,6 +585,7 @@ from PIL import Image  # noqa: E402
 from scipy import ndimage  # noqa: E402
 from test_formats import has_imagemagick  # noqa: E402
 
+from mcrt.grade.accuracy import unsaid  # noqa: E402
 from mcrt.grade.submissions import discover  # noqa: E402
 from mcrt.grade.grader import grade_submission  # noqa: E402
 
@@ -642,6 +643,7 @@ def structured(scene, context64, workdir):
         "mi_no_tetrahedron": (_mitsuba(scene, 256, 407, drop=("tetrahedron",)), 256),
         "mi_cracks": (np.where(np.isin(np.arange(64), [40, 41])[:, None, None] & np.isin(np.arange(64), [20, 21])[None, :, None],
                                0.0, correct), 256),
+        "mi_sphere_casts_no_shadow": (unsaid._sphere_unshadowing(correct, spp=256, seed=408), 256),
     }
     files = {sid: ((lambda p, im=im: write_pfm(p.with_suffix(".pfm"), im)), spp) for sid, (im, spp) in imgs.items()}
     return _grade_files(workdir / "structured", files, context64)
@@ -694,6 +696,20 @@ def test_a_few_wrong_pixels_are_minor(structured, context64):
     th = context64.assignment.thresholds
     lost, out = _lost(structured["mi_cracks"], "unbiased")
     assert lost == pytest.approx(th.minor_loss * 55) and "darker than any correct render" in out, out
+
+
+def test_a_shadow_missing_is_found_as_a_patch(structured, context64):
+    """The sphere left out of the shadow rays' test (Mitsuba: the direct light the sphere blocks added back at the
+    surfaces the camera sees; seed 408, 256 spp): a few dozen pixels of the floor and wall DE, about twice as bright,
+    which the tiles' spread and the objects' means take for noise. The patch test finds them, and the image loses
+    points, as a minor mistake, with the patch placed and no cause claimed."""
+    th = context64.assignment.thresholds
+    r = structured["mi_sphere_casts_no_shadow"]
+    lost, out = _lost(r, "unbiased")
+    assert r.details["structure"]["penalised"]["patches"] == 1, r.details["structure"]
+    assert lost == pytest.approx(th.minor_loss * 55) and "A patch of" in out and "brighter" in out, out
+    assert "the floor" in out.split("A patch of")[1], out
+    assert not (r.details.get("explanation") or {}).get("named"), r.details["explanation"]
 
 
 def _png_writer(img, curve):

@@ -177,6 +177,7 @@ def run_study(out: Path, *, seeds: int, cache: str | None, progress: bool = True
                          "p_correlation": st.get("p_correlation"), "p_objects": st.get("p_objects"),
                          "p_objects_relevant": st.get("p_objects_relevant"),
                          "p_object_structure": st.get("p_object_structure"), "objects_rel": st.get("objects_rel"),
+                         "p_patches": st.get("p_patches"),
                          "penalised": st.get("penalised"),
                          "var_ratio": c.spp / eff if eff else None,
                          "encoding": (r.details.get("encoding") or {}).get("detected")})
@@ -196,7 +197,8 @@ def run_study(out: Path, *, seeds: int, cache: str | None, progress: bool = True
 DETECTORS = {"registration": "registration", "blur": "blur", "correlation": "correlation",
              "objects": "objects: zero difference (per object and channel)",
              "objects_relevant": "objects: difference beyond min_effect (the test that is scored)",
-             "object_structure": "object structure (per object)"}
+             "object_structure": "object structure (per object)",
+             "patches": "patches of pixels off together (brighter, darker)"}
 #: A hand-in with this many times fewer samples than it declares: the noise criterion's power is reported for it.
 FEWER = 4
 

@@ -180,6 +180,18 @@ def filter_text(st, blur: bool, spp_eff: float, spp: int | None) -> str:
             + "; a Monte-Carlo render's pixels are independent: hand in the unfiltered render")
 
 
+def patches_text(patch: np.ndarray, effects: list[float], names: list[str]) -> str:
+    """The patch finding: where the pixels off together lie, how many, and by how much (no cause is claimed: a
+    shadow missing, light leaking and a highlight misplaced all look so)."""
+    rows, cols = np.nonzero(patch)
+    how = " and ".join(f"{'brighter' if e > 0 else 'darker'} by {fmt_pct(abs(e))} on average" for e in effects)
+    where = ", ".join(names[:-1]) + (" and " if len(names) > 1 else "") + names[-1] if names else "the image"
+    return (f"A patch of {int(patch.sum())} touching pixels is {how}, more than noise allows (rows {int(rows.min())} "
+            f"to {int(rows.max())}, columns {int(cols.min())} to {int(cols.max())}, on {where}): something on that "
+            "part of the image differs from the scene, such as a shadow missing or misplaced, light that leaks or "
+            "a reflection in the wrong place")
+
+
 def pixels_text(pix: np.ndarray) -> str:
     """The wrong-pixels finding: how many, the first, and the usual causes."""
     first = np.argwhere(pix)[0]

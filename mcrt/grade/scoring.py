@@ -169,19 +169,21 @@ def _rejected_objects(ex: dict, labels: np.ndarray, n_labels: int) -> np.ndarray
 
 
 def unbiased_loss(bt, th, labels, label_names, *, registration: bool, filtered: bool,
-                  major: str | None = None) -> tuple[float, str]:
+                  major: str | None = None, patches: np.ndarray | None = None) -> tuple[float, str]:
     """Share of the unbiased points lost, as a TA would: by the kind of mistake, then by its extent.
 
     ``registration``, ``filtered``: the misregistration and filter findings stand (they are dropped
     where the explanation names another cause); ``major``: what the explanation names where it is a
-    major kind of mistake whatever its share of the image (an object missing, a colour, the camera).
+    major kind of mistake whatever its share of the image (an object missing, a colour, the camera);
+    ``patches`` (H, W): the pixels of patches found off together (mcrt.grade.structure), part of the extent.
     """
     from mcrt.grade.feedback import fmt_pct
 
     ex = bt.extra
     t_loss = tile_loss(bt, th.min_loss) if bt.penalised_any else 0.0
     pix = ex["pixels"].reshape(bt.shape + (3,)).any(axis=2) if "pixels" in ex else np.zeros(bt.shape, bool)
-    area = float(np.mean((bt.pixel_effect > 0) | pix | _rejected_objects(ex, labels, len(label_names) - 1)))
+    area = float(np.mean((bt.pixel_effect > 0) | pix | _rejected_objects(ex, labels, len(label_names) - 1)
+                         | (patches if patches is not None else False)))
     surfaces = wrong_surfaces(bt, th, labels, label_names) if bt.penalised_any else []
     if registration or surfaces or major:
         what = ("; ".join(surfaces[:3]) + (" look wrong" if len(surfaces) > 1 else " looks wrong") if surfaces

@@ -56,8 +56,35 @@ fall short of its mean only so far: :math:`P(\bar X \le \mu - t) \le
 which holds however heavy the upper tail), with :math:`E[X^2]/n = \sigma^2/n
 + \mu^2/n`. Each pixel and channel darker than the reference gets that bound
 as its p-value (reference and quantisation noise added to the variance).
-Too-bright pixels are not tested: a correct render's fireflies make any
-brightness possible.
+Too-bright pixels are not tested one by one: a correct render's fireflies
+make any brightness possible.
+
+**A patch of pixels off together** (a shadow missing, a highlight where
+there is none). A change over a few dozen pixels hides in the tiles it
+touches (their spread takes it for noise) and in the objects it is a small
+part of; its pixels are far off the reference, all the same way, and
+touch. With :math:`z_i` each pixel's luminance residual over its noise
+(the same weights' variance), the pixels beyond :data:`PATCH_Z` on one side
+are grouped into 4-connected patches (for each threshold of :data:`PATCH_Z`:
+a few pixels far off, or many a little). A Monte-Carlo render's pixels are
+independent, so a given connected set of s pixels is all beyond with
+probability :math:`q^s`, q the chance that one is; at most :math:`s
+\lambda^s` connected sets of s pixels hold a given pixel
+(:data:`PATCH_ANIMALS`), so over N pixels the largest patch has
+
+.. math::
+
+    P(\text{a patch of } s \text{ or more}) \le N\, s\, (\lambda q)^s
+
+(the union bound over lattice animals). q is not assumed: it is each
+surface's own share of pixels beyond, at its upper 99.9 % confidence bound
+(Clopper-Pearson), the largest over surfaces (the model fits some surfaces
+less well than others; small ones are pooled), counted outside the patch
+tested (which would raise its own surface's share), at least a Gaussian's. Fireflies stand alone and
+heavy tails raise q, which the bound follows; a patch of dozens is beyond
+either. The least bound over the thresholds, times their number
+(Bonferroni), is each side's p-value; the two sides are two tests, relevant
+where the patch's mean relative difference is ``min_pixel_effect``.
 
 Each detector also has a relevance threshold (as the tile test's
 ``min_effect``): a significant but negligible structure is not penalised.
@@ -83,6 +110,13 @@ MIN_CORRELATION = 0.05  # lag-one correlation of the residual noise
 MIN_PIXEL_EFFECT = 0.25  # relative darkening of a pixel
 TARGET_SHIFT = 0.5  # grade pixels: the displacement beyond which the first-order model is not trusted (weights)
 MIN_LABEL_PIXELS = 32  # a surface seen by fewer pixels gets no brightness factor of its own
+PATCH_Z = (3.0, 4.0, 6.0)  # |z| beyond which a pixel belongs to a patch: each is tried (module docstring)
+PATCH_CONFIDENCE = 0.999  # the upper confidence bound on each surface's share of pixels beyond PATCH_Z
+PATCH_GROUP = 256  # surfaces of fewer pixels are pooled for that bound
+#: A bound on the growth constant of lattice animals (fixed polyominoes): there are at most PATCH_ANIMALS^s of s
+#: cells (Klarner and Rivest 1973 bound the constant by 4.65; their count is supermultiplicative, so the constant
+#: bounds every term), hence at most s PATCH_ANIMALS^s holding a given cell.
+PATCH_ANIMALS = 4.65
 
 
 @dataclass
@@ -110,6 +144,9 @@ class Structure:
     correlation_axis: str = ""  # the direction the noise is correlated along: '' both, 'rows' or 'columns' alone
     pixel_p: np.ndarray | None = None  # (H, W, 3) lower-tail bounds (1 where not tested)
     pixel_effect: np.ndarray | None = None  # (H, W, 3) relative darkening
+    patch_p: np.ndarray | None = None  # (2,) the bound of the largest patch brighter, darker (module docstring)
+    patch_maps: np.ndarray | None = None  # (2, H, W) its pixels
+    patch_effect: np.ndarray | None = None  # (2,) its mean relative luminance difference (signed)
     notes: list[str] = field(default_factory=list)
 
     def families(self) -> list[tuple[str, np.ndarray]]:
@@ -120,6 +157,8 @@ class Structure:
         out.append(("correlation", np.array([self.p_correlation])))
         if self.pixel_p is not None:
             out.append(("pixels", self.pixel_p.ravel()))
+        if self.patch_p is not None:
+            out.append(("patches", self.patch_p))
         return out
 
     def relevant(self, name: str, *, min_shift: float = MIN_SHIFT, min_blur: float = MIN_BLUR,
@@ -131,6 +170,8 @@ class Structure:
             return np.array([abs(self.blur) >= min_blur])
         if name == "correlation":
             return np.array([self.correlation >= min_correlation])
+        if name == "patches":
+            return np.abs(self.patch_effect) >= min_pixel
         return (self.pixel_effect >= min_pixel).ravel()
 
 
@@ -268,11 +309,86 @@ def detect(resid: np.ndarray, ref: np.ndarray, mask: np.ndarray, var: np.ndarray
         eff = np.where(m3 & (np.abs(ref) > 0), deficit / np.maximum(np.abs(ref), 1e-300), 0.0)
     out.pixel_p = np.minimum(p, 1.0)
     out.pixel_effect = eff
+    out.patch_p, out.patch_maps, out.patch_effect = patches(resid, ref, pixel_mask & ~beside_emitters(v, pixel_mask),
+                                                            v, labels)
     return out
 
 
+def patches(resid: np.ndarray, ref: np.ndarray, mask: np.ndarray, v: np.ndarray, labels: np.ndarray | None):
+    """((2,) bounds, (2, H, W) maps, (2,) mean relative differences) of the largest patch brighter and darker
+    (module docstring), the least bound over :data:`PATCH_Z` times their number (Bonferroni); ``v`` (H, W) is each
+    pixel's luminance variance."""
+    h, w = resid.shape[:2]
+    lab = np.zeros((h, w), np.int64) if labels is None else np.asarray(labels)
+    keep = mask & (v > 0)
+    n = int(keep.sum())
+    p, maps, eff = np.ones(2), np.zeros((2, h, w), bool), np.zeros(2)
+    if n == 0:
+        return p, maps, eff
+    r = np.where(keep, resid @ LUMINANCE, 0.0)
+    z = np.where(keep, r / np.sqrt(np.where(keep, v, 1.0)), 0.0)
+    # Surfaces too small for their share to be bounded usefully are pooled.
+    ks, counts = np.unique(lab[keep], return_counts=True)
+    small = np.isin(lab, ks[counts < PATCH_GROUP])
+    groups = [keep & (lab == k) for k in ks[counts >= PATCH_GROUP]] + [keep & small]
+    lum_ref = ref @ LUMINANCE
+    for side, sign in enumerate((1.0, -1.0)):
+        for zt in PATCH_Z:
+            beyond = sign * z > zt
+            comp, count = ndimage.label(beyond)
+            if count == 0:
+                continue
+            big = int(np.argmax(np.bincount(comp.ravel())[1:])) + 1
+            patch = comp == big
+            s = int(patch.sum())
+            # The share beyond, from the pixels outside the patch tested (a patch would raise its own surface's).
+            q = float(_sps.norm.sf(zt))
+            for sel in groups:
+                sel = sel & ~patch
+                m = int(sel.sum())
+                if m >= PATCH_GROUP:
+                    b = int(np.count_nonzero(beyond & sel))
+                    q = max(q, float(_sps.beta.ppf(PATCH_CONFIDENCE, b + 1, m - b)))
+            # log of N s (lambda q)^s, which can underflow as a product
+            bound = float(np.exp(min(0.0, np.log(n) + np.log(s) + s * np.log(PATCH_ANIMALS * q)))) * len(PATCH_Z)
+            if bound < p[side]:
+                p[side], maps[side] = min(bound, 1.0), patch
+                ref_sum = float(np.sum(lum_ref[patch]))
+                eff[side] = float(np.sum(r[patch])) / ref_sum if ref_sum > 0 else 0.0
+    return p, maps, eff
+    z = np.where(keep, (resid @ LUMINANCE) / np.sqrt(np.where(keep, v, 1.0)), 0.0)
+    lab = np.zeros((h, w), np.int64) if labels is None else np.asarray(labels)
+    lum_ref = ref @ LUMINANCE
+    # Surfaces too small for their share to be bounded usefully are pooled.
+    ks, counts = np.unique(lab[keep], return_counts=True)
+    small = np.isin(lab, ks[counts < PATCH_GROUP])
+    groups = [keep & (lab == k) for k in ks[counts >= PATCH_GROUP]] + [keep & small]
+    for side, beyond in enumerate((z > PATCH_Z, z < -PATCH_Z)):
+        comp, count = ndimage.label(beyond)
+        if count == 0:
+            continue
+        sizes = np.bincount(comp.ravel())[1:]
+        big = int(np.argmax(sizes)) + 1
+        s = int(sizes[big - 1])
+        # The share beyond, from the pixels outside the patch tested (a patch would raise its own surface's).
+        q = float(_sps.norm.sf(PATCH_Z))
+        for sel in groups:
+            sel = sel & (comp != big)
+            m = int(sel.sum())
+            if m >= PATCH_GROUP:
+                b = int(np.count_nonzero(beyond & sel))
+                q = max(q, float(_sps.beta.ppf(PATCH_CONFIDENCE, b + 1, m - b)))
+        # log of N s (LAMBDA q)^s, which can underflow as a product
+        logp = np.log(n) + np.log(s) + s * np.log(PATCH_ANIMALS * q)
+        p[side] = float(np.exp(min(0.0, logp)))
+        maps[side] = comp == big
+        r = float(np.sum(lum_ref[maps[side]]))
+        eff[side] = float(np.sum((resid @ LUMINANCE)[maps[side]])) / r if r > 0 else 0.0
+    return p, maps, eff
+
+
 #: Share of the family-wise error rate each detector gets; the tile tests keep the rest.
-SHARES = {"registration": 0.05, "blur": 0.025, "correlation": 0.025, "pixels": 0.10}
+SHARES = {"registration": 0.05, "blur": 0.025, "correlation": 0.025, "pixels": 0.075, "patches": 0.025}
 
 
 def families(st: Structure, th) -> list[tuple[str, np.ndarray, np.ndarray, float]]:

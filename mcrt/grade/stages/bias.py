@@ -2,7 +2,7 @@
 
 The tile test is :func:`mcrt.stats.onesample.multiscale_test`; the detectors
 of :mod:`mcrt.grade.structure` (misregistration, blur, correlated noise,
-too-dark pixels) and the per-object test of :mod:`mcrt.grade.objects` join
+too-dark pixels, patches of pixels off together) and the per-object test of :mod:`mcrt.grade.objects` join
 its family with their shares of ``alpha``. Another
 detector joins the same way: one more (name, p-values, relevant, share) in
 ``extra``.
@@ -33,6 +33,7 @@ class Tested:
     img: np.ndarray  # the image they tested
     objects: object = None  # mcrt.grade.objects.ObjectTests of the image
     shape: tuple | None = None  # the per-object structure family (name, p-values, relevant, share)
+    patches: np.ndarray | None = None  # (H, W) the pixels of the patches found off together (mcrt.grade.structure)
 
 
 def flagged(bt) -> bool:
@@ -61,7 +62,8 @@ def test(g: Grading, hand: Hand, lvl: Level, img: np.ndarray, resid: np.ndarray,
     bt = multiscale_test(resid, R, lvl.clip_mask, noise, a.tiles, alpha=th.alpha, min_effect=th.min_effect,
                          full_effect=th.full_effect, relevant=True,
                          extra=structure_families(st, th) + [objs.family(th.min_effect, relevant=True), shape])
-    return Tested(bt, st, img, objs, shape)
+    found = bt.extra.get("patches", np.zeros(2, bool))
+    return Tested(bt, st, img, objs, shape, (st.patch_maps & found[:, None, None]).any(axis=0))
 
 
 def record(g: Grading, hand: Hand, lvl: Level, t: Tested) -> dict:
@@ -89,7 +91,7 @@ def record(g: Grading, hand: Hand, lvl: Level, t: Tested) -> dict:
 
 
 def findings(g: Grading, hand: Hand, lvl: Level, t: Tested) -> dict[str, str]:
-    """Feedback for each structured error found (rejected and relevant): registration, filter, pixels."""
+    """Feedback for each structured error found (rejected and relevant): registration, filter, pixels, patches."""
     from mcrt.grade.scoring import wrong_surfaces
 
     st, bt = t.st, t.bt
@@ -106,6 +108,11 @@ def findings(g: Grading, hand: Hand, lvl: Level, t: Tested) -> dict[str, str]:
         out["filter"] = fb.filter_text(st, blur, lvl.spp_eff, hand.spp)
     if "pixels" in ex and ex["pixels"].any():
         out["pixels"] = fb.pixels_text(ex["pixels"].reshape(bt.shape + (3,)).any(axis=2))
+    if t.patches is not None and t.patches.any():
+        labels = g.ctx.labels[hand.cam]
+        names = [g.ctx.label_names[k] for k in np.unique(labels[t.patches])]
+        effects = [float(e) for e, f in zip(st.patch_effect, ex["patches"]) if f]
+        out["patches"] = fb.patches_text(t.patches, effects, names)
     return out
 
 
@@ -140,6 +147,9 @@ def _structure_details(st, bt) -> dict:
     reg = st.registration
     out = {"correlation": st.correlation, "p_correlation": st.p_correlation, "blur_variance": st.blur,
            "p_blur": st.p_blur, "penalised": {k: int(np.count_nonzero(v)) for k, v in bt.extra.items()}}
+    if st.patch_p is not None:
+        out["p_patches"] = st.patch_p.tolist()
+        out["patch_pixels"] = st.patch_maps.sum(axis=(1, 2)).tolist()
     if reg is not None:
         out["registration"] = {"shift": list(reg.shift), "zoom": reg.zoom, "roll": reg.roll,
                                "edge_displacement": reg.edge_displacement, "p": reg.p}
@@ -189,7 +199,7 @@ def verdict(g: Grading, hand: Hand, lvl: Level, t: Tested, found: dict[str, str]
 
     major = named.name if named is not None and named.family in _families("MAJOR_FAMILIES") else None
     loss, why = unbiased_loss(bt, th, g.ctx.labels[hand.cam], g.ctx.label_names, registration="registration" in found,
-                              filtered="filter" in found, major=major)
+                              filtered="filter" in found, major=major, patches=t.patches)
     lines += [found[k] + "." for k in found]
     lines.append(f"Bias beyond noise: {fb.fmt_pct(bt.excess_rms)} RMS; {fb.fmt_pct(loss)} of these points lost ({why}).")
     g.rubric.failed("unbiased", " ".join(lines), loss=loss)
