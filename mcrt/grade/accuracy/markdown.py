@@ -181,7 +181,7 @@ _NOVEL = ("The wrong renders are an eighth class of mistakes in students' tracer
 
 def _written_blind(nth: str, module: str) -> str:
     """The first sentences of the intro of a class written blind and graded once on frozen rules (untold, unmet,
-    unheard, unsaid, unasked)."""
+    unheard, unsaid, unasked, unsought)."""
     return (f"The wrong renders are a {nth} class of mistakes in students' tracers, their scene input and their output "
             f"that no other class or the catalogue tried (mcrt.grade.accuracy.{module}), written blind to the grader's "
             "rules and not graded by their author: post-processing, writing the file, materials, geometry, camera and "
@@ -253,11 +253,27 @@ _UNASKED = _written_blind("thirteenth", "unasked") + ("c074e24 (after a false-al
            "generalises (found by the fresh-clone suite). Both rows here are of rules that saw the class.")
 
 
+#: The frozen rules' commit and its figures are filled in when the class has been graded on them.
+_UNSOUGHT = (
+    "The wrong renders are a fourteenth class of mistakes in students' tracers, their scene input and their output "
+    "that no other class or the catalogue tried (mcrt.grade.accuracy.unsought), written blind to the grader's rules "
+    "and not graded by their author: post-processing, writing the file, materials, geometry, camera and light models, "
+    "the integrator, and samples and passes; from Mitsuba renders of edited scenes, Mitsuba renders combined, or "
+    "correct renders written as students' programs write files. The correct ones come from Mitsuba and mcrt in ways "
+    "no other class used. *Named right*, *confidently wrong*, *partial or none*: as for the other classes. "
+    "**Held-out** cases (marked H) were fixed by the rule stated in the module (every other case of each category) "
+    "before any case was graded. Unlike the classes before it, its author's report named each mistake (name, "
+    "category, cause, major, held out) and the correct hand-ins, and the grader's author read that list before the "
+    "rules were frozen, not the module's code or its images. One change was made between reading it and the freeze, "
+    "begun before the list arrived and prompted by the unsaid class's sphere left out of the shadow test: a test for "
+    "patches of touching pixels off together (mcrt.grade.structure). The rules were frozen at commit FROZEN.")
+
+
 def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta: dict, gradescope: list[dict],
                  klass: str = "scene") -> Path:
     """Write index.md and data.json under ``out``; returns the Markdown's path. ``klass`` is the class graded:
     'scene' (mcrt.grade.accuracy.cases) or another name of :data:`mcrt.grade.accuracy.cli.CLASSES` ('outside',
-    'programs', 'fresh', ..., 'unsaid', 'unasked': the module of that name under mcrt.grade.accuracy); an empty half
+    'programs', 'fresh', ..., 'unasked', 'unsought': the module of that name under mcrt.grade.accuracy); an empty half
     (tuned on or held out) is left out of the rates table."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
@@ -278,7 +294,8 @@ def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta
         "unmet": ": a tenth class of mistakes, written blind",
         "unheard": ": an eleventh class of mistakes, written blind",
         "unsaid": ": a twelfth class of mistakes, written blind",
-        "unasked": ": a thirteenth class of mistakes, written blind"}.get(klass, "")
+        "unasked": ": a thirteenth class of mistakes, written blind",
+        "unsought": ": a fourteenth class of mistakes, written blind"}.get(klass, "")
     L = [f"# {title}", "",
          f"Written by `{command}` ({meta.get('date', '')}, {meta.get('seconds', 0):.0f} s). "
          f"Assignment: `{meta.get('assignment')}`; reference: {meta.get('reference')}.", "",
@@ -290,11 +307,11 @@ def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta
          "`exposure` for a constant factor, `camera` for misregistration). *Confidently wrong*: it names a cause, and "
          "not the right one; *also wrong*: it names the right cause and a wrong one beside it. **Held-out** cases (marked H) were not looked at while the diagnosis was tuned, with one exception: the last two rules of the grader (the camera not blamed beside a cause outside it; an explained wrong geometry, light placement, colour or camera scored as a major mistake) were added after the held-out results had been seen; and when the per-object structure test was added, the exemption of a blur's remainder where the detectors found a filter (a denoiser's kernel is no Gaussian) was added after the held-out `denoised` case had been seen to lose its name, and a rule (a claimed blur counted as a filtered image by itself) was dropped after the final run, with no held-out verdict changed."
          if klass not in ("outside", "programs", "fresh", "blind", "unseen", "untried", "novel", "untold", "unmet",
-                          "unheard", "unsaid", "unasked") else {
+                          "unheard", "unsaid", "unasked", "unsought") else {
              "outside": _OUTSIDE, "programs": _PROGRAMS, "fresh": _FRESH, "blind": _BLIND,
              "unseen": _UNSEEN, "untried": _UNTRIED, "novel": _NOVEL,
              "untold": _UNTOLD, "unmet": _UNMET, "unheard": _UNHEARD, "unsaid": _UNSAID,
-             "unasked": _UNASKED}[klass], "",
+             "unasked": _UNASKED, "unsought": _UNSOUGHT}[klass], "",
          "## Rates", "",
          "| | mistakes | detected (lost points) | named right | confidently wrong | partial or none | also wrong | "
          "major mistakes losing >= 25 % | correct renders | false alarms | correct named a bug |",
