@@ -253,7 +253,6 @@ _UNASKED = _written_blind("thirteenth", "unasked") + ("c074e24 (after a false-al
            "generalises (found by the fresh-clone suite). Both rows here are of rules that saw the class.")
 
 
-#: The frozen rules' commit and its figures are filled in when the class has been graded on them.
 _UNSOUGHT = (
     "The wrong renders are a fourteenth class of mistakes in students' tracers, their scene input and their output "
     "that no other class or the catalogue tried (mcrt.grade.accuracy.unsought), written blind to the grader's rules "
@@ -266,7 +265,9 @@ _UNSOUGHT = (
     "category, cause, major, held out) and the correct hand-ins, and the grader's author read that list before the "
     "rules were frozen, not the module's code or its images. One change was made between reading it and the freeze, "
     "begun before the list arrived and prompted by the unsaid class's sphere left out of the shadow test: a test for "
-    "patches of touching pixels off together (mcrt.grade.structure). The rules were frozen at commit FROZEN.")
+    "patches of touching pixels off together (mcrt.grade.structure). The rules were frozen at commit 9a994c0 (after a "
+    "false-alarm report on them: 0 of 153), and the whole class was graded once, on them; these rows are of those "
+    "rules.")
 
 
 def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta: dict, gradescope: list[dict],
