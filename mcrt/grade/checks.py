@@ -11,6 +11,8 @@ Nothing here raises on bad student data.
 
 from __future__ import annotations
 
+import itertools
+
 import os
 import stat
 from dataclasses import dataclass, field
@@ -293,11 +295,17 @@ def detect_orientation(img: np.ndarray, refs: dict[str, np.ndarray], camera: str
     handed in) only when its luminance correlation is higher by ``margin``,
     its chromaticity correlation is not lower, and its luminance correlation
     reaches :data:`RESEMBLES`; the best such candidate (sum of both) wins.
+    Each candidate is compared with the image's channels in the order that
+    matches it best (channels written in another order are a colour
+    mistake, which the explanation names; they must not read as a flip).
     An image that resembles no view that well (a file read with the wrong
     layout, noise) keeps the assigned camera as handed in: a flip that
     raises a correlation from 0.2 to 0.4 is no evidence of a flip.
     """
-    fl, fr, fg = _features(img)
+    # The image's channels in each order: channels written in another order change which wall is bright, and a
+    # mirrored view can then match the luminance better than the view itself; each candidate is judged with the
+    # order that suits it best.
+    feats = [_features(img[..., list(order)]) for order in itertools.permutations(range(3))]
     square = img.shape[0] == img.shape[1]
     names = list(TRANSFORMS)[: len(TRANSFORMS) if square else SQUARE_ONLY]
     lum, chroma = {}, {}
@@ -305,8 +313,10 @@ def detect_orientation(img: np.ndarray, refs: dict[str, np.ndarray], camera: str
         rl, rr, rg = _features(ref)
         for name in names:
             t = TRANSFORMS[name][0]
-            lum[(cam, name)] = float(np.mean(fl * t(rl)))
-            chroma[(cam, name)] = 0.5 * float(np.mean(fr * t(rr)) + np.mean(fg * t(rg)))
+            tl, tr, tg = t(rl), t(rr), t(rg)
+            fl, fr, fg = max(feats, key=lambda f: float(np.mean(f[0] * tl)))
+            lum[(cam, name)] = float(np.mean(fl * tl))
+            chroma[(cam, name)] = 0.5 * float(np.mean(fr * tr) + np.mean(fg * tg))
     ident = (camera, "identity")
     table = {f"{c}/{t}": (round(lum[(c, t)], 4), round(chroma[(c, t)], 4)) for (c, t) in lum}
     eligible = [k for k in lum if k != ident and lum[k] >= lum[ident] + margin and chroma[k] >= chroma[ident]

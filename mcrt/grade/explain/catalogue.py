@@ -145,6 +145,37 @@ def variance_inflation(e, baseline, mask: np.ndarray) -> float:
     return rel(e) / max(rel(baseline), 1e-300)
 
 
+#: The share of a bug's excess variance the surfaces it is found on hold (:func:`excess_where`).
+EXCESS_HELD = 0.9
+#: The least share of an image's excess variance that must lie there for the bug to be named by its noise.
+EXCESS_THERE = 0.5
+
+
+def excess_where(e, baseline, mask: np.ndarray, labels: np.ndarray, n_labels: int) -> np.ndarray:
+    """(n_labels,) bool: the fewest surfaces that hold :data:`EXCESS_HELD` of the variance a bug adds to the
+    baseline's (its catalogue image ``e``): where its rare, huge samples land (a light emitting from both sides: the
+    ceiling around it)."""
+    add = np.maximum(e.var.astype(np.float64) - baseline.var.astype(np.float64), 0.0).sum(axis=-1)
+    per = np.bincount(np.where(mask, labels, n_labels).ravel(), add.ravel(), minlength=n_labels + 1)[:n_labels]
+    out = np.zeros(n_labels, bool)
+    if per.sum() <= 0:
+        return out
+    order = np.argsort(-per)
+    held = np.cumsum(per[order]) / per.sum()
+    out[order[:int(np.searchsorted(held, EXCESS_HELD)) + 1]] = True
+    return out
+
+
+def excess_fits(where: np.ndarray, resid: np.ndarray, var: np.ndarray, mask: np.ndarray, labels: np.ndarray) -> bool:
+    """Whether an image's excess (its squared residual beyond the variance ``var`` at its declared spp, summed per
+    surface) lies :data:`EXCESS_THERE` or more on the surfaces ``where`` of :func:`excess_where`: a bug named by the
+    amount of its noise must also put it where its noise is."""
+    n = len(where)
+    ex = np.where(mask[..., None], resid**2 - var, 0.0).sum(axis=-1)
+    per = np.maximum(np.bincount(np.where(mask, labels, n).ravel(), ex.ravel(), minlength=n + 1)[:n], 0.0)
+    return bool(per.sum() > 0 and per[where].sum() >= EXCESS_THERE * per.sum())
+
+
 def rank_noise_level(var_ratio: float, mutants: dict, baseline, mask: np.ndarray, texts: dict,
                      hidden: set[str]) -> list[Candidate]:
     r"""Candidates for an image with a right mean and far too much noise, by the *amount* of noise.

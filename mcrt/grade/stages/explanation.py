@@ -15,7 +15,8 @@ from __future__ import annotations
 import numpy as np
 
 from mcrt.grade.candidates import AMBIGUOUS, Inputs
-from mcrt.grade.explain.catalogue import catalogue_power, rank_mutants, rank_noise, rank_noise_level
+from mcrt.grade.explain.catalogue import (catalogue_power, excess_fits, excess_where, rank_mutants, rank_noise,
+                                         rank_noise_level)
 from mcrt.grade.adequacy import Scene2D, claim_rule
 from mcrt.grade.regions import change_region, rel_lum, short_text, signature_region, tile_means
 from mcrt.grade.stages.state import Grading, Hand, Level
@@ -217,8 +218,14 @@ def _rank_noise_level(g: Grading, hand: Hand, lvl: Level, var_nominal) -> list:
     details["bulk_ratio_fewer_samples"] = bulk_few
     if not bulk < 0.5 * bulk_few:
         return []
+    # Most pixels are quieter than fewer samples would leave them: the excess is in a few (the noise criterion's
+    # words say so, not fewer samples), and a bug is named by it only where its own excess lies.
+    details["excess_in_few_pixels"] = True
     hidden = {p["mutant"] for p in catalogue_power(ctx, samples) if not p["detectable"]}
-    return rank_noise_level(var_ratio, ctx.mutants, ctx.baseline, mask, ctx.mutant_texts, hidden)[:2]
+    labels, n = ctx.labels[hand.cam], len(ctx.label_names) - 1
+    fits = {m for m in hidden if excess_fits(excess_where(ctx.mutants[m], ctx.baseline, mask, labels, n),
+                                             lvl.resid, var_nominal, mask, labels)}
+    return rank_noise_level(var_ratio, ctx.mutants, ctx.baseline, mask, ctx.mutant_texts, fits)[:2]
 
 
 def _conclusive_chi2(cands, chi0: float, terms: int) -> bool:

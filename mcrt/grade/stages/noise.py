@@ -281,5 +281,20 @@ def verdict(g: Grading, hand: Hand, lvl: Level, bt, found: dict[str, str], flagg
             lvl.noise = Noise(model=lvl.model_ps / (lvl.spp_model * lvl.per) + lvl.q, reference=lvl.ref_noise,
                               pair=lvl.pair)
         if not lvl.edge_excess:  # an outline that differs is no noise pattern of the catalogue's
-            text += explain_excess_noise(g, hand, lvl)
+            more = explain_excess_noise(g, hand, lvl)
+            if g.details.get("noise", {}).get("excess_in_few_pixels"):
+                text = few_pixels_text(lvl.var_ratio, lvl.spp_nominal)
+            text += more
     g.rubric.set("noise", status, text)
+
+
+def few_pixels_text(var_ratio: float, spp: int) -> str:
+    """The noise criterion's failure where most pixels are quieter than fewer samples would leave them
+    (mcrt.grade.stages.explanation's bulk against a correct render's at the samples the variance implies): the excess
+    is in a few pixels, and no claim of fewer samples is made."""
+    times = f"{var_ratio:.1f}" if var_ratio < 10 else f"{var_ratio:.0f}"
+    return (f"about {times}x the spread {spp} spp should give, but from a few pixels: most pixels deviate as little as "
+            f"at {spp} spp or less, which fewer samples would not do. The excess is rare, very bright samples (a "
+            "singularity: a division by a tiny distance or pdf) or a pattern the samples leave in a few places "
+            "(samples that are not random: the light's or the pixel's sample points fixed, strata without jitter); "
+            "look at the pixels far from the reference")
