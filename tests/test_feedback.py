@@ -697,6 +697,20 @@ def test_channels_in_another_order_are_not_read_as_a_flip(ctx):
     assert "orientation" not in named and "channels" in named, (named, said)
 
 
+def test_a_black_glossy_sphere_is_worded_with_its_material_beside_the_black_mirror(ctx):
+    """The mirror sphere rendered as Mitsuba's smooth plastic with a black base (a glass's Fresnel reflection, 4 %
+    head-on, and nothing else; seed 61, 256 spp): the catalogue's mirror of the wrong sign (a black sphere) fits it
+    to within noise, and the words name the sphere's material beside that bug, which the image cannot tell apart."""
+    from mcrt.grade.accuracy.outside import _sphere_bsdf
+
+    spec = Spec("t", None, spp=256, mitsuba_edit=lambda d: _sphere_bsdf(d, {
+        "type": "plastic", "int_ior": 1.5, "diffuse_reflectance": {"type": "rgb", "value": [0.0, 0.0, 0.0]}}))
+    img = _render_spec(spec, load_scene(), width=RES, height=RES, max_depth=8, seed=61).mean
+    res = grade_image("glass", ctx, [img], spp=256)
+    named, said = named_causes(res)
+    assert res.score < res.max_score and "material" in named, (named, said)
+
+
 def test_a_brdf_normalisation_is_only_a_factor_a_program_gets_wrong():
     """Every diffuse reflectance times k is fitted only at the factors a tracer gets wrong (1/pi, 1/2, ...): on a
     reference 1 % darker (seed 6) its best is no 0.99, and on one at 1/pi it is 1/pi, with no free parameter."""

@@ -253,6 +253,8 @@ def _explanation_causes(expl: dict) -> list[str]:
                             # black pixels that are a mirror's (added after the untold class was graded)
                             ("bad_pixels", "paths through the mirror", "specular_unseen"),
                             ("bad_pixels", "a hole in", "mesh_face"),  # a patch on one surface (since unasked)
+                            # the catalogue's black mirror worded with another material (since unsought)
+                            ("mirror_wrong_sign", "another material", "material"),
                             # roulette's divisor, where the words name it (added after unheard was graded)
                             ("path_weight", "Russian roulette", "roulette"),
                             ("object_missing", "rays passing through it", "material")):  # a mirror (since unsaid)

@@ -37,16 +37,25 @@ from mcrt.stats.onesample import bias_scales
 from mcrt.stats.tiles import tile_counts, tile_sums
 
 
+#: Bugs whose image another mistake of a student's program makes alike, worded beside the bug's own words: the
+#: catalogue names a line of code, and the image cannot tell it from these. (A mirror whose reflection points into
+#: the sphere turns it black; a sphere of glass or of a dark diffuse material reflects little too, and at a student's
+#: noise the difference is the few per cent they still reflect.)
+LOOK_ALIKES = {"mirror_wrong_sign": "or the sphere given another material that reflects little (glass, or a dark "
+                                    "diffuse one), which leaves it nearly black too"}
+
+
 def catalogue(fit, inputs) -> list[Candidate]:
-    """Every catalogued bug as a candidate with the change its expected image makes (no parameter)."""
+    """Every catalogued bug as a candidate with the change its expected image makes (no parameter), with its
+    look-alikes' words (:data:`LOOK_ALIKES`)."""
     out = []
     if not inputs.mutants:
         return out
     base = inputs.baseline.mean.astype(np.float64)
     for name, e in inputs.mutants.items():
         dm = e.mean.astype(np.float64) - base
-        out.append(Candidate("catalogue", name, short_text(inputs.texts.get(name, name)), fit.delta(dm), 0,
-                             catalogue=True, change=dm))
+        text = short_text(inputs.texts.get(name, name)) + (f", {LOOK_ALIKES[name]}" if name in LOOK_ALIKES else "")
+        out.append(Candidate("catalogue", name, text, fit.delta(dm), 0, catalogue=True, change=dm))
     return out
 
 
