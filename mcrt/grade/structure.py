@@ -330,7 +330,9 @@ def patches(resid: np.ndarray, ref: np.ndarray, mask: np.ndarray, v: np.ndarray,
     # Surfaces too small for their share to be bounded usefully are pooled.
     ks, counts = np.unique(lab[keep], return_counts=True)
     small = np.isin(lab, ks[counts < PATCH_GROUP])
-    groups = [keep & (lab == k) for k in ks[counts >= PATCH_GROUP]] + [keep & small]
+    # Every kept pixel is a group too, whatever their number: with no surface large enough (a small image), the
+    # share must still be measured, never assumed Gaussian.
+    groups = [keep & (lab == k) for k in ks[counts >= PATCH_GROUP]] + [keep & small, keep]
     lum_ref = ref @ LUMINANCE
     for side, sign in enumerate((1.0, -1.0)):
         for zt in PATCH_Z:
@@ -343,10 +345,10 @@ def patches(resid: np.ndarray, ref: np.ndarray, mask: np.ndarray, v: np.ndarray,
             s = int(patch.sum())
             # The share beyond, from the pixels outside the patch tested (a patch would raise its own surface's).
             q = float(_sps.norm.sf(zt))
-            for sel in groups:
+            for k, sel in enumerate(groups):
                 sel = sel & ~patch
                 m = int(sel.sum())
-                if m >= PATCH_GROUP:
+                if m >= PATCH_GROUP or (k == len(groups) - 1 and m > 0):
                     b = int(np.count_nonzero(beyond & sel))
                     q = max(q, float(_sps.beta.ppf(PATCH_CONFIDENCE, b + 1, m - b)))
             # log of N s (lambda q)^s, which can underflow as a product
@@ -355,35 +357,6 @@ def patches(resid: np.ndarray, ref: np.ndarray, mask: np.ndarray, v: np.ndarray,
                 p[side], maps[side] = min(bound, 1.0), patch
                 ref_sum = float(np.sum(lum_ref[patch]))
                 eff[side] = float(np.sum(r[patch])) / ref_sum if ref_sum > 0 else 0.0
-    return p, maps, eff
-    z = np.where(keep, (resid @ LUMINANCE) / np.sqrt(np.where(keep, v, 1.0)), 0.0)
-    lab = np.zeros((h, w), np.int64) if labels is None else np.asarray(labels)
-    lum_ref = ref @ LUMINANCE
-    # Surfaces too small for their share to be bounded usefully are pooled.
-    ks, counts = np.unique(lab[keep], return_counts=True)
-    small = np.isin(lab, ks[counts < PATCH_GROUP])
-    groups = [keep & (lab == k) for k in ks[counts >= PATCH_GROUP]] + [keep & small]
-    for side, beyond in enumerate((z > PATCH_Z, z < -PATCH_Z)):
-        comp, count = ndimage.label(beyond)
-        if count == 0:
-            continue
-        sizes = np.bincount(comp.ravel())[1:]
-        big = int(np.argmax(sizes)) + 1
-        s = int(sizes[big - 1])
-        # The share beyond, from the pixels outside the patch tested (a patch would raise its own surface's).
-        q = float(_sps.norm.sf(PATCH_Z))
-        for sel in groups:
-            sel = sel & (comp != big)
-            m = int(sel.sum())
-            if m >= PATCH_GROUP:
-                b = int(np.count_nonzero(beyond & sel))
-                q = max(q, float(_sps.beta.ppf(PATCH_CONFIDENCE, b + 1, m - b)))
-        # log of N s (LAMBDA q)^s, which can underflow as a product
-        logp = np.log(n) + np.log(s) + s * np.log(PATCH_ANIMALS * q)
-        p[side] = float(np.exp(min(0.0, logp)))
-        maps[side] = comp == big
-        r = float(np.sum(lum_ref[maps[side]]))
-        eff[side] = float(np.sum((resid @ LUMINANCE)[maps[side]])) / r if r > 0 else 0.0
     return p, maps, eff
 
 
