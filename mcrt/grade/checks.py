@@ -12,7 +12,6 @@ Nothing here raises on bad student data.
 from __future__ import annotations
 
 import itertools
-
 import os
 import stat
 from dataclasses import dataclass, field

@@ -79,8 +79,9 @@ probability :math:`q^s`, q the chance that one is; at most :math:`s
 (the union bound over lattice animals). q is not assumed: it is each
 surface's own share of pixels beyond, at its upper 99.9 % confidence bound
 (Clopper-Pearson), the largest over surfaces (the model fits some surfaces
-less well than others; small ones are pooled), counted outside the patch
-tested (which would raise its own surface's share), at least a Gaussian's. Fireflies stand alone and
+less well than others; small ones are pooled, and all pixels together
+count too), counted outside the patch tested (which would raise its own
+surface's share), at least a Gaussian's. Fireflies stand alone and
 heavy tails raise q, which the bound follows; a patch of dozens is beyond
 either. The least bound over the thresholds, times their number
 (Bonferroni), is each side's p-value; the two sides are two tests, relevant
@@ -327,12 +328,11 @@ def patches(resid: np.ndarray, ref: np.ndarray, mask: np.ndarray, v: np.ndarray,
         return p, maps, eff
     r = np.where(keep, resid @ LUMINANCE, 0.0)
     z = np.where(keep, r / np.sqrt(np.where(keep, v, 1.0)), 0.0)
-    # Surfaces too small for their share to be bounded usefully are pooled.
+    # (pixels, the fewest it needs): each large surface, the small ones pooled, and every kept pixel together, whatever
+    # their number (with no surface large enough, a small image, the share is still measured, never assumed).
     ks, counts = np.unique(lab[keep], return_counts=True)
-    small = np.isin(lab, ks[counts < PATCH_GROUP])
-    # Every kept pixel is a group too, whatever their number: with no surface large enough (a small image), the
-    # share must still be measured, never assumed Gaussian.
-    groups = [keep & (lab == k) for k in ks[counts >= PATCH_GROUP]] + [keep & small, keep]
+    groups = [(keep & (lab == k), PATCH_GROUP) for k in ks[counts >= PATCH_GROUP]]
+    groups += [(keep & np.isin(lab, ks[counts < PATCH_GROUP]), PATCH_GROUP), (keep, 1)]
     lum_ref = ref @ LUMINANCE
     for side, sign in enumerate((1.0, -1.0)):
         for zt in PATCH_Z:
@@ -345,10 +345,10 @@ def patches(resid: np.ndarray, ref: np.ndarray, mask: np.ndarray, v: np.ndarray,
             s = int(patch.sum())
             # The share beyond, from the pixels outside the patch tested (a patch would raise its own surface's).
             q = float(_sps.norm.sf(zt))
-            for k, sel in enumerate(groups):
+            for sel, need in groups:
                 sel = sel & ~patch
                 m = int(sel.sum())
-                if m >= PATCH_GROUP or (k == len(groups) - 1 and m > 0):
+                if m >= need:
                     b = int(np.count_nonzero(beyond & sel))
                     q = max(q, float(_sps.beta.ppf(PATCH_CONFIDENCE, b + 1, m - b)))
             # log of N s (lambda q)^s, which can underflow as a product
