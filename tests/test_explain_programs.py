@@ -70,6 +70,20 @@ def test_a_colour_matrix_is_named(ctx, name, post, family, what):
     assert res.score < res.max_score
 
 
+def test_the_display_curve_on_two_channels_is_named_per_channel(ctx):
+    """A Mitsuba render (seed 61) written to an 8-bit sRGB file with the curve applied to red and green only, blue
+    written as linear codes (a loop over range(2)): read back, red and green are right and blue is decoded once more.
+    Claimed as the display curve per channel, in those words; the image loses points."""
+    from mcrt.image_files import srgb_eotf
+
+    x = np.clip(_mitsuba(61), 0.0, 1.0)
+    res = grade_image("srgb_rg", ctx, [np.concatenate([x[..., :2], srgb_eotf(x[..., 2:])], axis=-1)], spp=1024)
+    fam, said = _claimed(res)
+    assert fam == "encoding" and res.details["explanation"]["named"] == "sRGB curve per channel", said
+    assert "red and green right; blue written linear" in said
+    assert res.score < res.max_score
+
+
 def test_direct_light_added_twice_is_named(ctx):
     """A Mitsuba path render (seed 62) plus a Mitsuba direct-lighting render with the light hidden (seed 63): the
     direct light counted twice; no other cause."""

@@ -33,6 +33,7 @@ def curves(fit: Fit, inputs: Inputs) -> list[Candidate]:
            Candidate("encoding", "BT.709 curve", "the values encoded with BT.709's camera curve (4.5 x below 0.018, "
                      "1.099 x^0.45 - 0.099 above) where the file's sRGB curve belongs", fit.model(srgb_eotf(bt709(C))),
                      0, value="bt709", change=srgb_eotf(bt709(C)) - fit.R)]
+    out += _per_channel(fit, R, C)
     exps = np.linspace(0.25, 2.5, 91)
     errs = np.array([fit.model(R**p) for p in exps])
     i = int(np.argmin(errs))
@@ -61,6 +62,43 @@ def curves(fit: Fit, inputs: Inputs) -> list[Candidate]:
 def bt709(x: np.ndarray) -> np.ndarray:
     """BT.709's camera curve (its OETF) of linear values in [0, 1]."""
     return np.where(x < 0.018, 4.5 * x, 1.099 * np.power(np.maximum(x, 0.018), 0.45) - 0.099)
+
+
+#: What a channel can go through on its own (a loop over the wrong channels, a curve applied in one channel's code
+#: path): the value right (as rendered, or clipped by a display file) or one of the encodings above.
+_CHANNEL_CURVES = (("right", None), ("sRGB-encoded once too often (too bright)", "srgb"),
+                   ("written linear where the file says sRGB (decoded once more: too dark)", "srgb-inverse"))
+_CHANNEL_NAMES = ("red", "green", "blue")
+
+
+def _per_channel(fit: Fit, R: np.ndarray, C: np.ndarray) -> list[Candidate]:
+    """The sRGB curve applied to some channels and not others, or applied where it is not due on some: every
+    assignment of :data:`_CHANNEL_CURVES` to the three channels that treats them unlike (the alike ones are the
+    candidates above). One parameter, the choice. A channel left right is the value as rendered, clipped at 1
+    where the image has no value above 1 (a display file)."""
+    from itertools import product
+
+    from mcrt.image_files import srgb_eotf, srgb_oetf
+
+    ok = fit.ok if fit.ok.any() else np.ones(fit.S.shape, bool)
+    display = float(np.max(fit.S[ok])) <= 1.0 + 1e-6
+    each = {None: C if display else R, "srgb": srgb_oetf(C), "srgb-inverse": srgb_eotf(C)}
+    best = None
+    for combo in product(range(len(_CHANNEL_CURVES)), repeat=3):
+        if len(set(combo)) == 1:
+            continue
+        M = np.stack([each[_CHANNEL_CURVES[k][1]][..., c] for c, k in enumerate(combo)], axis=-1)
+        e = fit.model(M)
+        if best is None or e < best[0]:
+            best = (e, combo, M)
+    e, combo, M = best
+    parts = []
+    for k in dict.fromkeys(combo):
+        chans = [_CHANNEL_NAMES[c] for c, kc in enumerate(combo) if kc == k]
+        parts.append(f"{' and '.join(chans)} {_CHANNEL_CURVES[k][0]}")
+    return [Candidate("encoding", "sRGB curve per channel", "the display curve applied to some colour channels and not "
+                      f"others (a loop over the wrong channels): {'; '.join(parts)}", e, 1,
+                      value={"channels": [_CHANNEL_CURVES[k][1] or "right" for k in combo]}, change=M - fit.R)]
 
 
 #: Kernels of 3 x 3 filters written by hand, with the sum of their weights: a filter divided by another count (a
