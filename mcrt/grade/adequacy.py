@@ -324,7 +324,10 @@ def claim_rule(S: np.ndarray, R: np.ndarray, mask: np.ndarray, noise: Noise, sc:
     description (:attr:`mcrt.grade.candidates.Candidate.describes`: any
     monotone curve), it is DESCRIBED, said but not claimed; else the best is PARTIAL,
     with where its remainder lies, if it explains :data:`PARTIAL_SHARE` of
-    the difference; else nothing is claimed and the difference itself is
+    the difference and is a cause, not a description (a curve flexible enough
+    explains a share of any difference, a camera turned or a light moved, and
+    "partly like a tone map" would point the student at a step that is not
+    wrong); else nothing is claimed and the difference itself is
     placed on objects (``remainder_where``). ``extra_var(c)`` is the noise
     (H, W, 3) of candidate c's predicted change (None: none). The rule's
     measurements go to ``e.adequacy`` (:class:`Adequacy`).
@@ -369,7 +372,7 @@ def claim_rule(S: np.ndarray, R: np.ndarray, mask: np.ndarray, noise: Noise, sc:
                 if others or c.out_of_view:
                     e.verdict = e.adequacy.verdict = cd.AMBIGUOUS
                 return
-        if best is not None and best.change is not None and best.explained >= PARTIAL_SHARE:
+        if best is not None and best.change is not None and best.explained >= PARTIAL_SHARE and not best.describes:
             ad = tried.get(id(best)) or test(best)
             if ad.verdict == "partial":
                 e.verdict, e.remainder_where, e.adequacy = cd.PARTIAL, ad.where, ad
