@@ -303,6 +303,19 @@ def test_a_partial_explanation_says_something_else_is_wrong(ctx):
     assert "something else is wrong on" in ex["sentence"]
 
 
+def test_a_constant_factor_names_a_count_beside_the_exposure(ctx):
+    """A Mitsuba render (seed 71, 1024 spp) whose pixels' sums lost 3 % of their samples and were divided by the full
+    count (two threads adding without a lock): a constant factor, claimed as the whole image scaled, in words that
+    name a sum divided by another count than its samples' beside an exposure and the light's radiance, so the
+    feedback names the sample count too."""
+    res = grade_image("lost_adds", ctx, [0.97 * _mitsuba(load_scene(), 71)], spp=1024)
+    ex = res.details["explanation"]
+    assert ex["verdict"] == "claimed" and ex["family"] == "scale", ex["sentence"]
+    assert "divided by another count than the samples added to it" in ex["sentence"]
+    assert {"light_radiance", "sample_count"} <= set(named_causes(res)[0])
+    assert res.score < res.max_score
+
+
 @pytest.mark.parametrize("post, scale, family", [("nearest2", 2, "resampling"), ("cos4", 1, "falloff")])
 def test_resampling_and_falloff_are_named(ctx, post, scale, family):
     """A Mitsuba render at half the resolution enlarged by repeating pixels (seed 46), and one weighted by

@@ -257,7 +257,9 @@ def _explanation_causes(expl: dict) -> list[str]:
                             ("mirror_wrong_sign", "another material", "material"),
                             # roulette's divisor, where the words name it (added after unheard was graded)
                             ("path_weight", "Russian roulette", "roulette"),
-                            ("object_missing", "rays passing through it", "material")):  # a mirror (since unsaid)
+                            ("object_missing", "rays passing through it", "material"),  # a mirror (since unsaid)
+                            # a constant factor from a count that is not the samples' (since unguessed)
+                            ("scale", "another count than the samples", "sample_count")):
         if fam == f and words in expl["sentence"]:
             causes.append(cause)
     for alt in (expl.get("adequacy") or {}).get("alternatives", []):  # named beside it as fitting as well

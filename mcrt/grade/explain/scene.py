@@ -24,8 +24,11 @@ def scale(fit: Fit, inputs: Inputs) -> list[Candidate]:
     k1 = float(np.sum(num) / max(np.sum(den), 1e-300))
     # Near 1, three decimals: "1.005 times", never "1 times".
     factor = f"{k1:.3f}" if abs(k1 - 1) < 0.1 else _num(k1)
+    # A constant factor is also what a pixel's sum divided by another count than its samples' gives (samples lost
+    # from the sum, a count off): the words name it beside the exposure and the light.
     out = [Candidate("scale", "overall scale", f"the whole image {factor} times the reference (an exposure or "
-                     f"display scale, or the light's radiance {_fmt(np.asarray(values.get('light_radiance', (1, 1, 1))) * k1, 1)})",
+                     f"display scale, the light's radiance {_fmt(np.asarray(values.get('light_radiance', (1, 1, 1))) * k1, 1)}, "
+                     "or each pixel's sum divided by another count than the samples added to it)",
                      fit.model(k1 * R), 1, value=k1, change=(k1 - 1) * R)]
     Le = np.asarray(values.get("light_radiance", (1.0, 1.0, 1.0)))
     out.append(Candidate("light_radiance", "the light's radiance",
