@@ -164,6 +164,31 @@ def test_a_description_that_leaves_structure_is_no_partial_cause():
     assert "the closest, the right half lit too much, explains" in e.sentence and "on right" in e.sentence, e.sentence
 
 
+def test_a_camera_family_must_be_seen_beyond_the_emitters():
+    """A room of value 0.5 with a bright 8 x 8 emitter (20) and a darker box (0.2), noise sd 0.01 (seed 5). A camera
+    candidate whose change lies on the emitter's outline alone (a warp fitting the light's shape) is not seen beyond
+    the emitters; one that also moves the box's edges is, as is any family that is not a camera's."""
+    from mcrt.grade.adequacy import Scene2D, seen_beyond_emitters
+    from mcrt.grade.explain.fit import Fit
+
+    rng = np.random.default_rng(5)
+    R = np.full((H, W, 3), 0.5)
+    R[4:12, 12:20] = 20.0
+    R[20:28, 6:14] = 0.2
+    outline = np.zeros_like(R)
+    outline[3, 12:20] = outline[12, 12:20] = 2.0  # the emitter one pixel taller
+    edges = outline.copy()
+    edges[20:28, 14] = -0.3  # and the box one pixel wider
+    sc = Scene2D((8, 16, 0), 0.01, 0.003, 0.1, np.zeros((H, W), np.int16), ("room", "nothing"))
+    for change, seen in ((outline, False), (edges, True)):
+        S = R + change + rng.normal(0.0, 1e-2, R.shape)
+        fit = Fit(S, R, np.full(R.shape, 1e-4), np.ones(R.shape, bool), np.zeros(R.shape))
+        assert seen_beyond_emitters(Candidate("fov", "fov", "a field of view", fit.delta(change), 1, change=change),
+                                    fit, sc) is seen
+        assert seen_beyond_emitters(Candidate("light_size", "size", "the light's size", fit.delta(change), 1,
+                                              change=change), fit, sc)
+
+
 def test_closeness_is_significant_for_a_clearly_better_fit_and_signed():
     """Vuong's statistic: the exact change against one 30 % too weak, on noise of seed 3 (sd 0.01): far beyond
     OCCAM_Z for the exact one, as far below it the other way round, and 0 for a candidate against itself."""

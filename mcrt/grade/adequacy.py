@@ -306,6 +306,29 @@ def unconfirmed(c, adequate: list, fit, named: list) -> list:
     return out
 
 
+#: Pixels within this many of one that sees an emitter (directly or in the mirror) are its outline.
+OUTLINE = 2
+
+
+def seen_beyond_emitters(c, fit, sc: Scene2D) -> bool:
+    """Whether a change of the whole view (a camera family: :data:`mcrt.grade.explain.families.CAMERA_FAMILIES`)
+    fits better than no change away from the emitters' outlines, by :data:`CONFIRM_Z` (the term-by-term statistic of
+    :func:`closeness` over those pixels). The light's outline is the image's brightest edge: a warp of a few hundredths
+    fits any change of the light's shape there, while a camera that is wrong moves every edge. Other families pass."""
+    from scipy.ndimage import binary_dilation
+
+    from mcrt.grade.explain.families import CAMERA_FAMILIES
+
+    if c.family not in CAMERA_FAMILIES or c.change is None:
+        return True
+    bright = (fit.R @ obj.LUMINANCE) > 1.0  # an emitter seen directly or in the mirror (the lit walls stay below 1)
+    away = ~binary_dilation(bright, iterations=OUTLINE)
+    h, w, k = fit.D.shape
+    gain = (fit.terms(0.0)[: h * w * k] - fit.terms(c.change)[: h * w * k]).reshape(h, w, k)[away & fit.ok.all(axis=-1)]
+    spread = float(np.sqrt(np.sum((gain - gain.mean()) ** 2))) if gain.size else 0.0
+    return spread > 0 and float(gain.sum()) / spread >= CONFIRM_Z
+
+
 def claim_rule(S: np.ndarray, R: np.ndarray, mask: np.ndarray, noise: Noise, sc: Scene2D, *, extra_var=None):
     """The adequacy rule as a claim rule of the explanation engine (:class:`mcrt.grade.candidates.ClaimRule`).
 
@@ -350,7 +373,7 @@ def claim_rule(S: np.ndarray, R: np.ndarray, mask: np.ndarray, noise: Noise, sc:
             pool = tried_candidates(e.candidates, GAIN_SIGMAS * math.sqrt(2 * fit.n), fit=fit)
             for c in pool:
                 tried[id(c)] = test(c)
-            adequate = [c for c in pool if tried[id(c)].verdict == "adequate"]
+            adequate = [c for c in pool if tried[id(c)].verdict == "adequate" and seen_beyond_emitters(c, fit, sc)]
             c = occam(adequate, fit)
             if c is not None and c.describes:  # only a description leaves noise: how the image differs, no cause
                 _claim(e, c, tried[id(c)], [], np.where(mask[..., None], S - R - c.change, 0.0))
