@@ -82,6 +82,21 @@ def test_the_remainder_of_the_right_cause_is_noise():
     assert ad.where.startswith("on box (darker by 3 %"), ad.where
 
 
+def test_a_registration_far_beyond_first_order_gives_no_numbers():
+    """The misregistration finding gives the fitted shift, zoom and roll where they move the border a few pixels;
+    where the fit would move it by 156 pixels (tiles written at the wrong places fit so) its numbers describe
+    nothing: it says the view differs and names the camera and where pixels are written, without a shift."""
+    from types import SimpleNamespace
+
+    from mcrt.grade.feedback import registration_text
+
+    small = SimpleNamespace(shift=(0.5, 0.0), zoom=0.01, roll=0.0, edge_displacement=0.8, p=1e-6)
+    assert "shifted by (+0.50, +0.00) pixels" in registration_text(small, (64, 64), 0.1)
+    far = SimpleNamespace(shift=(42.7, 9.25), zoom=2.45, roll=0.085, edge_displacement=156.0, p=1e-9)
+    text = registration_text(far, (64, 64), 0.1)
+    assert "does not line up" in text and "where each pixel is written" in text and "shifted by" not in text, text
+
+
 def test_the_object_test_sees_a_small_change_on_one_object():
     """2 % darker on the 36 pixels of one surface (seed 2): in the bias test's Holm family (level 0.01) the
     tiles alone miss it, the per-object test finds it on that surface and no other."""

@@ -145,8 +145,19 @@ def bias_family_text(bt, th) -> str:
             f"relative effects of {fmt_pct(th.min_effect)} or more")
 
 
+#: Border displacement (pixels) beyond which the first-order registration fit describes nothing: its numbers are then
+#: not given, only that the view differs (a scrambled or far-off image fits shifts of tens of pixels).
+FIRST_ORDER_LIMIT = 8.0
+
+
 def registration_text(reg, shape, min_shift: float) -> str:
     """The misregistration finding: how the camera differs, and what to check."""
+    if reg.edge_displacement > FIRST_ORDER_LIMIT:
+        return ("the image does not line up with the reference: fitted as a small camera change it would move its "
+                f"border by {reg.edge_displacement:.0f} pixels, far beyond what such a fit measures, so it says only "
+                "that the view differs (p = {:.2g}); check the camera (field of view, eye, look-at and up vectors, "
+                "the pixel-to-ray mapping) and where each pixel is written (row and column indices, the row stride, "
+                "tiles' offsets)".format(reg.p))
     h, w = shape
     radius = 0.5 * float(np.hypot(h - 1, w - 1))
     parts = []

@@ -306,6 +306,8 @@ def named_causes(res) -> tuple[list[str], str]:
     cam = tests.get("camera")
     if cam is not None and cam.status == "failed":
         causes += ["camera_fov", "camera_rotation", "camera_eye", "pixel_offset"]
+        if "where each pixel is written" in cam.output:  # a view far off: the pixels' places named too (since unguessed)
+            causes.append("row_stride")
         said.append(cam.output.split(";")[0])
     noise = tests.get("noise")
     if noise is not None and noise.status == "failed" and (res.details.get("pair") or {}).get("same_noise"):
