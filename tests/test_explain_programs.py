@@ -84,6 +84,20 @@ def test_the_display_curve_on_two_channels_is_named_per_channel(ctx):
     assert res.score < res.max_score
 
 
+def test_the_display_curve_on_the_luminance_is_named(ctx):
+    """A Mitsuba render (seed 65) whose pixels' luminance went through the sRGB curve, each colour scaled along to keep
+    its hue, saved as floats: claimed as that curve on the luminance; the image loses points."""
+    from mcrt.image_files import srgb_oetf
+
+    x = _mitsuba(65)
+    lum = (x @ np.array([0.2126, 0.7152, 0.0722]))[..., None]
+    res = grade_image("srgb_lum", ctx, [x * np.where(lum > 0, srgb_oetf(lum) / np.maximum(lum, 1e-12), 0.0)],
+                      spp=1024)
+    fam, said = _claimed(res)
+    assert fam == "tone_curve" and res.details["explanation"]["named"] == "tone map srgb on luminance", said
+    assert res.score < res.max_score
+
+
 def test_direct_light_added_twice_is_named(ctx):
     """A Mitsuba path render (seed 62) plus a Mitsuba direct-lighting render with the light hidden (seed 63): the
     direct light counted twice; no other cause."""

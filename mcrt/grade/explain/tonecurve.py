@@ -10,7 +10,7 @@ white point 11.2), the exponential curve :math:`1 - e^{-x}` (tutorials'
 :math:`x (1 + x / w^2) / (1 + x)` with its white point w scanned too; and
 Reinhard's curves, ACES and Hable's applied to the luminance L alone, each
 pixel's colour scaled by :math:`f(L) / L` (hue and saturation kept, as
-tone-mapping guides teach); and a constant subtracted from every value,
+tone-mapping guides teach), and the sRGB curve so; and a constant subtracted from every value,
 clipped at 0 (a black level), or added. Any other monotone curve is fitted as an
 isotonic regression of S on R per channel
 (:func:`scipy.optimize.isotonic_regression`) on :data:`BINS` quantile bins
@@ -154,6 +154,8 @@ def _contrast(fit: Fit, R: np.ndarray) -> list[Candidate]:
 def _reinhard_extended(fit: Fit, R: np.ndarray) -> list[Candidate]:
     """Reinhard's extended curve per channel and on the luminance, and the other curves of :data:`ON_LUMINANCE` on
     the luminance: an exposure (and a white point) scanned for each."""
+    from mcrt.image_files import srgb_oetf
+
     named = _named_curves()
     curves = [("reinhard_ext", "put through Reinhard's extended tone map x (1 + x / w^2) / (1 + x)", w,
                lambda x, w=w: _reinhard_ext(x, w)) for w in WHITES]
@@ -162,6 +164,9 @@ def _reinhard_extended(fit: Fit, R: np.ndarray) -> list[Candidate]:
     curves += [("reinhard_ext on luminance", "put through Reinhard's extended tone map x (1 + x / w^2) / (1 + x) "
                 "applied to the luminance (colours kept)", w, _on_luminance(lambda x, w=w: _reinhard_ext(x, w)))
                for w in WHITES]
+    # The display curve on the luminance, each colour scaled along (to keep the hue): an encoding, not a tone map.
+    curves.append(("srgb on luminance", "through the sRGB curve applied to the luminance (colours kept)", None,
+                   _on_luminance(srgb_oetf)))
     best = {}
     for key, words, w, f in curves:
         for k in EXPOSURES:
