@@ -15,7 +15,8 @@ CLASSES = {"scene": "cases", "outside": "outside", "programs": "programs", "fres
            "blind": "blind", "unseen": "unseen", "untried": "untried",
            "novel": "novel", "untold": "untold", "unmet": "unmet",
            "unheard": "unheard", "unsaid": "unsaid", "unasked": "unasked",
-           "unsought": "unsought", "unguessed": "unguessed"}
+           "unsought": "unsought", "unguessed": "unguessed",
+           "unforeseen": "unforeseen"}
 
 
 def register(sub) -> None:
@@ -38,9 +39,10 @@ def register(sub) -> None:
                    "written blind, mcrt.grade.accuracy.unheard), 'unsaid' (a twelfth, in tracers, scene input and "
                    "output, written blind, mcrt.grade.accuracy.unsaid), 'unasked' (a thirteenth, in tracers, scene "
                    "input and output, written blind, mcrt.grade.accuracy.unasked), 'unsought' (a fourteenth, in "
-                   "tracers, scene input and output, written blind, mcrt.grade.accuracy.unsought) or 'unguessed' (a "
-                   "fifteenth, in tracers, scene input and output, written blind, mcrt.grade.accuracy.unguessed) "
-                   "(default: scene)")
+                   "tracers, scene input and output, written blind, mcrt.grade.accuracy.unsought), 'unguessed' (a "
+                   "fifteenth, in tracers, scene input and output, written blind, mcrt.grade.accuracy.unguessed) or "
+                   "'unforeseen' (a sixteenth, in tracers, scene input and output, written blind, "
+                   "mcrt.grade.accuracy.unforeseen) (default: scene)")
     p.add_argument("--held-out", choices=("all", "only", "none"), default="all",
                    help="grade all cases, only the held-out ones, or none of them (default: all)")
     p.add_argument("--out", default=None, help=f"report folder (default: {DEFAULT_OUT}, or {DEFAULT_OUT}/CLASS "
