@@ -10,7 +10,6 @@ from __future__ import annotations
 import json
 import re
 import statistics
-from pathlib import Path
 
 from mcrt.bench import BenchCase, bench_cases, bounded_rows, kernel_profile, run_bench
 from mcrt.bench_page import LOG_HEADING, format_profile, format_table, markdown, write_report
@@ -276,7 +275,7 @@ def test_flatness_interleaves_resolutions_and_sets_the_goal():
                    (False, "84 % of its best: 21.0 M paths/s against 25.0 at 1024x1024 (medians of 5 interleaved rounds)")}
 
 
-def test_report_states_the_sampler_cost_and_the_previous_run():
+def test_report_states_the_sampler_cost_and_the_previous_run(tmp_path):
     """The sampler-cost table and the comparison with the previous run, each figure from recorded numbers.
 
     The previous run's speed-ups are this run's times 0.9, 1.0, 1.1 and 1.2 (in the order of the cases): the
@@ -291,7 +290,7 @@ def test_report_states_the_sampler_cost_and_the_previous_run():
     now = [(a["case"], speedup(a, b)) for a, b in pairs(data["rows"])]
     data["previous"] = {"commit": "old1", "date": "1999", "speedups": [
         {"case": c, "speedup": v * f} for (c, v), f in zip(now, (0.9, 1.0, 1.1, 1.2))]}
-    page = markdown(data, Path("."))
+    page = markdown(data, tmp_path)  # its plots go there, not into the checkout
     assert "| near | 64x64 | 1024 | 4,194,304 | 0.2500 | 0.3000 | 16.78 | 13.98 | 1.20 |" in page
     assert "takes 1.20 to 1.20 times the independent render's time" in page
     assert "commit old1, 1999" in page and f"median {(1 / 1.0 + 1 / 1.1) / 2:.2f}" in page
