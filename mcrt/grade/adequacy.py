@@ -314,7 +314,8 @@ def seen_beyond_emitters(c, fit, sc: Scene2D) -> bool:
     """Whether a change of the whole view (a camera family: :data:`mcrt.grade.explain.families.CAMERA_FAMILIES`)
     fits better than no change away from the emitters' outlines, by :data:`CONFIRM_Z` (the term-by-term statistic of
     :func:`closeness` over those pixels). The light's outline is the image's brightest edge: a warp of a few hundredths
-    fits any change of the light's shape there, while a camera that is wrong moves every edge. Other families pass."""
+    fits any change of the light's shape there, while a camera that is wrong moves every edge. Other families pass.
+    One that fails is not claimed, but stays an adequate reading beside the others (:func:`unconfirmed`)."""
     from scipy.ndimage import binary_dilation
 
     from mcrt.grade.explain.families import CAMERA_FAMILIES
@@ -373,8 +374,10 @@ def claim_rule(S: np.ndarray, R: np.ndarray, mask: np.ndarray, noise: Noise, sc:
             pool = tried_candidates(e.candidates, GAIN_SIGMAS * math.sqrt(2 * fit.n), fit=fit)
             for c in pool:
                 tried[id(c)] = test(c)
-            adequate = [c for c in pool if tried[id(c)].verdict == "adequate" and seen_beyond_emitters(c, fit, sc)]
-            c = occam(adequate, fit)
+            adequate = [c for c in pool if tried[id(c)].verdict == "adequate"]
+            # A camera change seen on the emitters' outlines alone is never claimed, but it is still a reading that
+            # leaves noise: beside it another claim is unconfirmed (a light moved or a lens warped both fit there).
+            c = occam([a for a in adequate if seen_beyond_emitters(a, fit, sc)], fit)
             if c is not None and c.describes:  # only a description leaves noise: how the image differs, no cause
                 _claim(e, c, tried[id(c)], [], np.where(mask[..., None], S - R - c.change, 0.0))
                 e.verdict = e.adequacy.verdict = cd.DESCRIBED
