@@ -290,8 +290,9 @@ _UNGUESSED = (
     "graded once, on them (report at commit 389b6c5: held out, 2 of 12 named right, 2 of 12 confidently wrong, 12 of "
     "12 detected; all 28, 5 named right, 5 confidently wrong, 26 detected; 0 of 8 correct hand-ins lost points). "
     "Changes made after that grading, with the whole class in view (commits ffc51ba to 2a71bb8, before the unforeseen "
-    "class was graded): a constant factor worded also as a pixel's sum divided by another count than its samples'; a "
-    "camera family claimed only where it fits beyond the emitters' outlines; a misregistration beyond what a "
+    "class was graded, and fb0b997 after it): a constant factor worded also as a pixel's sum divided by another count "
+    "than its samples'; a camera family claimed only where it fits beyond the emitters' outlines (kept as another "
+    "reading where it does not); a misregistration beyond what a "
     "first-order fit measures worded without its numbers, naming the camera and where each pixel is written; the sRGB "
     "curve applied to the luminance among the curves. Both rows here are of rules that saw the class.")
 
@@ -306,7 +307,11 @@ _UNFORESEEN = (
     "**Held-out** cases (marked H) were fixed by the rule stated in the module (every other case of each category) "
     "before any case was graded. Its author reported counts only (no case named or described); the grader's rules "
     "were frozen at commit 2a71bb8 and a false-alarm report on them gave 0 of 153 before any case was read or graded; "
-    "the whole class was then graded once, on them, and this report is that grading.")
+    "the whole class was then graded once, on them (report at commit fdd939b: held out, 2 of 12 named right, 0 of 12 "
+    "confidently wrong, 8 of 12 detected; all 28, 7 named right, 1 confidently wrong, 23 detected; 0 of 8 correct "
+    "hand-ins lost points). One change was made after that grading, without this class in view: a camera change seen "
+    "on the emitters' outlines alone kept as a reading beside the others (commit fb0b997, for another class's case "
+    "that the rebuild of every report showed).")
 
 
 def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta: dict, gradescope: list[dict],
