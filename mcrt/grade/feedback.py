@@ -155,9 +155,9 @@ def registration_text(reg, shape, min_shift: float) -> str:
     if reg.edge_displacement > FIRST_ORDER_LIMIT:
         return ("the image does not line up with the reference: fitted as a small camera change it would move its "
                 f"border by {reg.edge_displacement:.0f} pixels, far beyond what such a fit measures, so it says only "
-                "that the view differs (p = {:.2g}); check the camera (field of view, eye, look-at and up vectors, "
-                "the pixel-to-ray mapping) and where each pixel is written (row and column indices, the row stride, "
-                "tiles' offsets)".format(reg.p))
+                f"that the view differs (p = {reg.p:.2g}); check the camera (field of view, eye, look-at and up "
+                "vectors, the pixel-to-ray mapping) and where each pixel is written (row and column indices, the row "
+                "stride, tiles' offsets)")
     h, w = shape
     radius = 0.5 * float(np.hypot(h - 1, w - 1))
     parts = []
