@@ -305,3 +305,20 @@ def test_shadow_rays_summed_are_fitted_by_their_count(ctx):
     fit = Fit(S, R, V, np.ones(S.shape, bool), ctx.explain.var.astype(np.float64) / ctx.explain.spp)
     best = light_sampling(fit, Inputs(ctx.explain))[0]
     assert best.value == {"factor": 30.0} and "30 shadow rays a point summed" in best.text, best.text
+
+
+def test_the_light_sampled_elsewhere_is_named_where_its_samples_are(ctx):
+    """A light sampling routine with its own copy of the light, its centre's y typed 1 too small: Mitsuba's light
+    seen directly (cut at depth 1, the scene's light) plus the light the moved copy sheds on surfaces (its full render
+    minus its own cut at depth 1), one seed (98). The light as sampled is claimed, at the copy's centre, and the
+    image loses points."""
+    s = load_scene()
+    moved = replace(s, light=replace(s.light, center=(s.light.center[0], s.light.center[1] - 1.0, s.light.center[2])))
+    S = _mitsuba(98, max_depth=1) + _mitsuba(98, moved) - _mitsuba(98, moved, max_depth=1)
+    res = grade_image("sampled_elsewhere", ctx, [S], spp=1024)
+    fam, said = _claimed(res)
+    ex = res.details["explanation"]
+    assert fam == "light_sampling" and ex["named"] == "light sampled elsewhere", said
+    assert ex["candidates"][0]["value"]["centre"] == pytest.approx(moved.light.center), said
+    assert named_causes(res)[0] == ["light_pdf"] and res.score < res.max_score
+

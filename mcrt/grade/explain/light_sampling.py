@@ -38,6 +38,7 @@ import numpy as np
 from mcrt.grade.candidates import Candidate, Inputs
 from mcrt.grade.explain.fit import Fit
 from mcrt.grade.explain.light_twice import _depth
+from mcrt.grade.feedback import fmt_values as _fmt
 from mcrt.grade.feedback import num as _num
 
 
@@ -53,6 +54,27 @@ def factors(area: float) -> tuple[tuple[float, str], ...]:
             (0.5, "1/2: half the light's surface sampled (one of its two triangles) with the whole light's pdf"),
             (2.0, "2: the light sampled with half its pdf (two triangles' samples both counted)"),
             *((float(n), f"{n}: {n} shadow rays a point summed where their mean belongs") for n in SHADOW_RAYS))
+
+
+#: Sides of the square a light's samples may come from, as a factor of the light's (1 is the light itself).
+ELSEWHERE_SIZES = (0.5, 0.75, 1.25, 1.5, 2.0)
+
+
+def _elsewhere(scene):
+    """(what, words, scene) with the light moved along x or y, or resized about its centre, that stays inside the
+    room: where a copy of the light in the sampling code may put it."""
+    from dataclasses import replace
+
+    from mcrt.grade.explain.basis import AXES, LIGHT_OFFSETS, _light_inside, _shift
+
+    lt = scene.light
+    out = []
+    for axis in (0, 1):
+        for d in LIGHT_OFFSETS:
+            out.append((("moved", AXES[axis], d), replace(scene, light=replace(lt, center=_shift(lt.center, axis, d)))))
+    for f in ELSEWHERE_SIZES:
+        out.append((("size", f), replace(scene, light=replace(lt, size=(lt.size[0] * f, lt.size[1] * f)))))
+    return [(what, s) for what, s in out if _light_inside(s)]
 
 
 def _quadrants(scene):
@@ -76,12 +98,13 @@ def _prepare(a, scene, render) -> dict[str, np.ndarray]:
     def img(s, depth):
         return render(s, a.camera, a.grade_width, a.grade_height, depth, spp, seed).mean.astype(np.float32)
 
-    return {name: img(s, a.max_depth) - img(s, 1) for name, s in _quadrants(scene)}
+    return {"quarters": {name: img(s, a.max_depth) - img(s, 1) for name, s in _quadrants(scene)},
+            "elsewhere": [(what, img(s, a.max_depth) - img(s, 1)) for what, s in _elsewhere(scene)]}
 
 
 def _quadrant(fit: Fit, inputs: Inputs, x: np.ndarray) -> Candidate | None:
     """The best quadrant of :func:`_quadrants` as the light sampled (the module docstring), None without renders."""
-    quads = inputs.basis.extra.get(light_sampling.name)
+    quads = (inputs.basis.extra.get(light_sampling.name) or {}).get("quarters")
     if not quads:
         return None
     err, name, change = min(((fit.delta(q - x), name, q - x) for name, q in
@@ -93,9 +116,45 @@ def _quadrant(fit: Fit, inputs: Inputs, x: np.ndarray) -> Candidate | None:
                      change=change)
 
 
+def _sampled_elsewhere(fit: Fit, inputs: Inputs, x: np.ndarray) -> Candidate | None:
+    """The best light as sampled of :func:`_elsewhere` (the module docstring), None without renders."""
+    v = inputs.basis.values
+    best = None
+    for what, on in (inputs.basis.extra.get(light_sampling.name) or {}).get("elsewhere", ()):
+        on = on.astype(np.float64)
+        kept = (("its radiance", 1.0),) if what[0] == "moved" else (("the pdf of that square", 1.0),
+                                                                     ("the whole light's pdf", 1.0 / what[1] ** 2))
+        for how, c in kept:
+            err = fit.delta(c * on - x)
+            if best is None or err < best[0]:
+                best = (err, what, how, c * on - x)
+    if best is None:
+        return None
+    err, what, how, change = best
+    if what[0] == "moved":
+        axis, d = what[1], what[2]
+        centre = list(v["light_center"])
+        centre["xyz".index(axis)] += d
+        text = (f"the light's samples drawn about {_fmt(centre, 2)} where the light is at {_fmt(v['light_center'], 2)} "
+                f"(moved by {d:+g} along {axis}): its light on surfaces comes from there, the light itself seen where it "
+                "is (the sampling code's own copy of the light's position typed wrong)")
+        value = {"centre": tuple(centre)}
+    else:
+        f = what[1]
+        side = " x ".join(_num(f * float(x)) for x in v["light_size"])
+        whole = how == "the whole light's pdf"
+        power = "the light's power" if whole else f"{_num(f * f)} times the light's power"
+        text = (f"the light's samples drawn on a {side} square about its centre where the light is "
+                f"{' x '.join(_num(float(x)) for x in v['light_size'])}, weighted by {how} ({power} on surfaces), the "
+                "light itself seen right (the sampling code's own copy of the light's side)")
+        value = {"side": f, "pdf": "whole light" if whole else "sampled square"}
+    return Candidate("light_sampling", "light sampled elsewhere", text, err, 0, value=value, change=change)
+
+
 def light_sampling(fit: Fit, inputs: Inputs) -> list[Candidate]:
-    """The light on surfaces k times the truth for the best k of :func:`factors`, and from the best quarter of the
-    light (:func:`_quadrant`), the light seen directly unchanged (the module docstring)."""
+    """The light on surfaces k times the truth for the best k of :func:`factors`, from the best quarter of the
+    light (:func:`_quadrant`) and from the best light as sampled elsewhere (:func:`_sampled_elsewhere`), the light
+    seen directly unchanged (the module docstring)."""
     b = inputs.basis
     d1 = _depth(b, 1)
     size = b.values.get("light_size", (0.0, 0.0))
@@ -108,8 +167,7 @@ def light_sampling(fit: Fit, inputs: Inputs) -> list[Candidate]:
             f"sample weighted wrongly (k = {words})")
     out = [Candidate("light_sampling", "light sample's weight", text, err, 0, value={"factor": k},
                      change=(k - 1.0) * x, gain=True)]
-    quarter = _quadrant(fit, inputs, x)
-    return out + ([quarter] if quarter is not None else [])
+    return out + [c for c in (_quadrant(fit, inputs, x), _sampled_elsewhere(fit, inputs, x)) if c is not None]
 
 
 light_sampling.name, light_sampling.prepare = "light_sampling", _prepare
