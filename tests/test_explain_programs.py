@@ -322,3 +322,31 @@ def test_the_light_sampled_elsewhere_is_named_where_its_samples_are(ctx):
     assert ex["candidates"][0]["value"]["centre"] == pytest.approx(moved.light.center), said
     assert named_causes(res)[0] == ["light_pdf"] and res.score < res.max_score
 
+
+def test_several_surfaces_colours_are_named_together(ctx):
+    """A Mitsuba render (seed 99) with every diffuse albedo's channels clamped at 0.6 (a guard against reflecting
+    more than came in, set too low): five walls, the ceiling and the tetrahedron change, no single surface explains
+    it, and no fixed remapping is a clamp. Several surfaces' colours are claimed together (of those in view at
+    32 x 32, wall CD and the ceiling among them), each within 0.05 of its clamped colour in every channel, and the
+    image loses points."""
+    s = load_scene()
+
+    def c(v):
+        return tuple(min(float(x), 0.6) for x in v)
+
+    room = replace(s.room, floor_albedo=c(s.room.floor_albedo), ceiling_albedo=c(s.room.ceiling_albedo),
+                   walls=tuple(replace(w, albedo=c(w.albedo)) for w in s.room.walls))
+    objects = tuple(replace(o, material=replace(o.material, albedo=c(o.material.albedo)))
+                    if hasattr(o.material, "albedo") else o for o in s.objects)
+    clamped = replace(s, room=room, objects=objects)
+    res = grade_image("clamped", ctx, [_mitsuba(99, clamped)], spp=1024)
+    fam, said = _claimed(res)
+    ex = res.details["explanation"]
+    assert fam == "albedo" and ex["named"] == "albedos of several surfaces", said
+    truth = {f"wall {''.join(w.corners)}": w.albedo for w in room.walls} | {"the ceiling": room.ceiling_albedo}
+    fitted = ex["candidates"][0]["value"]
+    assert {"wall CD", "the ceiling"} <= set(fitted), said
+    for label, v in fitted.items():
+        if label in truth:
+            assert np.allclose(v, truth[label], atol=0.05), (label, v, truth[label])
+    assert named_causes(res)[0] == ["albedo"] and res.score < res.max_score

@@ -289,7 +289,8 @@ def reading_of(c) -> str:
 
 
 def unconfirmed(c, adequate: list, fit, named: list) -> list:
-    """The adequate candidates of other readings than claimed c's (:data:`READINGS`; not a description, not a rival,
+    """The adequate candidates of other readings than claimed c's (:data:`READINGS`; not a description nor a flexible
+    fit (:attr:`mcrt.grade.candidates.Candidate.flexible`: its fit is no evidence), not a rival,
     not a generalisation of c or nested in it, not ``named`` beside it) that c does not beat by :data:`CONFIRM_Z`
     (:func:`closeness` without the BIC's credit): another cause the image cannot tell from c's, the best of each
     reading. For c a surface out of view (:attr:`mcrt.grade.candidates.Candidate.out_of_view`) every such candidate
@@ -297,7 +298,7 @@ def unconfirmed(c, adequate: list, fit, named: list) -> list:
     out, seen = [], {reading_of(c)}
     for a in adequate:
         r = reading_of(a)
-        if (r in seen or any(a is x for x in named) or a.describes or a.family in c.rivals or c.family in a.rivals
+        if (r in seen or any(a is x for x in named) or a.describes or a.flexible or a.family in c.rivals or c.family in a.rivals
                 or c.family in a.generalises or a.family in c.generalises
                 or (not c.out_of_view and closeness(fit, c, a, bic=False) >= CONFIRM_Z)):
             continue
@@ -346,7 +347,8 @@ def claim_rule(S: np.ndarray, R: np.ndarray, mask: np.ndarray, noise: Noise, sc:
     :data:`mcrt.grade.candidates.AMBIGUOUS`, those candidates its
     alternatives, nothing claimed); where that simplest is a
     description (:attr:`mcrt.grade.candidates.Candidate.describes`: any
-    monotone curve), it is DESCRIBED, said but not claimed; else the best is PARTIAL,
+    monotone curve), it is DESCRIBED, said but not claimed; else the best that is not
+    flexible (:attr:`mcrt.grade.candidates.Candidate.flexible`: a parameter per object) is PARTIAL,
     with where its remainder lies, if it explains :data:`PARTIAL_SHARE` of
     the difference and is a cause, not a description (a curve flexible enough
     explains a share of any difference, a camera turned or a light moved, and
@@ -377,7 +379,9 @@ def claim_rule(S: np.ndarray, R: np.ndarray, mask: np.ndarray, noise: Noise, sc:
             adequate = [c for c in pool if tried[id(c)].verdict == "adequate"]
             # A camera change seen on the emitters' outlines alone is never claimed, but it is still a reading that
             # leaves noise: beside it another claim is unconfirmed (a light moved or a lens warped both fit there).
-            c = occam([a for a in adequate if seen_beyond_emitters(a, fit, sc)], fit)
+            # A flexible fit is a last resort: claimed only where nothing else leaves noise.
+            c = occam([a for a in adequate if seen_beyond_emitters(a, fit, sc)
+                       and not (a.flexible and any(not x.flexible for x in adequate))], fit)
             if c is not None and c.describes:  # only a description leaves noise: how the image differs, no cause
                 _claim(e, c, tried[id(c)], [], np.where(mask[..., None], S - R - c.change, 0.0))
                 e.verdict = e.adequacy.verdict = cd.DESCRIBED
@@ -398,9 +402,14 @@ def claim_rule(S: np.ndarray, R: np.ndarray, mask: np.ndarray, noise: Noise, sc:
                 if others or c.out_of_view:
                     e.verdict = e.adequacy.verdict = cd.AMBIGUOUS
                 return
-        if best is not None and best.change is not None and best.explained >= PARTIAL_SHARE and not best.describes:
-            ad = tried.get(id(best)) or test(best)
+        # A flexible fit's share is no evidence of its cause: the closest other candidate leads a partial reading.
+        lead = next((c for c in e.candidates if not c.flexible), None)
+        if lead is not None and lead.change is not None and lead.explained >= PARTIAL_SHARE and not lead.describes:
+            ad = tried.get(id(lead)) or test(lead)
             if ad.verdict == "partial":
+                if lead is not best:
+                    e.candidates = [lead] + [x for x in e.candidates if x is not lead]
+                    e.remainder = np.where(mask[..., None], S - R - lead.change, 0.0)
                 e.verdict, e.remainder_where, e.adequacy = cd.PARTIAL, ad.where, ad
                 return
         e.verdict = cd.NONE if e.verdict == cd.CLAIMED else e.verdict

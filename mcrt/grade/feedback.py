@@ -123,8 +123,9 @@ def explanation_words(e: Explanation) -> tuple[str, str]:
                     f"{best.text}, lowers chi-square by {gain:.0f} where noise alone varies it by about "
                     f"{math.sqrt(2 * e.terms):.0f})")
     else:
-        # A description (any monotone curve) is no mistake: the closest named is the closest cause.
-        near = next((c for c in e.candidates if not c.describes), None) if best is not None and best.describes else best
+        # A description (any monotone curve) is no mistake, a flexible fit's share no evidence: the closest named is
+        # the closest cause.
+        near = next((c for c in e.candidates if not (c.describes or c.flexible)), None)
         sentence = (f"{_TRIED} explains most of the difference"
                     + (f": the closest, {near.text}, explains {100 * max(near.explained, 0):.0f} %" if near else ""))
     if e.remainder_where:  # the adequacy rule placed the difference on objects

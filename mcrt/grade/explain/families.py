@@ -19,18 +19,18 @@ from mcrt.grade.explain.pixels import bad_pixels
 from mcrt.grade.explain.reflectance import reflectance_remapped, reflectance_scale
 from mcrt.grade.explain.resampling import resampling
 from mcrt.grade.explain.sample_clamp import sample_clamp
-from mcrt.grade.explain.scene import albedo, rendered, scale
+from mcrt.grade.explain.scene import albedo, albedos, rendered, scale
 from mcrt.grade.explain.surface_black import surface_black
 from mcrt.grade.explain.swap import swap
 from mcrt.grade.explain.tonecurve import tone_curve
 
 #: Every family the engine fits, in this order (ties keep it). The scene file's parameters (and the colours mixed by
-#: a matrix, a surface of the room black) and the catalogue; then what a student's program gets wrong beyond the
+#: a matrix, several surfaces' colours at once, a surface of the room black) and the catalogue; then what a student's program gets wrong beyond the
 #: scene file (a tone curve, each sample clamped, a fall-off, resampling, bloom, an object's material or size,
 #: values stored at the wrong places, colours or materials given to the wrong surfaces, every diffuse reflectance off
 #: by one factor, squared or its complement, light counted twice, a path's weight off from a bounce on, a light
 #: sample's weight, the light facing the wrong way, black pixels).
-FAMILIES = (scale, colour, curves, albedo, surface_black, rendered, camera, catalogue, tone_curve, sample_clamp,
+FAMILIES = (scale, colour, curves, albedo, albedos, surface_black, rendered, camera, catalogue, tone_curve, sample_clamp,
             falloff, resampling, layout, bloom, material, object_size, swap, reflectance_scale, reflectance_remapped,
             light_twice, path_weight, light_sampling, light_facing, bad_pixels)
 

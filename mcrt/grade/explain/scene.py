@@ -89,6 +89,68 @@ def albedo(fit: Fit, inputs: Inputs) -> list[Candidate]:
     return out
 
 
+#: A surface's fitted colour counts as changed in :func:`albedos`' words when a channel moves by more than this.
+CHANGED = 0.03
+#: Sweeps of :func:`albedos`' coordinate descent over the surfaces.
+SWEEPS = 4
+
+
+def albedos(fit: Fit, inputs: Inputs) -> list[Candidate]:
+    r"""Several surfaces' albedos at once: colours typed for the wrong walls, clamped, or read in another order.
+
+    Each surface's effect is its albedo curve of :func:`albedo` (Lagrange
+    through its nodes); the model is their sum, which leaves out what two
+    changed surfaces do to each other (second order in the changes). The
+    fit is a coordinate descent over the surfaces in view (one out of view
+    shows only in the light it reflects), channel by channel
+    (:data:`SWEEPS` sweeps on the grid of :func:`albedo`, pixel chi^2 with the
+    fit's weights), and the candidate's chi^2 is the fit's full criterion.
+    Every such surface's three albedos count as parameters, so one surface's
+    colour alone is :func:`albedo`'s; the candidate needs two or more
+    surfaces changed by more than :data:`CHANGED`. It is flexible
+    (:attr:`~mcrt.grade.candidates.Candidate.flexible`): claimed only where
+    its remainder is noise and no other candidate's is.
+    """
+    b = inputs.basis
+    seen = _seen(inputs)
+    # A surface out of view shows only in the light it reflects, which every surface's colour changes alike.
+    labels = [lab for lab in b.albedo if seen is None or lab in seen]
+    if len(labels) < 2:
+        return []
+    grid = np.linspace(0.0, 1.0, 101)
+    w = np.where(fit.ok, fit.w, 0.0)
+    fitted = {lab: list(b.albedo[lab][2]) for lab in labels}
+    dm = np.zeros_like(b.base, dtype=np.float64)
+    for c in range(3):
+        polys = {}
+        for lab in labels:
+            nodes, imgs, scene_v = b.albedo[lab]
+            keep = np.concatenate([np.abs(nodes - scene_v[c]) > 1e-3, [True]])
+            xs = np.append(nodes, scene_v[c])[keep]
+            ys = (np.concatenate([imgs[:, :, :, c], b.base[None, :, :, c]]).astype(np.float64)[keep]
+                  - b.base[None, :, :, c])
+            gram = np.einsum("jhw,khw,hw->jk", ys, ys, w[..., c])
+            polys[lab] = (xs, ys, gram, lagrange(grid, xs))
+        part = {lab: np.zeros(b.base.shape[:2]) for lab in labels}
+        for _ in range(SWEEPS):
+            for lab in labels:
+                xs, ys, gram, L = polys[lab]
+                r = fit.D[..., c] - (sum(part.values()) - part[lab])
+                err = -2 * L @ np.einsum("jhw,hw->j", ys, r * w[..., c]) + np.einsum("gj,jk,gk->g", L, gram, L)
+                i = int(np.argmin(err))
+                a = float(refine(grid, err, i))
+                fitted[lab][c] = a
+                part[lab] = np.tensordot(lagrange(np.array([a]), xs), ys, axes=(1, 0))[0]
+        dm[..., c] = sum(part.values())
+    changed = [lab for lab in labels if max(abs(x - y) for x, y in zip(fitted[lab], b.albedo[lab][2])) > CHANGED]
+    if len(changed) < 2:
+        return []
+    words = "; ".join(f"{lab} {_fmt(fitted[lab])} where the scene says {_fmt(b.albedo[lab][2])}" for lab in changed)
+    text = f"the colours of {len(changed)} surfaces other than the scene's: {words}"
+    return [Candidate("albedo", "albedos of several surfaces", text, fit.delta(dm), 3 * len(labels),
+                      value={lab: tuple(fitted[lab]) for lab in changed}, change=dm, flexible=True)]
+
+
 def _seen(inputs: Inputs) -> set[str] | None:
     """The albedo basis's labels of the surfaces some pixel sees directly ('wall DE', 'the floor'); None without
     labels."""
