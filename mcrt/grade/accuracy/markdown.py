@@ -314,11 +314,24 @@ _UNFORESEEN = (
     "that the rebuild of every report showed).")
 
 
+_UNPROMPTED = (
+    "The wrong renders are a seventeenth class of mistakes in students' tracers, their scene input and their output "
+    "that no other class or the catalogue tried (mcrt.grade.accuracy.unprompted), written blind to the grader's rules "
+    "and not graded by their author: post-processing, writing the file, materials, geometry, camera and light models, "
+    "the integrator, and samples and passes; from Mitsuba renders of edited scenes, Mitsuba renders combined, or "
+    "correct renders written as students' programs write files. The correct ones come from Mitsuba and mcrt in ways "
+    "no other class used. *Named right*, *confidently wrong*, *partial or none*: as for the other classes. "
+    "**Held-out** cases (marked H) were fixed by the rule stated in the module (every other case of each category) "
+    "before any case was graded. Its author reported counts only (no case named or described); the grader's rules "
+    "were frozen at commit bf4b76d and a false-alarm report on them gave 0 of 153 before any case was read or "
+    "graded; the whole class was then graded once, on them.")
+
+
 def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta: dict, gradescope: list[dict],
                  klass: str = "scene") -> Path:
     """Write index.md and data.json under ``out``; returns the Markdown's path. ``klass`` is the class graded:
     'scene' (mcrt.grade.accuracy.cases) or another name of :data:`mcrt.grade.accuracy.cli.CLASSES` ('outside',
-    'programs', 'fresh', ..., 'unguessed', 'unforeseen': the module of that name under mcrt.grade.accuracy); an empty half
+    'programs', 'fresh', ..., 'unforeseen', 'unprompted': the module of that name under mcrt.grade.accuracy); an empty half
     (tuned on or held out) is left out of the rates table."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
@@ -342,7 +355,8 @@ def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta
         "unasked": ": a thirteenth class of mistakes, written blind",
         "unsought": ": a fourteenth class of mistakes, written blind",
         "unguessed": ": a fifteenth class of mistakes, written blind",
-        "unforeseen": ": a sixteenth class of mistakes, written blind"}.get(klass, "")
+        "unforeseen": ": a sixteenth class of mistakes, written blind",
+        "unprompted": ": a seventeenth class of mistakes, written blind"}.get(klass, "")
     L = [f"# {title}", "",
          f"Written by `{command}` ({meta.get('date', '')}, {meta.get('seconds', 0):.0f} s). "
          f"Assignment: `{meta.get('assignment')}`; reference: {meta.get('reference')}.", "",
@@ -354,12 +368,12 @@ def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta
          "`exposure` for a constant factor, `camera` for misregistration). *Confidently wrong*: it names a cause, and "
          "not the right one; *also wrong*: it names the right cause and a wrong one beside it. **Held-out** cases (marked H) were not looked at while the diagnosis was tuned, with one exception: the last two rules of the grader (the camera not blamed beside a cause outside it; an explained wrong geometry, light placement, colour or camera scored as a major mistake) were added after the held-out results had been seen; and when the per-object structure test was added, the exemption of a blur's remainder where the detectors found a filter (a denoiser's kernel is no Gaussian) was added after the held-out `denoised` case had been seen to lose its name, and a rule (a claimed blur counted as a filtered image by itself) was dropped after the final run, with no held-out verdict changed."
          if klass not in ("outside", "programs", "fresh", "blind", "unseen", "untried", "novel", "untold", "unmet",
-                          "unheard", "unsaid", "unasked", "unsought", "unguessed", "unforeseen") else {
+                          "unheard", "unsaid", "unasked", "unsought", "unguessed", "unforeseen", "unprompted") else {
              "outside": _OUTSIDE, "programs": _PROGRAMS, "fresh": _FRESH, "blind": _BLIND,
              "unseen": _UNSEEN, "untried": _UNTRIED, "novel": _NOVEL,
              "untold": _UNTOLD, "unmet": _UNMET, "unheard": _UNHEARD, "unsaid": _UNSAID,
              "unasked": _UNASKED, "unsought": _UNSOUGHT, "unguessed": _UNGUESSED,
-             "unforeseen": _UNFORESEEN}[klass], "",
+             "unforeseen": _UNFORESEEN, "unprompted": _UNPROMPTED}[klass], "",
          "## Rates", "",
          "| | mistakes | detected (lost points) | named right | confidently wrong | partial or none | also wrong | "
          "major mistakes losing >= 25 % | correct renders | false alarms | correct named a bug |",
