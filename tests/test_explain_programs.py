@@ -350,3 +350,44 @@ def test_several_surfaces_colours_are_named_together(ctx):
         if label in truth:
             assert np.allclose(v, truth[label], atol=0.05), (label, v, truth[label])
     assert named_causes(res)[0] == ["albedo"] and res.score < res.max_score
+
+
+def test_a_filter_written_with_np_roll_is_named_with_its_wrapped_border(ctx):
+    """A Mitsuba render (seed 101) filtered by the 3 x 3 binomial kernel written as a weighted mean of np.roll's
+    shifted copies: the border wraps round to the opposite edge. The filter is claimed, in words that say so."""
+    x = _mitsuba(101)
+    w = {-1: 1.0, 0: 2.0, 1: 1.0}
+    S = sum(w[dy] * w[dx] * np.roll(x, (dy, dx), axis=(0, 1)) for dy in w for dx in w) / 16.0
+    res = grade_image("rolled", ctx, [S], spp=1024)
+    fam, said = _claimed(res)
+    assert fam == "blur" and "binomial" in said and "wrapped round to the opposite edge" in said, said
+    assert "sum to" not in said and res.score < res.max_score
+
+
+def test_the_light_sample_times_pi_is_fitted_by_its_factor(ctx):
+    """The light's radiance multiplied by pi in the light sample only (an exitance's factor): Mitsuba's light seen
+    directly (cut at depth 1) plus pi times the rest, one seed (102). The light sample's weight fitted on the grading
+    basis is pi of its factors (the claim is the engine's: at 32 x 32 a monotone curve describes the image as well)."""
+    from mcrt.grade.candidates import Inputs
+    from mcrt.grade.explain.fit import Fit
+    from mcrt.grade.explain.light_sampling import light_sampling
+
+    d1 = _mitsuba(102, max_depth=1)
+    S = d1 + np.pi * (_mitsuba(102) - d1)
+    R = ctx.references["near"].mean.astype(np.float64)
+    V = ctx.model_var["near"].astype(np.float64) / 1024
+    fit = Fit(S, R, V, np.ones(S.shape, bool), ctx.explain.var.astype(np.float64) / ctx.explain.spp)
+    best = light_sampling(fit, Inputs(ctx.explain))[0]
+    assert best.value == {"factor": pytest.approx(np.pi)} and "divided by pi" not in best.text, best.text
+    assert "multiplied by pi in the light sample" in best.text, best.text
+
+
+def test_a_light_with_one_side_doubled_is_named_with_its_sides(ctx):
+    """A Mitsuba render (seed 103) of the scene with the light's side along y doubled and x kept (a half-width
+    forgotten in y alone): the light's size is claimed as 2 x 4."""
+    s = load_scene()
+    wide = replace(s, light=replace(s.light, size=(s.light.size[0], 2.0 * s.light.size[1])))
+    res = grade_image("one_side", ctx, [_mitsuba(103, wide)], spp=1024)
+    fam, said = _claimed(res)
+    ex = res.details["explanation"]
+    assert fam == "light_size" and ex["candidates"][0]["value"] == pytest.approx(wide.light.size), said

@@ -21,10 +21,12 @@ WIDE = 1.2
 SUB = FINE
 #: Albedo nodes rendered per surface (with the scene's own value).
 ALBEDO_NODES = (0.0, 0.5, 1.0)
-#: Offsets (scene units) of the light, the objects and the eye; light size factors.
+#: Offsets (scene units) of the light, the objects and the eye; light size factors (both sides).
 LIGHT_OFFSETS = (-2.0, -1.5, -1.0, -0.5, 0.5, 1.0, 1.5, 2.0)
 LIGHT_DROPS = (-0.5, -1.0)
 LIGHT_SIZES = (0.5, 0.75, 1.25, 1.5)
+#: Factors of one side of the light alone (the other kept).
+LIGHT_SIDES = (0.5, 2.0)
 OBJECT_OFFSETS = (-1.5, -1.0, -0.5, 0.5, 1.0, 1.5)
 EYE_OFFSETS = (-1.0, -0.5, -0.3, -0.2, -0.1, 0.1, 0.2, 0.3, 0.5, 1.0)
 DEPTHS = (1, 2, 3, 4, 5, 6, 7, 9, 10, 12, -1)
@@ -101,7 +103,10 @@ def _light_variants(scene: Scene) -> dict[str, list[tuple[float, Scene]]]:
     for axis, offsets in ((0, LIGHT_OFFSETS), (1, LIGHT_OFFSETS), (2, LIGHT_DROPS)):
         out[f"light_{AXES[axis]}"] = [(d, replace(scene, light=replace(lt, center=_shift(lt.center, axis, d))))
                                       for d in offsets]
-    out["light_size"] = [(f, replace(scene, light=replace(lt, size=(lt.size[0] * f, lt.size[1] * f)))) for f in LIGHT_SIZES]
+    # Each side times f, or one side alone (a half-width forgotten, or halved twice, along x or y only).
+    sides = [(f, f) for f in LIGHT_SIZES] + [(f, 1.0) for f in LIGHT_SIDES] + [(1.0, f) for f in LIGHT_SIDES]
+    out["light_size"] = [(f, replace(scene, light=replace(lt, size=(lt.size[0] * f[0], lt.size[1] * f[1]))))
+                         for f in sides]
     # A coordinate of the centre typed with the wrong sign (its height -4.99 for 4.99).
     out["light_sign"] = [(axis, replace(scene, light=replace(lt, center=tuple(-float(x) if i == axis else float(x)
                                                                           for i, x in enumerate(lt.center)))))

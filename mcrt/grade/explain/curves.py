@@ -107,12 +107,23 @@ KERNELS = {"box": (np.ones((3, 3)), "a 3 x 3 box (mean) filter"),
            "binomial": (np.outer([1.0, 2.0, 1.0], [1.0, 2.0, 1.0]), "a 3 x 3 binomial filter (weights 1 2 1 by 1 2 1)")}
 
 
+#: How a hand-written filter treats the image's border: the edge pixels repeated, or the opposite edge wrapped round
+#: (a filter written as the mean of np.roll's shifted copies), in words.
+BORDERS = {"nearest": "", "wrap": ", its border wrapped round to the opposite edge (the mean of shifted copies, as "
+           "np.roll makes them)"}
+
+
+#: A 3 x 3 filter's fitted gain within this of 1 is a filter that keeps the image's level (the noise moves the fit
+#: by a few tenths of a per cent; weights divided by another count are off by 10 % or more).
+GAIN_KEPT = 0.01
+
+
 def _three_by_three(fit: Fit) -> list[Candidate]:
     """3 x 3 filters after rendering: a median, a maximum and a minimum filter (each pixel the median, largest or
     smallest of its 3 x 3 neighbourhood, channel by channel: a despeckle, a dilation, an erosion), none with a free
     parameter (of R: a filter of the noisy image differs by more where the noise is large, which the remainder
-    shows); and the best of :data:`KERNELS` with its weights' sum fitted (1: a correct filter; their count where
-    their sum belongs: the sum over it). That one has two parameters, the gain and the kernel chosen: where noise
+    shows); and the best of :data:`KERNELS` and :data:`BORDERS` with its weights' sum fitted (1: a correct filter;
+    their count where their sum belongs: the sum over it). That one has two parameters, the gain and the kernel chosen: where noise
     hides the filter (a dark image), it is a constant factor with a choice more, which Occam's rule does not name
     beside the factor."""
     from scipy.ndimage import convolve, maximum_filter, median_filter, minimum_filter
@@ -129,18 +140,22 @@ def _three_by_three(fit: Fit) -> list[Candidate]:
                              0, value={"filter": name, "size": 3}, change=M - fit.R))
     best = None
     for name, (k, what) in KERNELS.items():
-        F = convolve(fit.R, (k / k.sum())[..., None], mode="nearest")
-        wts = fit.w * F
-        g = float(np.sum(wts * fit.S) / max(float(np.sum(wts * F)), 1e-300))  # the gain by weighted least squares
-        e = fit.model(g * F)
-        if best is None or e < best[0]:
-            best = (e, name, what, g, g * F, float(k.sum()))
+        for mode in BORDERS:
+            F = convolve(fit.R, (k / k.sum())[..., None], mode=mode)
+            wts = fit.w * F
+            g = float(np.sum(wts * fit.S) / max(float(np.sum(wts * F)), 1e-300))  # the gain by weighted least squares
+            e = fit.model(g * F)
+            if best is None or e < best[0]:
+                best = (e, name, what + BORDERS[mode], g, g * F, float(k.sum()))
     e, name, what, g, M, total = best
     count = next((c for c in (9.0, 16.0, 8.0, 4.0) if abs(total / c - g) < 0.02 * g), None)
     why = (f" (its weights divided by {count:g} where their sum {total:g} belongs)" if count and count != total
            else "")
-    return out + [Candidate("blur", f"{name} filter times {_num(g)}", f"the image filtered after rendering by {what} "
-                            f"whose weights sum to {_num(g)}, not 1{why}", e, 2,
+    # Near 1, three decimals ("1.012"), none within GAIN_KEPT of 1: a filter that keeps the image's level.
+    gain = f"{g:.3f}" if abs(g - 1) < 0.1 else _num(g)
+    sums = "" if abs(g - 1) < GAIN_KEPT else f" whose weights sum to {gain}, not 1{why}"
+    return out + [Candidate("blur", f"{name} filter times {gain}", f"the image filtered after rendering by {what}"
+                            f"{sums}", e, 2,
                             value={"filter": name, "size": 3, "gain": g}, change=M - fit.R,
                             # A filter with a gain is a scale with a filter: where noise hides the filter it is no
                             # other cause beside the scale (a dark image left ambiguous between the two otherwise).

@@ -17,8 +17,9 @@ specular bounce, not a light sample, yet it is scaled with the rest: an
 approximation confined to a few of the sphere's pixels.
 
 No free parameter: k is one of the factors a program gets wrong
-(:func:`factors`: the light's area A or 1/A, 2 or 1/2, the number of shadow
-rays a point sums where their mean belongs); a weight fitted
+(:func:`factors`: the light's area A or 1/A, 2 or 1/2, pi or 1/pi (a
+radiance confused with an exitance), the number of shadow rays a point sums
+where their mean belongs); a weight fitted
 freely would mimic any small change of the light on the room (an adaptive
 sampler's bias of -1 % is no light sample's weight of 0.99).
 
@@ -53,6 +54,8 @@ def factors(area: float) -> tuple[tuple[float, str], ...]:
             (area, f"A = {_num(area)}: the light's area applied twice (its pdf taken as 1/A^2)"),
             (0.5, "1/2: half the light's surface sampled (one of its two triangles) with the whole light's pdf"),
             (2.0, "2: the light sampled with half its pdf (two triangles' samples both counted)"),
+            (1.0 / np.pi, "1/pi: the light's radiance divided by pi in the light sample (taken for its exitance)"),
+            (np.pi, "pi: the light's radiance multiplied by pi in the light sample (an exitance's factor)"),
             *((float(n), f"{n}: {n} shadow rays a point summed where their mean belongs") for n in SHADOW_RAYS))
 
 

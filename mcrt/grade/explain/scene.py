@@ -211,7 +211,7 @@ def _node_candidate(key: str, val, chi2: float, v: dict, max_depth: int) -> Cand
                          f"the wrong sign (centre {_fmt(c, 2)} where the scene says {_fmt(v['light_center'], 2)})",
                          chi2, 0, value=c)
     elif key == "light_size":
-        s = tuple(x * val for x in v["light_size"])
+        s = tuple(x * f for x, f in zip(v["light_size"], val))  # val: the factors of its two sides
         cand = Candidate("light_size", "the light's size", f"the light's size {_num(s[0])} x {_num(s[1])} where "
                          f"the scene says {_num(v['light_size'][0])} x {_num(v['light_size'][1])} (same radiance)",
                          chi2, 1, value=s)
