@@ -164,6 +164,42 @@ def test_a_description_that_leaves_structure_is_no_partial_cause():
     assert "the closest, the right half lit too much, explains" in e.sentence and "on right" in e.sentence, e.sentence
 
 
+@pytest.mark.parametrize("a, verdict", [(0.2, NONE), (0.4, PARTIAL)])
+def test_a_cause_leads_a_partial_reading_only_where_it_explains_half(a, verdict):
+    """A cause that predicts a of the change (the right half 10 % brighter, noise of seed 2), under the production
+    claim rule: it leaves structure either way. At a = 0.2 it explains 1 - 0.8^2 = 36 % of the difference: nothing
+    is claimed or led with ("partly like" it would send the student to a step that may not be wrong), the difference
+    is placed on the right half and the cause named as the closest with its share; at a = 0.4 (64 %) it leads a
+    partial reading."""
+    from mcrt.grade.adequacy import Scene2D, claim_rule
+    from mcrt.stats.onesample import Noise
+
+    rng = np.random.default_rng(2)
+    labels = np.zeros((H, W), np.int16)
+    labels[:, 16:] = 1
+    R = np.stack([0.2 + 0.1 * labels, 0.3 + 0.05 * labels, 0.25 * np.ones_like(labels)], axis=-1).astype(np.float64)
+    var = np.full(R.shape, 1e-4)
+    step = np.where((labels == 1)[..., None], 0.1 * R, 0.0)
+    S = R + step + rng.standard_normal(R.shape) * np.sqrt(var)
+    sc = Scene2D((8, 16, 0), 0.01, 0.003, 0.1, labels, ("left", "right", "nothing"))
+    basis = Basis(camera="near", spp=1, base=R.astype(np.float32), var=np.zeros(R.shape, np.float32),
+                  fine=R.astype(np.float32), fine_tan=1.0, fov_deg=90.0, max_depth=8)
+
+    def cause(fit, inputs):
+        return [Candidate("cause", "cause", "the right half lit too much", fit.delta(a * step), 1, change=a * step)]
+
+    cause.name = "cause"
+    mask = np.ones((H, W), bool)
+    rule = claim_rule(S, R, mask, Noise(model=var, reference=np.zeros_like(var)), sc)
+    e = explain(S, R, var, mask, Inputs(basis), families=(cause,), claim=rule)
+    assert e.verdict == verdict and e.named is None, (e.verdict, e.sentence)
+    if verdict == NONE:
+        assert e.sentence.startswith("No single mistake we tried") and "Partly" not in e.sentence, e.sentence
+        assert "the closest, the right half lit too much, explains 3" in e.sentence and "on right" in e.sentence
+    else:
+        assert e.sentence.startswith("Partly like the right half lit too much"), e.sentence
+
+
 def test_a_camera_family_must_be_seen_beyond_the_emitters():
     """A room of value 0.5 with a bright 8 x 8 emitter (20) and a darker box (0.2), noise sd 0.01 (seed 5). A camera
     candidate whose change lies on the emitter's outline alone (a warp fitting the light's shape) is not seen beyond

@@ -19,9 +19,9 @@ relevance threshold ``min_effect``), with the per-object tests of
   structured remainder is left: it is named as partial, with the share and
   the objects the remainder sits on ("partly like X, which explains 56 %;
   something else is wrong on the ceiling and the light");
-* **none**: no candidate explains enough (:data:`PARTIAL_SHARE` of the
-  difference) to be mentioned: the objects the difference sits on are named
-  instead, with how they differ.
+* **none**: no candidate explains enough (:data:`PARTIAL_LEAD` of the
+  difference) to lead: the objects the difference sits on are named
+  instead, with how they differ, and the closest cause with its share.
 
 **A claim must beat every other reading that leaves noise.** Occam's rule
 picks among candidates; it does not say the image confirmed the pick. The
@@ -83,6 +83,11 @@ from mcrt.stats.onesample import Noise, multiscale_test
 
 #: A candidate that explains less than this share of the difference is not mentioned at all.
 PARTIAL_SHARE = 0.3
+#: A candidate leads a partial reading ("partly like X; something else is wrong") only where it explains at least this
+#: share: "partly like" a cause that leaves most of the difference sends a student to a step that may not be wrong
+#: (a grey image for a camera aimed elsewhere); below it, nothing is claimed, the difference is placed on objects and
+#: the closest cause is named with its share.
+PARTIAL_LEAD = 0.5
 
 
 @dataclass
@@ -349,7 +354,7 @@ def claim_rule(S: np.ndarray, R: np.ndarray, mask: np.ndarray, noise: Noise, sc:
     description (:attr:`mcrt.grade.candidates.Candidate.describes`: any
     monotone curve), it is DESCRIBED, said but not claimed; else the best that is not
     flexible (:attr:`mcrt.grade.candidates.Candidate.flexible`: a parameter per object) is PARTIAL,
-    with where its remainder lies, if it explains :data:`PARTIAL_SHARE` of
+    with where its remainder lies, if it explains :data:`PARTIAL_LEAD` of
     the difference and is a cause, not a description (a curve flexible enough
     explains a share of any difference, a camera turned or a light moved, and
     "partly like a tone map" would point the student at a step that is not
@@ -404,7 +409,7 @@ def claim_rule(S: np.ndarray, R: np.ndarray, mask: np.ndarray, noise: Noise, sc:
                 return
         # A flexible fit's share is no evidence of its cause: the closest other candidate leads a partial reading.
         lead = next((c for c in e.candidates if not c.flexible), None)
-        if lead is not None and lead.change is not None and lead.explained >= PARTIAL_SHARE and not lead.describes:
+        if lead is not None and lead.change is not None and lead.explained >= PARTIAL_LEAD and not lead.describes:
             ad = tried.get(id(lead)) or test(lead)
             if ad.verdict == "partial":
                 if lead is not best:
