@@ -178,6 +178,29 @@ def test_8bit_codes_cast_without_a_clip_are_named(ctx, renders, tmp_path, clip):
         assert res.details["encoding"]["codes"] == ["wrapped"] and "encoding" in named_causes(res)[0]
 
 
+@pytest.mark.parametrize("scale", [256, 255])
+def test_white_that_overflows_to_0_is_named(ctx, renders, tmp_path, scale):
+    """``np.clip(v, 0, 1) * 256`` cast to uint8: white (the light, far above 1) is 256 and wraps to 0, every other
+    code is kept or one up; the light's pixels are left out of every statistic of an 8-bit file, so only the codes
+    show it. Named under ``linear`` (an overflow, or pixels never drawn); scaled by 255, nothing is said."""
+    from PIL import Image
+
+    from mcrt.image_files import srgb_oetf
+
+    def write(q):
+        v = np.clip(srgb_oetf(np.maximum(renders[0], 0.0)), 0, 1)
+        Image.fromarray((np.floor(v * scale).astype(np.int64) % 256).astype(np.uint8), "RGB").save(q)
+
+    res = _grade(ctx, tmp_path / "student", {"render.png": write})
+    linear = _test(res, "linear")
+    if scale == 255:
+        assert linear.status == "passed" and "codes" not in res.details["encoding"], linear.output
+    else:
+        assert linear.status == "failed" and "hold 0: the top code overflowed" in linear.output, linear.output
+        assert res.details["encoding"]["codes"] == ["white_zero"] and "encoding" in named_causes(res)[0]
+        assert res.score < res.max_score
+
+
 @pytest.mark.parametrize("first", ["rounded", "encoded", "cast"])
 def test_linear_values_rounded_to_8_bits_before_the_curve_are_named(ctx, renders, tmp_path, first):
     """A 256-entry sRGB table applied to linear values rounded to 8 bits: no dark code but 13, 22, 28, ...; the bias

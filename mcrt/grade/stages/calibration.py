@@ -64,7 +64,9 @@ def encoding(g: Grading, hand: Hand) -> None:
         times_256 = _codes_times_256(hand.loaded)
         hand.png_safe = _png_unclipped(hand.R, g.ctx.model_var[hand.cam].astype(np.float64), hand.spp or a.min_spp)
         hand.imgs, hand.qvar = _png_curve(g, hand)
-        wrong = {k: v for k, v, found in (("times_256", TIMES_256, times_256), ("wrapped", WRAPPED, _wrapped(g, hand)),
+        wrapped = _wrapped(g, hand)
+        wrong = {k: v for k, v, found in (("times_256", TIMES_256, times_256), ("wrapped", WRAPPED, wrapped),
+                                          ("white_zero", WHITE_ZERO, not wrapped and _white_zero(g, hand)),
                                           ("rounded_first", ROUNDED_FIRST, _rounded_first(g, hand)),
                                           ("cast_first", CAST_FIRST, _cast_first(hand.loaded)))
                  if found}
@@ -92,6 +94,10 @@ TIMES_256 = ("every 16-bit code is a multiple of 256: 8-bit codes times 256, whe
 WRAPPED = ("the pixels that should be white (the light and its reflections, far above 1) hold the codes that values "
            "past 1 give when cast to 8 bits without a clip (they wrap round past 255): clip to [0, 1] before "
            "converting to 8 bits")
+
+WHITE_ZERO = ("the pixels that should be white (the light and its reflections, far above 1) hold 0: the top code "
+              "overflowed (a value of 1 times 256, or times 65536 at 16 bits, wraps to 0 in the file's integers), or "
+              "those pixels were never drawn; scale by 255 (65535 at 16 bits) and clip to [0, 1] before the cast")
 
 ROUNDED_FIRST = ("the dark codes are only those that linear values rounded to 8 bits give through the curve (none of "
                  "1-12 where the sRGB curve is the file's, then 13, 22, 28, ...): the values were rounded to 8 bits "
@@ -151,6 +157,24 @@ def _wrapped(g: Grading, hand: Hand) -> bool:
     off = np.abs(codes - wrapped)
     match = np.all(np.minimum(off, 256 - off) <= tol, axis=-1)
     return bool(np.mean(np.any(codes < 250, axis=-1)) >= 0.5 and np.mean(match) >= 0.8)
+
+
+def _white_zero(g: Grading, hand: Hand) -> bool:
+    """A display file black where it must be white: of the pixels whose expected value is far above 1 with all their
+    neighbours (the reference minus 4 sd of a hand-in pixel at least 1.5 in every channel, the set eroded by one
+    pixel, so that every hand-in pixel within one is inside the light's image too), at least 3, and at least half of
+    them hold the code 0 in every channel in most of their hand-in pixels. A correct file holds the top code there, a
+    dark or tone-mapped one a code well above 0; 0 is what a top code that overflowed gives, or nothing drawn."""
+    from scipy import ndimage
+
+    loaded = hand.loaded
+    sd = np.sqrt(g.ctx.model_var[hand.cam].astype(np.float64) / max(hand.spp or g.a.min_spp, 1))
+    must = ndimage.binary_erosion(np.all(hand.R - 4 * sd >= 1.5, axis=2) & hand.mask, structure=np.ones((3, 3), bool))
+    if np.count_nonzero(must) < 3:
+        return False
+    codes = ck.TRANSFORMS[hand.transform][1](ck.png_codes(loaded.images[0], loaded.fmt))
+    zero = ck.box_down(np.all(codes == 0, axis=-1, keepdims=True).astype(np.float64), hand.plan.down)[..., 0]
+    return zero.shape == must.shape and bool(np.mean(zero[must] > 0.5) >= 0.5)
 
 
 def _decimals(loaded) -> int:
