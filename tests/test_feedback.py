@@ -598,6 +598,20 @@ def test_a_quarter_turn_names_the_up_vector(ctx, up, named):
     assert named_causes(res)[0] == named, res.summary
 
 
+def test_a_field_of_view_like_the_other_cameras_is_not_called_that_camera(ctx):
+    """The near camera with a 60-degree field of view for 90 (Mitsuba, seed 55): nearer the far camera's view (53
+    degrees from twice as far back) than the near one's, but graded against the far camera's reference it still
+    fails. The camera criterion says it is the far camera's view with another mistake or neither camera's, not that
+    the cameras are swapped, and sends the student to the eye and the field of view."""
+    s = load_scene()
+    wide = replace(s, cameras={**s.cameras, "near": replace(s.cameras["near"], fov_x_deg=60.0)})
+    res = grade_image("fov60", ctx, [_mitsuba(wide, 55)], spp=1024)
+    out = _output(res, "camera")
+    assert res.details["orientation"]["camera"] == "far", res.details["orientation"]
+    assert "still differs" in out and "or neither camera's" in out and "swapped" not in out, out
+    assert "field of view" in out and res.score < res.max_score
+
+
 def test_rows_written_one_place_up_are_named_an_index_off_by_one(ctx):
     """A Mitsuba render (seed 55, 1024 spp) with every row written one place up (the first at the bottom): the claim
     is the image shifted by a whole pixel, worded as an index off by one, which names the row stride."""

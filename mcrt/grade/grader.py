@@ -144,6 +144,7 @@ def _statistics(g: Grading, hand: Hand) -> None:
     m = bias.record(g, hand, lvl, t)
     found = bias.findings(g, hand, lvl, t)
     bias.verdict(g, hand, lvl, t, found)
+    calibration.confirm_camera(g, hand)
     if "registration" in found:
         g.rubric.failed("camera", found["registration"])
     noise.verdict(g, hand, lvl, t.bt, found, bias.flagged(t.bt))

@@ -56,6 +56,25 @@ def orientation(g: Grading, hand: Hand, declared_camera: str | None) -> None:
     hand.transform = ori.transform
 
 
+def confirm_camera(g: Grading, hand: Hand) -> None:
+    """Another camera's view was the closest (:func:`orientation`), but graded against that camera's reference the
+    image still fails the bias test: it may be that camera's view with another mistake, or no camera of the scene,
+    only nearer one than the other (a field of view or an eye off resembles a camera further back or nearer; the
+    explanation stage, whose renders are the assigned camera's, cannot tell). The camera criterion says both in
+    place of naming the other camera's view."""
+    t = g.rubric.results.get("unbiased")
+    cam = g.rubric.results.get("camera")
+    if hand.cam == g.a.camera or t is None or t.status != "failed" or cam is None or cam.status != "failed":
+        return
+    manifest = cam.output.split("; your manifest says ", 1)
+    g.rubric.failed("camera", f"the view is nearer the {hand.cam!r} camera's than the {g.a.camera!r} camera's the "
+                    f"assignment asks for, but graded against the {hand.cam!r} camera's reference it still differs (the "
+                    f"bias test fails): it is the {hand.cam!r} camera's view with another mistake, or neither camera's; "
+                    f"check the camera's eye, direction and field of view against the {g.a.camera!r} camera's"
+                    + (f"; your manifest says {manifest[1]}" if len(manifest) == 2 else ""))
+    g.details["orientation"]["camera_confirmed"] = False
+
+
 def encoding(g: Grading, hand: Hand) -> None:
     """The ``linear`` criterion: a display image's curve, or a curve on data that should be linear radiance."""
     a = g.a
