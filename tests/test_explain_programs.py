@@ -391,3 +391,45 @@ def test_a_light_with_one_side_doubled_is_named_with_its_sides(ctx):
     fam, said = _claimed(res)
     ex = res.details["explanation"]
     assert fam == "light_size" and ex["candidates"][0]["value"] == pytest.approx(wide.light.size), said
+
+
+def test_the_variance_buffer_written_for_the_mean_is_fitted(ctx):
+    """Mitsuba's per-sample variance (its render's variance buffer, seed 104) written where the mean belongs: of the
+    film's buffers the variance fits better than the squares, with k near 1 (the buffer as written, divided by no
+    other count), and leaves less chi^2 than no change."""
+    from mcrt.grade.candidates import Inputs
+    from mcrt.grade.explain.buffers import wrong_buffer
+    from mcrt.grade.explain.fit import Fit
+    from mcrt.mitsuba_scene import render_with_variance, scene_dict
+
+    d = scene_dict(load_scene(), "near", RES, RES, 8, spp=1024)
+    S = np.maximum(np.asarray(render_with_variance(d, spp=1024, seed=104).variance, np.float64), 0.0)
+    R = ctx.references["near"].mean.astype(np.float64)
+    V = ctx.model_var["near"].astype(np.float64) / 1024
+    fit = Fit(S, R, V, np.ones(S.shape, bool), ctx.explain.var.astype(np.float64) / ctx.explain.spp)
+    best = min(wrong_buffer(fit, Inputs(ctx.explain)), key=lambda c: c.chi2)
+    assert best.value["buffer"] == "variance" and 0.5 < best.value["scale"] < 2.0, best.value
+    assert best.chi2 < fit.chi0 and "variance buffer written for its mean" in best.text
+
+
+def test_colours_a_few_hundredths_off_are_no_colours_typed_wrong(ctx):
+    """Walls CD and DE at 0.95 times their colours (Mitsuba, seed 105): every channel within 0.04 of the scene's,
+    what a change of the light makes on several surfaces too. Several surfaces' colours are no candidate (a colour
+    typed, read or clamped wrongly moves by a tenth); at 0.8 times (seed 106) they are, with both walls changed.
+    The surfaces fitted are those in view, as the engine passes them (the grading context's labels)."""
+    from mcrt.grade.candidates import Inputs
+    from mcrt.grade.explain.fit import Fit
+    from mcrt.grade.explain.scene import albedos
+
+    s = load_scene()
+    R = ctx.references["near"].mean.astype(np.float64)
+    V = ctx.model_var["near"].astype(np.float64) / 1024
+    for k, seed, found in ((0.95, 105, False), (0.8, 106, True)):
+        walls = tuple(replace(w, albedo=tuple(k * a for a in w.albedo)) if "".join(w.corners) in ("CD", "DE") else w
+                      for w in s.room.walls)
+        S = _mitsuba(seed, replace(s, room=replace(s.room, walls=walls)))
+        fit = Fit(S, R, V, np.ones(S.shape, bool), ctx.explain.var.astype(np.float64) / ctx.explain.spp)
+        got = albedos(fit, Inputs(ctx.explain, labels=ctx.labels["near"], label_names=ctx.label_names))
+        assert bool(got) == found, (k, [c.value for c in got])
+        if found:
+            assert {"wall CD", "wall DE"} <= set(got[0].value), got[0].value

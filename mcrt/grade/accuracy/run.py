@@ -84,6 +84,8 @@ CAUSE_OF: dict[str, tuple[str, ...]] = {
     "light_sampling": ("light_pdf",),
     # Each sample clamped (fireflies removed with their energy): mcrt.grade.explain.sample_clamp.
     "sample_clamp": ("sample_clamp",),
+    # Another of the film's buffers written for its mean (mcrt.grade.explain.buffers): its variance, its squares.
+    "wrong_buffer": ("wrong_buffer",),
     # A surface black (mcrt.grade.explain.surface_black): a surface of the closed room missing, of albedo 0, or with
     # its normals facing away under one-sided shading looks the same, and the words name every cause; an object
     # black is not missing (what lies behind it would show).

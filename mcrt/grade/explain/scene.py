@@ -91,6 +91,10 @@ def albedo(fit: Fit, inputs: Inputs) -> list[Candidate]:
 
 #: A surface's fitted colour counts as changed in :func:`albedos`' words when a channel moves by more than this.
 CHANGED = 0.03
+#: :func:`albedos` is a candidate only where some surface's colour moves by at least this in a channel: a colour
+#: typed, read or clamped wrongly moves by a tenth or more, while a few hundredths on several surfaces is what a
+#: change of the light (its samples, its shape) makes too.
+TYPED = 0.1
 #: Sweeps of :func:`albedos`' coordinate descent over the surfaces.
 SWEEPS = 4
 
@@ -107,7 +111,7 @@ def albedos(fit: Fit, inputs: Inputs) -> list[Candidate]:
     fit's weights), and the candidate's chi^2 is the fit's full criterion.
     Every such surface's three albedos count as parameters, so one surface's
     colour alone is :func:`albedo`'s; the candidate needs two or more
-    surfaces changed by more than :data:`CHANGED`. It is flexible
+    surfaces changed by more than :data:`CHANGED`, one by :data:`TYPED`. It is flexible
     (:attr:`~mcrt.grade.candidates.Candidate.flexible`): claimed only where
     its remainder is noise and no other candidate's is.
     """
@@ -142,8 +146,9 @@ def albedos(fit: Fit, inputs: Inputs) -> list[Candidate]:
                 fitted[lab][c] = a
                 part[lab] = np.tensordot(lagrange(np.array([a]), xs), ys, axes=(1, 0))[0]
         dm[..., c] = sum(part.values())
-    changed = [lab for lab in labels if max(abs(x - y) for x, y in zip(fitted[lab], b.albedo[lab][2])) > CHANGED]
-    if len(changed) < 2:
+    moved = {lab: max(abs(x - y) for x, y in zip(fitted[lab], b.albedo[lab][2])) for lab in labels}
+    changed = [lab for lab in labels if moved[lab] > CHANGED]
+    if len(changed) < 2 or max(moved.values()) < TYPED:
         return []
     words = "; ".join(f"{lab} {_fmt(fitted[lab])} where the scene says {_fmt(b.albedo[lab][2])}" for lab in changed)
     text = f"the colours of {len(changed)} surfaces other than the scene's: {words}"
