@@ -10,10 +10,13 @@ basis's, one seed), the model images are
 * the squares' buffer: :math:`k\,(\sigma^2 + B^2)` (the mean of the
   squared samples, the light's radiance squared).
 
-k (one parameter, by weighted least squares) takes up the count the buffer
-was divided by (n or n - 1, or none). The basis's variance is an estimate
-from its own samples, noisier than its mean: a remainder of that noise
-makes a partial reading more likely than a claim, which is the honest side.
+k (one parameter, by weighted least squares) takes up a count the buffer
+was divided by that is off by a little (n - 1 for n, a pass's count); a k
+outside :data:`SCALES` is no candidate: far below 1 it fits any image near
+black (a light below the floor), which is no buffer written. The basis's
+variance is an estimate from its own samples, noisier than its mean: a
+remainder of that noise makes a partial reading more likely than a claim,
+which is the honest side.
 """
 
 from __future__ import annotations
@@ -24,6 +27,8 @@ from mcrt.grade.candidates import Candidate, Inputs
 from mcrt.grade.explain.fit import Fit
 from mcrt.grade.feedback import num as _num
 
+#: The range of k a buffer written for the mean may take (the module docstring).
+SCALES = (0.1, 10.0)
 #: (name, what it is in words) of each buffer.
 BUFFERS = (("variance", "the film's variance buffer written for its mean: each pixel the variance of its samples "
             "(zero where they all agree, as on the light)"),
@@ -44,6 +49,8 @@ def wrong_buffer(fit: Fit, inputs: Inputs) -> list[Candidate]:
         if den <= 0:
             continue
         k = float(np.sum(w * img * fit.S)) / den
+        if not SCALES[0] <= k <= SCALES[1]:
+            continue
         change = k * img - fit.R
         out.append(Candidate("wrong_buffer", f"{name} buffer", f"{words}, times {_num(k)}", fit.delta(change), 1,
                              value={"buffer": name, "scale": k}, change=change))
