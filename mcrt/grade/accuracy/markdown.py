@@ -274,7 +274,9 @@ _UNSOUGHT = (
     "comparing each view with the image's channels in the order that suits it best; the catalogue's black mirror "
     "worded beside a material that reflects little; and, in the round after (commits 2777094 and 3440cb8, before the "
     "unguessed class was graded): the display curve applied to some colour channels and not others, and a monotone "
-    "curve that leaves structure never the lead of a partial claim. Both rows here are of rules that saw the class.")
+    "curve that leaves structure never the lead of a partial claim; and, before the unprompted class was graded "
+    "(commit 0998815), a light sampled elsewhere (the sampling code's own copy of the light), with this class's light "
+    "sampled about (5.5, 0, 4.99) in view. Both rows here are of rules that saw the class.")
 
 
 _UNGUESSED = (
@@ -294,7 +296,10 @@ _UNGUESSED = (
     "than its samples'; a camera family claimed only where it fits beyond the emitters' outlines (kept as another "
     "reading where it does not); a misregistration beyond what a "
     "first-order fit measures worded without its numbers, naming the camera and where each pixel is written; the sRGB "
-    "curve applied to the luminance among the curves. Both rows here are of rules that saw the class.")
+    "curve applied to the luminance among the curves; and, before the unprompted class was graded (commit bf4b76d), "
+    "several surfaces' colours at once, with this class's albedos clamped at 0.7 in view, then (commit da4fc01) that "
+    "family a candidate only where one colour moves by a tenth, after its light sampled unevenly had been claimed as "
+    "two walls' colours. Both rows here are of rules that saw the class.")
 
 
 _UNFORESEEN = (
@@ -327,7 +332,12 @@ _UNPROMPTED = (
     "graded; the whole class was then graded once, on them (report at commit a50b657: held out, 8 of 12 named right, 0 "
     "of 12 confidently wrong, 12 of 12 detected; all 28, 15 named right, 0 confidently wrong, 28 detected; 0 of 8 "
     "correct hand-ins lost points). The two families added just before the freeze (a light sampled elsewhere, several "
-    "surfaces' colours at once) named two of the held-out eight.")
+    "surfaces' colours at once) named two of the held-out eight. Changes made after that grading, with the whole "
+    "class in view (commits 58470d7 to ef38100): a light sample's weight pi or 1/pi; the light's size along one side "
+    "alone; a 3 x 3 filter whose border wraps round; a cause leads a partial reading only where it explains half the "
+    "difference; a display file black where it must be white; another camera's view named only where its reference "
+    "fits; another of the film's buffers (its variance, its squares) written for the mean; several surfaces' colours "
+    "a candidate only where one moves by a tenth. Both rows here are of rules that saw the class.")
 
 
 def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta: dict, gradescope: list[dict],
