@@ -375,7 +375,6 @@ def claim_rule(S: np.ndarray, R: np.ndarray, mask: np.ndarray, noise: Noise, sc:
 
     def rule(e, fit, inputs) -> None:
         share_rule(e, fit, inputs)
-        best = e.best
         tried = {}
         if e.verdict in (cd.CLAIMED, cd.INDISTINCT):  # a share of NAMED; a small gain over noise is no objection
             pool = tried_candidates(e.candidates, GAIN_SIGMAS * math.sqrt(2 * fit.n), fit=fit)
@@ -407,22 +406,34 @@ def claim_rule(S: np.ndarray, R: np.ndarray, mask: np.ndarray, noise: Noise, sc:
                 if others or c.out_of_view:
                     e.verdict = e.adequacy.verdict = cd.AMBIGUOUS
                 return
-        # A flexible fit's share is no evidence of its cause: the closest other candidate leads a partial reading.
-        lead = next((c for c in e.candidates if not c.flexible), None)
-        if lead is not None and lead.change is not None and lead.explained >= PARTIAL_LEAD and not lead.describes:
-            ad = tried.get(id(lead)) or test(lead)
-            if ad.verdict == "partial":
-                if lead is not best:
-                    e.candidates = [lead] + [x for x in e.candidates if x is not lead]
-                    e.remainder = np.where(mask[..., None], S - R - lead.change, 0.0)
-                e.verdict, e.remainder_where, e.adequacy = cd.PARTIAL, ad.where, ad
-                return
+        if _partial(e, tried, test, S - R, mask):
+            return
         e.verdict = cd.NONE if e.verdict == cd.CLAIMED else e.verdict
         ad = remainder_test(S, R, 0.0, mask, noise, sc, explained=0.0)
         ad.verdict = "none" if ad.rejected else "adequate"
         e.remainder_where, e.adequacy = ad.where, ad
 
     return rule
+
+
+def _partial(e, tried: dict, test, diff: np.ndarray, mask: np.ndarray) -> bool:
+    """Make e a partial reading, led by its best candidate that is not flexible (a flexible fit's share is no
+    evidence of its cause), where that one is a cause (not a description), explains :data:`PARTIAL_LEAD` of the
+    difference ``diff`` (S - R; ``mask`` the pixels used) and leaves structure (``test``, or its result in
+    ``tried``); whether it did."""
+    from mcrt.grade import candidates as cd
+
+    lead = next((c for c in e.candidates if not c.flexible), None)
+    if lead is None or lead.change is None or lead.explained < PARTIAL_LEAD or lead.describes:
+        return False
+    ad = tried.get(id(lead)) or test(lead)
+    if ad.verdict != "partial":
+        return False
+    if lead is not e.best:
+        e.candidates = [lead] + [x for x in e.candidates if x is not lead]
+        e.remainder = np.where(mask[..., None], diff - lead.change, 0.0)
+    e.verdict, e.remainder_where, e.adequacy = cd.PARTIAL, ad.where, ad
+    return True
 
 
 def _claim(e, c, ad: Adequacy, alternatives: list, remainder: np.ndarray) -> None:

@@ -340,6 +340,41 @@ _UNPROMPTED = (
     "a candidate only where one moves by a tenth. Both rows here are of rules that saw the class.")
 
 
+#: Each class's title, after "Grading accuracy on a class of realistic hand-ins".
+TITLES = {
+    "outside": ": mistakes outside the scene file", "programs": ": mistakes of students' programs",
+    "fresh": ": mistakes no other class tried",
+    "blind": ": mistakes outside the scene file, written blind",
+    "unseen": ": a sixth class of mistakes, written blind",
+    "untried": ": a seventh class of mistakes, written blind",
+    "novel": ": an eighth class of mistakes, written blind",
+    "untold": ": a ninth class of mistakes, written blind",
+    "unmet": ": a tenth class of mistakes, written blind",
+    "unheard": ": an eleventh class of mistakes, written blind",
+    "unsaid": ": a twelfth class of mistakes, written blind",
+    "unasked": ": a thirteenth class of mistakes, written blind",
+    "unsought": ": a fourteenth class of mistakes, written blind",
+    "unguessed": ": a fifteenth class of mistakes, written blind",
+    "unforeseen": ": a sixteenth class of mistakes, written blind",
+    "unprompted": ": a seventeenth class of mistakes, written blind"}
+
+#: The scene class's introduction (mcrt.grade.accuracy.cases).
+_SCENE = (
+    "The wrong renders are **Mitsuba** renders of the scene edited the way a student's tracer goes wrong "
+    "(mcrt.grade.accuracy.cases), not mcrt's catalogued mutants; the correct ones come from mcrt and from "
+    "Mitsuba's `path` and `volpath` with several samplers, 16 to 1024 spp, as EXR or 8-bit PNG. Each is "
+    "written as a student's folder and graded with the course assignment. *Named right*: the feedback names "
+    "the mistake's cause (the explanation's family, or a criterion that names it: `linear` for an encoding, "
+    "`exposure` for a constant factor, `camera` for misregistration). *Confidently wrong*: it names a cause, and "
+    "not the right one; *also wrong*: it names the right cause and a wrong one beside it. **Held-out** cases (marked H) were not looked at while the diagnosis was tuned, with one exception: the last two rules of the grader (the camera not blamed beside a cause outside it; an explained wrong geometry, light placement, colour or camera scored as a major mistake) were added after the held-out results had been seen; and when the per-object structure test was added, the exemption of a blur's remainder where the detectors found a filter (a denoiser's kernel is no Gaussian) was added after the held-out `denoised` case had been seen to lose its name, and a rule (a claimed blur counted as a filtered image by itself) was dropped after the final run, with no held-out verdict changed.")
+
+#: Each class's introduction (the scene class's is :data:`_SCENE`).
+INTROS = {"outside": _OUTSIDE, "programs": _PROGRAMS, "fresh": _FRESH, "blind": _BLIND, "unseen": _UNSEEN,
+          "untried": _UNTRIED, "novel": _NOVEL, "untold": _UNTOLD, "unmet": _UNMET, "unheard": _UNHEARD,
+          "unsaid": _UNSAID, "unasked": _UNASKED, "unsought": _UNSOUGHT, "unguessed": _UNGUESSED,
+          "unforeseen": _UNFORESEEN, "unprompted": _UNPROMPTED}
+
+
 def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta: dict, gradescope: list[dict],
                  klass: str = "scene") -> Path:
     """Write index.md and data.json under ``out``; returns the Markdown's path. ``klass`` is the class graded:
@@ -354,39 +389,11 @@ def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta
     data = {"command": command, "meta": meta, "rates": groups, "gradescope": gradescope,
             "cases": [o.to_dict() for o in outcomes]}
     (out / "data.json").write_text(json.dumps(data, indent=1, default=str) + "\n", encoding="utf-8")
-    title = "Grading accuracy on a class of realistic hand-ins" + {
-        "outside": ": mistakes outside the scene file", "programs": ": mistakes of students' programs",
-        "fresh": ": mistakes no other class tried",
-        "blind": ": mistakes outside the scene file, written blind",
-        "unseen": ": a sixth class of mistakes, written blind",
-        "untried": ": a seventh class of mistakes, written blind",
-        "novel": ": an eighth class of mistakes, written blind",
-        "untold": ": a ninth class of mistakes, written blind",
-        "unmet": ": a tenth class of mistakes, written blind",
-        "unheard": ": an eleventh class of mistakes, written blind",
-        "unsaid": ": a twelfth class of mistakes, written blind",
-        "unasked": ": a thirteenth class of mistakes, written blind",
-        "unsought": ": a fourteenth class of mistakes, written blind",
-        "unguessed": ": a fifteenth class of mistakes, written blind",
-        "unforeseen": ": a sixteenth class of mistakes, written blind",
-        "unprompted": ": a seventeenth class of mistakes, written blind"}.get(klass, "")
+    title = "Grading accuracy on a class of realistic hand-ins" + TITLES.get(klass, "")
     L = [f"# {title}", "",
          f"Written by `{command}` ({meta.get('date', '')}, {meta.get('seconds', 0):.0f} s). "
          f"Assignment: `{meta.get('assignment')}`; reference: {meta.get('reference')}.", "",
-         "The wrong renders are **Mitsuba** renders of the scene edited the way a student's tracer goes wrong "
-         "(mcrt.grade.accuracy.cases), not mcrt's catalogued mutants; the correct ones come from mcrt and from "
-         "Mitsuba's `path` and `volpath` with several samplers, 16 to 1024 spp, as EXR or 8-bit PNG. Each is "
-         "written as a student's folder and graded with the course assignment. *Named right*: the feedback names "
-         "the mistake's cause (the explanation's family, or a criterion that names it: `linear` for an encoding, "
-         "`exposure` for a constant factor, `camera` for misregistration). *Confidently wrong*: it names a cause, and "
-         "not the right one; *also wrong*: it names the right cause and a wrong one beside it. **Held-out** cases (marked H) were not looked at while the diagnosis was tuned, with one exception: the last two rules of the grader (the camera not blamed beside a cause outside it; an explained wrong geometry, light placement, colour or camera scored as a major mistake) were added after the held-out results had been seen; and when the per-object structure test was added, the exemption of a blur's remainder where the detectors found a filter (a denoiser's kernel is no Gaussian) was added after the held-out `denoised` case had been seen to lose its name, and a rule (a claimed blur counted as a filtered image by itself) was dropped after the final run, with no held-out verdict changed."
-         if klass not in ("outside", "programs", "fresh", "blind", "unseen", "untried", "novel", "untold", "unmet",
-                          "unheard", "unsaid", "unasked", "unsought", "unguessed", "unforeseen", "unprompted") else {
-             "outside": _OUTSIDE, "programs": _PROGRAMS, "fresh": _FRESH, "blind": _BLIND,
-             "unseen": _UNSEEN, "untried": _UNTRIED, "novel": _NOVEL,
-             "untold": _UNTOLD, "unmet": _UNMET, "unheard": _UNHEARD, "unsaid": _UNSAID,
-             "unasked": _UNASKED, "unsought": _UNSOUGHT, "unguessed": _UNGUESSED,
-             "unforeseen": _UNFORESEEN, "unprompted": _UNPROMPTED}[klass], "",
+         INTROS.get(klass, _SCENE), "",
          "## Rates", "",
          "| | mistakes | detected (lost points) | named right | confidently wrong | partial or none | also wrong | "
          "major mistakes losing >= 25 % | correct renders | false alarms | correct named a bug |",
