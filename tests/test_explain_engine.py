@@ -128,15 +128,13 @@ def test_occam_claims_the_complex_family_where_the_simple_one_leaves_structure()
     assert e.verdict == CLAIMED and e.named.name == "three factors"
 
 
-def test_a_description_that_leaves_structure_is_no_partial_cause():
-    """A description (Candidate.describes, as any monotone curve is) that predicts 80 % of the change (the right half
-    10 % brighter, noise of seed 1) and a cause that predicts 40 % of it, under the production claim rule: neither
-    leaves noise. "Partly like" the description would point at a step that is not wrong, so nothing is claimed or
-    led with, the difference is placed on the right half, and the closest named is the cause, not the description."""
+def _halves(seed: int):
+    """Two surfaces side by side, the right half 10 % too bright, noise sd 0.01 of the given seed, and the production
+    claim rule for it: (S, R, var, step, rule, basis)."""
     from mcrt.grade.adequacy import Scene2D, claim_rule
     from mcrt.stats.onesample import Noise
 
-    rng = np.random.default_rng(1)
+    rng = np.random.default_rng(seed)
     labels = np.zeros((H, W), np.int16)
     labels[:, 16:] = 1
     R = np.stack([0.2 + 0.1 * labels, 0.3 + 0.05 * labels, 0.25 * np.ones_like(labels)], axis=-1).astype(np.float64)
@@ -146,6 +144,16 @@ def test_a_description_that_leaves_structure_is_no_partial_cause():
     sc = Scene2D((8, 16, 0), 0.01, 0.003, 0.1, labels, ("left", "right", "nothing"))
     basis = Basis(camera="near", spp=1, base=R.astype(np.float32), var=np.zeros(R.shape, np.float32),
                   fine=R.astype(np.float32), fine_tan=1.0, fov_deg=90.0, max_depth=8)
+    rule = claim_rule(S, R, np.ones((H, W), bool), Noise(model=var, reference=np.zeros_like(var)), sc)
+    return S, R, var, step, rule, basis
+
+
+def test_a_description_that_leaves_structure_is_no_partial_cause():
+    """A description (Candidate.describes, as any monotone curve is) that predicts 80 % of the change (the right half
+    10 % brighter, noise of seed 1) and a cause that predicts 40 % of it, under the production claim rule: neither
+    leaves noise. "Partly like" the description would point at a step that is not wrong, so nothing is claimed or
+    led with, the difference is placed on the right half, and the closest named is the cause, not the description."""
+    S, R, var, step, rule, basis = _halves(1)
 
     def curve(fit, inputs):
         a = 0.8 * step
@@ -157,7 +165,6 @@ def test_a_description_that_leaves_structure_is_no_partial_cause():
 
     curve.name, cause.name = "curve", "cause"
     mask = np.ones((H, W), bool)
-    rule = claim_rule(S, R, mask, Noise(model=var, reference=np.zeros_like(var)), sc)
     e = explain(S, R, var, mask, Inputs(basis), families=(curve, cause), claim=rule)
     assert e.best.name == "curve" and e.verdict == NONE and e.named is None, (e.verdict, e.sentence)
     assert e.sentence.startswith("No single mistake we tried") and "Partly" not in e.sentence, e.sentence
@@ -171,26 +178,13 @@ def test_a_cause_leads_a_partial_reading_only_where_it_explains_half(a, verdict)
     is claimed or led with ("partly like" it would send the student to a step that may not be wrong), the difference
     is placed on the right half and the cause named as the closest with its share; at a = 0.4 (64 %) it leads a
     partial reading."""
-    from mcrt.grade.adequacy import Scene2D, claim_rule
-    from mcrt.stats.onesample import Noise
-
-    rng = np.random.default_rng(2)
-    labels = np.zeros((H, W), np.int16)
-    labels[:, 16:] = 1
-    R = np.stack([0.2 + 0.1 * labels, 0.3 + 0.05 * labels, 0.25 * np.ones_like(labels)], axis=-1).astype(np.float64)
-    var = np.full(R.shape, 1e-4)
-    step = np.where((labels == 1)[..., None], 0.1 * R, 0.0)
-    S = R + step + rng.standard_normal(R.shape) * np.sqrt(var)
-    sc = Scene2D((8, 16, 0), 0.01, 0.003, 0.1, labels, ("left", "right", "nothing"))
-    basis = Basis(camera="near", spp=1, base=R.astype(np.float32), var=np.zeros(R.shape, np.float32),
-                  fine=R.astype(np.float32), fine_tan=1.0, fov_deg=90.0, max_depth=8)
+    S, R, var, step, rule, basis = _halves(2)
 
     def cause(fit, inputs):
         return [Candidate("cause", "cause", "the right half lit too much", fit.delta(a * step), 1, change=a * step)]
 
     cause.name = "cause"
     mask = np.ones((H, W), bool)
-    rule = claim_rule(S, R, mask, Noise(model=var, reference=np.zeros_like(var)), sc)
     e = explain(S, R, var, mask, Inputs(basis), families=(cause,), claim=rule)
     assert e.verdict == verdict and e.named is None, (e.verdict, e.sentence)
     if verdict == NONE:
