@@ -135,13 +135,14 @@ def _sampled_elsewhere(fit: Fit, inputs: Inputs, x: np.ndarray) -> Candidate | N
         return None
     err, what, how, change = best
     if what[0] == "moved":
+        from mcrt.grade.explain.basis import AXES, _shift
+
         axis, d = what[1], what[2]
-        centre = list(v["light_center"])
-        centre["xyz".index(axis)] += d
+        centre = _shift(v["light_center"], AXES.index(axis), d)
         text = (f"the light's samples drawn about {_fmt(centre, 2)} where the light is at {_fmt(v['light_center'], 2)} "
                 f"(moved by {d:+g} along {axis}): its light on surfaces comes from there, the light itself seen where it "
                 "is (the sampling code's own copy of the light's position typed wrong)")
-        value = {"centre": tuple(centre)}
+        value = {"centre": centre}
     else:
         f = what[1]
         side = " x ".join(_num(f * float(x)) for x in v["light_size"])
