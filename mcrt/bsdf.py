@@ -13,6 +13,8 @@ with weight R (a delta distribution: f cos / pdf = R), never light-sampled.
 
 Each function takes the estimator's named option that a catalogued bug
 changes (:mod:`mcrt.mutants`); the defaults are the correct physics.
+:func:`mistaken_bounce` draws the Lambertian bounce as students' tracers get
+it wrong (:data:`mcrt.options.BOUNCES`), for the grader's explanation.
 """
 
 from __future__ import annotations
@@ -21,13 +23,16 @@ import math
 
 import drjit as dr
 
-from mcrt.options import LAMBERTIAN_SAMPLERS
+from mcrt.minmax import fmax, sqrt0
+from mcrt.options import BOUNCES, LAMBERTIAN_SAMPLERS
 from mcrt.sampling import (
     INV_PI,
     coordinate_frame,
     cosine_about_normal,
+    square_to_cosine_hemisphere,
     square_to_uniform_ball,
     square_to_uniform_hemisphere,
+    square_to_uniform_sphere,
     to_world,
 )
 
@@ -62,6 +67,68 @@ def sample_lambertian(Vector3f, n, u1, u2, sampler, *, method: str = "cosine"):
         s, t = coordinate_frame(n.x, n.y, n.z)
         return Vector3f(*to_world(local, s, t, (n.x, n.y, n.z)))
     raise ValueError(f"unknown Lambertian sampler {method!r} (one of {', '.join(LAMBERTIAN_SAMPLERS)})")
+
+
+def mistaken_bounce(Vector3f, n, u1, u2, weight, how: str):
+    r"""A Lambertian bounce about the unit normal ``n`` drawn or weighted as ``how`` (:data:`mcrt.options.BOUNCES`).
+
+    ``weight`` is the correct bounce's f cos / pdf (the albedo rho). Each
+    mistake's expectation, for incident radiance L, against the correct
+    :math:`(\rho/\pi) \int_H L \cos\theta \, d\omega`:
+
+    * 'uniform_sphere': uniform on the whole sphere, weighted with the
+      hemisphere's pdf 1/(2 pi) (2 rho cos); half the directions lie below
+      the surface: :math:`(\rho / 2\pi) \int_H L \cos\theta`, half the truth;
+    * 'cosine_squared': cosine-distributed, weighted rho cos (the cosine
+      applied in the weight and again): :math:`(\rho/\pi) \int_H L \cos^2\theta`;
+    * 'local_frame': cosine-distributed about +z, never turned to n,
+      weighted rho; those below the surface lost;
+    * 'half_azimuth_*': the azimuth pi u for 2 pi u, so only the half of the
+      hemisphere on the frame's second tangent's side, weighted rho:
+      :math:`(2\rho/\pi) \int_{H/2} L \cos\theta`. The half depends on the frame:
+      '_duff' mcrt's (Duff et al.), '_axis' the tangent n x a and second
+      tangent n x (n x a), '_cross' the second tangent n x a itself, with
+      a = (1, 0, 0), or (0, 1, 0) where n is within 0.9 of the x axis;
+    * 'disk_radius_u': the disk radius u1 for sqrt(u1) (sin theta uniform,
+      pdf cos / (2 pi sin)), weighted rho:
+      :math:`(\rho / 2\pi) \int_H L \cos\theta / \sin\theta`;
+    * 'no_albedo': cosine-distributed, weight 1 (rho left out of the throughput).
+
+    A direction below the surface goes on mirrored into the room with weight
+    0: it carries nothing, as a ray through the wall would, and stays inside
+    the closed room.
+    """
+    if how not in BOUNCES or how == "cosine":
+        raise ValueError(f"no bounce mistake {how!r} (one of {', '.join(BOUNCES[1:])})")
+    nn = (n.x, n.y, n.z)
+    if how == "uniform_sphere":
+        d = Vector3f(*square_to_uniform_sphere(u1, u2))
+        w = weight * (2.0 * fmax(dr.dot(d, n), 0.0))
+    elif how == "local_frame":
+        d = Vector3f(*square_to_cosine_hemisphere(u1, u2))
+        w = dr.select(dr.dot(d, n) > 0.0, weight, 0.0)
+    elif how == "disk_radius_u":
+        s, t = coordinate_frame(*nn)
+        sn, cs = dr.sincos(2.0 * math.pi * u2)
+        d = Vector3f(*to_world((u1 * cs, u1 * sn, sqrt0(1.0 - u1 * u1)), s, t, nn))
+        w = weight
+    else:
+        d = Vector3f(*cosine_about_normal(u1, u2, nn))
+        w = weight * dr.dot(d, n) if how == "cosine_squared" else type(weight)(1.0) if how == "no_albedo" else weight
+        if how.startswith("half_azimuth"):
+            b = _second_tangent(Vector3f, n, how)
+            d = dr.fma(-2.0 * dr.minimum(dr.dot(d, b), 0.0), b, d)  # the other half mirrored onto this one
+    below = dr.dot(d, n) <= 0.0
+    return dr.select(below, dr.fma(-2.0 * dr.dot(d, n), n, d), d), dr.select(below, 0.0, w)
+
+
+def _second_tangent(Vector3f, n, how: str):
+    """The unit tangent whose side a half-circle azimuth keeps (:func:`mistaken_bounce`)."""
+    if how == "half_azimuth_duff":
+        return Vector3f(*coordinate_frame(n.x, n.y, n.z)[1])
+    a = dr.select(dr.abs(n.x) < 0.9, Vector3f(1.0, 0.0, 0.0), Vector3f(0.0, 1.0, 0.0))
+    t = dr.normalize(dr.cross(n, a))
+    return t if how == "half_azimuth_cross" else dr.cross(n, t)
 
 
 def reflect(d, n, *, sign: float = 1.0):

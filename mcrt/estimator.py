@@ -54,7 +54,7 @@ from typing import Protocol, runtime_checkable
 
 import drjit as dr
 
-from mcrt.bsdf import lambertian_f, lambertian_weight, reflect, sample_lambertian
+from mcrt.bsdf import lambertian_f, lambertian_weight, mistaken_bounce, reflect, sample_lambertian
 from mcrt.light import solid_angle_pdf
 from mcrt.minmax import fmin
 from mcrt.options import EstimatorOptions
@@ -239,7 +239,7 @@ class PathEstimator:
 
             # ---- Continue: cosine-weighted Lambertian direction or mirror reflection.
             u1, u2 = sampler.next_1d(), sampler.next_1d()
-            d, weight, specular = self.scatter(d, hit, alive, u1, u2, sampler)
+            d, weight, specular = self.scatter(d, hit, alive, u1, u2, sampler, depth)
             if mis:
                 pdf_bsdf = cosine_hemisphere_pdf(dr.dot(hit.n, d))
             beta *= weight
@@ -300,11 +300,21 @@ class PathEstimator:
                 weight = dr.select(caustic, caustic_weight, weight)
         return dr.select(counted, hit.light_radiance * weight, 0.0)
 
-    def scatter(self, d, hit, alive, u1, u2, sampler):
-        """Next direction from (u1, u2), its weight f cos / pdf, and whether the bounce was specular (a mirror)."""
+    def scatter(self, d, hit, alive, u1, u2, sampler, depth=None):
+        """Next direction from (u1, u2), its weight f cos / pdf, and whether the bounce was specular (a mirror).
+
+        With the trick ``bounce`` the Lambertian bounce is one of
+        :func:`mcrt.bsdf.mistaken_bounce`'s on a camera path (``depth``, its
+        segments so far, given), at every vertex or (``bounce_at`` 'first') at
+        its first vertex only.
+        """
         host, opt = self.host, self.opt
         d_next = sample_lambertian(host.Vector3f, hit.n, u1, u2, sampler, method=opt.mutations.lambertian_sampler)
         weight = lambertian_weight(hit.color, inv_pi=opt.mutations.brdf_inv_pi)
+        if opt.tricks.bounce != "cosine" and depth is not None:
+            d_bad, w_bad = mistaken_bounce(host.Vector3f, hit.n, u1, u2, weight, opt.tricks.bounce)
+            at = (depth == 1) if opt.tricks.bounce_at == "first" else True
+            d_next, weight = dr.select(at, d_bad, d_next), dr.select(at, w_bad, weight)
         if not host.has_mirror:
             return d_next, weight, host.Bool(False)
         mirror = alive & hit.mirror

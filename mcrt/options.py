@@ -27,6 +27,13 @@ UNBOUNDED = 2**32 - 1
 #: How a Lambertian direction is drawn (mcrt.bsdf.sample_lambertian): correctly, or by two catalogued mistakes.
 LAMBERTIAN_SAMPLERS = ("cosine", "uniform_as_cosine", "ball_plus_normal")
 
+#: How a diffuse bounce is drawn and weighted (mcrt.bsdf.mistaken_bounce): correctly ('cosine'), or by one of the
+#: mistakes students' tracers make that the grader's explanation renders (mcrt.grade.explain.bounce).
+BOUNCES = ("cosine", "uniform_sphere", "cosine_squared", "local_frame", "half_azimuth_duff", "half_azimuth_axis",
+           "half_azimuth_cross", "disk_radius_u", "no_albedo")
+#: Where a bounce mistake applies: at every diffuse vertex, or at the first vertex of a camera path only.
+BOUNCE_AT = ("every", "first")
+
 #: What the path tracer does with the paths eye D ... D S+ L (Caustics.mode).
 MIRROR_CAUSTICS = ("all", "skip", "only", "mis")
 
@@ -95,8 +102,16 @@ class Tricks:
     # Each camera path's radiance clamped per channel to this before it is added (fireflies removed, with their
     # energy: biased); None: no clamp. A student's mistake the grader's explanation renders (mcrt.grade.explain).
     sample_clamp: float | None = None
+    # The diffuse bounce drawn or weighted as a student's tracer gets it wrong (BOUNCES), at BOUNCE_AT's vertices.
+    # Another mistake the explanation renders; 'cosine' is the estimator above.
+    bounce: str = "cosine"
+    bounce_at: str = "every"
 
     def __post_init__(self):
+        if self.bounce not in BOUNCES:
+            raise ValueError(f"bounce must be one of {', '.join(BOUNCES)}, got {self.bounce!r}")
+        if self.bounce_at not in BOUNCE_AT:
+            raise ValueError(f"bounce_at must be one of {', '.join(BOUNCE_AT)}, got {self.bounce_at!r}")
         if self.sample_clamp is not None and not self.sample_clamp > 0.0:
             raise ValueError(f"sample_clamp must be > 0, got {self.sample_clamp}")
         if self.roulette_survival is not None and not 0.0 < self.roulette_survival <= 1.0:
@@ -173,7 +188,7 @@ _PART_OF = {f.name: part for part, kind in PARTS.items() for f in fields(kind)}
 
 #: Name -> default of every estimator trick the ``mcrt`` renderer takes (its Tricks, and Mutations' roulette scheme).
 TRICK_OPTIONS = {"roulette": "unbiased", "roulette_survival": None, "roulette_start": None, "light_sampling": "area",
-                 "sample_clamp": None}
+                 "sample_clamp": None, "bounce": "cosine", "bounce_at": "every"}
 
 
 def trick_options(tricks: dict) -> tuple:

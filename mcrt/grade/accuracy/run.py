@@ -93,6 +93,9 @@ CAUSE_OF: dict[str, tuple[str, ...]] = {
     # Added after the unheard class was graded: a path's weight off by a constant from a bounce on (a pdf off by a
     # constant; roulette where its words say so, named_causes).
     "path_weight": ("indirect_scale",),
+    # The diffuse bounce drawn or weighted wrongly (mcrt.grade.explain.bounce; added after the unprompted class was
+    # graded): the indirect light off by a factor that depends on the direction.
+    "bounce": ("indirect_scale",),
 }
 
 

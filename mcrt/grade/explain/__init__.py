@@ -43,6 +43,8 @@ light_twice    direct light, or all light, counted twice;   the path-depth rende
                the direct light missing
 path_weight    a path's weight carried on from a hit off by the path-depth renders
                q: at one hit, or at every hit from one on
+bounce         the diffuse bounce drawn or weighted wrongly mcrt renders with the trick
+               (the cosine twice, half the sphere lost)     ``bounce``
 light_facing   the light emitting on its other side         one mcrt render
 bad_pixels     pixels (or a block) written as 0             closed form on R
 ============== ============================================ ===================================
@@ -91,7 +93,7 @@ a cause is claimed only when what it leaves is noise); the families
 catalogued bugs among them, and their rankings by tiles, pixels and noise),
 :mod:`.colour` and :mod:`.surface_black`, and beyond the scene file
 :mod:`.tonecurve`, :mod:`.sample_clamp`, :mod:`.falloff`, :mod:`.resampling`, :mod:`.objects`,
-:mod:`.light_twice`, :mod:`.path_weight`, :mod:`.light_facing` and :mod:`.pixels`, in the order of
+:mod:`.light_twice`, :mod:`.path_weight`, :mod:`.bounce`, :mod:`.light_facing` and :mod:`.pixels`, in the order of
 :data:`FAMILIES`.
 """
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from mcrt.grade.explain.basis import Basis, prepare_basis
 from mcrt.grade.explain.bloom import bloom
+from mcrt.grade.explain.bounce import bounce
 from mcrt.grade.explain.buffers import wrong_buffer
 from mcrt.grade.explain.camera import camera
 from mcrt.grade.explain.catalogue import catalogue
@@ -29,11 +30,11 @@ from mcrt.grade.explain.tonecurve import tone_curve
 #: a matrix, several surfaces' colours at once, a surface of the room black) and the catalogue; then what a student's program gets wrong beyond the
 #: scene file (a tone curve, each sample clamped, a fall-off, resampling, bloom, an object's material or size,
 #: values stored at the wrong places, colours or materials given to the wrong surfaces, every diffuse reflectance off
-#: by one factor, squared or its complement, light counted twice, a path's weight off from a bounce on, a light
-#: sample's weight, the light facing the wrong way, black pixels, another of the film's buffers written).
+#: by one factor, squared or its complement, light counted twice, a path's weight off from a bounce on, the diffuse
+#: bounce drawn or weighted wrongly, a light sample's weight, the light facing the wrong way, black pixels, another of the film's buffers written).
 FAMILIES = (scale, colour, curves, albedo, albedos, surface_black, rendered, camera, catalogue, tone_curve, sample_clamp,
             falloff, resampling, layout, bloom, material, object_size, swap, reflectance_scale, reflectance_remapped,
-            light_twice, path_weight, light_sampling, light_facing, bad_pixels, wrong_buffer)
+            light_twice, path_weight, bounce, light_sampling, light_facing, bad_pixels, wrong_buffer)
 
 #: The families that are mistakes of the camera (what the misregistration test of mcrt.grade.structure also sees).
 CAMERA_FAMILIES = frozenset({"fov", "aspect", "pixel_offset", "rotation", "eye", "camera_model"})
