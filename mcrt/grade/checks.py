@@ -255,6 +255,7 @@ class Orientation:
     transform: str
     correlations: dict  # "camera/transform" -> (luminance, chromaticity) rank correlations
     resembles: bool  # the best luminance correlation is high enough to say anything
+    edges: dict = field(default_factory=dict)  # "camera/transform" -> rank correlation of the edges' strength
 
 
 def _ranks(x: np.ndarray) -> np.ndarray:
@@ -274,6 +275,19 @@ def _features(img: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 RESEMBLES = 0.8
 
 
+#: How much lower than as handed in a candidate's edge correlation may be (noise moves it by about a hundredth).
+EDGE_SLACK = 0.02
+
+
+def _edges(lum_ranks: np.ndarray) -> np.ndarray:
+    """Ranks of the gradient's length of the luminance's ranks: where the edges are, whatever the colours (0 for an
+    image of one row or column, which has none)."""
+    if min(lum_ranks.shape) < 2:
+        return np.zeros_like(lum_ranks)
+    gy, gx = np.gradient(lum_ranks)
+    return _ranks(np.hypot(gx, gy))
+
+
 def resemblance(img: np.ndarray, ref: np.ndarray) -> float:
     """Luminance rank correlation (Spearman) of an image with a reference of its shape."""
     return float(np.mean(_features(img)[0] * _features(ref)[0]))
@@ -290,10 +304,16 @@ def detect_orientation(img: np.ndarray, refs: dict[str, np.ndarray], camera: str
     the bottom; chromaticity sees which coloured wall is where, and does not
     change when a bug moves brightness around (a BRDF pi times too bright
     makes the floor brighter than the ceiling, which luminance alone takes
-    for an upside-down image). A candidate replaces (assigned camera, as
+    for an upside-down image). Both change when surfaces' colours are given to
+    the wrong surfaces: the walls' colours permuted can make a mirrored view
+    the closer in luminance and in colour. Where the edges are (the ranks of
+    the gradient's length of the luminance's ranks) does not depend on the
+    colours: the objects' outlines, which no flip of the room keeps in place.
+    A candidate replaces (assigned camera, as
     handed in) only when its luminance correlation is higher by ``margin``,
-    its chromaticity correlation is not lower, and its luminance correlation
-    reaches :data:`RESEMBLES`; the best such candidate (sum of both) wins.
+    its chromaticity correlation is not lower, its edges' correlation is not
+    lower by more than :data:`EDGE_SLACK`, and its luminance correlation
+    reaches :data:`RESEMBLES`; the best such candidate (sum of the first two) wins.
     Each candidate is compared with the image's channels in the order that
     matches it best (channels written in another order are a colour
     mistake, which the explanation names; they must not read as a flip).
@@ -307,23 +327,27 @@ def detect_orientation(img: np.ndarray, refs: dict[str, np.ndarray], camera: str
     feats = [_features(img[..., list(order)]) for order in itertools.permutations(range(3))]
     square = img.shape[0] == img.shape[1]
     names = list(TRANSFORMS)[: len(TRANSFORMS) if square else SQUARE_ONLY]
-    lum, chroma = {}, {}
+    lum, chroma, edge = {}, {}, {}
+    img_edges = _edges(feats[0][0])  # the channels' order does not move the edges
     for cam, ref in refs.items():
         rl, rr, rg = _features(ref)
+        re = _edges(rl)
         for name in names:
             t = TRANSFORMS[name][0]
             tl, tr, tg = t(rl), t(rr), t(rg)
             fl, fr, fg = max(feats, key=lambda f: float(np.mean(f[0] * tl)))
             lum[(cam, name)] = float(np.mean(fl * tl))
             chroma[(cam, name)] = 0.5 * float(np.mean(fr * tr) + np.mean(fg * tg))
+            edge[(cam, name)] = float(np.mean(img_edges * t(re)))
     ident = (camera, "identity")
     table = {f"{c}/{t}": (round(lum[(c, t)], 4), round(chroma[(c, t)], 4)) for (c, t) in lum}
+    edges = {f"{c}/{t}": round(v, 4) for (c, t), v in edge.items()}
     eligible = [k for k in lum if k != ident and lum[k] >= lum[ident] + margin and chroma[k] >= chroma[ident]
-                and lum[k] >= RESEMBLES]
+                and edge[k] >= edge[ident] - EDGE_SLACK and lum[k] >= RESEMBLES]
     if eligible:
         best = max(eligible, key=lambda k: lum[k] + chroma[k])
-        return Orientation(best[0], best[1], table, True)
-    return Orientation(camera, "identity", table, max(lum.values()) > 0.3)
+        return Orientation(best[0], best[1], table, True, edges)
+    return Orientation(camera, "identity", table, max(lum.values()) > 0.3, edges)
 
 
 # --------------------------------------------------------------------------

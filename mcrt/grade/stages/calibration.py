@@ -30,7 +30,8 @@ def orientation(g: Grading, hand: Hand, declared_camera: str | None) -> None:
     ori = ck.detect_orientation(hand.imgs[0], {c: e.mean for c, e in g.ctx.references.items()}, a.camera,
                                 g.th.orientation_margin)
     g.details["orientation"] = {"camera": ori.camera, "transform": ori.transform,
-                                "rank_correlations_luminance_chroma": ori.correlations}
+                                "rank_correlations_luminance_chroma": ori.correlations,
+                                "rank_correlations_edges": ori.edges}
     if ori.transform != "identity":
         inv = ck.TRANSFORMS[ori.transform][1]
         hand.imgs, hand.qvar, hand.mask = [inv(i) for i in hand.imgs], [inv(q) for q in hand.qvar], inv(hand.mask)
