@@ -13,8 +13,9 @@ with weight R (a delta distribution: f cos / pdf = R), never light-sampled.
 
 Each function takes the estimator's named option that a catalogued bug
 changes (:mod:`mcrt.mutants`); the defaults are the correct physics.
-:func:`mistaken_bounce` draws the Lambertian bounce as students' tracers get
-it wrong (:data:`mcrt.options.BOUNCES`), for the grader's explanation.
+:func:`mistaken_bounce` draws the Lambertian bounce and :func:`mistaken_mirror`
+reflects as students' tracers get them wrong (:data:`mcrt.options.BOUNCES`,
+:data:`mcrt.options.MIRRORS`), for the grader's explanation.
 """
 
 from __future__ import annotations
@@ -24,7 +25,7 @@ import math
 import drjit as dr
 
 from mcrt.minmax import fmax, sqrt0
-from mcrt.options import BOUNCES, LAMBERTIAN_SAMPLERS
+from mcrt.options import BOUNCES, LAMBERTIAN_SAMPLERS, MIRRORS
 from mcrt.sampling import (
     INV_PI,
     coordinate_frame,
@@ -129,6 +130,36 @@ def _second_tangent(Vector3f, n, how: str):
     a = dr.select(dr.abs(n.x) < 0.9, Vector3f(1.0, 0.0, 0.0), Vector3f(0.0, 1.0, 0.0))
     t = dr.normalize(dr.cross(n, a))
     return t if how == "half_azimuth_cross" else dr.cross(n, t)
+
+
+def mistaken_mirror(Vector3f, d, n, p, how: str, *, normal_length: float = 1.0):
+    r"""The direction a mirror at p with unit normal ``n`` sends the unit direction ``d`` on, and the factor on its
+    weight, as ``how`` (:data:`mcrt.options.MIRRORS`) gets it wrong:
+
+    * 'without_2': d - (d.n) n, its 2 missing (normalised): the ray goes on
+      along the surface;
+    * 'normal_unnormalised': reflected about a normal of length
+      ``normal_length`` (a sphere's p - c never divided by its radius):
+      d - 2 l^2 (d.n) n, normalised;
+    * 'normal_from_origin': reflected about p normalised (a sphere's
+      centre never subtracted);
+    * 'cosine_weighted': reflected right, weighted by |d.n| as a diffuse
+      bounce;
+    * 'camera_only': reflected right, weight 0 (the caller applies it after
+      a camera ray's first hit only: a path that meets the mirror later ends).
+    """
+    if how not in MIRRORS or how == "reflect":
+        raise ValueError(f"no mirror mistake {how!r} (one of {', '.join(MIRRORS[1:])})")
+    c = dr.dot(d, n)
+    if how == "without_2":
+        return dr.normalize(dr.fma(-c, n, d)), 1.0
+    if how == "normal_unnormalised":
+        return dr.normalize(dr.fma(-2.0 * normal_length**2 * c, n, d)), 1.0
+    if how == "normal_from_origin":
+        m = dr.normalize(p)
+        return dr.fma(-2.0 * dr.dot(d, m), m, d), 1.0
+    r = dr.fma(-2.0 * c, n, d)
+    return r, (dr.abs(c) if how == "cosine_weighted" else 0.0)
 
 
 def reflect(d, n, *, sign: float = 1.0):

@@ -54,7 +54,7 @@ from typing import Protocol, runtime_checkable
 
 import drjit as dr
 
-from mcrt.bsdf import lambertian_f, lambertian_weight, mistaken_bounce, reflect, sample_lambertian
+from mcrt.bsdf import lambertian_f, lambertian_weight, mistaken_bounce, mistaken_mirror, reflect, sample_lambertian
 from mcrt.light import solid_angle_pdf
 from mcrt.minmax import fmin
 from mcrt.options import EstimatorOptions
@@ -306,7 +306,8 @@ class PathEstimator:
         With the trick ``bounce`` the Lambertian bounce is one of
         :func:`mcrt.bsdf.mistaken_bounce`'s on a camera path (``depth``, its
         segments so far, given), at every vertex or (``bounce_at`` 'first') at
-        its first vertex only.
+        its first vertex only; with ``mirror``, the mirror's reflection one of
+        :func:`mcrt.bsdf.mistaken_mirror`'s (``mirror_at`` likewise).
         """
         host, opt = self.host, self.opt
         d_next = sample_lambertian(host.Vector3f, hit.n, u1, u2, sampler, method=opt.mutations.lambertian_sampler)
@@ -319,7 +320,16 @@ class PathEstimator:
             return d_next, weight, host.Bool(False)
         mirror = alive & hit.mirror
         r = reflect(d, hit.n, sign=opt.mutations.mirror_sign)
-        return dr.select(mirror, r, d_next), dr.select(mirror, hit.color, weight), mirror
+        w_mirror = hit.color
+        if opt.tricks.mirror != "reflect" and depth is not None:
+            r_bad, k = mistaken_mirror(host.Vector3f, d, hit.n, hit.p, opt.tricks.mirror,
+                                       normal_length=opt.tricks.mirror_normal_length)
+            # A path that meets the mirror after its first hit ends there ('camera_only'); the others at the
+            # first hit only, or at every hit.
+            at = (depth > 1) if opt.tricks.mirror == "camera_only" else (
+                (depth == 1) if opt.tricks.mirror_at == "first" else True)
+            r, w_mirror = dr.select(at, r_bad, r), dr.select(at, w_mirror * k, w_mirror)
+        return dr.select(mirror, r, d_next), dr.select(mirror, w_mirror, weight), mirror
 
     def roulette(self, beta, depth, diffuse, alive, sampler):
         """Russian roulette from depth ``roulette_start`` (default ``rr_depth``): survive with q, then beta /= q.

@@ -31,8 +31,11 @@ LAMBERTIAN_SAMPLERS = ("cosine", "uniform_as_cosine", "ball_plus_normal")
 #: mistakes students' tracers make that the grader's explanation renders (mcrt.grade.explain.bounce).
 BOUNCES = ("cosine", "uniform_sphere", "cosine_squared", "local_frame", "half_azimuth_duff", "half_azimuth_axis",
            "half_azimuth_cross", "disk_radius_u", "no_albedo")
-#: Where a bounce mistake applies: at every diffuse vertex, or at the first vertex of a camera path only.
+#: Where a bounce (or mirror) mistake applies: at every vertex, or at the first vertex of a camera path only.
 BOUNCE_AT = ("every", "first")
+#: How a mirror reflects (mcrt.bsdf.mistaken_mirror): correctly ('reflect'), or by one of the mistakes students'
+#: tracers make that the grader's explanation renders (mcrt.grade.explain.mirror).
+MIRRORS = ("reflect", "without_2", "normal_unnormalised", "normal_from_origin", "cosine_weighted", "camera_only")
 
 #: What the path tracer does with the paths eye D ... D S+ L (Caustics.mode).
 MIRROR_CAUSTICS = ("all", "skip", "only", "mis")
@@ -106,12 +109,23 @@ class Tricks:
     # Another mistake the explanation renders; 'cosine' is the estimator above.
     bounce: str = "cosine"
     bounce_at: str = "every"
+    # The mirror's reflection computed as a student's tracer gets it wrong (MIRRORS), at BOUNCE_AT's vertices; the
+    # length of the sphere's normal left unnormalised (its radius) for 'normal_unnormalised'.
+    mirror: str = "reflect"
+    mirror_at: str = "every"
+    mirror_normal_length: float = 1.0
 
     def __post_init__(self):
         if self.bounce not in BOUNCES:
             raise ValueError(f"bounce must be one of {', '.join(BOUNCES)}, got {self.bounce!r}")
         if self.bounce_at not in BOUNCE_AT:
             raise ValueError(f"bounce_at must be one of {', '.join(BOUNCE_AT)}, got {self.bounce_at!r}")
+        if self.mirror not in MIRRORS:
+            raise ValueError(f"mirror must be one of {', '.join(MIRRORS)}, got {self.mirror!r}")
+        if self.mirror_at not in BOUNCE_AT:
+            raise ValueError(f"mirror_at must be one of {', '.join(BOUNCE_AT)}, got {self.mirror_at!r}")
+        if not self.mirror_normal_length > 0.0:
+            raise ValueError(f"mirror_normal_length must be > 0, got {self.mirror_normal_length}")
         if self.sample_clamp is not None and not self.sample_clamp > 0.0:
             raise ValueError(f"sample_clamp must be > 0, got {self.sample_clamp}")
         if self.roulette_survival is not None and not 0.0 < self.roulette_survival <= 1.0:
@@ -188,7 +202,8 @@ _PART_OF = {f.name: part for part, kind in PARTS.items() for f in fields(kind)}
 
 #: Name -> default of every estimator trick the ``mcrt`` renderer takes (its Tricks, and Mutations' roulette scheme).
 TRICK_OPTIONS = {"roulette": "unbiased", "roulette_survival": None, "roulette_start": None, "light_sampling": "area",
-                 "sample_clamp": None, "bounce": "cosine", "bounce_at": "every"}
+                 "sample_clamp": None, "bounce": "cosine", "bounce_at": "every", "mirror": "reflect",
+                 "mirror_at": "every", "mirror_normal_length": 1.0}
 
 
 def trick_options(tricks: dict) -> tuple:

@@ -72,8 +72,8 @@ def test_the_tricks_at_their_defaults_render_the_default_image_bit_for_bit(scene
     s = _settings(scene, 16, res=32)
     plain = render(scene, s, seed=3, progress=False)
     explicit = render(scene, s, seed=3, progress=False, roulette="unbiased", roulette_survival=None, roulette_start=None,
-                      light_sampling="area", sample_clamp=None, bounce="cosine", bounce_at="every", adaptive=None,
-                      denoise=None)
+                      light_sampling="area", sample_clamp=None, bounce="cosine", bounce_at="every", mirror="reflect",
+                      mirror_at="every", mirror_normal_length=1.0, adaptive=None, denoise=None)
     assert np.array_equal(plain.mean, explicit.mean) and np.array_equal(plain.variance, explicit.variance)
     assert "tricks" not in plain.extra
     moved = render(scene, s, seed=3, progress=False, roulette_start=1)
@@ -144,6 +144,52 @@ def test_a_bounce_on_the_whole_sphere_is_half_a_bounce_by_the_physics(scene):
     assert np.abs(z).max() > z_max
 
 
+def _sphere_seen(scene, res: int) -> np.ndarray:
+    """(res, res, 1): pixels whose square any camera ray through its corners or centre shows the mirror sphere, and
+    their neighbours (NumPy's ray-sphere test; no tracer)."""
+    from scipy.ndimage import binary_dilation
+
+    from mcrt.camera import primary_directions
+    from mcrt.scene import Mirror
+
+    cam = scene.camera("near")
+    sph = next(o for o in scene.objects if isinstance(o.material, Mirror))
+    j, i = np.mgrid[0:res, 0:res]
+    hit = np.zeros((res, res), bool)
+    for u, v in ((0, 0), (0, 1), (1, 0), (1, 1), (0.5, 0.5)):
+        d = primary_directions(cam, res, res, i, j, np.full(i.shape, u), np.full(i.shape, v))
+        oc = np.asarray(cam.eye, float) - np.asarray(sph.center, float)
+        b = np.einsum("ijk,k->ij", d, oc)
+        hit |= b * b - (oc @ oc - sph.radius**2) >= 0.0
+    return binary_dilation(hit, iterations=1)[..., None]
+
+
+def test_a_mirror_for_camera_rays_only_is_black_to_every_other_ray(scene):
+    """The mirror handled for camera rays only (trick mirror 'camera_only'): a path that meets it after its first
+    hit ends. By the physics, wherever the camera does not see the sphere, that is the scene with the sphere black
+    (reflectance 0). Pixels away from the sphere (:func:`_sphere_seen`), z-tests on 8 x 8 tiles, Bonferroni at
+    0.01, seeds 25 and 26 (512 spp, 32 x 32); the same test rejects the mirror right (seed 27)."""
+    from dataclasses import replace
+
+    from mcrt.scene import Mirror
+
+    s = _settings(scene, 512, res=32)
+    black = replace(scene, objects=tuple(replace(o, material=Mirror(reflectance=(0.0, 0.0, 0.0)))
+                                         if isinstance(o.material, Mirror) else o for o in scene.objects))
+    away = ~_sphere_seen(scene, 32)
+
+    def est(sc, seed, **tricks):
+        r = render(sc, s, seed=seed, progress=False, **tricks)
+        m, v = np.asarray(r.mean, np.float64), np.asarray(r.variance, np.float64) / 512
+        return np.where(away, m, 0.0), np.where(away, v, 0.0)
+
+    physics = est(black, 26)
+    z_max = norm.isf(ALPHA / 2 / (16 * 3))
+    with np.errstate(invalid="ignore"):
+        assert np.nanmax(np.abs(_tile_z(est(scene, 25, mirror="camera_only"), physics))) < z_max
+        assert np.nanmax(np.abs(_tile_z(est(scene, 27), physics))) > z_max
+
+
 @pytest.mark.parametrize("options, message", [
     ({"roulette_survival": 0.0}, "roulette_survival must be in"),
     ({"roulette_start": 0}, "roulette_start must be"),
@@ -151,6 +197,9 @@ def test_a_bounce_on_the_whole_sphere_is_half_a_bounce_by_the_physics(scene):
     ({"sample_clamp": 0.0}, "sample_clamp must be > 0"),
     ({"bounce": "hemisphere"}, "bounce must be one of"),
     ({"bounce_at": "last"}, "bounce_at must be one of"),
+    ({"mirror": "refract"}, "mirror must be one of"),
+    ({"mirror_at": "last"}, "mirror_at must be one of"),
+    ({"mirror_normal_length": 0.0}, "mirror_normal_length must be > 0"),
     ({"light_sampling": "solid_angle", "mis": True}, "runs without MIS"),
 ])
 def test_bad_trick_values_are_refused(options, message):

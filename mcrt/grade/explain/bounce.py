@@ -24,6 +24,7 @@ import numpy as np
 
 from mcrt.grade.candidates import Candidate, Inputs
 from mcrt.grade.explain.fit import Fit
+from mcrt.grade.explain.tricks import best_change, rendered_changes
 from mcrt.options import BOUNCE_AT, BOUNCES
 
 #: Each mistake in the student's terms (what the code does, then what it does to the light).
@@ -57,28 +58,18 @@ AT_WORDS = {"every": "at every diffuse surface a path meets",
 
 def _prepare(a, scene, render) -> list[tuple[tuple[str, str], np.ndarray]]:
     """((mistake, where), its render minus the basis's) for every mistake and place (the module docstring)."""
-    from mcrt.grade.explain.basis import basis_settings
-
-    spp, seed = basis_settings(a)
-
-    def img(**tricks):
-        return render(scene, a.camera, a.grade_width, a.grade_height, a.max_depth, spp, seed,
-                      **tricks).mean.astype(np.float64)
-
-    base = img()
-    return [((how, at), (img(bounce=how, bounce_at=at) - base).astype(np.float32))
-            for how in BOUNCES if how != "cosine" for at in BOUNCE_AT]
+    return rendered_changes(a, scene, render, [((how, at), {"bounce": how, "bounce_at": at})
+                                               for how in BOUNCES if how != "cosine" for at in BOUNCE_AT])
 
 
 def bounce(fit: Fit, inputs: Inputs) -> list[Candidate]:
     """The mistaken bounce whose render fits best (the module docstring)."""
-    renders = inputs.basis.extra.get(bounce.name)
-    if not renders:
+    best = best_change(fit, inputs.basis.extra.get(bounce.name))
+    if best is None:
         return []
-    err, (how, at), change = min(((fit.delta(c.astype(np.float64)), what, c) for what, c in renders),
-                                 key=lambda t: t[0])
+    err, (how, at), change = best
     return [Candidate("bounce", "diffuse bounce drawn wrongly", f"{WORDS[how]}, {AT_WORDS[at]}", err, 0,
-                      value={"bounce": how, "at": at}, change=change.astype(np.float64), gain=True)]
+                      value={"bounce": how, "at": at}, change=change, gain=True)]
 
 
 bounce.name, bounce.prepare = "bounce", _prepare
