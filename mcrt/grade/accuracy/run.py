@@ -96,6 +96,9 @@ CAUSE_OF: dict[str, tuple[str, ...]] = {
     # The diffuse bounce drawn or weighted wrongly (mcrt.grade.explain.bounce; added after the unprompted class was
     # graded): the indirect light off by a factor that depends on the direction.
     "bounce": ("indirect_scale",),
+    # The mirror's reflection computed wrongly (mcrt.grade.explain.mirror; added after the unprompted class was
+    # graded): its normal wrong, or its material's handling (the family 'material').
+    "mirror_normal": ("normals",),
 }
 
 

@@ -15,6 +15,8 @@ colour         k M R: channels reordered, colour lost to    closed form; weighte
 albedo         each surface's albedo per channel            mcrt renders at albedo 0, 1/2, 1
                                                             and the scene's, Lagrange
                                                             interpolation per channel
+walls          every wall one colour (per channel)          mcrt renders of every wall at 0,
+                                                            1/4, ..., 1; Lagrange per channel
 reflectance    the mirror's reflectance per channel         the same with 0, 1/2 and 1
 light          the light moved along x, y, z; its size; a   mcrt renders at a few offsets
                coordinate of its centre of the wrong sign

@@ -15,6 +15,7 @@ from mcrt.grade.explain.layout import layout
 from mcrt.grade.explain.light_facing import light_facing
 from mcrt.grade.explain.light_sampling import light_sampling
 from mcrt.grade.explain.light_twice import light_twice
+from mcrt.grade.explain.mirror import mirror
 from mcrt.grade.explain.objects import material, object_size
 from mcrt.grade.explain.path_weight import path_weight
 from mcrt.grade.explain.pixels import bad_pixels
@@ -25,24 +26,28 @@ from mcrt.grade.explain.scene import albedo, albedos, rendered, scale
 from mcrt.grade.explain.surface_black import surface_black
 from mcrt.grade.explain.swap import swap
 from mcrt.grade.explain.tonecurve import tone_curve
+from mcrt.grade.explain.walls import walls_one_colour
 
-#: Every family the engine fits, in this order (ties keep it). The scene file's parameters (and the colours mixed by
-#: a matrix, several surfaces' colours at once, a surface of the room black) and the catalogue; then what a student's program gets wrong beyond the
-#: scene file (a tone curve, each sample clamped, a fall-off, resampling, bloom, an object's material or size,
-#: values stored at the wrong places, colours or materials given to the wrong surfaces, every diffuse reflectance off
-#: by one factor, squared or its complement, light counted twice, a path's weight off from a bounce on, the diffuse
-#: bounce drawn or weighted wrongly, a light sample's weight, the light facing the wrong way, black pixels, another of the film's buffers written).
-FAMILIES = (scale, colour, curves, albedo, albedos, surface_black, rendered, camera, catalogue, tone_curve, sample_clamp,
-            falloff, resampling, layout, bloom, material, object_size, swap, reflectance_scale, reflectance_remapped,
-            light_twice, path_weight, bounce, light_sampling, light_facing, bad_pixels, wrong_buffer)
+#: Every family the engine fits, in this order (ties keep it). The scene file's parameters (and the colours mixed by a
+#: matrix, several surfaces' colours at once, every wall one colour, a surface of the room black) and the catalogue;
+#: then what a student's program gets wrong beyond the scene file (a tone curve, each sample clamped, a fall-off,
+#: resampling, bloom, an object's material or size, values stored at the wrong places, colours or materials given to
+#: the wrong surfaces, every diffuse reflectance off by one factor, squared or its complement, light counted twice, a
+#: path's weight off from a bounce on, the diffuse bounce drawn or weighted wrongly, the mirror's reflection computed
+#: wrongly, a light sample's weight, the light facing the wrong way, black pixels, another of the film's buffers
+#: written).
+FAMILIES = (scale, colour, curves, albedo, albedos, walls_one_colour, surface_black, rendered, camera, catalogue,
+            tone_curve, sample_clamp, falloff, resampling, layout, bloom, material, object_size, swap,
+            reflectance_scale, reflectance_remapped, light_twice, path_weight, bounce, mirror, light_sampling,
+            light_facing, bad_pixels, wrong_buffer)
 
 #: The families that are mistakes of the camera (what the misregistration test of mcrt.grade.structure also sees).
 CAMERA_FAMILIES = frozenset({"fov", "aspect", "pixel_offset", "rotation", "eye", "camera_model"})
 #: The families a TA counts as major mistakes whatever their share of the image: the camera, the scene's geometry
 #: (an object or the light missing, moved or resized) and its colours (mcrt.grade.scoring.unbiased_loss).
 MAJOR_FAMILIES = CAMERA_FAMILIES | {"object_missing", "object_moved", "light_position", "light_size", "albedo", "channels",
-                                    "material", "object_size", "colour_lost", "light_facing", "surface_black",
-                                    "object_black", "reflectance_scale", "reflectance_squared",
+                                    "material", "mirror_normal", "object_size", "colour_lost", "light_facing",
+                                    "surface_black", "object_black", "reflectance_scale", "reflectance_squared",
                                     "reflectance_complement", "reflectance_normalised", "reflectance_rounded",
                                     "albedo_swap", "material_swap"}
 

@@ -15,7 +15,11 @@ model images are
   at the vertex after a mirror bounce, a specular flag read one bounce
   late): :math:`R - m (D_3 - D_2)`, with m the pixels whose first surface is
   a mirror (there the paths of three segments are eye, mirror, surface,
-  light sample).
+  light sample);
+* only the last vertex's light kept (the radiance assigned at each vertex,
+  ``L = beta * direct`` for ``L +=``), the light seen directly counted (a
+  path that meets the light ends there): :math:`D_1 + (R - D_{d-1})` for
+  the assignment's depth d.
 
 Neither has a free parameter: a free weight k of the added part would fit
 any change of the indirect light (a path depth off by one is k = -1 %),
@@ -42,7 +46,7 @@ def _depth(basis, k: int) -> np.ndarray | None:
 
 def light_twice(fit: Fit, inputs: Inputs) -> list[Candidate]:
     """The direct light counted again, the light counted twice at every bounce, the direct light missing at the first
-    hit or after a mirror (the module docstring)."""
+    hit or after a mirror, only the last vertex's light kept (the module docstring)."""
     b = inputs.basis
     d1, d2 = _depth(b, 1), _depth(b, 2)
     if d1 is None or d2 is None:
@@ -59,6 +63,13 @@ def light_twice(fit: Fit, inputs: Inputs) -> list[Candidate]:
     out.append(Candidate("direct_missing", "direct light missing", "the direct light missing (no light sample at the "
                          "first surface the camera sees: it is lit only by light that has bounced)", fit.delta(change),
                          0, value={"counted": 0}, change=change))
+    last = _depth(b, b.max_depth - 1)
+    if last is not None and b.max_depth > 2:
+        change = d1 - last
+        out.append(Candidate("depth", "only the last vertex's light", "only the light of paths of the full depth kept: "
+                             "the radiance assigned, not added, at each vertex (L = beta * direct for L +=), so each "
+                             "path keeps the light sampled at its last vertex, and the light seen directly",
+                             fit.delta(change), 0, value={"kept": "last vertex"}, change=change))
     lost = _after_mirror(inputs, d2)
     if lost is not None:
         out.append(Candidate("direct_missing", "direct light missing after a mirror", "the direct light missing at "

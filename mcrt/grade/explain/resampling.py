@@ -19,6 +19,12 @@ pixel i shows the film from k W/N to (k + 1) W/N, k = floor((i + 1/2) N/W)
 (a library's centre convention) or floor(i N/W) (an index scaled); its model
 image samples the basis's finer image (:class:`mcrt.grade.explain.camera._Warp`)
 over that footprint, for N in :data:`LARGER` or W times :data:`RATIOS`.
+An image shifted after rendering by half a pixel (to "centre the pixels")
+with bilinear interpolation, as ``scipy.ndimage.shift(order=1)`` does, is
+moved and blurred at once: each pixel the mean of two (or four) of R's, the
+edge filled with black (scipy's default) or its nearest pixels; its words
+name the shift (a pixel offset), which a camera's offset alone (moved,
+not blurred) does not fit.
 """
 
 from __future__ import annotations
@@ -86,9 +92,30 @@ def resampling(fit: Fit, inputs: Inputs) -> list[Candidate]:
                              f"copied to the next {what} (a loop stepping by 2, or {what}s written twice)",
                              fit.model(dup), 0, value={"copied": f"{what}s", "method": "every other"},
                              change=dup - fit.R))
+    out.append(_shifted(fit))
     if inputs.basis is not None and getattr(inputs.basis, "fine", None) is not None:
         out.append(_nearest_from_larger(fit, inputs))
     return out
+
+
+#: The shifts (x, y) in pixels of an image moved after rendering (half a pixel along x, y or both, either way).
+HALF_SHIFTS = tuple((dx, dy) for dx in (-0.5, 0.0, 0.5) for dy in (-0.5, 0.0, 0.5) if dx or dy)
+
+
+def _shifted(fit: Fit) -> Candidate:
+    """The best of R shifted by :data:`HALF_SHIFTS` with bilinear interpolation, the edge black or the nearest pixels
+    (module docstring)."""
+    from scipy.ndimage import shift
+
+    chi, (dx, dy), mode, moved = min(((fit.model(m), d, mode, m) for d in HALF_SHIFTS for mode in ("constant", "nearest")
+                                      for m in (shift(fit.R, (d[1], d[0], 0.0), order=1, mode=mode),)),
+                                     key=lambda t: t[0])
+    edge = "black" if mode == "constant" else "with its nearest pixels"
+    return Candidate("pixel_offset", "image shifted after rendering", f"the image shifted by ({dx:+.2f}, {dy:+.2f}) "
+                     "pixel (x right, y down) after rendering, by bilinear interpolation (scipy.ndimage.shift with "
+                     f"order 1, or an image library's translate), its edge filled {edge}: moved and slightly blurred, "
+                     "as when the pixels are 'centred' after rendering", chi, 1,
+                     value={"dx": dx, "dy": dy, "method": "bilinear", "edge": mode}, change=moved - fit.R)
 
 
 def _nearest_from_larger(fit: Fit, inputs: Inputs) -> Candidate:

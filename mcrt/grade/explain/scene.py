@@ -48,6 +48,18 @@ def lagrange(x: np.ndarray, nodes: np.ndarray) -> np.ndarray:
     return L
 
 
+def fit_channel(fit: Fit, c: int, xs: np.ndarray, ys: np.ndarray, base: np.ndarray) -> tuple[float, np.ndarray]:
+    """The value in [0, 1] (a grid of 101, refined by a parabola) of the polynomial through the renders ``ys``
+    (n, H, W) of channel c at ``xs`` that fits best (pixel and tile chi^2), and its change of channel c."""
+    grid = np.linspace(0.0, 1.0, 101)
+    curves = np.tensordot(lagrange(grid, xs), ys, axes=(1, 0)) - base[None]  # (101, H, W): M - R
+    err = np.sum(np.minimum((fit.D[None, :, :, c] - curves) ** 2 * fit.w[None, :, :, c], CAP), axis=(1, 2))
+    ct = fit.blocks(np.where(fit.ok[None, :, :, c:c + 1], curves[..., None], 0.0))[..., 0] / fit.cnt[None, :, :, c]
+    err = err + np.sum(np.minimum((fit.Dt[None, :, :, c] - ct) ** 2 * fit.wt[None, :, :, c], CAP), axis=(1, 2))
+    value = float(refine(grid, err, int(np.argmin(err))))
+    return value, np.tensordot(lagrange(np.array([value]), xs), ys, axes=(1, 0))[0] - base
+
+
 def albedo(fit: Fit, inputs: Inputs) -> list[Candidate]:
     r"""Each surface's albedo, fitted per channel on a grid of 101 values in [0, 1] then refined by a parabola.
 
@@ -57,7 +69,6 @@ def albedo(fit: Fit, inputs: Inputs) -> list[Candidate]:
     cause of that (:mod:`.surface_black`).
     """
     b = inputs.basis
-    grid = np.linspace(0.0, 1.0, 101)
     out = []
     seen = _seen(inputs)
     for label, (nodes, imgs, scene_v) in b.albedo.items():
@@ -66,15 +77,8 @@ def albedo(fit: Fit, inputs: Inputs) -> list[Candidate]:
             xs = np.append(nodes, scene_v[c])
             ys = np.concatenate([imgs[:, :, :, c], b.base[None, :, :, c]]).astype(np.float64)
             keep = np.concatenate([np.abs(nodes - scene_v[c]) > 1e-3, [True]])
-            xs, ys = xs[keep], ys[keep]
-            L = lagrange(grid, xs)
-            curves = np.tensordot(L, ys, axes=(1, 0)) - b.base[None, :, :, c]  # (101, H, W): M - R
-            err = np.sum(np.minimum((fit.D[None, :, :, c] - curves) ** 2 * fit.w[None, :, :, c], CAP), axis=(1, 2))
-            ct = fit.blocks(np.where(fit.ok[None, :, :, c:c + 1], curves[..., None], 0.0))[..., 0] / fit.cnt[None, :, :, c]
-            err = err + np.sum(np.minimum((fit.Dt[None, :, :, c] - ct) ** 2 * fit.wt[None, :, :, c], CAP), axis=(1, 2))
-            i = int(np.argmin(err))
-            fitted.append(float(refine(grid, err, i)))
-            dm[..., c] = np.tensordot(lagrange(np.array([fitted[-1]]), xs), ys, axes=(1, 0))[0] - b.base[..., c]
+            value, dm[..., c] = fit_channel(fit, c, xs[keep], ys[keep], b.base[..., c])
+            fitted.append(value)
         kind = b.values[label][0]
         word = "albedo" if kind == "albedo" else "reflectance"
         hidden = seen is not None and label not in seen

@@ -12,8 +12,12 @@ scene with
 * **two objects' materials exchanged**: a mirror and a diffuse object, each
   with the other's material (the mirror sphere orange and diffuse, the
   tetrahedron a mirror);
-* **the walls' colours one wall off**: each wall with the albedo of the wall
-  after it, or of the one before, in the room's order.
+* **the walls' colours some walls off**: each wall with the albedo of the
+  wall k places after it in the room's order (k = 1 ... n - 1 for n walls;
+  k = 1 and n - 1 are one wall off);
+* **the walls' colours in reverse order**: wall i with the albedo of wall
+  k - i (mod n), for each k (the corner list reversed to wind the room, the
+  colours kept in their order).
 
 Every such scene is rendered with mcrt at the basis's spp and seed
 (:func:`mcrt.grade.explain.basis.basis_settings`), so that a variation minus
@@ -62,11 +66,15 @@ def variants(scene: Scene) -> list[tuple[str, tuple, Scene]]:
             mats = {m.name: d.material, d.name: m.material}
             objs = tuple(replace(o, material=mats.get(o.name, o.material)) for o in scene.objects)
             out.append(("material_swap", ("swap", m.name, d.name), replace(scene, objects=objs)))
-    walls = scene.room.walls
-    for step, word in ((1, "after"), (-1, "before")):
-        if len({w.albedo for w in walls}) > 1:
-            shifted = tuple(replace(w, albedo=walls[(i + step) % len(walls)].albedo) for i, w in enumerate(walls))
-            out.append(("albedo_swap", ("walls", word), replace(scene, room=replace(scene.room, walls=shifted))))
+    walls, n = scene.room.walls, len(scene.room.walls)
+    if len({w.albedo for w in walls}) > 1:
+        steps = [k if k <= n // 2 else k - n for k in range(1, n)]  # signed: -1 is the wall before
+        orders = [(("walls", "after", k), [(i + k) % n for i in range(n)]) for k in steps]
+        orders += [(("walls", "reversed", k), [(k - i) % n for i in range(n)]) for k in range(n)]
+        for what, order in orders:
+            recoloured = tuple(replace(w, albedo=walls[j].albedo) for w, j in zip(walls, order))
+            if recoloured != walls:
+                out.append(("albedo_swap", what, replace(scene, room=replace(scene.room, walls=recoloured))))
     return out
 
 
@@ -78,8 +86,16 @@ def _prepare(a, scene: Scene, render) -> list[tuple[str, tuple, np.ndarray]]:
 
 def _words(fam: str, what: tuple) -> str:
     if what[0] == "walls":
-        return (f"every wall with the colour of the wall {what[1]} it in the room's order: the walls' colour index one "
-                "place off (a loop's counter, or the walls built from the next corner)")
+        _, how, k = what
+        if how == "reversed":
+            return (f"the walls' colours in reverse order, wall number i (from 0) given the colour of wall {k} - i: "
+                    "the corner list reversed to wind the room, its colours kept in their order")
+        place = "after" if k > 0 else "before"
+        if abs(k) == 1:
+            return (f"every wall with the colour of the wall {place} it in the room's order: the walls' colour index "
+                    "one place off (a loop's counter, or the walls built from the next corner)")
+        return (f"every wall with the colour of the wall {abs(k)} places {place} it in the room's order: the walls' "
+                f"colour index {abs(k)} places off")
     _, a, b = what
     if fam == "material_swap":
         return (f"the materials of the {a} and the {b} exchanged (each object given the other's material index): "
@@ -99,8 +115,8 @@ def swap(fit: Fit, inputs: Inputs) -> list[Candidate]:
         change = img.astype(np.float64) - base
         chi = fit.delta(change)
         if fam not in best or chi < best[fam].chi2:
-            value = {"exchanged": list(what[1:])} if what[0] == "swap" else {"walls": what[1]}
-            best[fam] = Candidate(fam, " ".join(what), _words(fam, what), chi, 1, value=value, change=change)
+            value = {"exchanged": list(what[1:])} if what[0] == "swap" else {"walls": what[1], "k": what[2]}
+            best[fam] = Candidate(fam, " ".join(map(str, what)), _words(fam, what), chi, 1, value=value, change=change)
     return list(best.values())
 
 

@@ -1,0 +1,73 @@
+r"""Every wall given one colour: a loop that reads one wall's colour for all six, a default, or their mean.
+
+The six walls light one another, so the image of all six changed at once is
+not the sum of each one's change (:func:`~mcrt.grade.explain.scene.albedos`
+leaves those second-order terms out, and they are large when every wall
+changes). mcrt renders the room with every wall of albedo v for v in
+:data:`NODES`, at the basis's spp and seed; channel c of the image depends
+on channel c of the albedo only, so each channel's colour is fitted on the
+polynomial through those renders (:func:`~mcrt.grade.explain.scene.fit_channel`),
+three parameters in all. The words name the colour, and which wall's it is
+(or the walls' mean) where it is within :data:`SAME` of one.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from mcrt.grade.candidates import Candidate, Inputs
+from mcrt.grade.explain.fit import Fit
+from mcrt.grade.explain.scene import fit_channel
+from mcrt.grade.feedback import fmt_values as _fmt
+
+#: The albedos every wall is rendered with.
+NODES = (0.0, 0.25, 0.5, 0.75, 1.0)
+#: A fitted colour within this of a wall's (or the walls' mean), in every channel, is named as that one.
+SAME = 0.05
+
+
+def _prepare(a, scene, render) -> dict:
+    """The renders of the room with every wall of each albedo of :data:`NODES` (the module docstring)."""
+    from mcrt.grade.explain.basis import basis_settings
+
+    spp, seed = basis_settings(a)
+
+    def walls_of(v):
+        walls = tuple(replace(w, albedo=(v, v, v)) for w in scene.room.walls)
+        return replace(scene, room=replace(scene.room, walls=walls))
+
+    imgs = [render(walls_of(v), a.camera, a.grade_width, a.grade_height, a.max_depth, spp, seed).mean
+            for v in NODES]
+    return {"nodes": np.asarray(NODES), "images": np.stack(imgs).astype(np.float32)}
+
+
+def _which(colour: np.ndarray, walls: dict[str, tuple]) -> str:
+    """Whose colour ``colour`` is, in words: a wall's, the walls' mean, or none (the module docstring)."""
+    named = {f"{label}'s": np.asarray(c) for label, c in walls.items()}
+    named["the walls' mean"] = np.mean(list(walls.values()), axis=0)
+    close = [(float(np.abs(colour - c).max()), who) for who, c in named.items()]
+    gap, who = min(close)
+    return f", {who} colour" if gap <= SAME else ""
+
+
+def walls_one_colour(fit: Fit, inputs: Inputs) -> list[Candidate]:
+    """Every wall of one albedo, fitted per channel (the module docstring)."""
+    b = inputs.basis
+    r = b.extra.get(walls_one_colour.name)
+    walls = {label: v[1] for label, v in b.values.items() if isinstance(label, str) and label.startswith("wall ")}
+    if r is None or not walls:
+        return []
+    base = b.base.astype(np.float64)
+    xs, imgs = r["nodes"], r["images"].astype(np.float64)
+    colour, dm = np.zeros(3), np.zeros_like(base)
+    for c in range(3):
+        colour[c], dm[..., c] = fit_channel(fit, c, xs, imgs[..., c], base[..., c])
+    text = (f"every wall with the albedo {_fmt(colour)}{_which(colour, walls)}, where the scene gives the "
+            f"{len(walls)} walls their own colours (one colour read for all of them: a loop that reads one wall's, a "
+            "default, or their mean)")
+    return [Candidate("albedo", "every wall one colour", text, fit.delta(dm), 3, value=tuple(colour), change=dm)]
+
+
+walls_one_colour.name, walls_one_colour.prepare = "walls_one_colour", _prepare
