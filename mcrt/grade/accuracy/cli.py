@@ -16,7 +16,8 @@ CLASSES = {"scene": "cases", "outside": "outside", "programs": "programs", "fres
            "novel": "novel", "untold": "untold", "unmet": "unmet",
            "unheard": "unheard", "unsaid": "unsaid", "unasked": "unasked",
            "unsought": "unsought", "unguessed": "unguessed",
-           "unforeseen": "unforeseen", "unprompted": "unprompted"}
+           "unforeseen": "unforeseen", "unprompted": "unprompted",
+           "unbidden": "unbidden"}
 
 
 def register(sub) -> None:
@@ -42,8 +43,9 @@ def register(sub) -> None:
                    "tracers, scene input and output, written blind, mcrt.grade.accuracy.unsought), 'unguessed' (a "
                    "fifteenth, in tracers, scene input and output, written blind, mcrt.grade.accuracy.unguessed), "
                    "'unforeseen' (a sixteenth, in tracers, scene input and output, written blind, "
-                   "mcrt.grade.accuracy.unforeseen) or 'unprompted' (a seventeenth, in tracers, scene input and "
-                   "output, written blind, mcrt.grade.accuracy.unprompted) (default: scene)")
+                   "mcrt.grade.accuracy.unforeseen), 'unprompted' (a seventeenth, in tracers, scene input and "
+                   "output, written blind, mcrt.grade.accuracy.unprompted) or 'unbidden' (an eighteenth, in "
+                   "tracers, scene input and output, written blind, mcrt.grade.accuracy.unbidden) (default: scene)")
     p.add_argument("--held-out", choices=("all", "only", "none"), default="all",
                    help="grade all cases, only the held-out ones, or none of them (default: all)")
     p.add_argument("--out", default=None, help=f"report folder (default: {DEFAULT_OUT}, or {DEFAULT_OUT}/CLASS "
