@@ -339,6 +339,17 @@ _UNPROMPTED = (
     "fits; another of the film's buffers (its variance, its squares) written for the mean; several surfaces' colours "
     "a candidate only where one moves by a tenth. Both rows here are of rules that saw the class.")
 
+_UNBIDDEN = (
+    "The wrong renders are an eighteenth class of mistakes in students' tracers, their scene input and their output "
+    "that no other class or the catalogue tried (mcrt.grade.accuracy.unbidden), written blind to the grader's rules "
+    "and not graded by their author: post-processing, writing the file, materials, geometry, camera and light models, "
+    "the integrator, and samples and passes; from Mitsuba renders of edited scenes, Mitsuba renders combined, or "
+    "correct renders written as students' programs write files. The correct ones come from Mitsuba and mcrt in ways "
+    "no other class used. *Named right*, *confidently wrong*, *partial or none*: as for the other classes. "
+    "**Held-out** cases (marked H) were fixed by the rule stated in the module (every other case of each category) "
+    "before any case was graded. Its author reported counts only (no case named or described); the grader's rules "
+    "were frozen at commit c534d6e before any case was read or graded, and the whole class was then graded once, on "
+    "them.")
 
 #: Each class's title, after "Grading accuracy on a class of realistic hand-ins".
 TITLES = {
@@ -356,7 +367,8 @@ TITLES = {
     "unsought": ": a fourteenth class of mistakes, written blind",
     "unguessed": ": a fifteenth class of mistakes, written blind",
     "unforeseen": ": a sixteenth class of mistakes, written blind",
-    "unprompted": ": a seventeenth class of mistakes, written blind"}
+    "unprompted": ": a seventeenth class of mistakes, written blind",
+    "unbidden": ": an eighteenth class of mistakes, written blind"}
 
 #: The scene class's introduction (mcrt.grade.accuracy.cases).
 _SCENE = (
@@ -372,14 +384,14 @@ _SCENE = (
 INTROS = {"outside": _OUTSIDE, "programs": _PROGRAMS, "fresh": _FRESH, "blind": _BLIND, "unseen": _UNSEEN,
           "untried": _UNTRIED, "novel": _NOVEL, "untold": _UNTOLD, "unmet": _UNMET, "unheard": _UNHEARD,
           "unsaid": _UNSAID, "unasked": _UNASKED, "unsought": _UNSOUGHT, "unguessed": _UNGUESSED,
-          "unforeseen": _UNFORESEEN, "unprompted": _UNPROMPTED}
+          "unforeseen": _UNFORESEEN, "unprompted": _UNPROMPTED, "unbidden": _UNBIDDEN}
 
 
 def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta: dict, gradescope: list[dict],
                  klass: str = "scene") -> Path:
     """Write index.md and data.json under ``out``; returns the Markdown's path. ``klass`` is the class graded:
     'scene' (mcrt.grade.accuracy.cases) or another name of :data:`mcrt.grade.accuracy.cli.CLASSES` ('outside',
-    'programs', 'fresh', ..., 'unforeseen', 'unprompted': the module of that name under mcrt.grade.accuracy); an empty half
+    'programs', 'fresh', ..., 'unprompted', 'unbidden': the module of that name under mcrt.grade.accuracy); an empty half
     (tuned on or held out) is left out of the rates table."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
