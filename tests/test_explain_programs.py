@@ -567,3 +567,30 @@ def test_a_mirror_handled_for_camera_rays_only_is_named(ctx):
     mine = [c for c in res.details["explanation"]["candidates"] if c["mutant"] == "mirror computed wrongly"]
     assert mine and mine[0]["value"] == {"mirror": "camera_only", "at": "every"} and mine[0]["explained"] >= 0.9, mine
     assert "the mirror handled for camera rays only" in mine[0]["description"] and res.score < res.max_score
+
+
+def test_a_box_filter_of_two_pixels_is_named_beside_the_half_pixel_shift_it_equals(ctx):
+    """A Mitsuba render (seed 109) through scipy.ndimage.uniform_filter with a size of (2, 2, 1): each pixel the
+    mean of a 2 x 2 block, which is the image shifted by half a pixel with bilinear interpolation. The words name both
+    (a filter, and the shift), and the image loses points."""
+    from scipy.ndimage import uniform_filter
+
+    res = grade_image("box2", ctx, [uniform_filter(_mitsuba(109), size=(2, 2, 1))], spp=1024)
+    said = _claimed(res)[1]
+    assert "a box filter of 2 x 2 pixels" in said, said
+    assert {"blur", "pixel_offset"} <= set(named_causes(res)[0]) and res.score < res.max_score
+
+
+def test_the_direct_light_missing_on_one_object_is_named_on_it(ctx):
+    """Mitsuba's render (seed 110) less its direct light (max depth 2 minus max depth 1, same seed) on the
+    tetrahedron's pixels (the context's surface labels): the tetrahedron shaded by a branch that never samples the
+    light. The words name the direct light missing on the tetrahedron (claimed, or as one reading of two), and the
+    image loses points."""
+    full, d2, d1 = _mitsuba(110), _mitsuba(110, max_depth=2), _mitsuba(110, max_depth=1)
+    labels = ctx.labels["near"]
+    tetra = labels == next(i for i, n in enumerate(ctx.label_names) if n.startswith("the tetrahedron"))
+    S = full - np.where(tetra[..., None], d2 - d1, 0.0)
+    res = grade_image("tetra_no_direct", ctx, [S], spp=1024)
+    said = _claimed(res)[1]
+    assert "the direct light missing on the tetrahedron" in said, said
+    assert res.score < res.max_score

@@ -267,7 +267,9 @@ def _explanation_causes(expl: dict) -> list[str]:
                             ("path_weight", "Russian roulette", "roulette"),
                             ("object_missing", "rays passing through it", "material"),  # a mirror (since unsaid)
                             # a constant factor from a count that is not the samples' (since unguessed)
-                            ("scale", "another count than the samples", "sample_count")):
+                            ("scale", "another count than the samples", "sample_count"),
+                            # a half-pixel shift by interpolation is a 2-pixel box filter (since unbidden)
+                            ("pixel_offset", "a box filter of", "blur")):
         if fam == f and words in expl["sentence"]:
             causes.append(cause)
     for alt in (expl.get("adequacy") or {}).get("alternatives", []):  # named beside it as fitting as well

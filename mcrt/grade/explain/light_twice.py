@@ -16,6 +16,9 @@ model images are
   late): :math:`R - m (D_3 - D_2)`, with m the pixels whose first surface is
   a mirror (there the paths of three segments are eye, mirror, surface,
   light sample);
+* the direct light missing on one surface or object alone (its branch of
+  the shading code never samples the light): :math:`R - m_o (D_2 - D_1)`,
+  m_o the pixels whose first surface is o, the best o;
 * only the last vertex's light kept (the radiance assigned at each vertex,
   ``L = beta * direct`` for ``L +=``), the light seen directly counted (a
   path that meets the light ends there): :math:`D_1 + (R - D_{d-1})` for
@@ -70,6 +73,7 @@ def light_twice(fit: Fit, inputs: Inputs) -> list[Candidate]:
                              "the radiance assigned, not added, at each vertex (L = beta * direct for L +=), so each "
                              "path keeps the light sampled at its last vertex, and the light seen directly",
                              fit.delta(change), 0, value={"kept": "last vertex"}, change=change))
+    out += _missing_on_one(fit, inputs, d2 - d1)
     lost = _after_mirror(inputs, d2)
     if lost is not None:
         out.append(Candidate("direct_missing", "direct light missing after a mirror", "the direct light missing at "
@@ -77,6 +81,28 @@ def light_twice(fit: Fit, inputs: Inputs) -> list[Candidate]:
                              "specular flag read one bounce late), the room in the mirror lit only by light that has "
                              "bounced", fit.delta(-lost), 0, value={"counted": 0, "after": "mirror"}, change=-lost))
     return out
+
+
+def _missing_on_one(fit: Fit, inputs: Inputs, direct: np.ndarray) -> list[Candidate]:
+    """The direct light missing on the one surface or object (of the labels, the light and the mirror aside) where
+    that fits best (the module docstring); none without labels."""
+    if inputs.labels is None:
+        return []
+    best = None
+    for i, name in enumerate(inputs.label_names):
+        on = inputs.labels == i
+        if name in ("the light", "nothing") or "mirror" in name or not on.any():
+            continue
+        change = -np.where(on[..., None], direct, 0.0)
+        chi = fit.delta(change)
+        if best is None or chi < best[0]:
+            best = (chi, name, change)
+    if best is None:
+        return []
+    chi, name, change = best
+    return [Candidate("direct_missing", "direct light missing on one surface", f"the direct light missing on {name} "
+                      "(no light sample there: the branch of the code that shades it never samples the light), lit "
+                      "only by light that has bounced", chi, 1, value={"counted": 0, "on": name}, change=change)]
 
 
 def _after_mirror(inputs: Inputs, d2: np.ndarray) -> np.ndarray | None:

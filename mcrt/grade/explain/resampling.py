@@ -24,7 +24,8 @@ with bilinear interpolation, as ``scipy.ndimage.shift(order=1)`` does, is
 moved and blurred at once: each pixel the mean of two (or four) of R's, the
 edge filled with black (scipy's default) or its nearest pixels; its words
 name the shift (a pixel offset), which a camera's offset alone (moved,
-not blurred) does not fit.
+not blurred) does not fit, and a box filter of 2 pixels (each pixel the
+mean of itself and its neighbour on one side), which is the same image.
 """
 
 from __future__ import annotations
@@ -111,10 +112,13 @@ def _shifted(fit: Fit) -> Candidate:
                                       for m in (shift(fit.R, (d[1], d[0], 0.0), order=1, mode=mode),)),
                                      key=lambda t: t[0])
     edge = "black" if mode == "constant" else "with its nearest pixels"
+    box = f"{1 + (dx != 0)} x {1 + (dy != 0)}"
     return Candidate("pixel_offset", "image shifted after rendering", f"the image shifted by ({dx:+.2f}, {dy:+.2f}) "
                      "pixel (x right, y down) after rendering, by bilinear interpolation (scipy.ndimage.shift with "
                      f"order 1, or an image library's translate), its edge filled {edge}: moved and slightly blurred, "
-                     "as when the pixels are 'centred' after rendering", chi, 1,
+                     "as when the pixels are 'centred' after rendering; or, the same image, a box filter of "
+                     f"{box} pixels (scipy.ndimage.uniform_filter with a size of 2), each pixel the mean of itself and "
+                     "its neighbours on one side", chi, 1,
                      value={"dx": dx, "dy": dy, "method": "bilinear", "edge": mode}, change=moved - fit.R)
 
 
