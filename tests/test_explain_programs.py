@@ -592,5 +592,5 @@ def test_the_direct_light_missing_on_one_object_is_named_on_it(ctx):
     S = full - np.where(tetra[..., None], d2 - d1, 0.0)
     res = grade_image("tetra_no_direct", ctx, [S], spp=1024)
     said = _claimed(res)[1]
-    assert "the direct light missing on the tetrahedron" in said, said
+    assert "lit as by light that has bounced alone: the direct light missing on it" in said, said
     assert res.score < res.max_score

@@ -269,7 +269,9 @@ def _explanation_causes(expl: dict) -> list[str]:
                             # a constant factor from a count that is not the samples' (since unguessed)
                             ("scale", "another count than the samples", "sample_count"),
                             # a half-pixel shift by interpolation is a 2-pixel box filter (since unbidden)
-                            ("pixel_offset", "a box filter of", "blur")):
+                            ("pixel_offset", "a box filter of", "blur"),
+                            # one object's direct light missing, or its material (since unbidden)
+                            ("direct_missing", "or its material other than the scene's", "material")):
         if fam == f and words in expl["sentence"]:
             causes.append(cause)
     for alt in (expl.get("adequacy") or {}).get("alternatives", []):  # named beside it as fitting as well

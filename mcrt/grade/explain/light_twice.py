@@ -18,7 +18,8 @@ model images are
   light sample);
 * the direct light missing on one surface or object alone (its branch of
   the shading code never samples the light): :math:`R - m_o (D_2 - D_1)`,
-  m_o the pixels whose first surface is o, the best o;
+  m_o the pixels whose first surface is o, the best o (a material other
+  than the scene's on o looks much the same, and the words name it too);
 * only the last vertex's light kept (the radiance assigned at each vertex,
   ``L = beta * direct`` for ``L +=``), the light seen directly counted (a
   path that meets the light ends there): :math:`D_1 + (R - D_{d-1})` for
@@ -100,9 +101,13 @@ def _missing_on_one(fit: Fit, inputs: Inputs, direct: np.ndarray) -> list[Candid
     if best is None:
         return []
     chi, name, change = best
-    return [Candidate("direct_missing", "direct light missing on one surface", f"the direct light missing on {name} "
-                      "(no light sample there: the branch of the code that shades it never samples the light), lit "
-                      "only by light that has bounced", chi, 1, value={"counted": 0, "on": name}, change=change)]
+    # A material other than the scene's (glossy, metallic) sends the light's direct light elsewhere too: on one
+    # object's few pixels the image rarely tells the two apart, and the words name both.
+    return [Candidate("direct_missing", "direct light missing on one surface", f"{name} lit as by light that has "
+                      "bounced alone: the direct light missing on it (no light sample there: the branch of the code "
+                      "that shades it never samples the light), or its material other than the scene's, which "
+                      "reflects the light's direct light elsewhere", chi, 1, value={"counted": 0, "on": name},
+                      change=change)]
 
 
 def _after_mirror(inputs: Inputs, d2: np.ndarray) -> np.ndarray | None:
