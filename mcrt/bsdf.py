@@ -24,7 +24,7 @@ import math
 
 import drjit as dr
 
-from mcrt.minmax import fmax, sqrt0
+from mcrt.minmax import fmax, fmin, sqrt0
 from mcrt.options import BOUNCES, LAMBERTIAN_SAMPLERS, MIRRORS
 from mcrt.sampling import (
     INV_PI,
@@ -118,7 +118,7 @@ def mistaken_bounce(Vector3f, n, u1, u2, weight, how: str):
         w = weight * dr.dot(d, n) if how == "cosine_squared" else type(weight)(1.0) if how == "no_albedo" else weight
         if how.startswith("half_azimuth"):
             b = _second_tangent(Vector3f, n, how)
-            d = dr.fma(-2.0 * dr.minimum(dr.dot(d, b), 0.0), b, d)  # the other half mirrored onto this one
+            d = dr.fma(-2.0 * fmin(dr.dot(d, b), 0.0), b, d)  # the other half mirrored onto this one
     below = dr.dot(d, n) <= 0.0
     return dr.select(below, dr.fma(-2.0 * dr.dot(d, n), n, d), d), dr.select(below, 0.0, w)
 
