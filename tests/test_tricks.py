@@ -144,9 +144,13 @@ def test_a_bounce_on_the_whole_sphere_is_half_a_bounce_by_the_physics(scene):
     assert np.abs(z).max() > z_max
 
 
-def _sphere_seen(scene, res: int) -> np.ndarray:
-    """(res, res, 1): pixels whose square any camera ray through its corners or centre shows the mirror sphere, and
-    their neighbours (NumPy's ray-sphere test; no tracer)."""
+#: Sub-pixel points of a pixel: its corners and centre.
+_CORNERS = ((0, 0), (0, 1), (1, 0), (1, 1), (0.5, 0.5))
+
+
+def _sphere_seen(scene, res: int, *, points=_CORNERS, dilate: int = 1) -> np.ndarray:
+    """(res, res, 1): pixels where a camera ray through any of ``points`` (sub-pixel (u, v)) meets the mirror sphere
+    ahead, grown by ``dilate`` pixels (NumPy's ray-sphere test; no tracer)."""
     from scipy.ndimage import binary_dilation
 
     from mcrt.camera import primary_directions
@@ -154,14 +158,14 @@ def _sphere_seen(scene, res: int) -> np.ndarray:
 
     cam = scene.camera("near")
     sph = next(o for o in scene.objects if isinstance(o.material, Mirror))
+    oc = np.asarray(cam.eye, float) - np.asarray(sph.center, float)
     j, i = np.mgrid[0:res, 0:res]
     hit = np.zeros((res, res), bool)
-    for u, v in ((0, 0), (0, 1), (1, 0), (1, 1), (0.5, 0.5)):
+    for u, v in points:
         d = primary_directions(cam, res, res, i, j, np.full(i.shape, u), np.full(i.shape, v))
-        oc = np.asarray(cam.eye, float) - np.asarray(sph.center, float)
         b = np.einsum("ijk,k->ij", d, oc)
-        hit |= b * b - (oc @ oc - sph.radius**2) >= 0.0
-    return binary_dilation(hit, iterations=1)[..., None]
+        hit |= (b * b - (oc @ oc - sph.radius**2) >= 0.0) & (b < 0.0)
+    return (binary_dilation(hit, iterations=dilate) if dilate else hit)[..., None]
 
 
 def test_a_mirror_for_camera_rays_only_is_black_to_every_other_ray(scene):

@@ -55,11 +55,13 @@ def _scaled(o, f: float) -> dict:
 
 
 def basis_renderer(a, render):
-    """A function of a scene: its mcrt render at the basis's spp and seed, the assigned camera, grade size."""
+    """A function of a scene (and the renderer's tricks, a mistake of the estimator): its mcrt render at the basis's
+    spp and seed, the assigned camera, grade size."""
     spp, seed = basis_settings(a)
 
-    def img(s: Scene) -> np.ndarray:
-        return render(s, a.camera, a.grade_width, a.grade_height, a.max_depth, spp, seed).mean.astype(np.float32)
+    def img(s: Scene, **tricks) -> np.ndarray:
+        return render(s, a.camera, a.grade_width, a.grade_height, a.max_depth, spp, seed,
+                      **tricks).mean.astype(np.float32)
 
     return img
 

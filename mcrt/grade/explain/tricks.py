@@ -6,21 +6,15 @@ from __future__ import annotations
 import numpy as np
 
 from mcrt.grade.explain.fit import Fit
+from mcrt.grade.explain.objects import basis_renderer
 
 
 def rendered_changes(a, scene, render, variants: list[tuple[object, dict]]) -> list[tuple[object, np.ndarray]]:
     """(key, render with the tricks minus the render without) for each (key, tricks) of ``variants``, at the basis's
     spp and seed (common random numbers)."""
-    from mcrt.grade.explain.basis import basis_settings
-
-    spp, seed = basis_settings(a)
-
-    def img(**tricks):
-        return render(scene, a.camera, a.grade_width, a.grade_height, a.max_depth, spp, seed,
-                      **tricks).mean.astype(np.float64)
-
-    base = img()
-    return [(key, (img(**tricks) - base).astype(np.float32)) for key, tricks in variants]
+    img = basis_renderer(a, render)
+    base = img(scene)
+    return [(key, img(scene, **tricks) - base) for key, tricks in variants]
 
 
 def best_change(fit: Fit, changes: list[tuple[object, np.ndarray]]) -> tuple[float, object, np.ndarray] | None:

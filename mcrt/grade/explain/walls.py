@@ -19,6 +19,7 @@ import numpy as np
 
 from mcrt.grade.candidates import Candidate, Inputs
 from mcrt.grade.explain.fit import Fit
+from mcrt.grade.explain.objects import basis_renderer
 from mcrt.grade.explain.scene import fit_channel
 from mcrt.grade.feedback import fmt_values as _fmt
 
@@ -30,17 +31,13 @@ SAME = 0.05
 
 def _prepare(a, scene, render) -> dict:
     """The renders of the room with every wall of each albedo of :data:`NODES` (the module docstring)."""
-    from mcrt.grade.explain.basis import basis_settings
-
-    spp, seed = basis_settings(a)
+    img = basis_renderer(a, render)
 
     def walls_of(v):
         walls = tuple(replace(w, albedo=(v, v, v)) for w in scene.room.walls)
         return replace(scene, room=replace(scene.room, walls=walls))
 
-    imgs = [render(walls_of(v), a.camera, a.grade_width, a.grade_height, a.max_depth, spp, seed).mean
-            for v in NODES]
-    return {"nodes": np.asarray(NODES), "images": np.stack(imgs).astype(np.float32)}
+    return {"nodes": np.asarray(NODES), "images": np.stack([img(walls_of(v)) for v in NODES])}
 
 
 def _which(colour: np.ndarray, walls: dict[str, tuple]) -> str:
