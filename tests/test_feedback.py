@@ -10,6 +10,7 @@ the production ones.
 
 from __future__ import annotations
 
+import math
 from dataclasses import replace
 
 import numpy as np
@@ -612,6 +613,50 @@ def test_a_field_of_view_like_the_other_cameras_is_not_called_that_camera(ctx):
     assert "field of view" in out and res.score < res.max_score
 
 
+def test_an_image_plane_of_twice_the_width_is_named(ctx):
+    """A Mitsuba render (seed 99, 1024 spp) of the scene whose camera's tan(fov / 2) is twice the scene's (the image
+    plane's full width taken for its half: 127 degrees for 90): beyond the reach of the fitted field of view's warp,
+    it is claimed as the field of view from the image plane's width, in those words."""
+    s = load_scene()
+    c = s.cameras["near"]
+    deg = math.degrees(2 * math.atan(2 * math.tan(math.radians(c.fov_x_deg) / 2)))
+    res = grade_image("plane", ctx, [_mitsuba(replace(s, cameras={**s.cameras, "near": replace(c, fov_x_deg=deg)}),
+                                              99)], spp=1024)
+    ex = res.details["explanation"]
+    assert ex["verdict"] == "claimed" and ex["family"] == "fov" and "full width" in ex["sentence"], ex["sentence"]
+    assert "camera_fov" in named_causes(res)[0] and res.score < res.max_score
+
+
+def _emitting(d: dict, radiance) -> dict:
+    """The Mitsuba scene dict ``d`` with every diffuse surface emitting ``radiance(albedo)`` (None: not that one)
+    from its front, built here from the scene's surfaces (not by the family's own scene builder)."""
+    from mcrt.mitsuba_scene import _bsdf_dict, _mesh
+
+    for sf in load_scene().surfaces():
+        e = radiance(sf.name, sf.material.albedo) if isinstance(sf.material, Lambertian) else None
+        if e is not None:
+            d = dict(d, **{sf.name: _mesh(sf, _bsdf_dict(sf.material), {
+                "type": "area", "radiance": {"type": "rgb", "value": [float(x) for x in e]}})})
+    return d
+
+
+@pytest.mark.parametrize("case, seed, radiance, family, words, cause", [
+    ("ambient", 101, lambda name, a: [0.05 * x for x in a], "ambient", "every diffuse surface emitting 0.05 times its "
+     "own colour", "ambient"),
+    ("floor_glows", 102, lambda name, a: (0.3, 0.2, 0.1) if name == "floor" else None, "object_emits",
+     "the floor emitting light", "object_emits"),
+])
+def test_surfaces_emitting_are_named(ctx, case, seed, radiance, family, words, cause):
+    """Mitsuba renders (1024 spp) of the scene with an ambient term (every diffuse surface emitting 0.05 times its
+    albedo) and with the floor emitting (0.3, 0.2, 0.1): each is claimed, in those words."""
+    img = _render_spec(Spec("t", None, spp=1024, mitsuba_edit=lambda d: _emitting(d, radiance)), load_scene(),
+                       width=RES, height=RES, max_depth=8, seed=seed).mean
+    res = grade_image(case, ctx, [img], spp=1024)
+    ex = res.details["explanation"]
+    assert ex["verdict"] == "claimed" and ex["family"] == family and words in ex["sentence"], ex["sentence"]
+    assert named_causes(res)[0] == [cause] and res.score < res.max_score
+
+
 def test_rows_written_one_place_up_are_named_an_index_off_by_one(ctx):
     """A Mitsuba render (seed 55, 1024 spp) with every row written one place up (the first at the bottom): the claim
     is the image shifted by a whole pixel, worded as an index off by one, which names the row stride."""
@@ -939,15 +984,19 @@ def _albedos(s, f):
     ("walls_one_off", 83, "albedo_swap", "every wall with the colour of the wall before it", "albedo"),
     ("absorption", 84, "reflectance_complement", "reflectance 1 - albedo", "albedo"),
     ("normalised", 85, "reflectance_normalised", "albedo divided by its length", "albedo"),
+    ("gamma_encoded", 97, "reflectance_gamma_encoded", "albedo gamma-encoded", "albedo"),
+    ("gamma_decoded", 98, "reflectance_gamma_decoded", "albedo gamma-decoded", "albedo"),
 ])
 def test_colours_given_to_the_wrong_surfaces_are_named(ctx, case, seed, family, words, cause):
     """Mitsuba renders (1024 spp) of the scene with walls AB's and DE's colours exchanged, the sphere's and the
     tetrahedron's materials exchanged, every wall given the colour of the wall before it (edited here, not by the
-    family's own scene builder), every albedo its complement, and every albedo divided by its length: each is
-    claimed, in those words, as a major mistake."""
+    family's own scene builder), every albedo its complement, every albedo divided by its length, and every albedo
+    through a gamma of 2.2 either way: each is claimed, in those words, as a major mistake."""
     edit = {"walls_exchanged": _walls_exchanged, "materials_exchanged": _materials_exchanged,
             "walls_one_off": _walls_one_off, "absorption": lambda s: _albedos(s, lambda v: 1.0 - v),
-            "normalised": lambda s: _albedos(s, lambda v: v / np.linalg.norm(v))}[case]
+            "normalised": lambda s: _albedos(s, lambda v: v / np.linalg.norm(v)),
+            "gamma_encoded": lambda s: _albedos(s, lambda v: v ** (1 / 2.2)),
+            "gamma_decoded": lambda s: _albedos(s, lambda v: v ** 2.2)}[case]
     res = grade_image(case, ctx, [_mitsuba(edit(load_scene()), seed)], spp=1024)
     ex = res.details["explanation"]
     assert ex["verdict"] == "claimed" and ex["family"] == family and words in ex["sentence"], ex["sentence"]

@@ -386,19 +386,26 @@ class Encoding:
     message: str
 
 
+#: A decoding is the file's encoding only where it leaves at most this share of the linear reading's spread: decoding
+#: an encoded render leaves its noise alone (a tenth or less of the spread at 16 spp or more), while every albedo
+#: brightened by a gamma, which brightens the dark surfaces most as an encoding does, keeps about half of it.
+DECODED_SPREAD = 0.25
+
+
 def detect_encoding(img: np.ndarray, ref: np.ndarray, mask: np.ndarray, fmt: str, tile: int) -> Encoding:
     """Linear, or gamma-encoded data given as linear? (HDR files; display images: :func:`detect_png_curve`.)
 
     For each hypothesis the image is decoded and its tile luminances compared
     with the reference's in log space; the spread (median absolute deviation
     of the log ratios) is small for the right decoding, whatever the
-    exposure. Another decoding wins only if it halves the spread and brings
-    it below 0.15 (15 %).
+    exposure. Another decoding wins only if it cuts the spread to
+    :data:`DECODED_SPREAD` of the linear reading's and brings it below 0.15
+    (15 %).
     """
     spreads = {k: _spread(_log_ratios(ENCODINGS[k][0](img), ref, mask, tile)) for k in ENCODINGS}
     best = min(spreads, key=spreads.get)
     lin = spreads["linear"]
-    if best != "linear" and spreads[best] < 0.5 * lin and spreads[best] < 0.15:
+    if best != "linear" and spreads[best] < DECODED_SPREAD * lin and spreads[best] < 0.15:
         msg = (f"the values look {ENCODINGS[best][1]}: decoded, they follow the reference's brightness "
                f"(spread {100 * spreads[best]:.0f} % instead of {100 * lin:.0f} %); HDR files (EXR, PFM, HDR) must "
                "hold linear radiance: write the values before any gamma or sRGB encoding")

@@ -74,6 +74,10 @@ CAUSE_OF: dict[str, tuple[str, ...]] = {
     # Values stored at the wrong places (added after unsaid was graded): rows (or columns) out of order, a pool's
     # finishing order; a row's or the image's channels one after another (the words name the channels' order).
     "lines_order": ("row_stride",), "layout": ("channels",), "reflectance_rounded": ("albedo",),
+    # Added after the unbidden class was graded, with it in view: every albedo through a gamma of 2.2.
+    "reflectance_gamma_encoded": ("albedo",), "reflectance_gamma_decoded": ("albedo",),
+    # Surfaces emitting (mcrt.grade.explain.emission; added after unbidden was graded): an ambient term, one surface.
+    "ambient": ("ambient",), "object_emits": ("object_emits",),
     # Mistakes of students' programs (mcrt.grade.accuracy.programs): a colour matrix that loses colour (grey, a
     # channel zeroed) and one that mixes the channels otherwise, light counted twice, the light facing the wrong
     # way, black pixels.
@@ -338,6 +342,8 @@ def named_causes(res) -> tuple[list[str], str]:
         said.append(noise.output.split(";")[0])
     elif noise is not None and noise.status == "failed" and any(w in noise.output for w in ("blur", "denois", "filter")):
         causes.append("blur")
+        if "resampled" in noise.output:  # the words name a resampling beside the filter (since unbidden)
+            causes.append("resampling")
         said.append(noise.output.split(";")[0])
     elif noise is not None and noise.status == "failed" and "noisier" in noise.output:
         causes.append("spp_claim")

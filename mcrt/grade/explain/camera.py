@@ -290,3 +290,42 @@ def camera(fit: Fit, inputs: Inputs) -> list[Candidate]:
 
 
 camera.name = "camera"
+
+
+#: The image plane's full width 2 tan(fov / 2) taken for its half-width: the field of view's tangent doubled, beyond
+#: what the warp of the fine image reaches (narrower views it reaches; at 90 degrees the angle not halved is 180).
+PLANE_FACTOR = 2.0
+#: Fields of view wider than this (degrees) are not rendered: no pinhole reaches 180.
+WIDEST = 170.0
+
+
+def _prepare_plane(a, scene, render) -> tuple[float, np.ndarray] | None:
+    """(the field of view of :data:`PLANE_FACTOR`, its render at the basis's spp and seed), or None past
+    :data:`WIDEST`."""
+    from dataclasses import replace
+
+    from mcrt.grade.explain.objects import basis_renderer
+
+    c0 = scene.cameras[a.camera]
+    deg = math.degrees(2 * math.atan(PLANE_FACTOR * math.tan(math.radians(c0.fov_x_deg) / 2)))
+    if deg > WIDEST:
+        return None
+    cam = replace(c0, fov_x_deg=deg)
+    return deg, basis_renderer(a, render)(replace(scene, cameras={**scene.cameras, a.camera: cam}))
+
+
+def plane_width(fit: Fit, inputs: Inputs) -> list[Candidate]:
+    """The camera's field of view from the image plane's full width taken for its half-width, rendered: no free
+    parameter."""
+    b = inputs.basis
+    r = b.extra.get(plane_width.name)
+    if r is None:
+        return []
+    deg, im = r
+    change = im.astype(np.float64) - b.base.astype(np.float64)
+    text = (f"the camera's field of view {deg:.1f} degrees where the scene says {_num(b.fov_deg)}: the image plane's "
+            "full width 2 tan(fov / 2) taken for its half-width")
+    return [Candidate("fov", "image plane's full width", text, fit.delta(change), 0, value=deg, change=change)]
+
+
+plane_width.name, plane_width.prepare = "plane_width", _prepare_plane

@@ -6,10 +6,11 @@ from mcrt.grade.explain.basis import Basis, prepare_basis
 from mcrt.grade.explain.bloom import bloom
 from mcrt.grade.explain.bounce import bounce
 from mcrt.grade.explain.buffers import wrong_buffer
-from mcrt.grade.explain.camera import camera
+from mcrt.grade.explain.camera import camera, plane_width
 from mcrt.grade.explain.catalogue import catalogue
 from mcrt.grade.explain.colour import colour
 from mcrt.grade.explain.curves import curves
+from mcrt.grade.explain.emission import emission
 from mcrt.grade.explain.falloff import falloff
 from mcrt.grade.explain.layout import layout
 from mcrt.grade.explain.light_facing import light_facing
@@ -29,17 +30,18 @@ from mcrt.grade.explain.tonecurve import tone_curve
 from mcrt.grade.explain.walls import walls_one_colour
 
 #: Every family the engine fits, in this order (ties keep it). The scene file's parameters (and the colours mixed by a
-#: matrix, several surfaces' colours at once, every wall one colour, a surface of the room black) and the catalogue;
+#: matrix, several surfaces' colours at once, every wall one colour, a surface of the room black, the camera and its
+#: image plane's width taken wrongly) and the catalogue;
 #: then what a student's program gets wrong beyond the scene file (a tone curve, each sample clamped, a fall-off,
 #: resampling, bloom, an object's material or size, values stored at the wrong places, colours or materials given to
 #: the wrong surfaces, every diffuse reflectance off by one factor, squared or its complement, light counted twice, a
 #: path's weight off from a bounce on, the diffuse bounce drawn or weighted wrongly, the mirror's reflection computed
-#: wrongly, a light sample's weight, the light facing the wrong way, black pixels, another of the film's buffers
-#: written).
-FAMILIES = (scale, colour, curves, albedo, albedos, walls_one_colour, surface_black, rendered, camera, catalogue,
-            tone_curve, sample_clamp, falloff, resampling, layout, bloom, material, object_size, swap,
+#: wrongly, a light sample's weight, the light facing the wrong way, surfaces emitting, black pixels, another of the
+#: film's buffers written).
+FAMILIES = (scale, colour, curves, albedo, albedos, walls_one_colour, surface_black, rendered, camera, plane_width,
+            catalogue, tone_curve, sample_clamp, falloff, resampling, layout, bloom, material, object_size, swap,
             reflectance_scale, reflectance_remapped, light_twice, path_weight, bounce, mirror, light_sampling,
-            light_facing, bad_pixels, wrong_buffer)
+            light_facing, emission, bad_pixels, wrong_buffer)
 
 #: The families that are mistakes of the camera (what the misregistration test of mcrt.grade.structure also sees).
 CAMERA_FAMILIES = frozenset({"fov", "aspect", "pixel_offset", "rotation", "eye", "camera_model"})
@@ -49,7 +51,8 @@ MAJOR_FAMILIES = CAMERA_FAMILIES | {"object_missing", "object_moved", "light_pos
                                     "material", "mirror_normal", "object_size", "colour_lost", "light_facing",
                                     "surface_black", "object_black", "reflectance_scale", "reflectance_squared",
                                     "reflectance_complement", "reflectance_normalised", "reflectance_rounded",
-                                    "albedo_swap", "material_swap"}
+                                    "reflectance_gamma_encoded", "reflectance_gamma_decoded",
+                                    "albedo_swap", "material_swap", "ambient", "object_emits"}
 
 
 def prepare(a, scene, render) -> Basis:

@@ -25,8 +25,10 @@ parameter: a power fitted freely would mimic any small darkening of the room
 colours for what a surface absorbs (weighing a bounce by 1 - albedo) renders
 every Lambertian albedo as its complement; one that normalises a colour as
 it would a direction divides each albedo by its length; a parser that rounds
-what it reads keeps one decimal of each. The third to fifth families are
-those renders, with no free parameter either.
+what it reads keeps one decimal of each; a loader that takes the linear
+colours for display values puts each through a gamma of 2.2, one way or the
+other. The third to seventh families are those renders, with no free
+parameter either.
 """
 
 from __future__ import annotations
@@ -88,7 +90,15 @@ REMAPS = (("reflectance_squared", lambda x: x * x, "every diffuse surface's refl
            "grey one most"),
           # Python's round (a parser's round(a, 1)): 0.15 is 0.1499... in binary and rounds down, 0.75 to even.
           ("reflectance_rounded", lambda x: np.array([round(float(v), 1) for v in x]), "every diffuse surface's "
-           "albedo rounded to one decimal, channel by channel (a parser's or a format's round(a, 1))"))
+           "albedo rounded to one decimal, channel by channel (a parser's or a format's round(a, 1))"),
+          # The scene's colours are linear reflectances; a loader that treats them as display values, or as linear
+          # values to be displayed, puts them through a gamma of 2.2 one way or the other.
+          ("reflectance_gamma_encoded", lambda x: np.power(x, 1.0 / 2.2), "every diffuse surface's albedo "
+           "gamma-encoded, channel by channel (a ** (1/2.2), as for display): the scene's linear colours converted "
+           "as if they were to be shown, every surface brighter, a dark channel most"),
+          ("reflectance_gamma_decoded", lambda x: np.power(x, 2.2), "every diffuse surface's albedo gamma-decoded, "
+           "channel by channel (a ** 2.2): the scene's linear colours taken for sRGB values and linearised, every "
+           "surface darker, a dark channel most"))
 
 
 def _prepare_remapped(a, scene: Scene, render) -> dict[str, np.ndarray]:
