@@ -17,7 +17,7 @@ CLASSES = {"scene": "cases", "outside": "outside", "programs": "programs", "fres
            "unheard": "unheard", "unsaid": "unsaid", "unasked": "unasked",
            "unsought": "unsought", "unguessed": "unguessed",
            "unforeseen": "unforeseen", "unprompted": "unprompted",
-           "unbidden": "unbidden"}
+           "unbidden": "unbidden", "unheralded": "unheralded"}
 
 
 def register(sub) -> None:
@@ -44,8 +44,10 @@ def register(sub) -> None:
                    "fifteenth, in tracers, scene input and output, written blind, mcrt.grade.accuracy.unguessed), "
                    "'unforeseen' (a sixteenth, in tracers, scene input and output, written blind, "
                    "mcrt.grade.accuracy.unforeseen), 'unprompted' (a seventeenth, in tracers, scene input and "
-                   "output, written blind, mcrt.grade.accuracy.unprompted) or 'unbidden' (an eighteenth, in "
-                   "tracers, scene input and output, written blind, mcrt.grade.accuracy.unbidden) (default: scene)")
+                   "output, written blind, mcrt.grade.accuracy.unprompted), 'unbidden' (an eighteenth, in "
+                   "tracers, scene input and output, written blind, mcrt.grade.accuracy.unbidden) or 'unheralded' (a "
+                   "nineteenth, in tracers, scene input and output, written blind, "
+                   "mcrt.grade.accuracy.unheralded) (default: scene)")
     p.add_argument("--held-out", choices=("all", "only", "none"), default="all",
                    help="grade all cases, only the held-out ones, or none of them (default: all)")
     p.add_argument("--out", default=None, help=f"report folder (default: {DEFAULT_OUT}, or {DEFAULT_OUT}/CLASS "
