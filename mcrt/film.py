@@ -172,6 +172,19 @@ class Progress:
         print(("\r" if self.tty else "") + msg.ljust(72), end=end, file=sys.stderr, flush=True)
 
 
+def pixel_statistic(samples: np.ndarray, how: str) -> np.ndarray:
+    """Each pixel's value of its samples (axis 0 of ``samples``, channel by channel) by statistic ``how`` of
+    :data:`mcrt.options.PIXEL_STATISTICS`: 'median', or 'trimmed_5' / 'trimmed_10' (the mean with that percentage of
+    the lowest and of the highest samples dropped, as scipy.stats.trim_mean)."""
+    if how == "median":
+        return np.median(samples, axis=0)
+    if how.startswith("trimmed_"):
+        from scipy.stats import trim_mean
+
+        return trim_mean(samples, int(how.split("_")[1]) / 100.0, axis=0)
+    raise ValueError(f"no pixel statistic {how!r}")
+
+
 def mean_variance(sums, n: int, width: int, height: int) -> tuple[np.ndarray, np.ndarray]:
     """Mean and unbiased per-sample variance (float32, H x W x 3) from device sums laid out (moment, pixel, channel).
 

@@ -37,6 +37,11 @@ BOUNCE_AT = ("every", "first")
 #: tracers make that the grader's explanation renders (mcrt.grade.explain.mirror).
 MIRRORS = ("reflect", "without_2", "normal_unnormalised", "normal_from_origin", "cosine_weighted", "camera_only")
 
+#: How a pixel's samples make its value (mcrt.film.pixel_statistic): their mean ('mean'), or a statistic students'
+#: programs take against fireflies that the grader's explanation renders (mcrt.grade.explain.pixel_statistic): the
+#: median, or the mean with the lowest and highest 5 % or 10 % dropped (scipy.stats.trim_mean).
+PIXEL_STATISTICS = ("mean", "median", "trimmed_5", "trimmed_10")
+
 #: What the path tracer does with the paths eye D ... D S+ L (Caustics.mode).
 MIRROR_CAUSTICS = ("all", "skip", "only", "mis")
 
@@ -114,6 +119,9 @@ class Tricks:
     mirror: str = "reflect"
     mirror_at: str = "every"
     mirror_normal_length: float = 1.0
+    # How the film makes a pixel's value of its samples (PIXEL_STATISTICS): 'mean' is the estimator's image; another
+    # statistic is a student's mistake the explanation renders (the estimator's paths are the same).
+    pixel_statistic: str = "mean"
 
     def __post_init__(self):
         if self.bounce not in BOUNCES:
@@ -124,6 +132,8 @@ class Tricks:
             raise ValueError(f"mirror must be one of {', '.join(MIRRORS)}, got {self.mirror!r}")
         if self.mirror_at not in BOUNCE_AT:
             raise ValueError(f"mirror_at must be one of {', '.join(BOUNCE_AT)}, got {self.mirror_at!r}")
+        if self.pixel_statistic not in PIXEL_STATISTICS:
+            raise ValueError(f"pixel_statistic must be one of {', '.join(PIXEL_STATISTICS)}, got {self.pixel_statistic!r}")
         if not self.mirror_normal_length > 0.0:
             raise ValueError(f"mirror_normal_length must be > 0, got {self.mirror_normal_length}")
         if self.sample_clamp is not None and not self.sample_clamp > 0.0:
@@ -203,7 +213,7 @@ _PART_OF = {f.name: part for part, kind in PARTS.items() for f in fields(kind)}
 #: Name -> default of every estimator trick the ``mcrt`` renderer takes (its Tricks, and Mutations' roulette scheme).
 TRICK_OPTIONS = {"roulette": "unbiased", "roulette_survival": None, "roulette_start": None, "light_sampling": "area",
                  "sample_clamp": None, "bounce": "cosine", "bounce_at": "every", "mirror": "reflect",
-                 "mirror_at": "every", "mirror_normal_length": 1.0}
+                 "mirror_at": "every", "mirror_normal_length": 1.0, "pixel_statistic": "mean"}
 
 
 def trick_options(tricks: dict) -> tuple:

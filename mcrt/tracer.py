@@ -180,7 +180,9 @@ class Tracer:
         totals = run_tiles(launch, width=W, height=H, spp=spp, tile_pixels=tile, spp_per_pass=per_pass,
                            progress=Progress(total, label="mcrt", unit="passes", enabled=progress), pixel_ranges=ranges)
         var = totals.variance * replicate_variance_scale(spp, sampler.replicates) if n_rep else totals.variance
-        mean, var = encode_output(totals.mean, var, output_encoding(self.mutants))
+        stat = dict(self.tricks).get("pixel_statistic")
+        mean = totals.mean if stat is None else self._statistic(seed, spp, stat).astype(totals.mean.dtype)
+        mean, var = encode_output(mean, var, output_encoding(self.mutants))
         c = self.caustics  # recorded with the tricks, where not plain path tracing
         named = sorted((*self.tricks, *((("mirror_caustics", c.mirror_caustics),) if c.mirror_caustics != "all" else ()),
                         *((("caustic_light_paths", c.caustic_light_paths),) if c.caustic_light_paths else ())))
@@ -209,6 +211,17 @@ class Tracer:
                 "mcrt_version": mcrt.__version__,
             },
         )
+
+    def _statistic(self, seed: int, spp: int, how: str) -> np.ndarray:
+        """The image of each pixel's ``spp`` samples at ``seed`` (the render's own paths, one sample at a time by
+        :meth:`pixel_sums`) combined by :func:`mcrt.film.pixel_statistic` ``how``, (H, W, 3)."""
+        import numpy as np
+
+        from mcrt.film import pixel_statistic
+
+        pixels = np.arange(self.width * self.height)
+        samples = np.stack([self.pixel_sums(seed, pixels, s, 1)[0] for s in range(spp)])
+        return pixel_statistic(samples, how).reshape(self.height, self.width, 3)
 
     def pixel_sums(self, seed: int, pixels, first_sample: int, n: int, *, spp_per_pass: int | None = None):
         """Sums of x and of x^2 over samples ``first_sample`` .. ``first_sample + n - 1`` of each of ``pixels``.

@@ -222,9 +222,10 @@ def test_the_light_seen_at_half_its_radiance_is_named_with_its_factor(ctx):
 
 
 def test_a_flipped_render_names_the_orientation(ctx):
-    """A Mitsuba render (seed 67) written upside down: the orientation criterion fails, and it is the cause named."""
+    """A Mitsuba render (seed 67) written upside down: the orientation criterion fails, and it is the cause named,
+    with the camera's vectors its words name beside the writer's order of rows."""
     res = grade_image("flipped", ctx, [_mitsuba(67)[::-1]], spp=1024)
-    assert named_causes(res)[0] == ["orientation"], res.summary
+    assert named_causes(res)[0] == ["orientation", "camera_rotation"], res.summary
     assert res.score < res.max_score
 
 

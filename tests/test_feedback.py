@@ -583,12 +583,12 @@ def test_a_surface_out_of_view_is_never_claimed_alone():
     assert "no cause is claimed" in sentence and "cannot confirm" in headline, (sentence, headline)
 
 
-@pytest.mark.parametrize("up, named", [((0.0, 1.0, 0.0), ["orientation", "camera_rotation"]),
-                                       ((0.0, 0.0, -1.0), ["orientation"])])
-def test_a_quarter_turn_names_the_up_vector(ctx, up, named):
+@pytest.mark.parametrize("up, words", [((0.0, 1.0, 0.0), "up vector along another axis"),
+                                       ((0.0, 0.0, -1.0), "up and right vectors")])
+def test_a_quarter_turn_names_the_up_vector(ctx, up, words):
     """A Mitsuba render whose camera's up vector is +y (a quarter turn; seed 54) is found turned, and the words send
     the student to the up vector as well as to the writer's order of rows and columns; one whose up is -z (upside
-    down, a half turn) names the writer's order first, as a flip does."""
+    down, a half turn) names the writer's order first, then the camera's up and right vectors, as a flip does."""
     from mcrt.grade.accuracy.cases import _camera
     from mcrt.grade.accuracy.run import named_causes
 
@@ -596,7 +596,8 @@ def test_a_quarter_turn_names_the_up_vector(ctx, up, named):
                        seed=54).mean
     res = grade_image("up", ctx, [img], spp=256)
     assert _output(res, "orientation").startswith("the image is rotated"), _output(res, "orientation")
-    assert named_causes(res)[0] == named, res.summary
+    assert words in _output(res, "orientation")
+    assert named_causes(res)[0] == ["orientation", "camera_rotation"], res.summary
 
 
 def test_a_field_of_view_like_the_other_cameras_is_not_called_that_camera(ctx):
@@ -655,6 +656,58 @@ def test_surfaces_emitting_are_named(ctx, case, seed, radiance, family, words, c
     ex = res.details["explanation"]
     assert ex["verdict"] == "claimed" and ex["family"] == family and words in ex["sentence"], ex["sentence"]
     assert named_causes(res)[0] == [cause] and res.score < res.max_score
+
+
+def test_every_surface_nearly_black_names_its_colours_beside_the_light_blocked(ctx):
+    """A Mitsuba render (seed 103, 1024 spp) with every diffuse albedo divided by 255 (colours given in 0-255 divided
+    once more): only the light is seen, as when shadow rays are always blocked; the words name every surface black
+    (the colours) beside it, and the colours are among the causes named."""
+    res = grade_image("dark", ctx, [_mitsuba(_albedos(load_scene(), lambda v: v / 255.0), 103)], spp=1024)
+    ex = res.details["explanation"]
+    assert "every diffuse surface black" in ex["sentence"], ex["sentence"]
+    assert "albedo" in named_causes(res)[0] and res.score < 0.75 * res.max_score
+
+
+def test_a_median_of_each_pixels_samples_is_named(ctx):
+    """Each pixel the median of its 256 Mitsuba samples (seed 104; path with MIS, not mcrt's estimator): claimed as
+    that statistic, naming a biased estimator alone."""
+    from mcrt.grade.accuracy.unbidden import _all_samples
+
+    img = np.median(_all_samples(RES, RES, 256, 104), axis=1).reshape(RES, RES, 3)
+    res = grade_image("median", ctx, [img], spp=256)
+    ex = res.details["explanation"]
+    assert ex["verdict"] == "claimed" and ex["family"] == "pixel_statistic", ex["sentence"]
+    assert "the median of its samples" in ex["sentence"] and named_causes(res)[0] == ["biased_estimator"]
+
+
+def test_every_diffuse_surface_of_one_colour_is_named(ctx):
+    """A Mitsuba render (seed 106, 1024 spp) with every diffuse surface (walls, floor, ceiling, tetrahedron) of the
+    albedo (0.3, 0.5, 0.2), as one default colour shared by every material makes it: claimed as that, in those
+    words, as a colour mistake."""
+    res = grade_image("one", ctx, [_mitsuba(_albedos(load_scene(), lambda v: np.array([0.3, 0.5, 0.2])), 106)],
+                      spp=1024)
+    ex = res.details["explanation"]
+    assert ex["verdict"] == "claimed" and "every diffuse surface (the walls" in ex["sentence"], ex["sentence"]
+    assert named_causes(res)[0] == ["albedo"] and res.score <= 0.75 * res.max_score
+
+
+def test_every_row_one_row_is_named(ctx):
+    """A Mitsuba render (seed 107, 1024 spp) whose every row is its row 20 (one row list referenced by every row):
+    claimed as every row the same, naming where pixels are written."""
+    img = _mitsuba(load_scene(), 107)
+    res = grade_image("rows", ctx, [np.repeat(img[20:21], RES, axis=0)], spp=1024)
+    ex = res.details["explanation"]
+    assert ex["verdict"] == "claimed" and "every row the same" in ex["sentence"], ex["sentence"]
+    assert named_causes(res)[0] == ["row_stride"] and res.score < res.max_score
+
+
+def test_a_mirrored_image_names_the_cameras_vectors_beside_the_writer(ctx):
+    """A Mitsuba render (seed 105, 1024 spp) mirrored left to right, as a camera whose right vector is up x forward
+    makes it: the orientation criterion fails, and its words name the camera's up and right vectors beside the order
+    of the columns (both counted as named)."""
+    res = grade_image("mirrored", ctx, [_mitsuba(load_scene(), 105)[:, ::-1]], spp=1024)
+    assert "up and right vectors" in _output(res, "orientation")
+    assert named_causes(res)[0][:2] == ["orientation", "camera_rotation"]
 
 
 def test_rows_written_one_place_up_are_named_an_index_off_by_one(ctx):

@@ -73,7 +73,7 @@ def test_the_tricks_at_their_defaults_render_the_default_image_bit_for_bit(scene
     plain = render(scene, s, seed=3, progress=False)
     explicit = render(scene, s, seed=3, progress=False, roulette="unbiased", roulette_survival=None, roulette_start=None,
                       light_sampling="area", sample_clamp=None, bounce="cosine", bounce_at="every", mirror="reflect",
-                      mirror_at="every", mirror_normal_length=1.0, adaptive=None, denoise=None)
+                      mirror_at="every", mirror_normal_length=1.0, pixel_statistic="mean", adaptive=None, denoise=None)
     assert np.array_equal(plain.mean, explicit.mean) and np.array_equal(plain.variance, explicit.variance)
     assert "tricks" not in plain.extra
     moved = render(scene, s, seed=3, progress=False, roulette_start=1)
@@ -90,6 +90,31 @@ def test_a_sample_clamp_caps_every_sample_and_only_darkens(scene):
     assert np.all(clamped.mean <= plain.mean + 1e-6) and clamped.extra["tricks"] == "sample_clamp=1.0"
     high = render(scene, s, seed=5, progress=False, sample_clamp=1e6)
     assert np.array_equal(high.mean, plain.mean)
+
+
+def test_a_pixel_statistic_takes_the_renders_own_samples(scene):
+    """Each pixel's median (and 10 % trimmed mean) of its 16 samples (seed 5): the light's pixels, whose every
+    sample is its radiance, stay 20; elsewhere the statistic lies between the pixel's smallest and largest sample
+    (the render's own paths, read back one sample at a time), it differs from the mean, and the same seed gives the
+    same image bit for bit."""
+    from mcrt.samplers import PixelSampler
+    from mcrt.tracer import _tracer
+
+    s = _settings(scene, 16, res=32)
+    plain = render(scene, s, seed=5, progress=False)
+    med = render(scene, s, seed=5, progress=False, pixel_statistic="median")
+    trim = render(scene, s, seed=5, progress=False, pixel_statistic="trimmed_10")
+    assert np.array_equal(med.mean, render(scene, s, seed=5, progress=False, pixel_statistic="median").mean)
+    assert med.extra["tricks"] == "pixel_statistic=median" and np.array_equal(med.variance, plain.variance)
+    light = np.all(plain.mean == 20.0, axis=2)
+    assert light.any() and np.all(med.mean[light] == 20.0) and np.all(trim.mean[light] == 20.0)
+    t = _tracer(scene, s.camera, s.width, s.height, s.max_depth, s.light_samples, s.rr_depth, "llvm", "convex",
+                frozenset(), True, None, (), PixelSampler.of("independent", None))
+    one = np.stack([t.pixel_sums(5, np.arange(32 * 32), k, 1)[0] for k in range(16)]).reshape(16, 32, 32, 3)
+    assert np.allclose(one.mean(axis=0), plain.mean, rtol=1e-5, atol=1e-6)
+    for img in (med.mean, trim.mean):
+        assert np.all(img >= one.min(axis=0) - 1e-6) and np.all(img <= one.max(axis=0) + 1e-6)
+        assert not np.allclose(img, plain.mean)
 
 
 def test_the_course_roulette_as_a_trick_is_the_catalogued_bug(scene):
@@ -204,6 +229,7 @@ def test_a_mirror_for_camera_rays_only_is_black_to_every_other_ray(scene):
     ({"mirror": "refract"}, "mirror must be one of"),
     ({"mirror_at": "last"}, "mirror_at must be one of"),
     ({"mirror_normal_length": 0.0}, "mirror_normal_length must be > 0"),
+    ({"pixel_statistic": "mode"}, "pixel_statistic must be one of"),
     ({"light_sampling": "solid_angle", "mis": True}, "runs without MIS"),
 ])
 def test_bad_trick_values_are_refused(options, message):

@@ -172,7 +172,7 @@ def _energy(x: np.ndarray, mask: np.ndarray, labels: np.ndarray, K: int) -> np.n
 #: Share of an object's difference a candidate must leave there (explaining at most half of it) for the object's
 #: structure to count against it.
 LEFT = 0.5
-#: Candidates tried for adequacy: the best, in rank order, until :data:`TRIED` families are among them (two walls'
+#: Candidates tried for adequacy: the best, in rank order, of the first :data:`TRIED` families among them (two walls'
 #: albedos are one family and do not crowd another cause out), at most :data:`MAX_TRIED`.
 TRIED = 3
 MAX_TRIED = 6
@@ -231,8 +231,9 @@ def beats_no_change(c, fit) -> bool:
 
 def tried_candidates(cands: list, within: float = 0.0, *, fit=None) -> list:
     """The candidates whose remainder is tested: the best (explaining at least :data:`mcrt.grade.explain.NAMED`,
-    or with a chi^2 within ``within`` of the best's, with a predicted change) in rank order until :data:`TRIED`
-    readings are among them, at most :data:`MAX_TRIED`.
+    or with a chi^2 within ``within`` of the best's, with a predicted change) in rank order, of the first
+    :data:`TRIED` readings among them (a lower-ranked candidate of those readings is tried after a better one of
+    another reading: a new family that fits about as well crowds none of them out), at most :data:`MAX_TRIED`.
 
     ``within`` is the spread of noise's chi^2 (the share rule's GAIN_SIGMAS sqrt(2 n)): a candidate the chi^2
     cannot tell from the best fits as well as far as chi^2 can say, whatever share of a small difference it has,
@@ -249,7 +250,7 @@ def tried_candidates(cands: list, within: float = 0.0, *, fit=None) -> list:
             continue
         if _reading(c.family) not in readings:
             if len(readings) == TRIED:
-                break
+                continue  # a further reading waits; a lower-ranked candidate of the tried readings may still be tried
             readings.add(_reading(c.family))
         out.append(c)
         if len(out) == MAX_TRIED:

@@ -76,6 +76,13 @@ CAUSE_OF: dict[str, tuple[str, ...]] = {
     "lines_order": ("row_stride",), "layout": ("channels",), "reflectance_rounded": ("albedo",),
     # Added after the unbidden class was graded, with it in view: every albedo through a gamma of 2.2.
     "reflectance_gamma_encoded": ("albedo",), "reflectance_gamma_decoded": ("albedo",),
+    # Added after unheralded was graded, with it in view: every diffuse surface black, whose words name an integer film
+    # (values under 1 truncated) beside the albedos.
+    "reflectance_zero": ("albedo", "quantisation"),
+    # Each pixel's samples combined by a median or a trimmed mean (added after unheralded was graded, with it in view).
+    "pixel_statistic": ("biased_estimator",),
+    # Every row (or column) one of the render's, repeated (added after unheralded was graded, with it in view).
+    "lines_aliased": ("row_stride",),
     # Surfaces emitting (mcrt.grade.explain.emission; added after unbidden was graded): an ambient term, one surface.
     "ambient": ("ambient",), "object_emits": ("object_emits",),
     # Mistakes of students' programs (mcrt.grade.accuracy.programs): a colour matrix that loses colour (grey, a
@@ -212,7 +219,10 @@ SAME_MISTAKE: dict[str, tuple[str, ...]] = {
     # wrong, which the words of a Lambertian's normalisation name at the same lines. Not accepted: the light's radiance
     # (the direct light is right), the path depth (the paths are as long as they should be), Russian roulette (no
     # path is stopped).
-    "indirect_scale": ("brdf_norm",)}
+    "indirect_scale": ("brdf_norm",),
+    # Added after unheralded was graded, with it in view: a power curve on the values, worded as an encoding's gamma,
+    # names the step that put a curve on them, whether it was meant as an encoding or as a brightness adjustment.
+    "tone_map": ("encoding",)}
 
 
 def is_named(cause: str, named: list[str]) -> bool:
@@ -275,7 +285,9 @@ def _explanation_causes(expl: dict) -> list[str]:
                             # a half-pixel shift by interpolation is a 2-pixel box filter (since unbidden)
                             ("pixel_offset", "a box filter of", "blur"),
                             # one object's direct light missing, or its material (since unbidden)
-                            ("direct_missing", "or its material other than the scene's", "material")):
+                            ("direct_missing", "or its material other than the scene's", "material"),
+                            # pi in the light sample, worded also as the BRDF's 1/pi left out (since unheralded)
+                            ("light_sampling", "BRDF's 1/pi left out", "brdf_norm")):
         if fam == f and words in expl["sentence"]:
             causes.append(cause)
     for alt in (expl.get("adequacy") or {}).get("alternatives", []):  # named beside it as fitting as well
@@ -316,8 +328,10 @@ def named_causes(res) -> tuple[list[str], str]:
         # brightness off by more than it allows, which no constant explains, names no cause.
         if t is not None and t.status == "failed" and (crit != "exposure" or "passes the bias test" in t.output):
             causes.append(cause)
-            if crit == "orientation" and "up vector" in t.output:
-                causes.append("camera_rotation")  # a quarter turn: the words name the camera's up vector too
+            if crit == "orientation" and ("up vector" in t.output or "up and right vectors" in t.output):
+                # A quarter turn's words name the camera's up vector too; a flip's its up and right vectors (the
+                # latter counted since unheralded was graded, with it in view).
+                causes.append("camera_rotation")
             said.append(t.output.split(";")[0])
     cam = tests.get("camera")
     if cam is not None and cam.status == "failed":

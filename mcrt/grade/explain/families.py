@@ -19,6 +19,7 @@ from mcrt.grade.explain.light_twice import light_twice
 from mcrt.grade.explain.mirror import mirror
 from mcrt.grade.explain.objects import material, object_size
 from mcrt.grade.explain.path_weight import path_weight
+from mcrt.grade.explain.pixel_statistic import pixel_statistic
 from mcrt.grade.explain.pixels import bad_pixels
 from mcrt.grade.explain.reflectance import reflectance_remapped, reflectance_scale
 from mcrt.grade.explain.resampling import resampling
@@ -36,12 +37,12 @@ from mcrt.grade.explain.walls import walls_one_colour
 #: resampling, bloom, an object's material or size, values stored at the wrong places, colours or materials given to
 #: the wrong surfaces, every diffuse reflectance off by one factor, squared or its complement, light counted twice, a
 #: path's weight off from a bounce on, the diffuse bounce drawn or weighted wrongly, the mirror's reflection computed
-#: wrongly, a light sample's weight, the light facing the wrong way, surfaces emitting, black pixels, another of the
-#: film's buffers written).
+#: wrongly, a light sample's weight, the light facing the wrong way, surfaces emitting, each pixel's samples combined
+#: by a median or trimmed mean, black pixels, another of the film's buffers written).
 FAMILIES = (scale, colour, curves, albedo, albedos, walls_one_colour, surface_black, rendered, camera, plane_width,
             catalogue, tone_curve, sample_clamp, falloff, resampling, layout, bloom, material, object_size, swap,
             reflectance_scale, reflectance_remapped, light_twice, path_weight, bounce, mirror, light_sampling,
-            light_facing, emission, bad_pixels, wrong_buffer)
+            light_facing, emission, pixel_statistic, bad_pixels, wrong_buffer)
 
 #: The families that are mistakes of the camera (what the misregistration test of mcrt.grade.structure also sees).
 CAMERA_FAMILIES = frozenset({"fov", "aspect", "pixel_offset", "rotation", "eye", "camera_model"})
@@ -51,7 +52,7 @@ MAJOR_FAMILIES = CAMERA_FAMILIES | {"object_missing", "object_moved", "light_pos
                                     "material", "mirror_normal", "object_size", "colour_lost", "light_facing",
                                     "surface_black", "object_black", "reflectance_scale", "reflectance_squared",
                                     "reflectance_complement", "reflectance_normalised", "reflectance_rounded",
-                                    "reflectance_gamma_encoded", "reflectance_gamma_decoded",
+                                    "reflectance_gamma_encoded", "reflectance_gamma_decoded", "reflectance_zero",
                                     "albedo_swap", "material_swap", "ambient", "object_emits"}
 
 

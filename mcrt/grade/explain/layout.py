@@ -1,4 +1,4 @@
-r"""Values stored at the wrong places: lines out of order, a row's channels one after another.
+r"""Values stored at the wrong places: lines out of order or all one, a row's channels one after another.
 
 Rows (or columns) stored out of order (a pool of workers' rows kept in the
 order they finished, an index off for some lines) are R with each such line
@@ -8,7 +8,9 @@ writes a row's reds, then its greens, then its blues; read as the format's
 interleaved samples, pixel i of the row holds samples 3 i to 3 i + 2 of
 that run. The same order over the whole image (every red first, a planar
 array written as it lies in memory) is the other fixed layout. Neither has
-a free parameter.
+a free parameter. Every row (or column) one and the same, the render's
+row k repeated (Python's ``[[0.0] * W] * H`` holds one row H times, and
+the last row written is every row), has k for its one parameter.
 """
 
 from __future__ import annotations
@@ -87,6 +89,7 @@ def layout(fit: Fit, inputs: Inputs) -> list[Candidate]:
                              change=moved - fit.R,
                              # A shift by whole lines and lines copied onward are lines of R at other places too.
                              generalises=("pixel_offset", "resampling")))
+    out += _one_line(fit)
     for name, f, text in (("planar rows", planar_rows, "each row's samples written channel by channel (the row's reds, "
                            "then its greens, then its blues: the channel loop outside the column loop) where the "
                            "format interleaves them"),
@@ -96,6 +99,25 @@ def layout(fit: Fit, inputs: Inputs) -> list[Candidate]:
         # A file that holds no value above 1 clipped them before they were moved (the light's pixels at 1).
         M = f(np.minimum(fit.R, 1.0) if float(np.max(fit.S)) <= 1.0 else fit.R)
         out.append(Candidate("layout", name, text, fit.model(M), 0, value=name, change=M - fit.R))
+    return out
+
+
+def _one_line(fit: Fit) -> list[Candidate]:
+    """Every row (column) the render's row (column) k, for the k that fits best: one parameter each. Where the
+    hand-in's lines are all one to the last bit, the model repeats its own line (its noise repeated too, which the
+    render's line would leave as a remainder): no render's lines are equal by chance."""
+    out = []
+    for axis, word in ((0, "row"), (1, "column")):
+        n = fit.R.shape[axis]
+        errs = [fit.model(np.repeat(np.take(fit.R, [k], axis=axis), n, axis=axis)) for k in range(n)]
+        k = int(np.argmin(errs))
+        own = np.take(fit.S, [0], axis=axis)
+        M = own if np.array_equal(np.broadcast_to(own, fit.S.shape), fit.S) else np.take(fit.R, [k], axis=axis)
+        M = np.repeat(M, n, axis=axis)
+        out.append(Candidate("lines_aliased", f"every {word} one", f"every {word} the same, the render's {word} {k} "
+                             f"repeated (one {word} list referenced {n} times, as [[0.0] * W] * H makes it, or an "
+                             "index that never changes)", fit.model(M), 1, value={"lines": f"{word}s", "kept": k},
+                             change=M - fit.R))
     return out
 
 

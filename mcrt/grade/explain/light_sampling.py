@@ -55,7 +55,8 @@ def factors(area: float) -> tuple[tuple[float, str], ...]:
             (0.5, "1/2: half the light's surface sampled (one of its two triangles) with the whole light's pdf"),
             (2.0, "2: the light sampled with half its pdf (two triangles' samples both counted)"),
             (1.0 / np.pi, "1/pi: the light's radiance divided by pi in the light sample (taken for its exitance)"),
-            (np.pi, "pi: the light's radiance multiplied by pi in the light sample (an exitance's factor)"),
+            (np.pi, "pi: the light's radiance multiplied by pi in the light sample (an exitance's factor), or the "
+             "Lambertian BRDF's 1/pi left out of it (f = albedo for albedo / pi)"),
             *((float(n), f"{n}: {n} shadow rays a point summed where their mean belongs") for n in SHADOW_RAYS))
 
 

@@ -27,7 +27,8 @@ every Lambertian albedo as its complement; one that normalises a colour as
 it would a direction divides each albedo by its length; a parser that rounds
 what it reads keeps one decimal of each; a loader that takes the linear
 colours for display values puts each through a gamma of 2.2, one way or the
-other. The third to seventh families are those renders, with no free
+other; colours given in 0-255 and divided again leave every surface nearly
+black. The third to eighth families are those renders, with no free
 parameter either.
 """
 
@@ -96,6 +97,12 @@ REMAPS = (("reflectance_squared", lambda x: x * x, "every diffuse surface's refl
           ("reflectance_gamma_encoded", lambda x: np.power(x, 1.0 / 2.2), "every diffuse surface's albedo "
            "gamma-encoded, channel by channel (a ** (1/2.2), as for display): the scene's linear colours converted "
            "as if they were to be shown, every surface brighter, a dark channel most"),
+          # No diffuse surface reflecting: what is left is the light seen, directly and in the mirror. Colours given in
+          # 0-255 and divided once more, read as 0, or an integer film (each sample under 1 truncated to 0, the
+          # light's 20 kept) make that image alike; the catalogue's shadow rays always blocked is another reading.
+          ("reflectance_zero", lambda x: 0.0 * x, "every diffuse surface black (its albedo 0 or nearly: colours "
+           "given in 0-255 divided by 255 once more, or read as 0; or every value under 1 lost, as in a film or sum "
+           "of integers that truncates each sample): only the light is seen, directly and in the mirror"),
           ("reflectance_gamma_decoded", lambda x: np.power(x, 2.2), "every diffuse surface's albedo gamma-decoded, "
            "channel by channel (a ** 2.2): the scene's linear colours taken for sRGB values and linearised, every "
            "surface darker, a dark channel most"))
