@@ -233,7 +233,8 @@ def tried_candidates(cands: list, within: float = 0.0, *, fit=None) -> list:
     """The candidates whose remainder is tested: the best (explaining at least :data:`mcrt.grade.explain.NAMED`,
     or with a chi^2 within ``within`` of the best's, with a predicted change) in rank order, of the first
     :data:`TRIED` readings among them (a lower-ranked candidate of those readings is tried after a better one of
-    another reading: a new family that fits about as well crowds none of them out), at most :data:`MAX_TRIED`.
+    another reading: a new family that fits about as well crowds none of them out; a flexible fit,
+    :attr:`mcrt.grade.candidates.Candidate.flexible`, counts as no reading), at most :data:`MAX_TRIED`.
 
     ``within`` is the spread of noise's chi^2 (the share rule's GAIN_SIGMAS sqrt(2 n)): a candidate the chi^2
     cannot tell from the best fits as well as far as chi^2 can say, whatever share of a small difference it has,
@@ -248,7 +249,7 @@ def tried_candidates(cands: list, within: float = 0.0, *, fit=None) -> list:
         if c.change is None or (c.explained < NAMED and not c.chi2 - best <= within) or (
                 fit is not None and not beats_no_change(c, fit)):
             continue
-        if _reading(c.family) not in readings:
+        if _reading(c.family) not in readings and not c.flexible:  # a flexible fit crowds no cause out
             if len(readings) == TRIED:
                 continue  # a further reading waits; a lower-ranked candidate of the tried readings may still be tried
             readings.add(_reading(c.family))

@@ -13,7 +13,8 @@ families:
   :math:`k \sum_s \rho_s U_s`, one parameter;
 * **one surface emitting** a colour e (its material read as an emitter, a
   struct's emission field filled), :math:`e \odot U_s` for the best s, three
-  parameters.
+  parameters: flexible (:attr:`~mcrt.grade.candidates.Candidate.flexible`),
+  as it takes up a share of any difference that sits on one surface.
 
 Each amplitude is the weighted least-squares one (the fit's pixel weights),
 never negative: a surface cannot absorb light it was not lit by.
@@ -88,7 +89,8 @@ def emission(fit: Fit, inputs: Inputs) -> list[Candidate]:
     chi, label, e, change = best
     out.append(Candidate("object_emits", "one surface emitting", f"{label} emitting light (radiance {_fmt(e)}) that "
                          "the scene does not give it (its material or colour read as an emitter)", chi, 3,
-                         value={"surface": label, "radiance": tuple(float(x) for x in e)}, change=change))
+                         value={"surface": label, "radiance": tuple(float(x) for x in e)}, change=change,
+                         flexible=True))
     return out
 
 
