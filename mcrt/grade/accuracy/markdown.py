@@ -372,7 +372,7 @@ _UNHERALDED = (
     "were frozen at commit 8b1d725 before any case was read or graded, and the whole class was graded once, on them: "
     "this report (held out, 3 of 12 named right, 3 of 12 confidently wrong, 12 of 12 detected; all 28, 8 named right, "
     "6 confidently wrong, 26 detected; 0 of 8 correct hand-ins lost points). Changes made after that grading, with "
-    "the whole class in view (commit 65166e2): every diffuse surface black, or of one colour; each pixel's samples "
+    "the whole class in view (commits 65166e2 and 0eeecec): every diffuse surface black, or of one colour; each pixel's samples "
     "combined by a median or a trimmed mean (rendered by mcrt); every row one row; a light sample's factor pi worded "
     "also as the BRDF's 1/pi left out; a flip's words counted as naming the camera's vectors; a power curve worded as "
     "an encoding counted for a tone curve; candidates of the first three readings tried before a fourth. Both rows "
