@@ -54,7 +54,9 @@ def test_new_causes_have_their_equivalences_fixed():
     # them).
     later = (set(fresh.NEW_CAUSES) | set(unseen.NEW_CAUSES) | set(untried.NEW_CAUSES) | set(novel.NEW_CAUSES)
              | set(untold.NEW_CAUSES) | set(unmet.NEW_CAUSES) | set(unheard.NEW_CAUSES))
-    assert set(SAME_MISTAKE) - later <= set(blind.NEW_CAUSES)
+    # A tone curve worded as an encoding's power curve (an old cause's equivalence, added after unheralded).
+    assert set(SAME_MISTAKE) - later - {"tone_map"} <= set(blind.NEW_CAUSES)
+    assert is_named("tone_map", ["encoding"]) and not is_named("encoding", ["tone_map"])
 
 
 def test_the_command_knows_the_class():
