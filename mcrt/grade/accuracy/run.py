@@ -83,8 +83,8 @@ CAUSE_OF: dict[str, tuple[str, ...]] = {
     "pixel_statistic": ("biased_estimator",),
     # Every row (or column) one of the render's, repeated (added after unheralded was graded, with it in view).
     "lines_aliased": ("row_stride",),
-    # Surfaces emitting (mcrt.grade.explain.emission; added after unbidden was graded): an ambient term, one surface.
-    "ambient": ("ambient",), "object_emits": ("object_emits",),
+    # One surface emitting (mcrt.grade.explain.emission; added after unbidden was graded).
+    "object_emits": ("object_emits",),
     # Mistakes of students' programs (mcrt.grade.accuracy.programs): a colour matrix that loses colour (grey, a
     # channel zeroed) and one that mixes the channels otherwise, light counted twice, the light facing the wrong
     # way, black pixels.

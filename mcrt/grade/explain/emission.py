@@ -1,20 +1,18 @@
-r"""Surfaces emitting light the scene does not give them: an ambient term, or one surface read as an emitter.
+r"""A surface emitting light the scene does not give it: its material or colour read as an emitter.
 
 Radiance is linear in what surfaces emit. mcrt renders the scene with each
 diffuse surface s (each wall, the floor, the ceiling, a diffuse object)
 emitting unit white radiance from its front, :math:`E_s`, at the basis's spp
 and seed; with B the basis's render of the scene, :math:`U_s = E_s - B` is
 what that emission adds (the shared seed cancels most of the noise), and
-channel c of a colour e emitted adds :math:`e_c U_{s,c}` exactly. Two
-families:
-
-* an **ambient term**: every diffuse surface emitting k times its own
-  albedo (a shader's ambient colour kept in a path tracer),
-  :math:`k \sum_s \rho_s U_s`, one parameter;
-* **one surface emitting** a colour e (its material read as an emitter, a
-  struct's emission field filled), :math:`e \odot U_s` for the best s, three
-  parameters: flexible (:attr:`~mcrt.grade.candidates.Candidate.flexible`),
-  as it takes up a share of any difference that sits on one surface.
+channel c of a colour e emitted adds :math:`e_c U_{s,c}` exactly. The family
+is one surface emitting a colour e (its material read as an emitter, a
+struct's emission field filled), :math:`e \odot U_s` for the best s, three
+parameters: flexible (:attr:`~mcrt.grade.candidates.Candidate.flexible`), as
+it takes up a share of any difference that sits on one surface. (An ambient
+term, every surface emitting k times its albedo, was a family too: on the
+unmet class's held-out roulette that never stops it left noise and was
+claimed; it is no longer tried.)
 
 Each amplitude is the weighted least-squares one (the fit's pixel weights),
 never negative: a surface cannot absorb light it was not lit by.
@@ -30,68 +28,61 @@ from mcrt.grade.candidates import Candidate, Inputs
 from mcrt.grade.explain.fit import Fit
 from mcrt.grade.explain.objects import basis_renderer
 from mcrt.grade.feedback import fmt_values as _fmt
-from mcrt.grade.feedback import num as _num
 from mcrt.scene import Lambertian, Scene
 
 WHITE = (1.0, 1.0, 1.0)
 
 
-def _emitting(scene: Scene) -> dict[str, tuple[tuple, Scene]]:
-    """{label: (the surface's albedo, the scene with that surface alone emitting white)} for every diffuse surface."""
+def _emitting(scene: Scene) -> dict[str, Scene]:
+    """{label: the scene with that diffuse surface alone emitting white} for every diffuse surface."""
     room = scene.room
     out = {}
     for i, w in enumerate(room.walls):
         walls = tuple(replace(x, emission=WHITE) if j == i else x for j, x in enumerate(room.walls))
-        out[f"wall {''.join(w.corners)}"] = (tuple(w.albedo), replace(scene, room=replace(room, walls=walls)))
-    out["the floor"] = (tuple(room.floor_albedo), replace(scene, room=replace(room, floor_emission=WHITE)))
-    out["the ceiling"] = (tuple(room.ceiling_albedo), replace(scene, room=replace(room, ceiling_emission=WHITE)))
+        out[f"wall {''.join(w.corners)}"] = replace(scene, room=replace(room, walls=walls))
+    out["the floor"] = replace(scene, room=replace(room, floor_emission=WHITE))
+    out["the ceiling"] = replace(scene, room=replace(room, ceiling_emission=WHITE))
     for o in scene.objects:
         if isinstance(o.material, Lambertian):
             objs = tuple(replace(x, material=replace(x.material, emission=WHITE)) if x.name == o.name else x
                          for x in scene.objects)
-            out[f"the {o.name}"] = (tuple(o.material.albedo), replace(scene, objects=objs))
+            out[f"the {o.name}"] = replace(scene, objects=objs)
     return out
 
 
 def _prepare(a, scene: Scene, render) -> dict:
-    """{label: (albedo, E_s)} at the basis's spp and seed (the module docstring)."""
+    """{label: E_s} at the basis's spp and seed (the module docstring)."""
     img = basis_renderer(a, render)
-    return {label: (albedo, img(s)) for label, (albedo, s) in _emitting(scene).items()}
+    return {label: img(s) for label, s in _emitting(scene).items()}
 
 
-def _amplitude(fit: Fit, M: np.ndarray, c: slice | int = slice(None)) -> float:
-    """The weighted least-squares amplitude of model M for the difference's channel(s) ``c`` (the fit's pixel
-    weights), at least 0."""
+def _amplitude(fit: Fit, M: np.ndarray, c: int) -> float:
+    """The weighted least-squares amplitude of model M for the difference's channel ``c`` (the fit's pixel weights),
+    at least 0."""
     w, D = np.where(fit.ok, fit.w, 0.0)[..., c], fit.D[..., c]
     den = float(np.sum(w * M * M))
     return max(float(np.sum(w * D * M)) / den, 0.0) if den > 0 else 0.0
 
 
 def emission(fit: Fit, inputs: Inputs) -> list[Candidate]:
-    """An ambient term, and the best one surface emitting (the module docstring)."""
+    """The best one surface emitting (the module docstring)."""
     r = inputs.basis.extra.get(emission.name)
     if not r:
         return []
     base = inputs.basis.base.astype(np.float64)
-    U = {label: (np.asarray(albedo, np.float64), E.astype(np.float64) - base) for label, (albedo, E) in r.items()}
-    ambient = sum(albedo * u for albedo, u in U.values())
-    k = _amplitude(fit, ambient)
-    out = [Candidate("ambient", "ambient term", f"every diffuse surface emitting {_num(k)} times its own colour (an "
-                     "ambient term added at every hit: light from nowhere)", fit.delta(k * ambient), 1,
-                     value=k, change=k * ambient)]
     best = None
-    for label, (_, u) in U.items():
+    for label, E in r.items():
+        u = E.astype(np.float64) - base
         e = np.array([_amplitude(fit, u[..., c], c) for c in range(3)])
         change = e * u
         chi = fit.delta(change)
         if best is None or chi < best[0]:
             best = (chi, label, e, change)
     chi, label, e, change = best
-    out.append(Candidate("object_emits", "one surface emitting", f"{label} emitting light (radiance {_fmt(e)}) that "
-                         "the scene does not give it (its material or colour read as an emitter)", chi, 3,
-                         value={"surface": label, "radiance": tuple(float(x) for x in e)}, change=change,
-                         flexible=True))
-    return out
+    return [Candidate("object_emits", "one surface emitting", f"{label} emitting light (radiance {_fmt(e)}) that the "
+                      "scene does not give it (its material or colour read as an emitter)", chi, 3,
+                      value={"surface": label, "radiance": tuple(float(x) for x in e)}, change=change,
+                      flexible=True)]
 
 
 emission.name, emission.prepare = "emission", _prepare

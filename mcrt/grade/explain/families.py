@@ -53,7 +53,7 @@ MAJOR_FAMILIES = CAMERA_FAMILIES | {"object_missing", "object_moved", "light_pos
                                     "surface_black", "object_black", "reflectance_scale", "reflectance_squared",
                                     "reflectance_complement", "reflectance_normalised", "reflectance_rounded",
                                     "reflectance_gamma_encoded", "reflectance_gamma_decoded", "reflectance_zero",
-                                    "albedo_swap", "material_swap", "ambient", "object_emits"}
+                                    "albedo_swap", "material_swap", "object_emits"}
 
 
 def prepare(a, scene, render) -> Basis:

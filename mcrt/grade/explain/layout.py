@@ -103,17 +103,19 @@ def layout(fit: Fit, inputs: Inputs) -> list[Candidate]:
 
 
 def _one_line(fit: Fit) -> list[Candidate]:
-    """Every row (column) the render's row (column) k, for the k that fits best: one parameter each. Where the
-    hand-in's lines are all one to the last bit, the model repeats its own line (its noise repeated too, which the
-    render's line would leave as a remainder): no render's lines are equal by chance."""
+    """Every row (column) one, where the hand-in's lines are all one to the last bit (no render's lines are equal by
+    chance): the model repeats its own line (its noise repeated too), and the words name the render's line k it
+    matches best. No candidate otherwise: a render's line repeated fits nothing else, and would stand as the closest
+    cause of images nothing explains."""
     out = []
     for axis, word in ((0, "row"), (1, "column")):
         n = fit.R.shape[axis]
+        own = np.take(fit.S, [0], axis=axis)
+        if not np.array_equal(np.broadcast_to(own, fit.S.shape), fit.S):
+            continue
         errs = [fit.model(np.repeat(np.take(fit.R, [k], axis=axis), n, axis=axis)) for k in range(n)]
         k = int(np.argmin(errs))
-        own = np.take(fit.S, [0], axis=axis)
-        M = own if np.array_equal(np.broadcast_to(own, fit.S.shape), fit.S) else np.take(fit.R, [k], axis=axis)
-        M = np.repeat(M, n, axis=axis)
+        M = np.repeat(own, n, axis=axis)
         out.append(Candidate("lines_aliased", f"every {word} one", f"every {word} the same, the render's {word} {k} "
                              f"repeated (one {word} list referenced {n} times, as [[0.0] * W] * H makes it, or an "
                              "index that never changes)", fit.model(M), 1, value={"lines": f"{word}s", "kept": k},
