@@ -358,7 +358,7 @@ _UNBIDDEN = (
     "grading, with the whole class in view (commit eafe813): that shift's words name the box filter it equals; the "
     "direct light missing on one surface or object (a tetrahedron never light-sampled, claimed as its colour, now "
     "read as either, no cause claimed); every albedo through a gamma of 2.2, the image plane's full width taken for "
-    "its half, and surfaces emitting (commit 8b1d725). Both rows here are of rules that saw the class.")
+    "its half, and surfaces emitting (commit 8b1d725; the ambient term among them dropped at 91c334c). Both rows here are of rules that saw the class.")
 
 _UNHERALDED = (
     "The wrong renders are a nineteenth class of mistakes in students' tracers, their scene input and their output "
@@ -375,7 +375,9 @@ _UNHERALDED = (
     "the whole class in view (commits 65166e2 and 0eeecec): every diffuse surface black, or of one colour; each pixel's samples "
     "combined by a median or a trimmed mean (rendered by mcrt); every row one row; a light sample's factor pi worded "
     "also as the BRDF's 1/pi left out; a flip's words counted as naming the camera's vectors; a power curve worded as "
-    "an encoding counted for a tone curve; candidates of the first three readings tried before a fourth. Both rows "
+    "an encoding counted for a tone curve; candidates of the first three readings tried before a fourth (commits "
+    "after 65166e2 up to 91c334c: one surface emitting a flexible fit, the ambient term dropped, every row one row only "
+    "where the lines are equal). Both rows "
     "here are of rules that saw the class.")
 
 #: Each class's title, after "Grading accuracy on a class of realistic hand-ins".
