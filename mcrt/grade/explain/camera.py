@@ -4,6 +4,7 @@ cylindrical, equirectangular or fisheye camera, a radial lens distortion), fitte
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from functools import partial
 
 import numpy as np
@@ -302,8 +303,6 @@ WIDEST = 170.0
 def _prepare_plane(a, scene, render) -> tuple[float, np.ndarray] | None:
     """(the field of view of :data:`PLANE_FACTOR`, its render at the basis's spp and seed), or None past
     :data:`WIDEST`."""
-    from dataclasses import replace
-
     from mcrt.grade.explain.objects import basis_renderer
 
     c0 = scene.cameras[a.camera]

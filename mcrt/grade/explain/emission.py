@@ -56,12 +56,12 @@ def _prepare(a, scene: Scene, render) -> dict:
     return {label: img(s) for label, s in _emitting(scene).items()}
 
 
-def _amplitude(fit: Fit, M: np.ndarray, c: int) -> float:
-    """The weighted least-squares amplitude of model M for the difference's channel ``c`` (the fit's pixel weights),
+def _amplitudes(w: np.ndarray, D: np.ndarray, M: np.ndarray) -> np.ndarray:
+    """The weighted least-squares amplitude of model M for the difference D, channel by channel (pixel weights w),
     at least 0."""
-    w, D = np.where(fit.ok, fit.w, 0.0)[..., c], fit.D[..., c]
-    den = float(np.sum(w * M * M))
-    return max(float(np.sum(w * D * M)) / den, 0.0) if den > 0 else 0.0
+    den = np.einsum("hwc,hwc->c", w * M, M)
+    num = np.einsum("hwc,hwc->c", w * D, M)
+    return np.maximum(np.divide(num, den, out=np.zeros(3), where=den > 0), 0.0)
 
 
 def emission(fit: Fit, inputs: Inputs) -> list[Candidate]:
@@ -70,10 +70,11 @@ def emission(fit: Fit, inputs: Inputs) -> list[Candidate]:
     if not r:
         return []
     base = inputs.basis.base.astype(np.float64)
+    w = np.where(fit.ok, fit.w, 0.0)  # once for every surface
     best = None
     for label, E in r.items():
         u = E.astype(np.float64) - base
-        e = np.array([_amplitude(fit, u[..., c], c) for c in range(3)])
+        e = _amplitudes(w, fit.D, u)
         change = e * u
         chi = fit.delta(change)
         if best is None or chi < best[0]:
