@@ -1192,3 +1192,25 @@ def test_albedos_rounded_to_one_decimal_are_named(ctx):
     ex = res.details["explanation"]
     assert ex["verdict"] == "claimed" and ex["family"] == "reflectance_rounded", ex["sentence"]
     assert named_causes(res)[0] == ["albedo"]
+
+
+def test_the_camera_finding_stands_where_a_camera_reading_ties_with_the_closest():
+    """Where no cause is claimed, the misregistration finding stands only beside a camera reading that is the
+    closest candidate or within TIE of it: which of two tied readings comes first is chance (unsaid's image plane
+    at z = 0 lost its camera finding to a shared albedo ahead by half a percent). A camera reading well behind
+    the closest drops it."""
+    from types import SimpleNamespace
+
+    from mcrt.grade.candidates import TIE, Candidate, Explanation
+    from mcrt.grade.stages.bias import _findings_rule
+
+    def kept(camera_share):
+        cands = [Candidate("albedo", "one colour", "", 0.0, explained=0.32),
+                 Candidate("rotation", "rotation", "", 0.0, explained=camera_share)]
+        g = SimpleNamespace(explanation=Explanation(cands, 0.0, 1, np.zeros(1)), th=None)
+        found = {"registration": "the camera does not match the reference"}
+        _findings_rule(g, None, None, SimpleNamespace(bt=None), found)
+        return "registration" in found
+
+    assert kept(0.32 - TIE / 4)
+    assert not kept(0.32 - 2 * TIE)

@@ -218,14 +218,18 @@ def _findings_rule(g: Grading, hand: Hand, lvl: Level, t: Tested, found: dict[st
     A structured remainder makes neighbours alike, moves edges and darkens
     pixels: the filter finding stands only if the noise is still
     correlated in what the best candidate leaves, the camera finding only
-    if that candidate is the camera's, the wrong-pixels finding (cracks,
-    shadow rays) only if its pixels are a minor share of the image.
+    if a candidate of the camera's is the best or tied with it (within
+    TIE: which of the two is ahead is then chance), the wrong-pixels
+    finding (cracks, shadow rays) only if its pixels are a minor share of
+    the image.
     """
     from mcrt.grade.adequacy import PARTIAL_SHARE
+    from mcrt.grade.candidates import TIE
     from mcrt.grade.structure import SHARES
 
     bt, th, best = t.bt, g.th, g.explanation.best
-    if best is None or best.family not in _families("CAMERA_FAMILIES"):
+    if best is None or not any(c.family in _families("CAMERA_FAMILIES") and c.explained >= best.explained - TIE
+                               for c in g.explanation.candidates):
         found.pop("registration", None)
     if "pixels" in found and bt.extra["pixels"].reshape(bt.shape + (3,)).any(axis=2).mean() > th.minor_area:
         found.pop("pixels")
