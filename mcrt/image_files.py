@@ -990,13 +990,33 @@ JPEG_REASON = ("JPEG is not accepted: its lossy compression changes the mean of 
 _WHITESPACE = b" \t\n\v\f\r"
 
 
-def _late_raster(path: str, raster: bytes, size: int, rgb8: bool) -> None:
+def _text_raster(raster: bytes, size: int) -> bool:
+    """Whether an 8-bit raster longer than its header declares is its ``size`` samples written as text and encoded
+    UTF-8 (``open(path, "w").write("".join(map(chr, codes)))``, Python's default on Linux): every code of 128 or
+    more two bytes, so it decodes to exactly ``size`` characters (a trailing newline aside), some beyond ASCII."""
+    if not size + 1 < len(raster) <= 2 * size + 1:
+        return False
+    try:
+        text = raster.decode("utf-8")
+    except UnicodeDecodeError:
+        return False
+    text = text[:-1] if len(text) == size + 1 and text[-1] == "\n" else text
+    return len(text) == size and max(map(ord, text)) < 256
+
+
+def _late_raster(path: str, raster: bytes, size: int, *, rgb: bool, bits8: bool) -> None:
     """Refuse a binary netpbm raster that starts late: k bytes more than its header declares, the first k of them
     whitespace and the last k not (a header ended by two newlines, where netpbm allows one; a trailing newline is
     whitespace at the end instead, and is read right); one that holds twice the data or more (16-bit samples
-    under an 8-bit header, or the header's size wrong); and an 8-bit RGB one (``rgb8``) that holds exactly 4/3 of
-    it (a program's RGBA buffer, 4 bytes a pixel, written whole: read as RGB, every pixel after the first would be
-    read from the wrong bytes)."""
+    under an 8-bit header, or the header's size wrong); an 8-bit RGB one that holds exactly 4/3 of it (a
+    program's RGBA buffer, 4 bytes a pixel, written whole: read as RGB, every pixel after the first would be read
+    from the wrong bytes); and an 8-bit one written as UTF-8 text (:func:`_text_raster`: read as bytes, every
+    sample after the first code of 128 or more would be read from the wrong bytes)."""
+    if bits8 and _text_raster(raster, size):
+        raise ImageError(f"{path}: the samples were written as text encoded UTF-8 (every code of 128 or more two "
+                         "bytes: a str of chr(code) written to a file opened with 'w'): open the file with 'wb' and "
+                         "write bytes (bytes(codes), or the array's tobytes())")
+    rgb8 = rgb and bits8
     k = len(raster) - size
     if rgb8 and k == size // 3 > 4:  # (k <= 4 is a late raster's, below)
         raise ImageError(f"{path}: the netpbm file holds 4 bytes a pixel where its RGB header declares 3: an RGBA "
@@ -1031,8 +1051,8 @@ def read_netpbm(path: PathLike, linear: bool = False) -> tuple[np.ndarray, int]:
             maxval = int(args[1]) if isinstance(args, tuple) and len(args) > 1 else (65535 if mode == "I" else 255)
             if tile is not None and tile.codec_name != "ppm_plain":
                 rgb = data[1:2] == b"6"
-                _late_raster(path, data[tile.offset:], w * h * (3 if rgb else 1) * (1 + (maxval > 255)),
-                             rgb and maxval <= 255)
+                _late_raster(path, data[tile.offset:], w * h * (3 if rgb else 1) * (1 + (maxval > 255)), rgb=rgb,
+                             bits8=maxval <= 255)
             if maxval <= 255:
                 if mode not in ("1", "L", "RGB"):
                     raise ImageError(f"{path}: unsupported netpbm pixel mode {mode}")

@@ -313,6 +313,26 @@ def test_ppm_holding_an_rgba_buffer_is_refused_naming_it(tmp_path):
     np.testing.assert_allclose(img * 255, rgba[..., :3].astype(np.float64), atol=1e-3)
 
 
+@pytest.mark.parametrize("magic, planes", [("P6", 3), ("P5", 1)])
+def test_netpbm_written_as_utf8_text_is_refused_naming_it(tmp_path, magic, planes):
+    """8-bit samples written as a str of chr(code) to a file opened with 'w' (UTF-8: each code of 128 or more two
+    bytes, as Python writes it on Linux, with and without a trailing newline) are refused with words that name the
+    text mode; the same codes as bytes are read right, as is a file whose codes are all below 128 (its text and
+    its bytes the same)."""
+    codes = np.random.default_rng(4).integers(0, 256, (5, 6, planes)).astype("u1")
+    head = f"{magic}\n6 5\n255\n"
+    path = tmp_path / "t.ppm"
+    for tail in ("", "\n"):
+        with open(path, "w", encoding="utf-8") as f:
+            f.write(head + "".join(map(chr, codes.reshape(-1).tolist())) + tail)
+        with pytest.raises(ImageError, match="t.ppm: the samples were written as text encoded UTF-8 .*'wb'"):
+            image_files.read_netpbm(path, linear=True)
+    for low in (codes, codes // 2):
+        path.write_bytes(head.encode() + low.tobytes())
+        img, _ = image_files.read_netpbm(path, linear=True)
+        np.testing.assert_allclose(img[..., :planes] * 255, low.astype(np.float64), atol=1e-3)
+
+
 def test_ppm_with_16_bit_samples_under_an_8_bit_header(tmp_path):
     """16-bit samples written under maxval 255 (twice the data the header declares, written here by hand) are an
     error that names the maxval."""
