@@ -936,19 +936,27 @@ def test_the_direct_light_left_out_is_named(ctx):
     ("barrel", "camera_model", "barrel distortion"),
     ("cylindrical", "camera_model", "cylindrical panorama"),
     ("contrast", "tone_curve", "saved as 1.3 (v - 0.3) + 0.3, clipped at 0"),
+    ("sigmoid", "tone_curve", "sigmoid contrast curve 1 / (1 + exp(7 (0.5 - v)))"),
+    ("pq", "encoding", "PQ curve of HDR video (SMPTE ST 2084), a value of 1 taken as 203 cd/m^2, where the file's sRGB"),
 ])
 def test_post_processing_and_camera_models_are_named(ctx, post, family, words):
     """A Mitsuba render (seed 76, 1024 spp) with a black level of 0.01 subtracted, through a contrast slider
-    (1.3 (v - 0.3) + 0.3, clipped at 0), or put through the untold class's barrel distortion (k = 0.06, written blind
-    to the grader); and its cylindrical panorama of the scene (Mitsuba, seed 77): each is claimed, in its words."""
-    from mcrt.grade.accuracy import untold
+    (1.3 (v - 0.3) + 0.3, clipped at 0), through scikit-image's adjust_sigmoid (gain 7), written as 16-bit PQ codes
+    (a value of 1 at 203 cd/m^2) by the unheralded class's writer and read back as the file's sRGB, or put through
+    the untold class's barrel distortion (k = 0.06; both classes written blind to the grader); and its cylindrical
+    panorama of the scene (Mitsuba, seed 77): each is claimed, in its words."""
+    from skimage.exposure import adjust_sigmoid
+
+    from mcrt.grade.accuracy import unheralded, untold
+    from mcrt.image_files import srgb_eotf
 
     if post == "cylindrical":
         img = untold._cylindrical(np.zeros((RES, RES, 3)), spp=256, seed=77)
     else:
         img = _mitsuba(load_scene(), 76)
         img = {"black_level": lambda x: np.maximum(x - 0.01, 0.0), "contrast": lambda x: np.maximum(
-            1.3 * (x - 0.3) + 0.3, 0.0)}.get(post, untold._barrel)(img)
+            1.3 * (x - 0.3) + 0.3, 0.0), "sigmoid": lambda x: adjust_sigmoid(np.maximum(x, 0.0), gain=7),
+               "pq": lambda x: srgb_eotf(unheralded._pq_codes(x, white=203.0) / 65535.0)}.get(post, untold._barrel)(img)
     res = grade_image(post, ctx, [img], spp=256 if post == "cylindrical" else 1024)
     ex = res.details["explanation"]
     assert ex["verdict"] == "claimed" and ex["family"] == family and words in ex["sentence"], ex["sentence"]

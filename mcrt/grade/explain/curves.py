@@ -10,7 +10,8 @@ from mcrt.grade.feedback import num as _num
 
 
 def curves(fit: Fit, inputs: Inputs) -> list[Candidate]:
-    """Encoding curves on the reference: sRGB (and its inverse), power curves; a Gaussian blur; an unsharp mask."""
+    """Encoding curves on the reference: sRGB (and its inverse), BT.709's, HDR video's PQ, power curves; a Gaussian
+    blur; an unsharp mask."""
     from scipy.ndimage import gaussian_filter
 
     from mcrt.image_files import srgb_eotf, srgb_oetf
@@ -34,6 +35,7 @@ def curves(fit: Fit, inputs: Inputs) -> list[Candidate]:
                      "1.099 x^0.45 - 0.099 above) where the file's sRGB curve belongs", fit.model(srgb_eotf(bt709(C))),
                      0, value="bt709", change=srgb_eotf(bt709(C)) - fit.R)]
     out += _per_channel(fit, R, C)
+    out += _hdr_video(fit, R, srgb_eotf)
     exps = np.linspace(0.25, 2.5, 91)
     errs = np.array([fit.model(R**p) for p in exps])
     i = int(np.argmin(errs))
@@ -62,6 +64,37 @@ def curves(fit: Fit, inputs: Inputs) -> list[Candidate]:
 def bt709(x: np.ndarray) -> np.ndarray:
     """BT.709's camera curve (its OETF) of linear values in [0, 1]."""
     return np.where(x < 0.018, 4.5 * x, 1.099 * np.power(np.maximum(x, 0.018), 0.45) - 0.099)
+
+
+#: SMPTE ST 2084 (PQ): m1, m2, c1, c2, c3.
+PQ = (2610.0 / 16384.0, 2523.0 / 4096.0 * 128.0, 3424.0 / 4096.0, 2413.0 / 4096.0 * 32.0, 2392.0 / 4096.0 * 32.0)
+#: The luminances (cd/m^2) a value of 1 is taken for before the PQ curve: SDR's white, BT.2408's graphics white,
+#: and a bright and the brightest display's.
+PQ_WHITES = (100.0, 203.0, 1000.0, 10000.0)
+
+
+def pq(y: np.ndarray) -> np.ndarray:
+    """The PQ curve (SMPTE ST 2084's inverse EOTF) of luminances as fractions of 10000 cd/m^2, clipped to [0, 1]."""
+    m1, m2, c1, c2, c3 = PQ
+    p = np.power(np.clip(y, 0.0, 1.0), m1)
+    return np.power((c1 + c2 * p) / (1.0 + c3 * p), m2)
+
+
+def _hdr_video(fit: Fit, R: np.ndarray, srgb_eotf) -> list[Candidate]:
+    """HDR video's PQ curve where the file's belongs, a value of 1 taken for one of :data:`PQ_WHITES` (one
+    parameter), read back with the sRGB curve from a display file (the reader decodes what the file declares) or
+    as it is from a float file. The curve ends at 1 itself (at 10000 cd/m^2)."""
+    out = []
+    for display, decode in ((True, srgb_eotf), (False, lambda v: v)):
+        models = [decode(pq(R * w / 10000.0)) for w in PQ_WHITES]
+        errs = [fit.model(m) for m in models]
+        i = int(np.argmin(errs))
+        where = "the file's sRGB curve belongs" if display else "the float file's linear values belong"
+        out.append(Candidate("encoding", f"PQ curve{'' if display else ', float'}", "the values encoded with the PQ "
+                             f"curve of HDR video (SMPTE ST 2084), a value of 1 taken as {_num(PQ_WHITES[i])} cd/m^2, "
+                             f"where {where}", errs[i], 1, value=f"pq{'' if display else '-float'}",
+                             change=models[i] - fit.R))
+    return out
 
 
 #: What a channel can go through on its own (a loop over the wrong channels, a curve applied in one channel's code

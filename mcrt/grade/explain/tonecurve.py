@@ -10,8 +10,9 @@ white point 11.2), the exponential curve :math:`1 - e^{-x}` (tutorials'
 :math:`x (1 + x / w^2) / (1 + x)` with its white point w scanned too; and
 Reinhard's curves, ACES and Hable's applied to the luminance L alone, each
 pixel's colour scaled by :math:`f(L) / L` (hue and saturation kept, as
-tone-mapping guides teach), and the sRGB curve so; and a constant subtracted from every value,
-clipped at 0 (a black level), or added. Any other monotone curve is fitted as an
+tone-mapping guides teach), and the sRGB curve so; a constant subtracted from every value,
+clipped at 0 (a black level), or added; a contrast slider; and a sigmoid contrast curve
+:math:`1 / (1 + e^{g (c - x)})` (scikit-image's ``adjust_sigmoid``), its cut-off and gain scanned. Any other monotone curve is fitted as an
 isotonic regression of S on R per channel
 (:func:`scipy.optimize.isotonic_regression`) on :data:`BINS` quantile bins
 of R, each bin's level one parameter at most, and worded by the values it
@@ -107,6 +108,7 @@ def tone_curve(fit: Fit, inputs: Inputs) -> list[Candidate]:
     out += _reinhard_extended(fit, R)
     out += _offset(fit, R)
     out += _contrast(fit, R)
+    out.append(_sigmoid(fit, R))
     out.append(_isotonic(fit))
     return out
 
@@ -149,6 +151,23 @@ def _contrast(fit: Fit, R: np.ndarray) -> list[Candidate]:
     return [Candidate("tone_curve", "contrast", f"the values through a contrast control before saving: each value v "
                       f"saved as {_num(a)} (v - {_num(pivot)}) + {_num(pivot)}, clipped at 0", fit.delta(change), 2,
                       value={"curve": "contrast", "contrast": a, "pivot": pivot}, change=change)]
+
+
+#: Cut-offs and gains scanned for a sigmoid contrast curve (scikit-image's adjust_sigmoid defaults: 0.5 and 10).
+SIGMOID_CUTOFFS = (0.25, 0.5, 0.75)
+SIGMOID_GAINS = (3.0, 5.0, 7.0, 10.0, 15.0, 20.0)
+
+
+def _sigmoid(fit: Fit, R: np.ndarray) -> Candidate:
+    """A sigmoid contrast curve 1 / (1 + exp(g (c - v))) of every value (``skimage.exposure.adjust_sigmoid``, an
+    S-curve for contrast): its cut-off c and gain g scanned (two parameters)."""
+    best = min(((fit.model(1.0 / (1.0 + np.exp(g * (c - R)))), c, g) for c in SIGMOID_CUTOFFS for g in SIGMOID_GAINS),
+               key=lambda t: t[0])
+    err, c, g = best
+    return Candidate("tone_curve", "sigmoid", f"the values through a sigmoid contrast curve 1 / (1 + exp({_num(g)} "
+                     f"({_num(c)} - v))) before saving (an S-curve for contrast, as scikit-image's adjust_sigmoid "
+                     "applies)", err, 2, value={"curve": "sigmoid", "cutoff": c, "gain": g},
+                     change=1.0 / (1.0 + np.exp(g * (c - R))) - fit.R)
 
 
 def _reinhard_extended(fit: Fit, R: np.ndarray) -> list[Candidate]:
