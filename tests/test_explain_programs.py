@@ -158,6 +158,32 @@ def test_black_pixels_are_named_and_lose_points(ctx, name):
     assert res.score < res.max_score
 
 
+@pytest.mark.parametrize("name", ["crosshair", "grid"])
+def test_lines_drawn_over_the_render_are_named_where_they_are(ctx, name):
+    """A Mitsuba render (seed 63) with the unheralded class's red crosshair through its centre (written blind to the
+    grader), or a grey grid drawn every 8 rows and columns: claimed as lines drawn, with their rows and columns,
+    and points are lost. The same render 20 times too bright in a display file (whole lines clipped at 1, one value
+    too) has no lines drawn."""
+    from mcrt.grade.accuracy import unheralded
+    from mcrt.grade.explain.pixels import drawn_lines
+
+    img = _mitsuba(63)
+    if name == "crosshair":
+        drawn, where = unheralded._crosshair(img), f"row {RES // 2} and column {RES // 2}"
+    else:
+        drawn = img.copy()
+        drawn[::8, :] = drawn[:, ::8] = 0.5
+        where = "rows 0, 8, 16, 24 and columns 0, 8, 16, 24"
+    res = grade_image(name, ctx, [drawn], spp=1024)
+    fam, said = _claimed(res)
+    assert fam == "bad_pixels" and where in said and named_causes(res)[0] == ["bad_pixels"], said
+    assert res.score < res.max_score
+    clipped = np.round(np.clip(img * 20.0, 0.0, 1.0) * 255.0) / 255.0
+    assert np.all(clipped == 1.0, axis=(1, 2)).any()
+    ref = ctx.references["near"]
+    assert drawn_lines(clipped, ref.mean, 1.0 / np.maximum(ctx.model_var["near"] / 1024 + ref.var / ref.spp, 1e-30)) == {}
+
+
 def test_a_wall_left_out_is_named_as_a_black_surface(ctx):
     """Wall CD left out of the Mitsuba scene (seed 71): in the closed room it is black, which is what a wall of
     albedo 0 looks like; the feedback claims that surface black and names both causes."""

@@ -14,6 +14,12 @@ chosen by that property of the hand-in, not fitted (one parameter, the
 rule); a set covering more than :data:`MOST` of the image is no longer a
 few bad pixels. Pixels that are NaN or infinite are the ``finite``
 criterion's (they are left out of every test, this one included).
+
+Lines of one colour drawn over the render (a crosshair or grid drawn to
+check the camera's aim, a guide line) are found the same way, by a property
+no render has: a row or column whose every pixel is one value to the last
+bit, far from the render's line; the model is R with those lines the
+hand-in's, one parameter a line.
 """
 
 from __future__ import annotations
@@ -28,6 +34,9 @@ from mcrt.stats import LUMINANCE_WEIGHTS
 DARK = 0.05
 #: Largest share of the image's pixels the family explains as bad pixels.
 MOST = 0.25
+#: A line of one colour is drawn where its chi^2 against the render's line exceeds noise's by this many standard
+#: deviations (sqrt(2 m) for m terms).
+LINE_Z = 5.0
 #: Black pixels are worded as one object's when this share of them is on it, and they cover most of its pixels
 #: (not all: its edge pixels see something else too).
 ONE_OBJECT = 0.9
@@ -51,7 +60,53 @@ def _block(bad: np.ndarray) -> tuple[int, int, int, int] | None:
 
 
 def bad_pixels(fit: Fit, inputs: Inputs) -> list[Candidate]:
-    """The hand-in's black pixels where the scene is not, as written 0 (the module docstring)."""
+    """The hand-in's black pixels where the scene is not, as written 0 (the module docstring), and lines of one
+    colour drawn over the image (:func:`drawn_lines`)."""
+    return _black(fit, inputs) + _lines(fit)
+
+
+def drawn_lines(S: np.ndarray, R: np.ndarray, w: np.ndarray) -> dict[str, list[int]]:
+    """{'rows': [...], 'columns': [...]}: the hand-in's rows and columns whose every pixel is one colour, to the last
+    bit, neither black nor the image's largest value in every channel (an over-exposed display file's lines
+    clipped at 1 are one value too), and that colour far from the render's line (its chi^2 against it, weights
+    ``w``, beyond :data:`LINE_Z` standard deviations of noise's): no render's line is one value by chance. At most
+    :data:`MOST` of either."""
+    out, top = {}, np.max(S, axis=(0, 1))
+    for axis, word in ((0, "rows"), (1, "columns")):
+        S_, R_, w_ = (np.moveaxis(x, axis, 0) for x in (S, R, w))
+        one = (np.all(S_ == S_[:, :1], axis=(1, 2)) & np.any(S_[:, 0] != 0.0, axis=-1)
+               & np.any(S_[:, 0] != top, axis=-1))
+        m = np.maximum(np.count_nonzero(w_, axis=(1, 2)), 1)
+        far = np.sum((S_ - R_) ** 2 * w_, axis=(1, 2)) - m > LINE_Z * np.sqrt(2.0 * m)
+        k = np.flatnonzero(one & far)
+        if 0 < len(k) <= MOST * len(S_):
+            out[word] = k.tolist()
+    return out
+
+
+def _lines(fit: Fit) -> list[Candidate]:
+    """Lines of one colour drawn over the render (a crosshair or grid drawn to check the camera's aim and left in,
+    a guide line, a line of one value written by an index that stays put): the model is R with those lines
+    the hand-in's colour; each line is one parameter, read off the hand-in."""
+    found = drawn_lines(fit.S, fit.R, fit.w)
+    if not found:
+        return []
+    drawn = np.zeros(fit.R.shape[:2], bool)
+    drawn[found.get("rows", []), :] = True
+    drawn[:, found.get("columns", [])] = True
+    M = np.where(drawn[..., None], fit.S, fit.R)
+    colours = {tuple(float(v) for v in fit.S[r, c]) for r, c in np.argwhere(drawn)}
+    colour = ("the colour " + "(" + ", ".join(f"{v:.3g}" for v in next(iter(colours))) + ")" if len(colours) == 1
+              else f"{len(colours)} colours")
+    where = " and ".join(f"{word[:-1] if len(ks) == 1 else word} {', '.join(map(str, ks))}" for word, ks in found.items())
+    n = sum(len(ks) for ks in found.values())
+    text = (f"{'a line' if n == 1 else f'{n} lines'} of one colour drawn over the render ({colour}, along {where}): "
+            "a crosshair, grid or guide drawn to check the camera's aim and left in, or a line written with one value")
+    return [Candidate("bad_pixels", "lines drawn", text, fit.model(M), n, value={"lines": found}, change=M - fit.R)]
+
+
+def _black(fit: Fit, inputs: Inputs) -> list[Candidate]:
+    """The hand-in's black pixels where the scene is not, as written 0."""
     bad = black_pixels(fit)
     n = int(bad.sum())
     if n == 0 or n > MOST * max(int(fit.ok.all(axis=-1).sum()), 1):
