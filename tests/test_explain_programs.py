@@ -184,6 +184,32 @@ def test_lines_drawn_over_the_render_are_named_where_they_are(ctx, name):
     assert drawn_lines(clipped, ref.mean, 1.0 / np.maximum(ctx.model_var["near"] / 1024 + ref.var / ref.spp, 1e-30)) == {}
 
 
+@pytest.mark.parametrize("aovs, words", [
+    ("aa:albedo", "the film's albedo buffer"),
+    ("nn:sh_normal", "the surface normals written as colours ((n + 1) / 2)"),
+    ("dd:depth", "a depth buffer (each pixel the distance to the first surface its rays meet, "),
+])
+def test_an_auxiliary_buffer_written_for_the_image_is_named(ctx, aovs, words):
+    """Mitsuba's aov integrator (seed 64, 64 spp): its albedo buffer, its shading normals as (n + 1) / 2, and its depth
+    divided by its largest value in every channel, each handed in for the image: claimed as that buffer (the depth's
+    scale within 3 % of 1 / the largest distance), and points are lost."""
+    import mitsuba as mi
+
+    from mcrt.mitsuba_scene import scene_dict
+
+    d = scene_dict(load_scene(), "near", RES, RES, 8, spp=64)
+    d["integrator"] = {"type": "aov", "aovs": aovs}
+    img = np.asarray(mi.render(mi.load_dict(d), spp=64, seed=64), np.float64)
+    far = float(img.max())
+    img = {"aa": img, "nn": (img + 1.0) / 2.0, "dd": np.repeat(img / far, 3, axis=2)}[aovs[:2]]
+    res = grade_image(aovs[:2], ctx, [img], spp=64)
+    fam, said = _claimed(res)
+    assert fam == "wrong_buffer" and words in said and named_causes(res)[0] == ["wrong_buffer"], said
+    if aovs == "dd:depth":
+        assert res.details["explanation"]["candidates"][0]["value"]["scale"] == pytest.approx(1.0 / far, rel=0.03)
+    assert res.score < res.max_score
+
+
 def test_a_wall_left_out_is_named_as_a_black_surface(ctx):
     """Wall CD left out of the Mitsuba scene (seed 71): in the closed room it is black, which is what a wall of
     albedo 0 looks like; the feedback claims that surface black and names both causes."""

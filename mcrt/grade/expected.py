@@ -306,55 +306,11 @@ def label_names(scene: Scene) -> tuple[str, ...]:
 
 def surface_labels(scene: Scene, camera: str, width: int, height: int, sub: int = 4) -> np.ndarray:
     """(H, W) index into :func:`label_names` of the surface most of each pixel sees (sub x sub rays)."""
-    from mcrt.camera import primary_directions
+    from mcrt.grade.hits import first_hits
 
-    cam = scene.camera(camera)
-    jj, ii = np.mgrid[0:height, 0:width]
-    surfaces = scene.surfaces()
-    spheres = scene.spheres()
-    n_labels = len(surfaces) + len(spheres) + 1
-    counts = np.zeros((height, width, n_labels), np.int32)
-    o = np.asarray(cam.eye, float)
-    tris, owner = [], []
-    for k, s in enumerate(surfaces):
-        tris.append(s.triangles)
-        owner += [k] * len(s.triangles)
-    tris = np.concatenate(tris)
-    owner = np.asarray(owner)
-    for su in range(sub):
-        for sv in range(sub):
-            u = np.full(ii.shape, (su + 0.5) / sub)
-            v = np.full(ii.shape, (sv + 0.5) / sub)
-            d = primary_directions(cam, width, height, ii, jj, u, v).reshape(-1, 3)
-            best_t = np.full(len(d), np.inf)
-            best = np.full(len(d), n_labels - 1)
-            e1 = tris[:, 1] - tris[:, 0]
-            e2 = tris[:, 2] - tris[:, 0]
-            for t_i in range(len(tris)):  # Moller-Trumbore, one triangle against all rays
-                p = np.cross(d, e2[t_i])
-                det = p @ e1[t_i]
-                with np.errstate(divide="ignore", invalid="ignore"):
-                    inv = 1.0 / det
-                    tv = o - tris[t_i, 0]
-                    uu = (p @ tv) * inv
-                    q = np.cross(tv, e1[t_i])
-                    vv = (d @ q) * inv
-                    t = (e2[t_i] @ q) * inv
-                ok = (np.abs(det) > 1e-12) & (uu >= 0) & (vv >= 0) & (uu + vv <= 1) & (t > 1e-6) & (t < best_t)
-                best_t = np.where(ok, t, best_t)
-                best = np.where(ok, owner[t_i], best)
-            for k, sp in enumerate(spheres):
-                oc = o - np.asarray(sp.center)
-                b = d @ oc
-                c = oc @ oc - sp.radius**2
-                disc = b * b - c
-                with np.errstate(invalid="ignore"):
-                    t = -b - np.sqrt(disc)
-                ok = (disc > 0) & (t > 1e-6) & (t < best_t)
-                best_t = np.where(ok, t, best_t)
-                best = np.where(ok, len(surfaces) + k, best)
-            np.add.at(counts, (jj.ravel(), ii.ravel(), best), 1)
-    return np.argmax(counts, axis=2).astype(np.int16)
+    return np.argmax(first_hits(scene, camera, width, height, sub).counts, axis=2).astype(np.int16)
+
+
 
 
 # --------------------------------------------------------------------------

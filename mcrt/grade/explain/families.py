@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from mcrt.grade.explain.aov import aov
 from mcrt.grade.explain.basis import Basis, prepare_basis
 from mcrt.grade.explain.bloom import bloom
 from mcrt.grade.explain.bounce import bounce
@@ -38,11 +39,11 @@ from mcrt.grade.explain.walls import walls_one_colour
 #: the wrong surfaces, every diffuse reflectance off by one factor, squared or its complement, light counted twice, a
 #: path's weight off from a bounce on, the diffuse bounce drawn or weighted wrongly, the mirror's reflection computed
 #: wrongly, a light sample's weight, the light facing the wrong way, surfaces emitting, each pixel's samples combined
-#: by a median or trimmed mean, black pixels, another of the film's buffers written).
+#: by a median or trimmed mean, black pixels, another of the film's buffers written, an auxiliary buffer written).
 FAMILIES = (scale, colour, curves, albedo, albedos, walls_one_colour, surface_black, rendered, camera, plane_width,
             catalogue, tone_curve, sample_clamp, falloff, resampling, layout, bloom, material, object_size, swap,
             reflectance_scale, reflectance_remapped, light_twice, path_weight, bounce, mirror, light_sampling,
-            light_facing, emission, pixel_statistic, bad_pixels, wrong_buffer)
+            light_facing, emission, pixel_statistic, bad_pixels, wrong_buffer, aov)
 
 #: The families that are mistakes of the camera (what the misregistration test of mcrt.grade.structure also sees).
 CAMERA_FAMILIES = frozenset({"fov", "aspect", "pixel_offset", "rotation", "eye", "camera_model"})

@@ -1,0 +1,85 @@
+"""What each pixel's camera rays meet first: which surface, its normal, its distance (the surfaces' labels and the
+auxiliary buffers' model images are made of them)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from mcrt.scene import Scene
+
+
+@dataclass(frozen=True)
+class FirstHits:
+    """What each pixel's sub x sub pinhole rays meet first (:func:`first_hits`)."""
+
+    counts: np.ndarray  # (H, W, labels) rays meeting each surface of label_names ('nothing' last)
+    normal: np.ndarray  # (H, W, 3) mean unit normal at the hits (facing the ray), 0 for rays that meet nothing
+    distance: np.ndarray  # (H, W) mean distance from the eye to the hits (rays that meet nothing left out)
+
+
+def first_hits(scene: Scene, camera: str, width: int, height: int, sub: int = 4) -> FirstHits:
+    """Each pixel's sub x sub pinhole rays (stratified at the strata's centres) traced to the first surface they
+    meet: which surface, its normal and its distance."""
+    from mcrt.camera import primary_directions
+
+    cam = scene.camera(camera)
+    jj, ii = np.mgrid[0:height, 0:width]
+    surfaces = scene.surfaces()
+    spheres = scene.spheres()
+    n_labels = len(surfaces) + len(spheres) + 1
+    counts = np.zeros((height, width, n_labels), np.int32)
+    normals, dist, hits = np.zeros((height * width, 3)), np.zeros(height * width), np.zeros(height * width)
+    o = np.asarray(cam.eye, float)
+    tris, owner = [], []
+    for k, s in enumerate(surfaces):
+        tris.append(s.triangles)
+        owner += [k] * len(s.triangles)
+    tris = np.concatenate(tris)
+    owner = np.asarray(owner)
+    e1 = tris[:, 1] - tris[:, 0]
+    e2 = tris[:, 2] - tris[:, 0]
+    tri_n = np.cross(e1, e2)
+    tri_n /= np.linalg.norm(tri_n, axis=1, keepdims=True)
+    for su in range(sub):
+        for sv in range(sub):
+            u = np.full(ii.shape, (su + 0.5) / sub)
+            v = np.full(ii.shape, (sv + 0.5) / sub)
+            d = primary_directions(cam, width, height, ii, jj, u, v).reshape(-1, 3)
+            best_t = np.full(len(d), np.inf)
+            best = np.full(len(d), n_labels - 1)
+            n = np.zeros((len(d), 3))
+            for t_i in range(len(tris)):  # Moller-Trumbore, one triangle against all rays
+                p = np.cross(d, e2[t_i])
+                det = p @ e1[t_i]
+                with np.errstate(divide="ignore", invalid="ignore"):
+                    inv = 1.0 / det
+                    tv = o - tris[t_i, 0]
+                    uu = (p @ tv) * inv
+                    q = np.cross(tv, e1[t_i])
+                    vv = (d @ q) * inv
+                    t = (e2[t_i] @ q) * inv
+                ok = (np.abs(det) > 1e-12) & (uu >= 0) & (vv >= 0) & (uu + vv <= 1) & (t > 1e-6) & (t < best_t)
+                best_t = np.where(ok, t, best_t)
+                best = np.where(ok, owner[t_i], best)
+                n = np.where(ok[:, None], tri_n[t_i], n)
+            for k, sp in enumerate(spheres):
+                oc = o - np.asarray(sp.center)
+                b = d @ oc
+                c = oc @ oc - sp.radius**2
+                disc = b * b - c
+                with np.errstate(invalid="ignore"):
+                    t = -b - np.sqrt(disc)
+                ok = (disc > 0) & (t > 1e-6) & (t < best_t)
+                best_t = np.where(ok, t, best_t)
+                best = np.where(ok, len(surfaces) + k, best)
+                n = np.where(ok[:, None], (o + t[:, None] * d - np.asarray(sp.center)) / sp.radius, n)
+            np.add.at(counts, (jj.ravel(), ii.ravel(), best), 1)
+            hit = np.isfinite(best_t)
+            n *= np.where(np.sum(n * d, axis=1, keepdims=True) > 0, -1.0, 1.0)  # facing the ray
+            normals += np.where(hit[:, None], n, 0.0)
+            dist += np.where(hit, best_t, 0.0)
+            hits += hit
+    return FirstHits(counts, (normals / (sub * sub)).reshape(height, width, 3),
+                     (dist / np.maximum(hits, 1)).reshape(height, width))
