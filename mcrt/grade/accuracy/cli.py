@@ -17,7 +17,7 @@ CLASSES = {"scene": "cases", "outside": "outside", "programs": "programs", "fres
            "unheard": "unheard", "unsaid": "unsaid", "unasked": "unasked",
            "unsought": "unsought", "unguessed": "unguessed",
            "unforeseen": "unforeseen", "unprompted": "unprompted",
-           "unbidden": "unbidden", "unheralded": "unheralded"}
+           "unbidden": "unbidden", "unheralded": "unheralded", "unbeknown": "unbeknown"}
 
 
 def register(sub) -> None:
@@ -45,9 +45,10 @@ def register(sub) -> None:
                    "'unforeseen' (a sixteenth, in tracers, scene input and output, written blind, "
                    "mcrt.grade.accuracy.unforeseen), 'unprompted' (a seventeenth, in tracers, scene input and "
                    "output, written blind, mcrt.grade.accuracy.unprompted), 'unbidden' (an eighteenth, in "
-                   "tracers, scene input and output, written blind, mcrt.grade.accuracy.unbidden) or 'unheralded' (a "
+                   "tracers, scene input and output, written blind, mcrt.grade.accuracy.unbidden), 'unheralded' (a "
                    "nineteenth, in tracers, scene input and output, written blind, "
-                   "mcrt.grade.accuracy.unheralded) (default: scene)")
+                   "mcrt.grade.accuracy.unheralded) or 'unbeknown' (a twentieth, in tracers, scene input and output, "
+                   "written blind, mcrt.grade.accuracy.unbeknown) (default: scene)")
     p.add_argument("--held-out", choices=("all", "only", "none"), default="all",
                    help="grade all cases, only the held-out ones, or none of them (default: all)")
     p.add_argument("--out", default=None, help=f"report folder (default: {DEFAULT_OUT}, or {DEFAULT_OUT}/CLASS "
