@@ -287,7 +287,9 @@ def _explanation_causes(expl: dict) -> list[str]:
                             # one object's direct light missing, or its material (since unbidden)
                             ("direct_missing", "or its material other than the scene's", "material"),
                             # pi in the light sample, worded also as the BRDF's 1/pi left out (since unheralded)
-                            ("light_sampling", "BRDF's 1/pi left out", "brdf_norm")):
+                            ("light_sampling", "BRDF's 1/pi left out", "brdf_norm"),
+                            # black pixels where the light is hidden: the bounced light lost (since unbeknown)
+                            ("bad_pixels", "the light bounced there lost", "indirect_scale")):
         if fam == f and words in expl["sentence"]:
             causes.append(cause)
     for alt in (expl.get("adequacy") or {}).get("alternatives", []):  # named beside it as fitting as well

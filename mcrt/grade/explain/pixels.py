@@ -115,7 +115,12 @@ def _black(fit: Fit, inputs: Inputs) -> list[Candidate]:
     box = _block(bad)
     obj = _on_one_object(bad, inputs)
     hole = _hole(bad, inputs) if not obj and box is None else ""
-    if obj:  # one object's pixels: neither a tile left out nor NaNs scattered, first of all that object
+    if n >= 2 and _in_shadow(bad, inputs):
+        text = (f"{n} pixels ({100 * n / bad.size:.2g} % of the image) black where the scene is not, every one where the "
+                "light is hidden from the surface (no direct light there): the light bounced there lost, as when the "
+                "path ends where its shadow ray is blocked (an early exit meant for the shadow test, in the path's "
+                "loop) or no light is bounced at all")
+    elif obj:  # one object's pixels: neither a tile left out nor NaNs scattered, first of all that object
         text = (f"{n} pixels ({100 * n / bad.size:.2g} % of the image) black where the scene is not{obj}; or a NaN or "
                 "infinite sample written as 0 on it (a division by a zero pdf or cosine there)")
     elif hole:
@@ -134,6 +139,17 @@ def _black(fit: Fit, inputs: Inputs) -> list[Candidate]:
     rows, cols = np.nonzero(bad)
     return [Candidate("bad_pixels", "black pixels", text, fit.delta(change), 1,
                       value={"pixels": n, "block": box, "first": [int(rows[0]), int(cols[0])]}, change=change)]
+
+
+def _in_shadow(bad: np.ndarray, inputs: Inputs) -> bool:
+    """Whether every black pixel is one the light does not reach directly: its direct light (the basis's paths of
+    depth 2 less those of depth 1: next-event estimation alone lights a surface there) none, to the last bit. A
+    shadow ray always blocked gives such a pixel no sample of direct light, whatever the basis's seed."""
+    depth = dict(inputs.basis.nodes.get("depth", ())) if inputs.basis is not None else {}
+    if 1 not in depth or 2 not in depth:
+        return False
+    direct = np.asarray(depth[2], np.float64) - np.asarray(depth[1], np.float64)
+    return bool(np.all(direct[bad] == 0.0))
 
 
 def _hole(bad: np.ndarray, inputs: Inputs) -> str:
