@@ -193,6 +193,17 @@ def test_lines_drawn_over_the_render_are_named_where_they_are(ctx, name):
     assert drawn_lines(clipped, ref.mean, 1.0 / np.maximum(ctx.model_var["near"] / 1024 + ref.var / ref.spp, 1e-30)) == {}
 
 
+def _mitsuba_aov(aovs: str, seed: int, spp: int = 64) -> np.ndarray:
+    """Mitsuba's aov integrator's image (its channels as the AOVs list them)."""
+    import mitsuba as mi
+
+    from mcrt.mitsuba_scene import scene_dict
+
+    d = scene_dict(load_scene(), "near", RES, RES, 8, spp=spp)
+    d["integrator"] = {"type": "aov", "aovs": aovs}
+    return np.asarray(mi.render(mi.load_dict(d), spp=spp, seed=seed), np.float64)
+
+
 @pytest.mark.parametrize("aovs, words", [
     ("aa:albedo", "the film's albedo buffer"),
     ("nn:sh_normal", "the surface normals written as colours ((n + 1) / 2)"),
@@ -202,13 +213,7 @@ def test_an_auxiliary_buffer_written_for_the_image_is_named(ctx, aovs, words):
     """Mitsuba's aov integrator (seed 64, 64 spp): its albedo buffer, its shading normals as (n + 1) / 2, and its depth
     divided by its largest value in every channel, each handed in for the image: claimed as that buffer (the depth's
     scale within 3 % of 1 / the largest distance), and points are lost."""
-    import mitsuba as mi
-
-    from mcrt.mitsuba_scene import scene_dict
-
-    d = scene_dict(load_scene(), "near", RES, RES, 8, spp=64)
-    d["integrator"] = {"type": "aov", "aovs": aovs}
-    img = np.asarray(mi.render(mi.load_dict(d), spp=64, seed=64), np.float64)
+    img = _mitsuba_aov(aovs, 64)
     far = float(img.max())
     img = {"aa": img, "nn": (img + 1.0) / 2.0, "dd": np.repeat(img / far, 3, axis=2)}[aovs[:2]]
     res = grade_image(aovs[:2], ctx, [img], spp=64)
@@ -216,6 +221,24 @@ def test_an_auxiliary_buffer_written_for_the_image_is_named(ctx, aovs, words):
     assert fam == "wrong_buffer" and words in said and named_causes(res)[0] == ["wrong_buffer"], said
     if aovs == "dd:depth":
         assert res.details["explanation"]["candidates"][0]["value"]["scale"] == pytest.approx(1.0 / far, rel=0.03)
+    assert res.score < res.max_score
+
+
+def test_lamberts_cosine_to_the_eye_is_named(ctx):
+    """A Mitsuba render (seed 68) whose light reflected at surfaces of non-zero albedo is times |n . d|, n and d from
+    Mitsuba's own shading-normal and position AOVs (seed 69, 256 spp) and the camera's eye, the emission the camera
+    sees (Mitsuba, max depth 1) kept: claimed as Lambert's cosine taken to the eye, scored as the BRDF's mistake."""
+    aov = _mitsuba_aov("aa:albedo,nn:sh_normal,pp:position", 69, spp=256)
+    n, p = aov[..., 3:6], aov[..., 6:9]
+    d = p - np.asarray(load_scene().camera("near").eye)
+    d /= np.linalg.norm(d, axis=-1, keepdims=True)
+    cos = np.where(aov[..., :3].sum(axis=-1) > 0, np.abs(np.sum(n * d, axis=-1)), 1.0)[..., None]
+    full = _mitsuba(68)
+    seen = np.asarray(_render_spec(Spec("t", None, spp=1024), load_scene(), width=RES, height=RES, max_depth=1,
+                                   seed=68).mean, np.float64)
+    res = grade_image("view_cosine", ctx, [seen + cos * (full - seen)], spp=1024)
+    fam, said = _claimed(res)
+    assert fam == "view_cosine" and named_causes(res)[0] == ["material", "brdf_norm"], said
     assert res.score < res.max_score
 
 

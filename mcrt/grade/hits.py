@@ -17,6 +17,7 @@ class FirstHits:
     counts: np.ndarray  # (H, W, labels) rays meeting each surface of label_names ('nothing' last)
     normal: np.ndarray  # (H, W, 3) mean unit normal at the hits (facing the ray), 0 for rays that meet nothing
     distance: np.ndarray  # (H, W) mean distance from the eye to the hits (rays that meet nothing left out)
+    cosines: np.ndarray  # (H, W, labels) sum of |n . d| over the rays meeting each surface (0 for 'nothing')
 
 
 def first_hits(scene: Scene, camera: str, width: int, height: int, sub: int = 4) -> FirstHits:
@@ -31,6 +32,7 @@ def first_hits(scene: Scene, camera: str, width: int, height: int, sub: int = 4)
     n_labels = len(surfaces) + len(spheres) + 1
     counts = np.zeros((height, width, n_labels), np.int32)
     normals, dist, hits = np.zeros((height * width, 3)), np.zeros(height * width), np.zeros(height * width)
+    cosines = np.zeros((height, width, n_labels))
     o = np.asarray(cam.eye, float)
     tris, owner = [], []
     for k, s in enumerate(surfaces):
@@ -77,9 +79,10 @@ def first_hits(scene: Scene, camera: str, width: int, height: int, sub: int = 4)
                 n = np.where(ok[:, None], (o + t[:, None] * d - np.asarray(sp.center)) / sp.radius, n)
             np.add.at(counts, (jj.ravel(), ii.ravel(), best), 1)
             hit = np.isfinite(best_t)
+            np.add.at(cosines, (jj.ravel(), ii.ravel(), best), np.where(hit, np.abs(np.sum(n * d, axis=1)), 0.0))
             n *= np.where(np.sum(n * d, axis=1, keepdims=True) > 0, -1.0, 1.0)  # facing the ray
             normals += np.where(hit[:, None], n, 0.0)
             dist += np.where(hit, best_t, 0.0)
             hits += hit
     return FirstHits(counts, (normals / (sub * sub)).reshape(height, width, 3),
-                     (dist / np.maximum(hits, 1)).reshape(height, width))
+                     (dist / np.maximum(hits, 1)).reshape(height, width), cosines)

@@ -97,6 +97,8 @@ CAUSE_OF: dict[str, tuple[str, ...]] = {
     "sample_clamp": ("sample_clamp",),
     # Another of the film's buffers written for its mean (mcrt.grade.explain.buffers): its variance, its squares.
     "wrong_buffer": ("wrong_buffer",),
+    # Lambert's cosine taken to the eye too: the diffuse BRDF's mistake (added after unbeknown was graded).
+    "view_cosine": ("material", "brdf_norm"),
     # A surface black (mcrt.grade.explain.surface_black): a surface of the closed room missing, of albedo 0, or with
     # its normals facing away under one-sided shading looks the same, and the words name every cause; an object
     # black is not missing (what lies behind it would show).

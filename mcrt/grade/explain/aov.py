@@ -109,7 +109,18 @@ def _prepare(a, scene, render) -> dict:
     rho = np.array([m.albedo if isinstance(m, Lambertian) else (0.0, 0.0, 0.0) for m in mats], np.float64)
     return {"cover": hits.counts / hits.counts.sum(axis=-1, keepdims=True), "albedo": rho,
             "mirror": [k for k, m in enumerate(mats) if m is not None and not isinstance(m, (Lambertian, str))],
-            "light": [k for k, m in enumerate(mats) if m is None], "normal": hits.normal, "distance": hits.distance}
+            "light": [k for k, m in enumerate(mats) if m is None], "normal": hits.normal, "distance": hits.distance,
+            "view_cosine": _view_cosine(hits, mats)}
+
+
+def _view_cosine(hits, mats) -> np.ndarray:
+    """(H, W, 1) the mean over each pixel's rays of |n . d| where a ray meets a Lambertian, 1 where it meets anything
+    else (mcrt.grade.explain.view_cosine's factor)."""
+    from mcrt.scene import Lambertian
+
+    diffuse = np.array([isinstance(m, Lambertian) for m in mats])
+    f = hits.cosines[..., diffuse].sum(axis=-1) + hits.counts[..., ~diffuse].sum(axis=-1)
+    return (f / hits.counts.sum(axis=-1))[..., None]
 
 
 aov.name = "aov"

@@ -29,6 +29,7 @@ from mcrt.grade.explain.scene import albedo, albedos, rendered, scale
 from mcrt.grade.explain.surface_black import surface_black
 from mcrt.grade.explain.swap import swap
 from mcrt.grade.explain.tonecurve import tone_curve
+from mcrt.grade.explain.view_cosine import view_cosine
 from mcrt.grade.explain.walls import walls_one_colour
 
 #: Every family the engine fits, in this order (ties keep it). The scene file's parameters (and the colours mixed by a
@@ -39,11 +40,11 @@ from mcrt.grade.explain.walls import walls_one_colour
 #: the wrong surfaces, every diffuse reflectance off by one factor, squared or its complement, light counted twice, a
 #: path's weight off from a bounce on, the diffuse bounce drawn or weighted wrongly, the mirror's reflection computed
 #: wrongly, a light sample's weight, the light facing the wrong way, surfaces emitting, each pixel's samples combined
-#: by a median or trimmed mean, black pixels, another of the film's buffers written, an auxiliary buffer written).
+#: by a median or trimmed mean, black pixels, another of the film's buffers written, an auxiliary buffer written, Lambert's cosine taken to the eye too).
 FAMILIES = (scale, colour, curves, albedo, albedos, walls_one_colour, surface_black, rendered, camera, plane_width,
             catalogue, tone_curve, sample_clamp, falloff, resampling, layout, bloom, material, object_size, swap,
             reflectance_scale, reflectance_remapped, light_twice, path_weight, bounce, mirror, light_sampling,
-            light_facing, emission, pixel_statistic, bad_pixels, wrong_buffer, aov)
+            light_facing, emission, pixel_statistic, bad_pixels, wrong_buffer, aov, view_cosine)
 
 #: The families that are mistakes of the camera (what the misregistration test of mcrt.grade.structure also sees).
 CAMERA_FAMILIES = frozenset({"fov", "aspect", "pixel_offset", "rotation", "eye", "camera_model"})
@@ -54,7 +55,7 @@ MAJOR_FAMILIES = CAMERA_FAMILIES | {"object_missing", "object_moved", "light_pos
                                     "surface_black", "object_black", "reflectance_scale", "reflectance_squared",
                                     "reflectance_complement", "reflectance_normalised", "reflectance_rounded",
                                     "reflectance_gamma_encoded", "reflectance_gamma_decoded", "reflectance_zero",
-                                    "albedo_swap", "material_swap", "object_emits"}
+                                    "albedo_swap", "material_swap", "object_emits", "view_cosine"}
 
 
 def prepare(a, scene, render) -> Basis:
