@@ -242,6 +242,18 @@ def test_lamberts_cosine_to_the_eye_is_named(ctx):
     assert res.score < res.max_score
 
 
+@pytest.mark.parametrize("side, forward", [("left", (0.0, 1.0, 0.0)), ("right", (0.0, -1.0, 0.0))])
+def test_a_camera_turned_a_quarter_is_named_with_its_side(ctx, side, forward):
+    """Mitsuba renders (seed 70) with the near camera looking along +y or -y where the scene says +x (a yaw from atan2
+    with its arguments swapped): claimed as the camera turned 90 degrees to that side, and points are lost."""
+    s = load_scene()
+    s = replace(s, cameras={**s.cameras, "near": replace(s.cameras["near"], forward=forward)})
+    res = grade_image(side, ctx, [_mitsuba(70, s)], spp=1024)
+    fam, said = _claimed(res)
+    assert fam == "rotation" and f"turned 90 degrees to the {side}" in said, said
+    assert "camera_rotation" in named_causes(res)[0] and res.score < res.max_score
+
+
 def test_a_wall_left_out_is_named_as_a_black_surface(ctx):
     """Wall CD left out of the Mitsuba scene (seed 71): in the closed room it is black, which is what a wall of
     albedo 0 looks like; the feedback claims that surface black and names both causes."""

@@ -182,7 +182,17 @@ def _eye_variants(scene: Scene, camera: str) -> dict[str, list[tuple[float, Scen
     # The forward vector's sign flipped: the camera looking back (its right vector flips with it).
     out["eye_back"] = [("back", replace(scene, cameras={**scene.cameras, camera: replace(
         c, forward=tuple(-float(x) for x in c.forward))}))]
+    # The forward vector turned a quarter about the up vector (its x and y exchanged: atan2's arguments swapped in
+    # a yaw, or a y-up convention's axes), to the left (+) or the right (-).
+    out["eye_turned"] = [(side, replace(scene, cameras={**scene.cameras, camera: replace(
+        c, forward=_turned(c.forward, c.up, sign))})) for side, sign in (("left", 1.0), ("right", -1.0))]
     return out
+
+
+def _turned(forward, up, sign: float) -> tuple[float, float, float]:
+    """``forward`` turned by sign x 90 degrees about the unit ``up`` (Rodrigues' formula at a right angle)."""
+    f, u = np.asarray(forward, float), np.asarray(up, float) / np.linalg.norm(up)
+    return tuple(float(x) for x in np.dot(f, u) * u + sign * np.cross(u, f))
 
 
 def basis_settings(a) -> tuple[int, int]:
@@ -226,7 +236,7 @@ def prepare_basis(a, scene: Scene, render) -> Basis:
     b.nodes["depth"] = [(k, img(scene, depth=k)) for k in DEPTHS if k != d]
     lt, c = scene.light, scene.cameras[cam]
     b.values.update(light_center=tuple(lt.center), light_size=tuple(lt.size), light_radiance=tuple(lt.radiance),
-                    eye=tuple(c.eye), floor=scene.room.floor_z, ceiling=scene.room.ceiling_z, objects={o.name: tuple(float(x) for x in (o.center if hasattr(o, "center")
+                    eye=tuple(c.eye), forward=tuple(c.forward), up=tuple(c.up), floor=scene.room.floor_z, ceiling=scene.room.ceiling_z, objects={o.name: tuple(float(x) for x in (o.center if hasattr(o, "center")
                                                                             else np.mean(o.vertices, axis=0)))
                                                 for o in scene.objects})
     b.prepare_time = time.perf_counter() - t0

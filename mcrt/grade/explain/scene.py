@@ -179,6 +179,9 @@ def rendered(fit: Fit, inputs: Inputs) -> list[Candidate]:
         if key == "eye_back":
             out.append(_looking_back(fit, b.base, nodes[0][1]))
             continue
+        if key == "eye_turned":
+            out.append(_turned_quarter(fit, b.base, nodes, v))
+            continue
         scores = [fit.delta(img.astype(np.float64) - b.base) for _, img in nodes]
         i = int(np.argmin(scores))
         val, img = nodes[i]
@@ -279,6 +282,19 @@ def _looking_back(fit: Fit, base: np.ndarray, back: np.ndarray) -> Candidate:
                      "sign flipped, so the image shows the room behind it" + (", mirrored left to right)" if mirrored
                                                                             else ")"),
                      chi, 0, value="back", change=dm)
+
+
+def _turned_quarter(fit: Fit, base: np.ndarray, nodes, v: dict) -> Candidate:
+    """The camera turned a quarter to the left or right: the better of the two renders (one parameter, the side)."""
+    from mcrt.grade.explain.basis import _turned
+
+    chi, side, dm = min(((fit.delta(img.astype(np.float64) - base), side, img.astype(np.float64) - base)
+                         for side, img in nodes), key=lambda t: t[0])
+    f = _turned(v["forward"], v["up"], 1.0 if side == "left" else -1.0)
+    return Candidate("rotation", "the camera turned a quarter", f"the camera turned 90 degrees to the {side} (looking "
+                     f"along {_fmt(f, 2)} where the scene says {_fmt(v['forward'], 2)}): its forward vector's "
+                     "horizontal components exchanged, as a yaw from atan2 with its arguments swapped, or x and y "
+                     "mixed up, makes it", chi, 1, value=side, change=dm)
 
 
 def _emitter_seen(fit: Fit, E: np.ndarray, Le) -> list[Candidate]:
