@@ -146,10 +146,14 @@ def mistaken_mirror(Vector3f, d, n, p, how: str, *, normal_length: float = 1.0):
     * 'cosine_weighted': reflected right, weighted by |d.n| as a diffuse
       bounce;
     * 'camera_only': reflected right, weight 0 (the caller applies it after
-      a camera ray's first hit only: a path that meets the mirror later ends).
+      a camera ray's first hit only: a path that meets the mirror later ends);
+    * 'backwards': -d, every ray sent back the way it came (``reflect``
+      left as a placeholder that returns ``-d``).
     """
     if how not in MIRRORS or how == "reflect":
         raise ValueError(f"no mirror mistake {how!r} (one of {', '.join(MIRRORS[1:])})")
+    if how == "backwards":
+        return -d, 1.0
     c = dr.dot(d, n)
     if how == "without_2":
         return dr.normalize(dr.fma(-c, n, d)), 1.0

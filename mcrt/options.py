@@ -35,7 +35,8 @@ BOUNCES = ("cosine", "uniform_sphere", "cosine_squared", "local_frame", "half_az
 BOUNCE_AT = ("every", "first")
 #: How a mirror reflects (mcrt.bsdf.mistaken_mirror): correctly ('reflect'), or by one of the mistakes students'
 #: tracers make that the grader's explanation renders (mcrt.grade.explain.mirror).
-MIRRORS = ("reflect", "without_2", "normal_unnormalised", "normal_from_origin", "cosine_weighted", "camera_only")
+MIRRORS = ("reflect", "without_2", "normal_unnormalised", "normal_from_origin", "cosine_weighted", "camera_only",
+           "backwards")
 
 #: How a pixel's samples make its value (mcrt.film.pixel_statistic): their mean ('mean'), or a statistic students'
 #: programs take against fireflies that the grader's explanation renders (mcrt.grade.explain.pixel_statistic): the

@@ -805,6 +805,20 @@ def test_mistakes_of_the_unseen_class_are_named(ctx, case):
     assert o.right and o.lost, (o.named, o.said)
 
 
+def test_a_mirror_sending_rays_back_is_named(ctx):
+    """The unbeknown class's tuning case of a mirror whose reflect() returns -d (Mitsuba's path on from the sphere,
+    written blind to the grader; its seed fixed by name) at 32 x 32: named as that mirror, and points are lost."""
+    from mcrt.grade.accuracy import unbeknown
+    from mcrt.grade.accuracy.cases import build_class
+    from mcrt.grade.accuracy.run import grade_cases
+
+    (c,) = build_class(width=RES, height=RES, max_depth=8, names=("mirror_reflect_placeholder",),
+                       specs=unbeknown.SPECS)
+    assert not c.held_out
+    (o,) = grade_cases([c], ctx)
+    assert o.right and o.lost and "back the way it came" in o.said, (o.named, o.said)
+
+
 @pytest.mark.parametrize("klass, case", [("unseen", "light_samples_diagonal"),
                                          ("unsought", "light_strata_unjittered")])
 def test_excess_in_a_few_pixels_is_not_called_fewer_samples(ctx, klass, case):

@@ -1,5 +1,6 @@
 r"""The mirror's reflection computed wrongly: the 2 of d - 2 (d.n) n missing, the sphere's normal not unit length or
-taken from the origin, a mirror bounce weighted by the cosine, a path that meets the mirror after its first hit ended.
+taken from the origin, a mirror bounce weighted by the cosine, every ray sent back the way it came, a path that meets
+the mirror after its first hit ended.
 
 Each changes what the mirror sphere shows, and the light it reflects onto
 the room, in its own way (:func:`mcrt.bsdf.mistaken_mirror`). mcrt renders
@@ -30,6 +31,8 @@ WORDS = {
                           "reflected about the wrong normal",
     "cosine_weighted": "each mirror bounce weighted by the cosine, as a diffuse bounce is: the sphere darker towards "
                        "its rim",
+    "backwards": "the mirror sending every ray back the way it came (reflect() returning -d, as a placeholder "
+                 "left in): the sphere showing what lies behind the ray's origin",
     "camera_only": "the mirror handled for camera rays only: a path that meets it after a bounce ends there (the room "
                    "lit by no light the mirror reflects)",
 }
