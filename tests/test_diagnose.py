@@ -111,6 +111,17 @@ def test_a_cut_path_depth_is_not_also_blamed_on_the_camera(ctx):
     assert "the camera does not match" not in res.summary
 
 
+def test_every_object_missing_is_named_together(ctx):
+    """The tetrahedron and the sphere both left out (Mitsuba, seed 16, 1024 spp): explained as every object missing,
+    not as one of them."""
+    s = load_scene()
+    r = _mitsuba(replace(s, objects=()), seed=16)
+    res = grade_image("no_objects", ctx, [r.mean], spp=1024)
+    ex = res.details["explanation"]
+    assert ex["family"] == "object_missing" and ex["named"] == "objects missing", ex["sentence"]
+    assert "every object (the tetrahedron and the sphere) missing" in ex["sentence"], ex["sentence"]
+
+
 def test_a_missing_object_is_a_major_mistake(ctx):
     """The mirror sphere left out (Mitsuba, seed 15, 1024 spp): explained as the sphere missing, and the bias
     criterion loses at least its major share (the assignment's major_loss), whatever the sphere's share of the

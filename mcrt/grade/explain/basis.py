@@ -121,6 +121,8 @@ def _light_inside(s: Scene) -> bool:
 
 def _object_variants(scene: Scene) -> dict[str, list[tuple[object, Scene]]]:
     out: dict[str, list] = {}
+    if len(scene.objects) > 1:  # every object left out (never added to the scene's list, or always behind the room)
+        out["missing:objects"] = [(None, replace(scene, objects=()))]
     for o in scene.objects:
         out[f"missing:{o.name}"] = [(None, replace(scene, objects=tuple(x for x in scene.objects if x.name != o.name)))]
         for axis in range(3):

@@ -233,8 +233,12 @@ def _node_candidate(key: str, val, chi2: float, v: dict, max_depth: int) -> Cand
         # image as far as the image can tell: its shadow is soft and small beside it.
         through = (f", or rays passing through it unchanged (a mirror's reflected direction computed but never used)"
                    if f"the mirror {name}" in v else "")
-        cand = Candidate("object_missing", f"{name} missing", f"the {name} missing from the image{through}", chi2, 0,
-                         value=name)
+        every = " and ".join(f"the {o}" for o in v.get("objects", ()))
+        what = (f"the {name} missing from the image{through}" if name != "objects" else f"every object ({every}) "
+                "missing from the image: never added to the scene's list, or the "
+                "intersection loop returning the first shape a ray meets in the list (the room's before the objects) "
+                "rather than the nearest")
+        cand = Candidate("object_missing", f"{name} missing", what, chi2, 0, value=name)
     elif fam == "moved":
         name, ax = key.split(":")[1:]
         cand = Candidate("object_moved", f"{name} moved", f"the {name} moved by {val:+g} along {ax}", chi2, 1,
