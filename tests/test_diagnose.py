@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 
 from mcrt.grade.accuracy.cases import Spec, _render_spec, light, wall_albedo, without
+from mcrt.grade.accuracy.run import named_causes
 from mcrt.grade.assignment import assignment_from_dict
 from mcrt.grade.candidates import Inputs
 from mcrt.grade.explain import explain
@@ -120,6 +121,21 @@ def test_every_object_missing_is_named_together(ctx):
     ex = res.details["explanation"]
     assert ex["family"] == "object_missing" and ex["named"] == "objects missing", ex["sentence"]
     assert "every object (the tetrahedron and the sphere) missing" in ex["sentence"], ex["sentence"]
+
+
+def test_every_face_of_the_room_black_is_named_together(ctx):
+    """The walls, the floor and the ceiling all black (Mitsuba, seed 17, 1024 spp; the objects as they are): explained
+    as every face of the room black, with their normals facing out among the causes (beside the catalogue's shadow
+    rays unbounded, which darken the room as much where the scene is this small), not as one surface."""
+    s = load_scene()
+    black = (0.0, 0.0, 0.0)
+    room = replace(s.room, floor_albedo=black, ceiling_albedo=black,
+                   walls=tuple(replace(w, albedo=black) for w in s.room.walls))
+    res = grade_image("room_black", ctx, [_mitsuba(replace(s, room=room), seed=17).mean], spp=1024)
+    ex = res.details["explanation"]
+    assert ex["verdict"] == "claimed" and "every face of the room (the walls, the floor and the ceiling) black: their " \
+        "normals facing out of the room" in ex["sentence"], ex["sentence"]
+    assert "normals" in named_causes(res)[0]
 
 
 def test_a_missing_object_is_a_major_mistake(ctx):

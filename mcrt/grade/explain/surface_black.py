@@ -13,6 +13,10 @@ and the image alone cannot say which reason it is:
   light comes from behind it. An *object* left out is not black: what lies
   behind it shows (the ``object_missing`` candidates of :mod:`.scene`).
 
+Every face of the room black at once (its corners taken in the other
+order, so that every face's normal points out) is rendered too, with the
+objects as they are.
+
 So every family that can predict a black surface words it as one statement
 naming every cause (:func:`black_words`), under one family name
 (:func:`black_family`): this module's candidates (each surface of the room
@@ -76,7 +80,31 @@ def surface_black(fit: Fit, inputs: Inputs) -> list[Candidate]:
         change = imgs[zero[0]].astype(np.float64) - base
         out.append(Candidate("surface_black", f"{label} black", black_words(label, scene_v), fit.delta(change), 0,
                              value=label, change=change))
+    room = b.extra.get(surface_black.name)
+    if room is not None and room.shape == base.shape:
+        change = room.astype(np.float64) - base
+        out.append(Candidate("surface_black", "the room black", ROOM_WORDS, fit.delta(change), 0, value="room",
+                             change=change))
     return out
 
 
-surface_black.name = "surface_black"
+#: Every face of the room black at once, in words (one clause, to follow "It looks like").
+ROOM_WORDS = ("every face of the room (the walls, the floor and the ceiling) black: their normals facing out of the "
+              "room, so that one-sided shading (max(0, n.l)) gives 0 (the room's corners taken in the other order, "
+              "or a test of their orientation of the wrong sign), or their albedo 0; the light and the objects lit "
+              "by it alone")
+
+
+def _prepare(a, scene, render) -> np.ndarray:
+    """The render with every face of the room at albedo 0 (the objects as they are), at the basis's spp and seed."""
+    from dataclasses import replace
+
+    from mcrt.grade.explain.objects import basis_renderer
+
+    room = scene.room
+    black = (0.0, 0.0, 0.0)
+    return basis_renderer(a, render)(replace(scene, room=replace(
+        room, floor_albedo=black, ceiling_albedo=black, walls=tuple(replace(w, albedo=black) for w in room.walls))))
+
+
+surface_black.name, surface_black.prepare = "surface_black", _prepare
