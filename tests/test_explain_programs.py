@@ -254,6 +254,20 @@ def test_a_camera_turned_a_quarter_is_named_with_its_side(ctx, side, forward):
     assert "camera_rotation" in named_causes(res)[0] and res.score < res.max_score
 
 
+def test_the_albedo_applied_twice_to_the_first_light_sample_is_named(ctx):
+    """A Mitsuba render (seed 71) plus its first hit's direct light (Mitsuba's paths of depth 2 less those of depth 1,
+    seed 72) times (rho - 1), rho Mitsuba's albedo AOV (seed 73): the albedo applied twice to the first hit's light
+    sample, claimed so, scored as a colour mistake."""
+    spec = Spec("t", None, spp=1024)
+    d = [np.asarray(_render_spec(spec, load_scene(), width=RES, height=RES, max_depth=k, seed=72).mean, np.float64)
+         for k in (1, 2)]
+    rho = _mitsuba_aov("aa:albedo", 73, spp=256)
+    res = grade_image("albedo_twice", ctx, [_mitsuba(71) + (d[1] - d[0]) * (rho - 1.0)], spp=1024)
+    fam, said = _claimed(res)
+    assert fam == "direct_albedo" and "albedo applied twice" in said and named_causes(res)[0] == ["albedo"], said
+    assert res.score < res.max_score
+
+
 def test_a_wall_left_out_is_named_as_a_black_surface(ctx):
     """Wall CD left out of the Mitsuba scene (seed 71): in the closed room it is black, which is what a wall of
     albedo 0 looks like; the feedback claims that surface black and names both causes."""

@@ -805,6 +805,21 @@ def test_mistakes_of_the_unseen_class_are_named(ctx, case):
     assert o.right and o.lost, (o.named, o.said)
 
 
+def test_the_first_hits_light_sample_without_its_albedo_is_named(ctx):
+    """The unbeknown class's tuning case of a light sample whose BRDF is 1/pi at the first hit (Mitsuba's samples
+    with that vertex's light sample redone, written blind to the grader; its seed fixed by name) at 32 x 32: named
+    as the albedo left out of the light sample, and points are lost."""
+    from mcrt.grade.accuracy import unbeknown
+    from mcrt.grade.accuracy.cases import build_class
+    from mcrt.grade.accuracy.run import grade_cases
+
+    (c,) = build_class(width=RES, height=RES, max_depth=8, names=("light_sample_without_albedo",),
+                       specs=unbeknown.SPECS)
+    assert not c.held_out
+    (o,) = grade_cases([c], ctx)
+    assert o.right and o.lost and "without that surface's albedo" in o.said, (o.named, o.said)
+
+
 def test_a_mirror_sending_rays_back_is_named(ctx):
     """The unbeknown class's tuning case of a mirror whose reflect() returns -d (Mitsuba's path on from the sphere,
     written blind to the grader; its seed fixed by name) at 32 x 32: named as that mirror, and points are lost."""
