@@ -224,6 +224,15 @@ def test_an_auxiliary_buffer_written_for_the_image_is_named(ctx, aovs, words):
     assert res.score < res.max_score
 
 
+def test_a_near_black_image_is_no_depth_buffer(ctx):
+    """A Mitsuba render (seed 64) written a thousand times too dark (as 12-bit codes read as 16-bit come out, about):
+    a depth buffer's two free values would fit it flat, so none is a candidate; the scale is claimed."""
+    res = grade_image("dark", ctx, [_mitsuba(64) * 1e-3], spp=1024)
+    ex = res.details["explanation"]
+    assert not any(c.get("mutant") == "depth buffer" for c in ex["candidates"]), ex["sentence"]
+    assert "depth buffer" not in ex["sentence"] and res.score < res.max_score
+
+
 def test_lamberts_cosine_to_the_eye_is_named(ctx):
     """A Mitsuba render (seed 68) whose light reflected at surfaces of non-zero albedo is times |n . d|, n and d from
     Mitsuba's own shading-normal and position AOVs (seed 69, 256 spp) and the camera's eye, the emission the camera

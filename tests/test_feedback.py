@@ -1235,14 +1235,15 @@ def test_the_camera_finding_stands_where_a_camera_reading_ties_with_the_closest(
     """Where no cause is claimed, the misregistration finding stands only beside a camera reading that is the
     closest candidate or within TIE of it: which of two tied readings comes first is chance (unsaid's image plane
     at z = 0 lost its camera finding to a shared albedo ahead by half a percent). A camera reading well behind
-    the closest drops it."""
+    the closest drops it, as does one tied with a closest that explains almost nothing (unsaid's light seen twice
+    as wide kept a camera finding so: every reading ties near 0)."""
     from types import SimpleNamespace
 
     from mcrt.grade.candidates import TIE, Candidate, Explanation
     from mcrt.grade.stages.bias import _findings_rule
 
-    def kept(camera_share):
-        cands = [Candidate("albedo", "one colour", "", 0.0, explained=0.32),
+    def kept(camera_share, best=0.32):
+        cands = [Candidate("albedo", "one colour", "", 0.0, explained=best),
                  Candidate("rotation", "rotation", "", 0.0, explained=camera_share)]
         g = SimpleNamespace(explanation=Explanation(cands, 0.0, 1, np.zeros(1)), th=None)
         found = {"registration": "the camera does not match the reference"}
@@ -1251,3 +1252,4 @@ def test_the_camera_finding_stands_where_a_camera_reading_ties_with_the_closest(
 
     assert kept(0.32 - TIE / 4)
     assert not kept(0.32 - 2 * TIE)
+    assert not kept(0.03 - TIE / 4, best=0.03)

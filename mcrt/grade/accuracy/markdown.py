@@ -358,7 +358,8 @@ _UNBIDDEN = (
     "grading, with the whole class in view (commit eafe813): that shift's words name the box filter it equals; the "
     "direct light missing on one surface or object (a tetrahedron never light-sampled, claimed as its colour, now "
     "read as either, no cause claimed); every albedo through a gamma of 2.2, the image plane's full width taken for "
-    "its half, and surfaces emitting (commit 8b1d725; the ambient term among them dropped at 91c334c). Both rows here are of rules that saw the class.")
+    "its half, and surfaces emitting (commit 8b1d725; the ambient term among them dropped at 91c334c); the film's "
+    "auxiliary buffers (commit 77b0780). Both rows here are of rules that saw the class.")
 
 _UNHERALDED = (
     "The wrong renders are a nineteenth class of mistakes in students' tracers, their scene input and their output "
@@ -379,7 +380,8 @@ _UNHERALDED = (
     "after 65166e2 up to 91c334c: one surface emitting a flexible fit, the ambient term dropped, every row one row only "
     "where the lines are equal); the camera finding kept beside a camera reading tied with the closest, a netpbm "
     "file written as UTF-8 text refused with its cause, HDR video's PQ curve and a sigmoid contrast named, lines of "
-    "one colour drawn over the image (commits 6187f81 to 720a097). Both rows here are of rules that saw the class.")
+    "one colour drawn over the image, the film's auxiliary buffers (commits 6187f81 to 77b0780). Both rows here are "
+    "of rules that saw the class.")
 
 _UNBEKNOWN = (
     "The wrong renders are a twentieth class of mistakes in students' tracers, their scene input and their output "
@@ -393,7 +395,11 @@ _UNBEKNOWN = (
     "(no case named or described); the grader's rules were frozen at commit 77b0780 before any case was read or "
     "graded, and the whole class was graded once, on them: this report (held out, 3 of 12 named right, 1 of 12 "
     "confidently wrong, 11 of 12 detected; all 28, 6 named right, 2 confidently wrong, 25 detected; 0 of 8 correct "
-    "hand-ins lost points). No rule has changed since, so both rows are of rules that never saw the class.")
+    "hand-ins lost points). Changes made after that grading, with the whole class in view (commits ae49b92 to "
+    "8abc9a5): black pixels where the light is hidden worded as the bounced light lost; Lambert's cosine taken to the "
+    "eye; the camera turned a quarter; a mirror sending rays back; every object missing at once; every face of the "
+    "room black; the first hit's light sample with its albedo left out or twice. Both rows here are of rules that "
+    "saw the class.")
 
 #: Each class's title, after "Grading accuracy on a class of realistic hand-ins".
 TITLES = {

@@ -42,7 +42,7 @@ def aov(fit: Fit, inputs: Inputs) -> list[Candidate]:
     if hits is None or hits["cover"].shape[:2] != fit.R.shape[:2]:
         return []
     w = np.where(fit.ok, fit.w, 0.0)
-    return [_albedo(fit, w, hits), _normals(fit, hits), _depth(fit, w, hits)]
+    return [c for c in (_albedo(fit, w, hits), _normals(fit, hits), _depth(fit, w, hits)) if c is not None]
 
 
 def _lsq(columns: list[np.ndarray], S: np.ndarray, w: np.ndarray) -> np.ndarray:
@@ -84,12 +84,19 @@ def _normals(fit: Fit, hits: dict) -> Candidate:
                      "image", chi, 1, value={"buffer": "normals", "form": how.strip()}, change=M - fit.R)
 
 
-def _depth(fit: Fit, w: np.ndarray, hits: dict) -> Candidate:
+#: The least a depth buffer's values span from the nearest pixel to the farthest (white is 1): a near-constant fit
+#: (b near 0) is any near-black or flat image, no depth written for display or as a distance.
+MIN_DEPTH_SPAN = 0.1
+
+
+def _depth(fit: Fit, w: np.ndarray, hits: dict) -> Candidate | None:
     """a + b d in every channel, a and b by weighted least squares (either may be negative: a depth inverted for
-    display)."""
+    display); None where it spans less than :data:`MIN_DEPTH_SPAN`."""
     d = hits["distance"][..., None]
     A = np.stack([np.ones(fit.S.size), np.broadcast_to(d, fit.S.shape).ravel()], axis=1) * np.sqrt(w.ravel())[:, None]
     a, b = np.linalg.lstsq(A, fit.S.ravel() * np.sqrt(w.ravel()), rcond=None)[0]
+    if abs(b) * float(np.ptp(d)) < MIN_DEPTH_SPAN:
+        return None
     M = np.broadcast_to(a + b * d, fit.S.shape)
     # An offset below 1 % of the middle distance's value is the fit's noise, not a depth inverted or shifted.
     how = f"{_num(a)} + {_num(b)} d" if abs(a) > 0.01 * abs(b) * float(np.median(d)) else f"{_num(b)} d"

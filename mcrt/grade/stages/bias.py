@@ -219,7 +219,9 @@ def _findings_rule(g: Grading, hand: Hand, lvl: Level, t: Tested, found: dict[st
     pixels: the filter finding stands only if the noise is still
     correlated in what the best candidate leaves, the camera finding only
     if a candidate of the camera's is the best or tied with it (within
-    TIE: which of the two is ahead is then chance), the wrong-pixels
+    TIE: which of the two is ahead is then chance) and explains a share
+    worth mentioning (PARTIAL_SHARE: below it every reading ties with
+    every other, and none says anything), the wrong-pixels
     finding (cracks, shadow rays) only if its pixels are a minor share of
     the image.
     """
@@ -228,8 +230,10 @@ def _findings_rule(g: Grading, hand: Hand, lvl: Level, t: Tested, found: dict[st
     from mcrt.grade.structure import SHARES
 
     bt, th, best = t.bt, g.th, g.explanation.best
-    if best is None or not any(c.family in _families("CAMERA_FAMILIES") and c.explained >= best.explained - TIE
-                               for c in g.explanation.candidates):
+    camera = _families("CAMERA_FAMILIES")
+    if best is None or (best.family not in camera and not any(
+            c.family in camera and c.explained >= max(best.explained - TIE, PARTIAL_SHARE)
+            for c in g.explanation.candidates)):
         found.pop("registration", None)
     if "pixels" in found and bt.extra["pixels"].reshape(bt.shape + (3,)).any(axis=2).mean() > th.minor_area:
         found.pop("pixels")
