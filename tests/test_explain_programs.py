@@ -142,9 +142,10 @@ def test_a_light_facing_the_ceiling_is_named(low_light):
 @pytest.mark.parametrize("name", ["block", "scattered", "unlit"])
 def test_black_pixels_are_named_and_lose_points(ctx, name):
     """A Mitsuba render (seed 65) with a 6 x 5 block written as 0, 12 scattered pixels (seed 66), or every pixel
-    that Mitsuba's direct integrator (seed 67) finds unlit by the light: the black pixels are claimed, the block by
-    its rows and columns, the unlit ones as the bounced light lost where the light is hidden (no other set is), and
-    the image loses points."""
+    that Mitsuba's direct integrator (seed 67) finds unlit by the light, the light's own aside (Mitsuba, max depth
+    1): the black pixels are claimed, the block by its rows and columns, the unlit ones as the bounced light lost
+    where the light is hidden (no other set is, nor the light's own pixels written black), and the image loses
+    points."""
     img = _mitsuba(65)
     if name == "block":
         img[10:16, 20:25] = 0.0
@@ -152,14 +153,19 @@ def test_black_pixels_are_named_and_lose_points(ctx, name):
         flat = img.reshape(-1, 3)
         flat[np.random.default_rng(66).choice(RES * RES, 12, replace=False)] = 0.0
     else:
-        unlit = np.all(_mitsuba_direct(67) == 0.0, axis=-1)
+        seen = _render_spec(Spec("t", None, spp=64), load_scene(), width=RES, height=RES, max_depth=1, seed=67).mean
+        unlit = np.all(_mitsuba_direct(67) == 0.0, axis=-1) & np.all(np.asarray(seen) == 0.0, axis=-1)
         img[unlit] = 0.0
     res = grade_image(name, ctx, [img], spp=1024)
     fam, said = _claimed(res)
     assert fam == "bad_pixels", said
     assert ("where the light is hidden" in said) == (name == "unlit"), said
     if name == "unlit":
-        assert named_causes(res)[0] == ["bad_pixels", "indirect_scale"], said
+        light = _mitsuba(65)
+        light[light.max(axis=-1) > 10.0] = 0.0  # the light's own pixels get no light sample either
+        said_light = _claimed(grade_image("light_black", ctx, [light], spp=1024))[1]
+        assert "where the light is hidden" not in said_light, said_light
+        assert named_causes(res)[0] == ["indirect_scale"], said
         return
     value = res.details["explanation"]["candidates"][0]["value"]
     assert value["pixels"] == (30 if name == "block" else 12)

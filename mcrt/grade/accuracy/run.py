@@ -270,6 +270,8 @@ def _explanation_causes(expl: dict) -> list[str]:
     causes = list(CAUSE_OF.get(fam, (f"catalogue:{fam}",)))
     if fam == "blur" and expl["sentence"].startswith("It looks like the image filtered after rendering by"):
         causes.remove("resampling")  # a 3 x 3 filter, in words that name no resampling (added after unsaid)
+    if fam == "bad_pixels" and "the light bounced there lost" in expl["sentence"]:
+        causes.remove("bad_pixels")  # black where the light is hidden: worded as no pixel written wrong (since unbeknown)
     if fam == "pixel_offset" and "index off by one" in expl["sentence"]:
         causes.append("row_stride")  # a shift by a whole pixel, worded as rows or columns written one place off
     # Words that name a second mistake beside the family's own (added after the novel class was graded):

@@ -143,13 +143,15 @@ def _black(fit: Fit, inputs: Inputs) -> list[Candidate]:
 
 def _in_shadow(bad: np.ndarray, inputs: Inputs) -> bool:
     """Whether every black pixel is one the light does not reach directly: its direct light (the basis's paths of
-    depth 2 less those of depth 1: next-event estimation alone lights a surface there) none, to the last bit. A
-    shadow ray always blocked gives such a pixel no sample of direct light, whatever the basis's seed."""
+    depth 2 less those of depth 1: next-event estimation alone lights a surface there) none, to the last bit, and
+    no emission seen there (the light's own pixels get no light sample either). A shadow ray always blocked gives
+    such a pixel no sample of direct light, whatever the basis's seed."""
     depth = dict(inputs.basis.nodes.get("depth", ())) if inputs.basis is not None else {}
     if 1 not in depth or 2 not in depth:
         return False
-    direct = np.asarray(depth[2], np.float64) - np.asarray(depth[1], np.float64)
-    return bool(np.all(direct[bad] == 0.0))
+    seen = np.asarray(depth[1], np.float64)  # the emission the camera sees: the light's own pixels
+    direct = np.asarray(depth[2], np.float64) - seen
+    return bool(np.all(direct[bad] == 0.0) and np.all(seen[bad] == 0.0))
 
 
 def _hole(bad: np.ndarray, inputs: Inputs) -> str:
