@@ -396,7 +396,7 @@ _UNBEKNOWN = (
     "graded, and the whole class was graded once, on them: this report (held out, 3 of 12 named right, 1 of 12 "
     "confidently wrong, 11 of 12 detected; all 28, 6 named right, 2 confidently wrong, 25 detected; 0 of 8 correct "
     "hand-ins lost points). Changes made after that grading, with the whole class in view (commits ae49b92 to "
-    "8abc9a5): black pixels where the light is hidden worded as the bounced light lost; Lambert's cosine taken to the "
+    "a33f1e6): black pixels where the light is hidden worded as the bounced light lost; Lambert's cosine taken to the "
     "eye; the camera turned a quarter; a mirror sending rays back; every object missing at once; every face of the "
     "room black; the first hit's light sample with its albedo left out or twice. Both rows here are of rules that "
     "saw the class.")
