@@ -17,7 +17,10 @@ rays meeting surface k, :math:`n` their mean normal (facing the ray) and
 * the depth buffer :math:`a + b\,d` (a and b fitted: a distance in the
   scene's units, or normalised and inverted for display).
 
-Pixels whose rays meet several surfaces are mixtures, as a film's are.
+Pixels whose rays meet several surfaces are mixtures, as a film's are. The
+same first hits give :mod:`~mcrt.grade.explain.view_cosine` its cosine to the
+eye and :mod:`~mcrt.grade.explain.direct_albedo` each pixel's albedo (both
+read this family's prepared dict).
 """
 
 from __future__ import annotations
