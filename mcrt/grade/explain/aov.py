@@ -48,11 +48,10 @@ def aov(fit: Fit, inputs: Inputs) -> list[Candidate]:
     return [c for c in (_albedo(fit, w, hits), _normals(fit, hits), _depth(fit, w, hits)) if c is not None]
 
 
-def _lsq(columns: list[np.ndarray], S: np.ndarray, w: np.ndarray) -> np.ndarray:
-    """Weighted least-squares coefficients of S on the (H, W, 3) columns, each at least 0."""
+def _lsq(columns: list, S: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """Weighted least-squares coefficients of S on the columns (each broadcast to S's shape)."""
     A = np.stack([np.broadcast_to(c, S.shape).ravel() for c in columns], axis=1) * np.sqrt(w.ravel())[:, None]
-    x = np.linalg.lstsq(A, S.ravel() * np.sqrt(w.ravel()), rcond=None)[0]
-    return np.maximum(x, 0.0)
+    return np.linalg.lstsq(A, S.ravel() * np.sqrt(w.ravel()), rcond=None)[0]
 
 
 def _albedo(fit: Fit, w: np.ndarray, hits: dict) -> Candidate:
@@ -60,7 +59,7 @@ def _albedo(fit: Fit, w: np.ndarray, hits: dict) -> Candidate:
     cover, rho = hits["cover"], hits["albedo"]
     fixed = cover @ rho
     parts = [cover[..., hits["mirror"]].sum(axis=-1, keepdims=True), cover[..., hits["light"]].sum(axis=-1, keepdims=True)]
-    m, l = _lsq(parts, fit.S - fixed, w)
+    m, l = np.maximum(_lsq(parts, fit.S - fixed, w), 0.0)
     M = fixed + m * parts[0] + l * parts[1]
     # Two places are all a grey value read off a few hundred pixels says (a fitted 0.0005 is a renderer's 0).
     text = WORDS["albedo"].format(mirror=_num(round(float(m), 2)), light=_num(round(float(l), 2))) + (
@@ -96,8 +95,7 @@ def _depth(fit: Fit, w: np.ndarray, hits: dict) -> Candidate | None:
     """a + b d in every channel, a and b by weighted least squares (either may be negative: a depth inverted for
     display); None where it spans less than :data:`MIN_DEPTH_SPAN`."""
     d = hits["distance"][..., None]
-    A = np.stack([np.ones(fit.S.size), np.broadcast_to(d, fit.S.shape).ravel()], axis=1) * np.sqrt(w.ravel())[:, None]
-    a, b = np.linalg.lstsq(A, fit.S.ravel() * np.sqrt(w.ravel()), rcond=None)[0]
+    a, b = _lsq([1.0, d], fit.S, w)
     if abs(b) * float(np.ptp(d)) < MIN_DEPTH_SPAN:
         return None
     M = np.broadcast_to(a + b * d, fit.S.shape)

@@ -203,6 +203,18 @@ def basis_settings(a) -> tuple[int, int]:
     return max(64, a.diagnosis_spp // 4), a.seed + 7
 
 
+def basis_renderer(a, render):
+    """A function of a scene (and the renderer's tricks, a mistake of the estimator): its mcrt render at the basis's
+    spp and seed, the assigned camera, grade size."""
+    spp, seed = basis_settings(a)
+
+    def img(s: Scene, **tricks) -> np.ndarray:
+        return render(s, a.camera, a.grade_width, a.grade_height, a.max_depth, spp, seed,
+                      **tricks).mean.astype(np.float32)
+
+    return img
+
+
 def prepare_basis(a, scene: Scene, render) -> Basis:
     """Render every image :func:`explain` needs, for the assignment ``a``.
 

@@ -303,7 +303,7 @@ WIDEST = 170.0
 def _prepare_plane(a, scene, render) -> tuple[float, np.ndarray] | None:
     """(the field of view of :data:`PLANE_FACTOR`, its render at the basis's spp and seed), or None past
     :data:`WIDEST`."""
-    from mcrt.grade.explain.objects import basis_renderer
+    from mcrt.grade.explain.basis import basis_renderer
 
     c0 = scene.cameras[a.camera]
     deg = math.degrees(2 * math.atan(PLANE_FACTOR * math.tan(math.radians(c0.fov_x_deg) / 2)))

@@ -26,7 +26,7 @@ import numpy as np
 
 from mcrt.grade.candidates import Candidate, Inputs
 from mcrt.grade.explain.fit import Fit
-from mcrt.grade.explain.objects import basis_renderer
+from mcrt.grade.explain.basis import basis_renderer
 from mcrt.grade.feedback import fmt_values as _fmt
 from mcrt.scene import Lambertian, Scene
 

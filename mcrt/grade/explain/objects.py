@@ -27,7 +27,7 @@ from dataclasses import replace
 import numpy as np
 
 from mcrt.grade.candidates import Candidate, Inputs
-from mcrt.grade.explain.basis import basis_settings
+from mcrt.grade.explain.basis import basis_renderer
 from mcrt.grade.explain.fit import Fit
 from mcrt.grade.explain.scene import lagrange
 from mcrt.grade.explain.surface_black import black_family, black_words, is_black
@@ -52,18 +52,6 @@ def _scaled(o, f: float) -> dict:
         return {"radius": o.radius * f}
     c = np.mean(o.vertices, axis=0)
     return {"vertices": tuple(tuple(float(x) for x in c + f * (np.asarray(v) - c)) for v in o.vertices)}
-
-
-def basis_renderer(a, render):
-    """A function of a scene (and the renderer's tricks, a mistake of the estimator): its mcrt render at the basis's
-    spp and seed, the assigned camera, grade size."""
-    spp, seed = basis_settings(a)
-
-    def img(s: Scene, **tricks) -> np.ndarray:
-        return render(s, a.camera, a.grade_width, a.grade_height, a.max_depth, spp, seed,
-                      **tricks).mean.astype(np.float32)
-
-    return img
 
 
 def _prepare_material(a, scene: Scene, render) -> dict:

@@ -40,7 +40,7 @@ import numpy as np
 
 from mcrt.grade.candidates import Candidate, Inputs
 from mcrt.grade.explain.fit import Fit
-from mcrt.grade.explain.objects import basis_renderer
+from mcrt.grade.explain.basis import basis_renderer
 from mcrt.grade.explain.scene import lagrange
 from mcrt.grade.feedback import num as _num
 from mcrt.scene import Lambertian, Scene

@@ -99,14 +99,12 @@ def _prepare(a, scene, render) -> np.ndarray:
     """The render with every face of the room at albedo 0 (the objects as they are), at the basis's spp and seed."""
     from dataclasses import replace
 
-    from mcrt.grade.explain.basis import basis_settings
+    from mcrt.grade.explain.basis import basis_renderer
 
     room, black = scene.room, (0.0, 0.0, 0.0)
     room = replace(room, floor_albedo=black, ceiling_albedo=black,
                    walls=tuple(replace(w, albedo=black) for w in room.walls))
-    spp, seed = basis_settings(a)
-    return render(replace(scene, room=room), a.camera, a.grade_width, a.grade_height, a.max_depth, spp,
-                  seed).mean.astype(np.float32)
+    return basis_renderer(a, render)(replace(scene, room=room))
 
 
 surface_black.name, surface_black.prepare = "surface_black", _prepare

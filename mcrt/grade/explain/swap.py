@@ -37,7 +37,7 @@ import numpy as np
 from mcrt.grade.candidates import Candidate, Inputs
 from mcrt.grade.explain.basis import _surface_edits
 from mcrt.grade.explain.fit import Fit
-from mcrt.grade.explain.objects import basis_renderer
+from mcrt.grade.explain.basis import basis_renderer
 from mcrt.scene import Lambertian, Scene
 
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from mcrt.grade.explain.fit import Fit
-from mcrt.grade.explain.objects import basis_renderer
+from mcrt.grade.explain.basis import basis_renderer
 
 
 def rendered_changes(a, scene, render, variants: list[tuple[object, dict]]) -> list[tuple[object, np.ndarray]]:

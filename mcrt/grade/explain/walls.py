@@ -22,7 +22,7 @@ import numpy as np
 
 from mcrt.grade.candidates import Candidate, Inputs
 from mcrt.grade.explain.fit import Fit
-from mcrt.grade.explain.objects import basis_renderer
+from mcrt.grade.explain.basis import basis_renderer
 from mcrt.grade.explain.reflectance import remapped_reflectance
 from mcrt.grade.explain.scene import fit_channel
 from mcrt.grade.feedback import fmt_values as _fmt
