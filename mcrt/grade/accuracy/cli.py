@@ -17,7 +17,8 @@ CLASSES = {"scene": "cases", "outside": "outside", "programs": "programs", "fres
            "unheard": "unheard", "unsaid": "unsaid", "unasked": "unasked",
            "unsought": "unsought", "unguessed": "unguessed",
            "unforeseen": "unforeseen", "unprompted": "unprompted",
-           "unbidden": "unbidden", "unheralded": "unheralded", "unbeknown": "unbeknown"}
+           "unbidden": "unbidden", "unheralded": "unheralded", "unbeknown": "unbeknown",
+           "unvisited": "unvisited"}
 
 
 def register(sub) -> None:
@@ -47,8 +48,9 @@ def register(sub) -> None:
                    "output, written blind, mcrt.grade.accuracy.unprompted), 'unbidden' (an eighteenth, in "
                    "tracers, scene input and output, written blind, mcrt.grade.accuracy.unbidden), 'unheralded' (a "
                    "nineteenth, in tracers, scene input and output, written blind, "
-                   "mcrt.grade.accuracy.unheralded) or 'unbeknown' (a twentieth, in tracers, scene input and output, "
-                   "written blind, mcrt.grade.accuracy.unbeknown) (default: scene)")
+                   "mcrt.grade.accuracy.unheralded), 'unbeknown' (a twentieth, in tracers, scene input and output, "
+                   "written blind, mcrt.grade.accuracy.unbeknown) or 'unvisited' (a twenty-first, in tracers, scene "
+                   "input and output, written blind, mcrt.grade.accuracy.unvisited) (default: scene)")
     p.add_argument("--held-out", choices=("all", "only", "none"), default="all",
                    help="grade all cases, only the held-out ones, or none of them (default: all)")
     p.add_argument("--out", default=None, help=f"report folder (default: {DEFAULT_OUT}, or {DEFAULT_OUT}/CLASS "
