@@ -80,3 +80,55 @@ def plain(size: int, spp: int = 256) -> np.ndarray:
     from mcrt.grade.accuracy.cases import Spec
 
     return build_class(width=size, height=size, specs=(Spec("plain", None, spp=spp),))[0].image
+
+
+def check_old_causes(klass, earlier) -> None:
+    """Class module ``klass`` words every mistake by a cause of the ``earlier`` class modules and adds none, so
+    SAME_MISTAKE needed no new entry."""
+    from mcrt.grade.accuracy import cases, outside
+
+    assert klass.NEW_CAUSES == {}
+    old = set(cases.CAUSES) | set(outside.CAUSES) | {c for m in earlier for c in getattr(m, "NEW_CAUSES", ())}
+    assert {s.cause for s in klass.MISTAKES} <= old
+
+
+def check_seeds(klass, earlier, lo: int) -> None:
+    """Class module ``klass``'s seeds lie in [lo, lo + 100000), where no ``earlier`` class module's seed for its names
+    falls."""
+    names = [s.name for s in klass.SPECS]
+    assert all(lo <= klass._crc(n) < lo + 100000 for n in names)
+    for m in earlier:
+        if hasattr(m, "_crc"):
+            assert not any(lo <= m._crc(n) < lo + 100000 for n in names), m.__name__
+
+
+def check_command(klass, name: str) -> None:
+    """``mcrt grade-accuracy --class name`` grades class module ``klass``'s specs."""
+    import importlib
+
+    from mcrt.grade.accuracy.cli import CLASSES
+
+    assert importlib.import_module(f"mcrt.grade.accuracy.{CLASSES[name]}").SPECS is klass.SPECS
+
+
+def check_new_truths(klass, earlier) -> None:
+    """Every case of class module ``klass`` says what it is, in words no ``earlier`` class module's case uses."""
+    assert all(s.truth for s in klass.SPECS)
+    assert not {s.truth for m in earlier for s in m.SPECS} & {s.truth for s in klass.SPECS}
+
+
+def pillow_codes(path) -> np.ndarray:
+    """The 8-bit RGB codes of an image file as Pillow decodes them."""
+    from PIL import Image
+
+    return np.asarray(Image.open(path).convert("RGB"))
+
+
+def check_correct_agree(klass, plain: np.ndarray) -> None:
+    """Every correct hand-in of class module ``klass``, built at W x H, agrees with ``plain`` (a correct render of
+    that size): its median pixel within 15 %, its mean within 10 %."""
+    for s in klass.CORRECT:
+        case = build(s)
+        rel = np.abs(case.image - plain).mean(axis=2) / (plain.mean(axis=2) + 0.05)
+        assert np.median(rel) < 0.15 and case.image.shape == (H, W, 3), s.name
+        assert abs(case.image.mean() / plain.mean() - 1) < 0.1, s.name
