@@ -63,19 +63,24 @@ def test_closest_hits_agree(setup):
     assert np.allclose(na, nb, atol=1e-5)
 
 
-def test_shadow_segments_agree(setup):
-    scene, m, o, _ = setup
-    convex, triangles = Geometry(scene, m, "convex"), Geometry(scene, m, "triangles")
-    rng = np.random.default_rng(2)
+def _to_the_light(scene, m, o, seed: int):
+    """Both intersectors' shadow tests of segments from ``o`` to random points of the light (NumPy ``seed``), ending
+    just short of it: (convex's, triangles', the light points)."""
+    rng = np.random.default_rng(seed)
     light = scene.light
-    y = np.asarray(light.center) + np.stack([(rng.random(len(o)) - 0.5) * light.size[0],
-                                               (rng.random(len(o)) - 0.5) * light.size[1], np.zeros(len(o))], axis=1)
-    w = y - o
+    p = np.asarray(light.center) + np.stack([(rng.random(len(o)) - 0.5) * light.size[0],
+                                             (rng.random(len(o)) - 0.5) * light.size[1], np.zeros(len(o))], axis=1)
+    w = p - o
     dist = np.linalg.norm(w, axis=1)
     w = (w / dist[:, None]).astype(np.float32)
     tmax = m.Float((dist * 0.999).astype(np.float32))
-    a = convex.occluded(_arr(m, o), _arr(m, w), tmax).numpy()
-    b = triangles.occluded(_arr(m, o), _arr(m, w), tmax).numpy()
+    a, b = (Geometry(scene, m, kind).occluded(_arr(m, o), _arr(m, w), tmax).numpy() for kind in ("convex", "triangles"))
+    return a, b, p
+
+
+def test_shadow_segments_agree(setup):
+    scene, m, o, _ = setup
+    a, b, _ = _to_the_light(scene, m, o, 2)
     assert a.sum() > 200  # the objects do shadow some of these segments
     assert np.array_equal(a, b), f"{np.sum(a != b)} of {len(a)} shadow segments disagree"
 
@@ -120,3 +125,18 @@ def test_enclosing_ball():
         spread = lambda c: np.max(np.linalg.norm(pts - c, axis=1))  # noqa: E731
         found = minimize(spread, pts.mean(axis=0), method="Nelder-Mead", options=dict(xatol=1e-9, fatol=1e-12, maxiter=20000))
         assert radius <= found.fun * (1 + 2.0**-9)
+
+
+def test_shadow_segments_to_a_light_through_a_wall_agree(setup):
+    """The light's centre read (y, x), (0, 5) for (5, 0), puts part of it through wall FA: the room blocks segments
+    to that part, which the convex intersector (that skips the room for a light inside it) must see as the triangles
+    do (NumPy seed 4)."""
+    from dataclasses import replace
+
+    scene, m, o, _ = setup
+    x, y, z = scene.light.center
+    scene = replace(scene, light=replace(scene.light, center=(y, x, z)))
+    a, b, p = _to_the_light(scene, m, o, 4)
+    beyond = ~np.array([scene.room.contains(q, -0.05) for q in p])  # clear of the wall by more than tmax spares
+    assert b[beyond].all() and beyond.sum() > 1000  # the wall blocks every segment to the part beyond it
+    assert np.array_equal(a, b), f"{np.sum(a != b)} of {len(a)} shadow segments disagree"
