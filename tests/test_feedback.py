@@ -805,6 +805,24 @@ def test_mistakes_of_the_unseen_class_are_named(ctx, case):
     assert o.right and o.lost, (o.named, o.said)
 
 
+@pytest.mark.parametrize("klass, case, words", [("unbidden", "tiles_normalised_by_tile_size", "the whole view at 1/4"),
+                                                ("unforeseen", "tiles_origin_not_added", "rendered as the top-left")])
+def test_tiles_with_wrong_pixel_coordinates_are_named(ctx, klass, case, words):
+    """Two blind classes' tuning cases of a 4 x 4 tiled render (Mitsuba's rays, written blind to the grader; seeds
+    fixed by name) at 32 x 32: each tile's pixels normalised by the tile's size (16 small copies of the view), and
+    each tile's origin never added (every tile the first): named, in their words, and points are lost."""
+    import importlib
+
+    from mcrt.grade.accuracy.cases import build_class
+    from mcrt.grade.accuracy.run import grade_cases
+
+    (c,) = build_class(width=RES, height=RES, max_depth=8, names=(case,),
+                       specs=importlib.import_module(f"mcrt.grade.accuracy.{klass}").SPECS)
+    assert not c.held_out
+    (o,) = grade_cases([c], ctx)
+    assert o.right and o.lost and words in o.said, (o.named, o.said)
+
+
 def test_the_first_hits_light_sample_without_its_albedo_is_named(ctx):
     """The unbeknown class's tuning case of a light sample whose BRDF is 1/pi at the first hit (Mitsuba's samples
     with that vertex's light sample redone, written blind to the grader; its seed fixed by name) at 32 x 32: named
@@ -967,14 +985,17 @@ def test_the_direct_light_left_out_is_named(ctx):
     ("contrast", "tone_curve", "saved as 1.3 (v - 0.3) + 0.3, clipped at 0"),
     ("sigmoid", "tone_curve", "sigmoid contrast curve 1 / (1 + exp(7 (0.5 - v)))"),
     ("pq", "encoding", "PQ curve of HDR video (SMPTE ST 2084), a value of 1 taken as 203 cd/m^2, where the file's sRGB"),
+    ("stretch", "tone_curve", "stretched between their 2 and 98 percentiles onto [0, 1] and clipped"),
+    ("smoothstep", "tone_curve", "smoothstep S-curve 3 c^2 - 2 c^3"),
 ])
 def test_post_processing_and_camera_models_are_named(ctx, post, family, words):
     """A Mitsuba render (seed 76, 1024 spp) with a black level of 0.01 subtracted, through a contrast slider
     (1.3 (v - 0.3) + 0.3, clipped at 0), through scikit-image's adjust_sigmoid (gain 7), written as 16-bit PQ codes
-    (a value of 1 at 203 cd/m^2) by the unheralded class's writer and read back as the file's sRGB, or put through
-    the untold class's barrel distortion (k = 0.06; both classes written blind to the grader); and its cylindrical
-    panorama of the scene (Mitsuba, seed 77): each is claimed, in its words."""
-    from skimage.exposure import adjust_sigmoid
+    (a value of 1 at 203 cd/m^2) by the unheralded class's writer and read back as the file's sRGB, stretched by
+    scikit-image's rescale_intensity between its 2nd and 98th percentiles, through smoothstep (0.7 v clipped to
+    [0, 1]), or put through the untold class's barrel distortion (k = 0.06; both classes written blind to the grader);
+    and its cylindrical panorama of the scene (Mitsuba, seed 77): each is claimed, in its words."""
+    from skimage.exposure import adjust_sigmoid, rescale_intensity
 
     from mcrt.grade.accuracy import unheralded, untold
     from mcrt.image_files import srgb_eotf
@@ -985,7 +1006,10 @@ def test_post_processing_and_camera_models_are_named(ctx, post, family, words):
         img = _mitsuba(load_scene(), 76)
         img = {"black_level": lambda x: np.maximum(x - 0.01, 0.0), "contrast": lambda x: np.maximum(
             1.3 * (x - 0.3) + 0.3, 0.0), "sigmoid": lambda x: adjust_sigmoid(np.maximum(x, 0.0), gain=7),
-               "pq": lambda x: srgb_eotf(unheralded._pq_codes(x, white=203.0) / 65535.0)}.get(post, untold._barrel)(img)
+               "pq": lambda x: srgb_eotf(unheralded._pq_codes(x, white=203.0) / 65535.0),
+               "stretch": lambda x: rescale_intensity(x, in_range=tuple(np.percentile(x, (2, 98))), out_range=(0, 1)),
+               "smoothstep": lambda x: np.clip(0.7 * x, 0, 1) ** 2 * (3 - 2 * np.clip(0.7 * x, 0, 1)),
+               }.get(post, untold._barrel)(img)
     res = grade_image(post, ctx, [img], spp=256 if post == "cylindrical" else 1024)
     ex = res.details["explanation"]
     assert ex["verdict"] == "claimed" and ex["family"] == family and words in ex["sentence"], ex["sentence"]
@@ -1000,6 +1024,25 @@ def test_the_light_below_the_floor_is_named_its_height_sign(ctx):
     ex = res.details["explanation"]
     assert ex["verdict"] == "claimed" and "the light's z typed with the wrong sign" in ex["sentence"], ex["sentence"]
     assert named_causes(res)[0] == ["light_position"]
+
+
+@pytest.mark.parametrize("what", ["light", "room"])
+def test_coordinates_read_y_x_are_named(ctx, what):
+    """A Mitsuba render (seed 79, 1024 spp) with the light's centre read (y, x), part of it through a wall, or the
+    room's corners read (y, x) (the room mirrored, the objects left outside it): claimed as that reading, in its
+    words."""
+    s = load_scene()
+    if what == "light":
+        x, y, z = s.light.center
+        s = replace(s, light=replace(s.light, center=(y, x, z)))
+    else:
+        room = s.room
+        s = replace(s, room=replace(room, corners={k: (v[1], v[0]) for k, v in room.corners.items()},
+                                    walls=tuple(replace(w, corners=w.corners[::-1]) for w in reversed(room.walls))))
+    res = grade_image(what, ctx, [_mitsuba(s, 79)], spp=1024)
+    ex = res.details["explanation"]
+    assert ex["verdict"] == "claimed" and f"the {what}'s" in ex["sentence"] and "read (y, x)" in ex["sentence"], \
+        ex["sentence"]
 
 
 @pytest.mark.parametrize("shape, weights, words", [
@@ -1189,6 +1232,48 @@ def test_another_standards_curve_is_named(ctx, tmp_path):
     ex = res.details["explanation"]
     assert ex["verdict"] == "claimed" and "BT.709's camera curve" in ex["sentence"], ex["sentence"]
     assert named_causes(res)[0] == ["encoding"]
+
+
+@pytest.mark.parametrize("how", ["video range", "frame"])
+def test_video_range_codes_and_a_white_frame_are_named(ctx, tmp_path, how):
+    """An 8-bit PNG (Pillow) of a Mitsuba render (seed 108): its sRGB codes in video's limited range (16 + 219 v),
+    or a one-pixel white frame drawn round it: each claimed in its words (the frame at the display file's clip level,
+    white, where the light's pixels are clipped too)."""
+    import io
+
+    from PIL import Image
+
+    codes = _srgb8(_mitsuba(load_scene(), 108))
+    if how == "video range":
+        codes = np.floor(16 + 219 * codes.astype(np.float64) / 255.0 + 0.5).astype(np.uint8)
+    else:
+        codes[[0, -1], :] = 255
+        codes[:, [0, -1]] = 255
+    buf = io.BytesIO()
+    Image.fromarray(codes, "RGB").save(buf, format="PNG")
+    res = _grade_file(ctx, tmp_path / how.replace(" ", "_"), "render.png", buf.getvalue())
+    ex = res.details["explanation"]
+    words = "video's limited range, codes 16 + 219 v" if how == "video range" else "along rows 0, 31 and columns 0, 31"
+    assert ex["verdict"] == "claimed" and words in ex["sentence"], ex["sentence"]
+
+
+@pytest.mark.parametrize("how, words", [
+    ("2.39", "rendered in a 2.39:1 frame (the same view across its longer side) and put in the middle of the image, "
+             "black bars above and below"),
+    ("axis", "each pixel the mean of its row"),
+])
+def test_a_letterbox_and_a_mean_over_the_wrong_axis_are_named(ctx, how, words):
+    """With the unasked class's helpers (written blind to the grader), at seed 109: a Mitsuba render of a 2.39:1 frame
+    (the image's width and horizontal view) between black bars, and each pixel its row's mean of one sample index
+    (the samples averaged over the columns' axis): each claimed in its words."""
+    from mcrt.grade.accuracy import unasked
+
+    blank = np.zeros((RES, RES, 3))
+    img, spp = ((unasked._letterboxed(blank, spp=1024, seed=109, aspect=2.39), 1024) if how == "2.39" else
+                (unasked._mean_over_columns(blank, seed=109), RES))
+    res = grade_image(how, ctx, [img], spp=spp)
+    ex = res.details["explanation"]
+    assert ex["verdict"] == "claimed" and words in ex["sentence"], ex["sentence"]
 
 
 def _binomial_over_nine(img):

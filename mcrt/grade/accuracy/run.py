@@ -73,7 +73,9 @@ CAUSE_OF: dict[str, tuple[str, ...]] = {
     "material_swap": ("material",),
     # Values stored at the wrong places (added after unsaid was graded): rows (or columns) out of order, a pool's
     # finishing order; a row's or the image's channels one after another (the words name the channels' order).
-    "lines_order": ("row_stride",), "layout": ("channels",), "reflectance_rounded": ("albedo",),
+    "lines_order": ("row_stride",), "layout": ("channels",),
+    # Added before the twenty-first class was graded: a tiled render's tiles showing the whole view or the first tile.
+    "tiles": ("row_stride",), "reflectance_rounded": ("albedo",),
     # Added after the unbidden class was graded, with it in view: every albedo through a gamma of 2.2.
     "reflectance_gamma_encoded": ("albedo",), "reflectance_gamma_decoded": ("albedo",),
     # Added after unheralded was graded, with it in view: every diffuse surface black, whose words name an integer film

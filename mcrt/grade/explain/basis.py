@@ -111,7 +111,12 @@ def _light_variants(scene: Scene) -> dict[str, list[tuple[float, Scene]]]:
     out["light_sign"] = [(axis, replace(scene, light=replace(lt, center=tuple(-float(x) if i == axis else float(x)
                                                                           for i, x in enumerate(lt.center)))))
                          for axis in range(3) if lt.center[axis] != 0]
-    return {k: [(d, s) for d, s in v if _light_inside(s)] for k, v in out.items()}
+    kept = {k: [(d, s) for d, s in v if _light_inside(s)] for k, v in out.items()}
+    # The centre read (y, x) can put part of the light through a wall, as the student's program does: rendered so.
+    if lt.center[0] != lt.center[1]:
+        kept["light_swapped"] = [((1, 0, 2), replace(scene, light=replace(lt, center=(
+            float(lt.center[1]), float(lt.center[0]), float(lt.center[2])))))]
+    return kept
 
 
 def _light_inside(s: Scene) -> bool:
@@ -156,6 +161,18 @@ def _object_variants(scene: Scene) -> dict[str, list[tuple[object, Scene]]]:
             out[f"origin:{o.name}"] = [(None, replace(scene, objects=tuple(moved if x.name == o.name else x
                                                                          for x in scene.objects)))]
     return out
+
+
+def _room_variants(scene: Scene) -> dict[str, list[tuple[object, Scene]]]:
+    """The room's corners read (y, x): the room mirrored about the line x = y, each wall between the same two
+    corners (their order reversed to keep them counter-clockwise); the light and the objects where they were.
+    None where a camera's eye would fall outside it."""
+    room = scene.room
+    mirrored = replace(room, corners={k: (float(v[1]), float(v[0])) for k, v in room.corners.items()},
+                       walls=tuple(replace(w, corners=w.corners[::-1]) for w in reversed(room.walls)))
+    if not all(mirrored.contains(c.eye, 1e-3) for c in scene.cameras.values()):
+        return {}
+    return {"swapped:room": [((1, 0, 2), replace(scene, room=mirrored))]}
 
 
 def _plane_variants(scene: Scene) -> dict[str, list[tuple[float, Scene]]]:
@@ -243,7 +260,8 @@ def prepare_basis(a, scene: Scene, render) -> Basis:
         imgs = [img(edit((v, v, v))) for v in nodes]
         b.albedo[label] = (np.asarray(nodes, np.float64), np.stack(imgs), tuple(value))
         b.values[label] = (kind, tuple(value))
-    for fam in (_light_variants(scene), _object_variants(scene), _plane_variants(scene), _eye_variants(scene, cam)):
+    for fam in (_light_variants(scene), _object_variants(scene), _room_variants(scene), _plane_variants(scene),
+                _eye_variants(scene, cam)):
         for key, vs in fam.items():
             if vs:
                 b.nodes[key] = [(v, img(s)) for v, s in vs]

@@ -10,8 +10,8 @@ from mcrt.grade.feedback import num as _num
 
 
 def curves(fit: Fit, inputs: Inputs) -> list[Candidate]:
-    """Encoding curves on the reference: sRGB (and its inverse), BT.709's, HDR video's PQ, power curves; a Gaussian
-    blur; an unsharp mask."""
+    """Encoding curves on the reference: sRGB (and its inverse), BT.709's, HDR video's PQ and limited range, power
+    curves; a Gaussian blur; an unsharp mask."""
     from scipy.ndimage import gaussian_filter
 
     from mcrt.image_files import srgb_eotf, srgb_oetf
@@ -36,6 +36,7 @@ def curves(fit: Fit, inputs: Inputs) -> list[Candidate]:
                      0, value="bt709", change=srgb_eotf(bt709(C)) - fit.R)]
     out += _per_channel(fit, R, C)
     out += _hdr_video(fit, R, srgb_eotf)
+    out += _video_range(fit, C, srgb_eotf, srgb_oetf)
     exps = np.linspace(0.25, 2.5, 91)
     errs = np.array([fit.model(R**p) for p in exps])
     i = int(np.argmin(errs))
@@ -95,6 +96,21 @@ def _hdr_video(fit: Fit, R: np.ndarray, srgb_eotf) -> list[Candidate]:
                              f"where {where}", errs[i], 1, value=f"pq{'' if display else '-float'}",
                              change=models[i] - fit.R))
     return out
+
+
+def _video_range(fit: Fit, C: np.ndarray, srgb_eotf, srgb_oetf) -> list[Candidate]:
+    """8-bit video's limited range where the file's full range belongs: the codes 16 + 219 v (black at 16, white at
+    235, a video library's default), or limited-range codes read as full range and stretched back, (255 v - 16) / 219
+    clipped (the other way round)."""
+    V = srgb_oetf(C)
+    limited = srgb_eotf((16.0 + 219.0 * V) / 255.0)
+    expanded = srgb_eotf(np.clip((255.0 * V - 16.0) / 219.0, 0.0, 1.0))
+    return [Candidate("encoding", "video range", "the values written in video's limited range, codes 16 + 219 v of the "
+                      "sRGB values (black at 16, white at 235, a video library's default) where the file's full range "
+                      "0 to 255 belongs", fit.model(limited), 0, value="video-range", change=limited - fit.R),
+            Candidate("encoding", "video range expanded", "the values stretched from video's limited range to the full "
+                      "one once too often, (255 v - 16) / 219 of the sRGB values, clipped (blacks crushed, whites "
+                      "clipped)", fit.model(expanded), 0, value="video-range-expanded", change=expanded - fit.R)]
 
 
 #: What a channel can go through on its own (a loop over the wrong channels, a curve applied in one channel's code

@@ -10,7 +10,10 @@ that run. The same order over the whole image (every red first, a planar
 array written as it lies in memory) is the other fixed layout. Neither has
 a free parameter. Every row (or column) one and the same, the render's
 row k repeated (Python's ``[[0.0] * W] * H`` holds one row H times, and
-the last row written is every row), has k for its one parameter.
+the last row written is every row), has k for its one parameter. A tiled
+render whose tiles' pixel coordinates are wrong (each tile the whole view
+shrunk, or each the first tile) has the tiles' count. Every pixel its row's
+(column's) mean, a mean over the wrong axis, has none.
 """
 
 from __future__ import annotations
@@ -90,6 +93,8 @@ def layout(fit: Fit, inputs: Inputs) -> list[Candidate]:
                              # A shift by whole lines and lines copied onward are lines of R at other places too.
                              generalises=("pixel_offset", "resampling")))
     out += _one_line(fit)
+    out += _tiles(fit)
+    out += _line_means(fit)
     for name, f, text in (("planar rows", planar_rows, "each row's samples written channel by channel (the row's reds, "
                            "then its greens, then its blues: the channel loop outside the column loop) where the "
                            "format interleaves them"),
@@ -99,6 +104,51 @@ def layout(fit: Fit, inputs: Inputs) -> list[Candidate]:
         # A file that holds no value above 1 clipped them before they were moved (the light's pixels at 1).
         M = f(np.minimum(fit.R, 1.0) if float(np.max(fit.S)) <= 1.0 else fit.R)
         out.append(Candidate("layout", name, text, fit.model(M), 0, value=name, change=M - fit.R))
+    return out
+
+
+#: Tiles across the image (and down it) a tiled renderer may split it into.
+TILES = (2, 4, 8, 16)
+
+
+def _tiles(fit: Fit) -> list[Candidate]:
+    """A tiled render whose tiles' pixel coordinates are wrong, n tiles across and down (the count the choice, one
+    parameter): each tile's pixels normalised by the tile's size, not the image's (every tile the whole view at 1/n of
+    the size: R box-filtered down by n, repeated n x n times), or each tile's origin never added (every tile the first
+    tile: R's top-left tile repeated)."""
+    h, w, _ = fit.R.shape
+    models = {"whole view": [], "first tile": []}
+    for n in TILES:
+        if h % n or w % n or h // n < 2 or w // n < 2:
+            continue
+        small = fit.R.reshape(h // n, n, w // n, n, 3).mean(axis=(1, 3))
+        models["whole view"].append((n, np.tile(small, (n, n, 1))))
+        models["first tile"].append((n, np.tile(fit.R[: h // n, : w // n], (n, n, 1))))
+    words = {"whole view": "each tile's pixel coordinates divided by the tile's width and height, not the image's: "
+                           "every tile the whole view at 1/{n} of the size",
+             "first tile": "each tile's origin never added to its pixels' rays: every tile rendered as the top-left "
+                           "one"}
+    out = []
+    for name, nodes in models.items():
+        if not nodes:
+            continue
+        err, n, M = min(((fit.model(M), n, M) for n, M in nodes), key=lambda t: t[0])
+        out.append(Candidate("tiles", f"tiles: {name}", f"the image rendered in {n} x {n} tiles, "
+                             + words[name].format(n=n), err, 1, value={"tiles": n, "kind": name}, change=M - fit.R))
+    return out
+
+
+def _line_means(fit: Fit) -> list[Candidate]:
+    """Each pixel its row's (column's) mean: a mean over the wrong axis of an array that holds the image's columns
+    (rows) beside the samples, every row (column) flat. Worded as a smoothing, which it is, along the lines; no free
+    parameter."""
+    out = []
+    for axis, word, across in ((1, "row", "columns"), (0, "column", "rows")):
+        M = np.broadcast_to(fit.R.mean(axis=axis, keepdims=True), fit.R.shape)
+        out.append(Candidate("blur", f"every {word} its mean", f"each pixel the mean of its {word} (a mean taken over "
+                             f"the wrong axis, the {across} where the samples' belongs): every {word} flat, the image "
+                             f"smoothed along its {word}s", fit.model(M), 0, value={"mean_over": across},
+                             change=M - fit.R))
     return out
 
 

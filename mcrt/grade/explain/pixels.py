@@ -68,14 +68,18 @@ def bad_pixels(fit: Fit, inputs: Inputs) -> list[Candidate]:
 def drawn_lines(S: np.ndarray, R: np.ndarray, w: np.ndarray) -> dict[str, list[int]]:
     """{'rows': [...], 'columns': [...]}: the hand-in's rows and columns whose every pixel is one colour, to the last
     bit, neither black nor the image's largest value in every channel (an over-exposed display file's lines
-    clipped at 1 are one value too), and that colour far from the render's line (its chi^2 against it, weights
+    clipped at 1 are one value too) unless the four border lines are all one colour (a frame), and that colour far from the render's line (its chi^2 against it, weights
     ``w``, beyond :data:`LINE_Z` standard deviations of noise's): no render's line is one value by chance. At most
     :data:`MOST` of either."""
     out, top = {}, np.max(S, axis=(0, 1))
+    # A frame drawn round the image (the four border lines one colour, the same) may be any colour, white too.
+    borders = (S[0], S[-1], S[:, 0], S[:, -1])
+    framed = all(np.all(b == S[0, 0]) for b in borders) and np.any(S[0, 0] != 0.0)
     for axis, word in ((0, "rows"), (1, "columns")):
         S_, R_, w_ = (np.moveaxis(x, axis, 0) for x in (S, R, w))
         one = (np.all(S_ == S_[:, :1], axis=(1, 2)) & np.any(S_[:, 0] != 0.0, axis=-1)
                & np.any(S_[:, 0] != top, axis=-1))
+        one[[0, -1]] |= framed
         m = np.maximum(np.count_nonzero(w_, axis=(1, 2)), 1)
         far = np.sum((S_ - R_) ** 2 * w_, axis=(1, 2)) - m > LINE_Z * np.sqrt(2.0 * m)
         k = np.flatnonzero(one & far)
@@ -94,14 +98,16 @@ def _lines(fit: Fit) -> list[Candidate]:
     drawn = np.zeros(fit.R.shape[:2], bool)
     drawn[found.get("rows", []), :] = True
     drawn[:, found.get("columns", [])] = True
-    M = np.where(drawn[..., None], fit.S, fit.R)
+    # A file that holds no value above 1 clipped the render's too (the light's pixels at 1).
+    M = np.where(drawn[..., None], fit.S, np.minimum(fit.R, 1.0) if float(np.max(fit.S)) <= 1.0 else fit.R)
     colours = {tuple(float(v) for v in fit.S[r, c]) for r, c in np.argwhere(drawn)}
     colour = ("the colour " + "(" + ", ".join(f"{v:.3g}" for v in next(iter(colours))) + ")" if len(colours) == 1
               else f"{len(colours)} colours")
     where = " and ".join(f"{word[:-1] if len(ks) == 1 else word} {', '.join(map(str, ks))}" for word, ks in found.items())
     n = sum(len(ks) for ks in found.values())
     text = (f"{'a line' if n == 1 else f'{n} lines'} of one colour drawn over the render ({colour}, along {where}): "
-            "a crosshair, grid or guide drawn to check the camera's aim and left in, or a line written with one value")
+            "a crosshair, grid, guide or frame drawn to check the camera's aim or for a figure and left in, or a line "
+            "written with one value")
     return [Candidate("bad_pixels", "lines drawn", text, fit.model(M), n, value={"lines": found}, change=M - fit.R)]
 
 

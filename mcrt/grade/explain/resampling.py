@@ -25,10 +25,15 @@ moved and blurred at once: each pixel the mean of two (or four) of R's, the
 edge filled with black (scipy's default) or its nearest pixels; its words
 name the shift (a pixel offset), which a camera's offset alone (moved,
 not blurred) does not fit, and a box filter of 2 pixels (each pixel the
-mean of itself and its neighbour on one side), which is the same image.
+mean of itself and its neighbour on one side), which is the same image. A
+frame of another aspect ratio (:data:`ASPECTS`) rendered with the image's
+view across its longer side and centred between black bars is R inside the
+band, black outside.
 """
 
 from __future__ import annotations
+
+import itertools
 
 import numpy as np
 
@@ -93,10 +98,56 @@ def resampling(fit: Fit, inputs: Inputs) -> list[Candidate]:
                              f"copied to the next {what} (a loop stepping by 2, or {what}s written twice)",
                              fit.model(dup), 0, value={"copied": f"{what}s", "method": "every other"},
                              change=dup - fit.R))
+    out += _boxed(fit)
     out.append(_shifted(fit))
     if inputs.basis is not None and getattr(inputs.basis, "fine", None) is not None:
         out.append(_nearest_from_larger(fit, inputs))
     return out
+
+
+#: Width-to-height ratios of a frame rendered inside the image with black bars (video's 16:9, cinema's 1.85 and 2.39,
+#: a 16:10 screen, television's 4:3), and their inverses (bars at the sides).
+ASPECTS = {"16:9": 16 / 9, "1.85:1": 1.85, "2.39:1": 2.39, "16:10": 1.6, "4:3": 4 / 3}
+
+
+def _band(n: int, kept: float, whole: bool) -> np.ndarray:
+    """How much of each of n pixels a centred band ``kept`` pixels wide covers (0 to 1); ``whole``: the band rounded
+    to whole pixels and its start to the pixel before the middle, as a program at this size places it."""
+    if whole:
+        kept = float(round(kept))
+        lo = float((n - int(kept)) // 2)
+    else:
+        lo = (n - kept) / 2.0
+    edges = np.arange(n + 1, dtype=np.float64)
+    return np.clip(np.minimum(edges[1:], lo + kept) - np.maximum(edges[:-1], lo), 0.0, 1.0)
+
+
+def _boxed(fit: Fit) -> list[Candidate]:
+    """A frame of another aspect ratio rendered with the image's horizontal (or vertical) view and put in the middle
+    of the image, black bars above and below (letterboxed) or at the sides (pillarboxed): R inside the band, black
+    outside it, the pixels on its edges covered in part (or the band in whole pixels). The ratio and the rounding the
+    choice, one parameter."""
+    h, w = fit.R.shape[:2]
+    best = None
+    ratios = [(name, a) for name, a in ASPECTS.items()]
+    ratios += [(":".join(name.split(":")[::-1]), 1.0 / a) for name, a in ASPECTS.items()]  # upright: 9:16
+    for (name, a), whole in itertools.product(ratios, (True, False)):
+        if a > w / h:  # wider than the image: its rows are fewer
+            cover, where = _band(h, w / a, whole)[:, None, None], "above and below (letterboxed)"
+        elif a < w / h:
+            cover, where = _band(w, h * a, whole)[None, :, None], "at the sides (pillarboxed)"
+        else:
+            continue
+        M = fit.R * cover
+        err = fit.model(M)
+        if best is None or err < best[0]:
+            best = (err, name, where, M)
+    if best is None:
+        return []
+    err, name, where, M = best
+    return [Candidate("resampling", f"{name} frame with bars", f"the image rendered in a {name} frame (the same view "
+                      f"across its longer side) and put in the middle of the image, black bars {where}", err, 1,
+                      value={"aspect": name, "method": "bars"}, change=M - fit.R)]
 
 
 #: The shifts (x, y) in pixels of an image moved after rendering (half a pixel along x, y or both, either way).

@@ -211,7 +211,7 @@ def _node_candidate(key: str, val, chi2: float, v: dict, max_depth: int) -> Cand
     """The candidate of one rendered variation (a basis node's key and value, its chi^2), in words; None for a key
     no family words."""
     fam = key.split(":")[0]
-    if key.startswith("light_") and key not in ("light_size", "light_sign"):
+    if key.startswith("light_") and key not in ("light_size", "light_sign", "light_swapped"):
         axis = AXES.index(key[-1])
         c = _shift(v["light_center"], axis, val)
         text = (f"the light moved by {val:+g} along {key[-1]} (centre {_fmt(c, 2)} where the scene says "
@@ -222,6 +222,10 @@ def _node_candidate(key: str, val, chi2: float, v: dict, max_depth: int) -> Cand
         cand = Candidate("light_position", "the light's coordinate's sign", f"the light's {AXES[val]} typed with "
                          f"the wrong sign (centre {_fmt(c, 2)} where the scene says {_fmt(v['light_center'], 2)})",
                          chi2, 0, value=c)
+    elif key == "light_swapped":
+        c = tuple(v["light_center"][i] for i in val)
+        cand = Candidate("light_position", "the light's x and y swapped", f"the light's centre read (y, x): "
+                         f"{_fmt(c, 2)} where the scene says {_fmt(v['light_center'], 2)}", chi2, 0, value=c)
     elif key == "light_size":
         s = tuple(x * f for x, f in zip(v["light_size"], val))  # val: the factors of its two sides
         cand = Candidate("light_size", "the light's size", f"the light's size {_num(s[0])} x {_num(s[1])} where "
@@ -243,6 +247,10 @@ def _node_candidate(key: str, val, chi2: float, v: dict, max_depth: int) -> Cand
         name, ax = key.split(":")[1:]
         cand = Candidate("object_moved", f"{name} moved", f"the {name} moved by {val:+g} along {ax}", chi2, 1,
                          value=(name, ax, val))
+    elif key == "swapped:room":
+        cand = Candidate("object_moved", "the room's corners swapped", "the room's corners read (y, x): the room "
+                         "mirrored about the line x = y, the light and the objects where the scene puts them", chi2, 0,
+                         value=("room", "yx"))
     elif fam == "swapped":
         name = key.split(":")[1]
         order = "(" + ", ".join(AXES[i] for i in val) + ")"

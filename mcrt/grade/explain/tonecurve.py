@@ -5,13 +5,15 @@ Named curves come first, each with an exposure scanned before it (a
 student's exposure slider): Reinhard's :math:`x/(1+x)`, the ACES filmic
 curve (Narkowicz's fit), Hable's filmic curve (Uncharted 2's constants and
 white point 11.2), the exponential curve :math:`1 - e^{-x}` (tutorials'
-"exposure" tone map), each alone or followed by the sRGB curve, a clamp to
-[0, 1], and 8-bit rounding; Reinhard's extended curve
+"exposure" tone map), each alone or followed by the sRGB curve, the
+smoothstep S-curve :math:`3c^2 - 2c^3` of the values clipped to [0, 1], a
+clamp to [0, 1], and 8-bit rounding; Reinhard's extended curve
 :math:`x (1 + x / w^2) / (1 + x)` with its white point w scanned too; and
 Reinhard's curves, ACES and Hable's applied to the luminance L alone, each
 pixel's colour scaled by :math:`f(L) / L` (hue and saturation kept, as
 tone-mapping guides teach), and the sRGB curve so; a constant subtracted from every value,
-clipped at 0 (a black level), or added; a contrast slider; and a sigmoid contrast curve
+clipped at 0 (a black level), or added; a contrast slider; a contrast stretch
+between two percentiles of the image onto [0, 1]; and a sigmoid contrast curve
 :math:`1 / (1 + e^{g (c - x)})` (scikit-image's ``adjust_sigmoid``), its cut-off and gain scanned. Any other monotone curve is fitted as an
 isotonic regression of S on R per channel
 (:func:`scipy.optimize.isotonic_regression`) on :data:`BINS` quantile bins
@@ -60,6 +62,12 @@ def _reinhard_ext(x, w: float):
     return x * (1.0 + x / (w * w)) / (1.0 + x)
 
 
+def _smoothstep(x):
+    """The S-curve 3 c^2 - 2 c^3 of c the values clipped to [0, 1] (GLSL's smoothstep(0, 1, x), a contrast curve)."""
+    c = np.clip(x, 0.0, 1.0)
+    return c * c * (3.0 - 2.0 * c)
+
+
 def _on_luminance(f):
     """The curve f applied to each pixel's luminance (Rec. 709), the pixel's colour scaled by f(L) / L."""
     from mcrt.grade.objects import LUMINANCE
@@ -88,6 +96,8 @@ def _named_curves() -> dict[str, tuple[str, callable]]:
         "exponential": ("put through the exponential tone map 1 - exp(-x)", lambda x: -np.expm1(-x)),
         "exponential+srgb": ("put through the exponential tone map 1 - exp(-x), then the sRGB curve",
                              lambda x: srgb_oetf(-np.expm1(-x))),
+        "smoothstep": ("put through the smoothstep S-curve 3 c^2 - 2 c^3 of c the values clipped to [0, 1]",
+                       _smoothstep),
         "clamp": ("clamped to [0, 1]", lambda x: np.clip(x, 0.0, 1.0)),
         "quantised": ("clamped to [0, 1] and rounded to 8 bits (linear)", q8),
     }
@@ -108,6 +118,7 @@ def tone_curve(fit: Fit, inputs: Inputs) -> list[Candidate]:
     out += _reinhard_extended(fit, R)
     out += _offset(fit, R)
     out += _contrast(fit, R)
+    out += _stretch(fit, R)
     out.append(_sigmoid(fit, R))
     out.append(_isotonic(fit))
     return out
@@ -151,6 +162,45 @@ def _contrast(fit: Fit, R: np.ndarray) -> list[Candidate]:
     return [Candidate("tone_curve", "contrast", f"the values through a contrast control before saving: each value v "
                       f"saved as {_num(a)} (v - {_num(pivot)}) + {_num(pivot)}, clipped at 0", fit.delta(change), 2,
                       value={"curve": "contrast", "contrast": a, "pivot": pivot}, change=change)]
+
+
+#: The percentile pairs a contrast stretch maps onto [0, 1] (scikit-image's example takes 2 and 98; a min-max
+#: normalisation 0 and 100).
+STRETCH_PERCENTILES = ((0.0, 100.0), (0.5, 99.5), (1.0, 99.0), (2.0, 98.0), (5.0, 95.0))
+
+
+def _stretch(fit: Fit, R: np.ndarray) -> list[Candidate]:
+    """A contrast stretch: the values between two percentiles of the image (over every value, as
+    ``skimage.exposure.rescale_intensity(img, in_range=(p_lo, p_hi))`` takes them) mapped linearly onto [0, 1]
+    and clipped: on the linear values, on their sRGB encoding (a stretch of the display image), or on the linear
+    values then saved as they are in a display file (an image library's float-to-byte conversion, which the reader
+    decodes as sRGB); the pair and the space the choice, one parameter. The student's percentiles are their own
+    image's, the reference's within noise."""
+    from mcrt.image_files import srgb_eotf, srgb_oetf
+
+    spaces = {"": (lambda v: v, lambda v: v),
+              ", on the sRGB-encoded image": (lambda v: srgb_oetf(np.minimum(v, 1.0)), srgb_eotf),
+              ", linear values saved as they are in a display file (decoded as sRGB)": (lambda v: v, srgb_eotf)}
+    best = None
+    for space, (encode, decode) in spaces.items():
+        V = encode(R)
+        for lo, hi in STRETCH_PERCENTILES:
+            a, b = (float(v) for v in np.percentile(V, (lo, hi)))
+            if b <= a:
+                continue
+            M = decode(np.clip((V - a) / (b - a), 0.0, 1.0))
+            err = fit.model(M)
+            if best is None or err < best[0]:
+                best = (err, space, lo, hi, M)
+    if best is None:  # a constant image: nothing to stretch
+        return []
+    err, space, lo, hi, M = best
+    what = ("from their minimum to their maximum" if (lo, hi) == (0.0, 100.0) else
+            f"between their {_num(lo)} and {_num(hi)} percentiles")
+    return [Candidate("tone_curve", "contrast stretch", f"the values stretched {what} onto [0, 1] and clipped before "
+                      f"saving (a contrast stretch, as scikit-image's rescale_intensity with in_range does{space})",
+                      err, 1, value={"curve": "stretch", "percentiles": (lo, hi), "space": space.strip(" ,")},
+                      change=M - fit.R)]
 
 
 #: Cut-offs and gains scanned for a sigmoid contrast curve (scikit-image's adjust_sigmoid defaults: 0.5 and 10).
