@@ -18,7 +18,7 @@ CLASSES = {"scene": "cases", "outside": "outside", "programs": "programs", "fres
            "unsought": "unsought", "unguessed": "unguessed",
            "unforeseen": "unforeseen", "unprompted": "unprompted",
            "unbidden": "unbidden", "unheralded": "unheralded", "unbeknown": "unbeknown",
-           "unvisited": "unvisited"}
+           "unvisited": "unvisited", "unlooked": "unlooked"}
 
 
 def register(sub) -> None:
@@ -49,8 +49,9 @@ def register(sub) -> None:
                    "tracers, scene input and output, written blind, mcrt.grade.accuracy.unbidden), 'unheralded' (a "
                    "nineteenth, in tracers, scene input and output, written blind, "
                    "mcrt.grade.accuracy.unheralded), 'unbeknown' (a twentieth, in tracers, scene input and output, "
-                   "written blind, mcrt.grade.accuracy.unbeknown) or 'unvisited' (a twenty-first, in tracers, scene "
-                   "input and output, written blind, mcrt.grade.accuracy.unvisited) (default: scene)")
+                   "written blind, mcrt.grade.accuracy.unbeknown), 'unvisited' (a twenty-first, in tracers, scene "
+                   "input and output, written blind, mcrt.grade.accuracy.unvisited) or 'unlooked' (a twenty-second, "
+                   "in tracers, scene input and output, written blind, mcrt.grade.accuracy.unlooked) (default: scene)")
     p.add_argument("--held-out", choices=("all", "only", "none"), default="all",
                    help="grade all cases, only the held-out ones, or none of them (default: all)")
     p.add_argument("--out", default=None, help=f"report folder (default: {DEFAULT_OUT}, or {DEFAULT_OUT}/CLASS "
