@@ -1026,6 +1026,39 @@ def test_the_light_below_the_floor_is_named_its_height_sign(ctx):
     assert named_causes(res)[0] == ["light_position"]
 
 
+def test_rays_left_in_camera_space_are_named(ctx):
+    """A Mitsuba render (seed 112, 1024 spp) whose camera looks along the world's +z with y up (the rays built in a
+    camera space looking down +z and never turned into the world): claimed as that, the camera's rotation named."""
+    from mcrt.grade.accuracy import cases
+
+    img = _mitsuba(cases._camera(load_scene(), forward=(0.0, 0.0, 1.0), up=(0.0, 1.0, 0.0)), 112)
+    res = grade_image("camera_space", ctx, [img], spp=1024)
+    ex = res.details["explanation"]
+    assert ex["verdict"] == "claimed" and "looking along the world's +z" in ex["sentence"], ex["sentence"]
+    assert "camera_rotation" in named_causes(res)[0]
+
+
+def test_a_blur_over_the_channels_is_named(ctx):
+    """A Mitsuba render (seed 113, 1024 spp) through scipy.ndimage.gaussian_filter(img, 1) on its (H, W, 3) array:
+    claimed as a blur over the colour channels too."""
+    from scipy.ndimage import gaussian_filter
+
+    res = grade_image("channels_blurred", ctx, [gaussian_filter(_mitsuba(load_scene(), 113), 1.0)], spp=1024)
+    ex = res.details["explanation"]
+    assert ex["verdict"] == "claimed" and "over its colour channels as well as its pixels" in ex["sentence"], \
+        ex["sentence"]
+
+
+def test_the_light_at_height_zero_is_named(ctx):
+    """A Mitsuba render (seed 111, 1024 spp) with the light's height left 0 (its centre (5, 0, 0), facing down from
+    the middle of the room): claimed as the light moved down to z = 0."""
+    img = _mitsuba(light(move=(0.0, 0.0, -load_scene().light.center[2]))(load_scene()), 111)
+    res = grade_image("light_z0", ctx, [img], spp=1024)
+    ex = res.details["explanation"]
+    assert ex["verdict"] == "claimed" and "(5.00, 0.00, 0.00)" in ex["sentence"], ex["sentence"]
+    assert named_causes(res)[0] == ["light_position"]
+
+
 @pytest.mark.parametrize("what", ["light", "room"])
 def test_coordinates_read_y_x_are_named(ctx, what):
     """A Mitsuba render (seed 79, 1024 spp) with the light's centre read (y, x), part of it through a wall, or the
@@ -1274,6 +1307,23 @@ def test_a_letterbox_and_a_mean_over_the_wrong_axis_are_named(ctx, how, words):
     res = grade_image(how, ctx, [img], spp=spp)
     ex = res.details["explanation"]
     assert ex["verdict"] == "claimed" and words in ex["sentence"], ex["sentence"]
+
+
+def test_columns_mapped_with_another_count_are_named(ctx):
+    """Mitsuba's path integrator (the unsaid class's tracer of a student's rays, seed 110, 1024 spp) on a pinhole
+    whose columns are mapped with 40 hard-coded for the image's 32, s = 2 (i + u) / 40 - 1: claimed as the columns'
+    count, the left 80 % of the view stretched."""
+    from mcrt.grade.accuracy import unsaid
+
+    def camera(fx, fy):
+        eye, r, u, f, k = unsaid._frame()
+        s, t = k * (2.0 * fx * RES / 40.0 - 1.0), k * (1.0 - 2.0 * fy)
+        return np.broadcast_to(eye, (len(fx), 3)), unsaid._unit(f + s[:, None] * r + t[:, None] * u)
+
+    res = grade_image("columns", ctx, [unsaid._traced(np.zeros((RES, RES, 3)), spp=1024, seed=110, camera=camera)],
+                      spp=1024)
+    ex = res.details["explanation"]
+    assert ex["verdict"] == "claimed" and "only the left 80 % of the view" in ex["sentence"], ex["sentence"]
 
 
 def _binomial_over_nine(img):

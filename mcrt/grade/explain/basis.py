@@ -23,7 +23,7 @@ SUB = FINE
 ALBEDO_NODES = (0.0, 0.5, 1.0)
 #: Offsets (scene units) of the light, the objects and the eye; light size factors (both sides).
 LIGHT_OFFSETS = (-2.0, -1.5, -1.0, -0.5, 0.5, 1.0, 1.5, 2.0)
-LIGHT_DROPS = (-0.5, -1.0)
+LIGHT_DROPS = (-0.5, -1.0, -2.5)
 LIGHT_SIZES = (0.5, 0.75, 1.25, 1.5)
 #: Factors of one side of the light alone (the other kept).
 LIGHT_SIDES = (0.5, 2.0)
@@ -100,7 +100,11 @@ def _shift(p, axis: int, d: float):
 def _light_variants(scene: Scene) -> dict[str, list[tuple[float, Scene]]]:
     lt = scene.light
     out: dict[str, list] = {}
-    for axis, offsets in ((0, LIGHT_OFFSETS), (1, LIGHT_OFFSETS), (2, LIGHT_DROPS)):
+    # Lower still: at z = 0 (its height left 0, or read as a distance below a ceiling at its own height) and at the
+    # room's mid-height.
+    room = scene.room
+    drops = sorted(set(LIGHT_DROPS) | {-float(lt.center[2]), (room.floor_z + room.ceiling_z) / 2 - float(lt.center[2])})
+    for axis, offsets in ((0, LIGHT_OFFSETS), (1, LIGHT_OFFSETS), (2, tuple(d for d in drops if d < 0))):
         out[f"light_{AXES[axis]}"] = [(d, replace(scene, light=replace(lt, center=_shift(lt.center, axis, d))))
                                       for d in offsets]
     # Each side times f, or one side alone (a half-width forgotten, or halved twice, along x or y only).
@@ -205,6 +209,10 @@ def _eye_variants(scene: Scene, camera: str) -> dict[str, list[tuple[float, Scen
     # a yaw, or a y-up convention's axes), to the left (+) or the right (-).
     out["eye_turned"] = [(side, replace(scene, cameras={**scene.cameras, camera: replace(
         c, forward=_turned(c.forward, c.up, sign))})) for side, sign in (("left", 1.0), ("right", -1.0))]
+    # The rays built in camera space and never turned into the world: looking along the world's -z with y up
+    # (OpenGL's convention), or along +z.
+    out["eye_axis"] = [(f, replace(scene, cameras={**scene.cameras, camera: replace(c, forward=f, up=(0.0, 1.0, 0.0))}))
+                       for f in ((0.0, 0.0, -1.0), (0.0, 0.0, 1.0)) if tuple(c.forward) != f]
     return out
 
 

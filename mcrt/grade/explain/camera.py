@@ -191,6 +191,38 @@ def _aspect(fit: Fit, wp: _Warp) -> Candidate:
                      "width and height swapped in it)", chi, 1, value=a, change=dm)
 
 
+#: The ratios k of the image's rows (columns) to the count hard-coded in their mapping to the image plane, scanned:
+#: below 1 a larger count (only the top, or left, part of the view), above it a smaller one, as far as the fine
+#: image reaches; within :data:`COUNT_NEAR` of 1 the field of view says it.
+COUNTS = tuple(np.round(np.arange(0.3, 1.125, 0.025), 3))
+COUNT_NEAR = 0.05
+
+
+def _one_axis_count(fit: Fit, wp: _Warp) -> list[Candidate]:
+    """The rows (columns) mapped to the image plane with another count than the image's hard-coded, ``t = 1 - 2 (j +
+    v) / N`` (``s = 2 (i + u) / N - 1``): the view anchored at the top (left) edge, scaled by k = H / N along that
+    axis alone; k scanned (one parameter)."""
+    out = []
+    for axis, word, edge in (("v", "rows", "top"), ("u", "columns", "left")):
+        best = None
+        for k in COUNTS:
+            if abs(k - 1.0) < COUNT_NEAR:
+                continue
+            u, v = (wp.u, wp.v * k) if axis == "v" else (wp.u * k, wp.v)
+            dm = wp.at(u, v) - wp.identity
+            chi = fit.delta(dm)
+            if best is None or chi < best[0]:
+                best = (chi, float(k), dm)
+        chi, k, dm = best
+        part = (f"only the {edge} {_num(100 * k)} % of the view, stretched over the image" if k < 1 else
+                f"{_num(100 * k)} % of the view from the {edge} edge, squeezed into the image")
+        out.append(Candidate("aspect", f"{word} mapped with another count", f"the {word} mapped to the image plane "
+                             f"with another count than the image's hard-coded (N = {_num(1 / k)} times the image's "
+                             f"{word} in {'t = 1 - 2 (j + v) / N' if axis == 'v' else 's = 2 (i + u) / N - 1'}): "
+                             f"{part}", chi, 1, value={"axis": word, "ratio": k}, change=dm))
+    return out
+
+
 def _cylindrical(sx, sy, t, ty):
     """The horizontal angle linear in the column (a cylinder's film), the height as the pinhole's at the centre."""
     a = sx * math.atan(t)
@@ -277,6 +309,7 @@ def camera(fit: Fit, inputs: Inputs) -> list[Candidate]:
                          f"{_cropped(float(p['fov']), f0, b.base.shape)}", chi, 1,
                          value=float(p["fov"]), change=dm))
     out.append(_aspect(fit, wp))
+    out += _one_axis_count(fit, wp)
     p, chi, dm = _fit_camera(fit, wp, "pixel_offset", f0)
     dx, dy = float(p["dx"]), float(p["dy"])
     out.append(Candidate("pixel_offset", "pixel-centre offset", f"the image shifted by ({dx:+.2f}, {dy:+.2f}) pixel "

@@ -57,9 +57,29 @@ def curves(fit: Fit, inputs: Inputs) -> list[Candidate]:
                          f"offsets outside 0 to 1): smoothed as by a Gaussian of about {_num(s)} pixel",
                          float(errs[i]), 1, value=float(s),
                          change=gaussian_filter(fit.R, (s, s, 0), mode="nearest") - fit.R))
+    out.append(_blur_over_channels(fit, sig, gaussian_filter))
     out += _three_by_three(fit)
     out.append(_unsharp(fit, gaussian_filter))
     return out
+
+
+#: Sigmas along the channel axis of a Gaussian filter given one sigma for every axis of an (H, W, 3) image (the
+#: image's resolution and the grade's may differ in the pixels, never in the channels).
+CHANNEL_SIGMAS = (0.5, 1.0, 2.0)
+
+
+def _blur_over_channels(fit: Fit, sig: np.ndarray, gaussian_filter) -> Candidate:
+    """A Gaussian blur over the channel axis too (``scipy.ndimage.gaussian_filter(img, sigma)`` with one sigma for the
+    three axes of an (H, W, 3) image, its ends reflected): each channel mixed with its neighbours, the colours washed
+    out; the pixels' sigma and the channels' scanned, one parameter."""
+    err, s, c, M = min(((fit.model(M), s, c, M) for s in sig for c in CHANNEL_SIGMAS
+                        for M in (gaussian_filter(fit.R, (s, s, c), mode=("nearest", "nearest", "reflect")),)),
+                       key=lambda t: t[0])
+    return Candidate("blur", "blur over the channels", f"the image blurred after rendering over its colour channels "
+                     f"as well as its pixels (a Gaussian filter given one sigma for the (H, W, 3) array's three axes, "
+                     f"as scipy.ndimage.gaussian_filter(img, sigma) does): about {_num(s)} pixel, and {_num(c)} across "
+                     "the channels, the colours washed out", err, 1, value={"sigma": float(s), "channels": c},
+                     change=M - fit.R)
 
 
 def bt709(x: np.ndarray) -> np.ndarray:

@@ -267,6 +267,11 @@ def _node_candidate(key: str, val, chi2: float, v: dict, max_depth: int) -> Cand
         cand = Candidate("object_moved", f"{name} at the origin", f"the {name} about the origin (its coordinates "
                          "taken in model space: its placement in the room never applied)", chi2, 0,
                          value=(name, "origin"))
+    elif key == "eye_axis":
+        what = "-z, x right and y up: OpenGL's convention" if val[2] < 0 else "+z, with y up"
+        cand = Candidate("rotation", "the camera's rays in camera space", f"the camera's rays built in camera space and "
+                         f"never turned into the world's frame (looking along the world's {what}), where the scene's "
+                         f"camera looks along {_fmt(v['forward'], 2)}", chi2, 1, value=val)
     elif key.startswith("eye_"):
         cand = Candidate("eye", "the camera's eye", f"the camera's eye moved by {val:+g} along {key[-1]} (at "
                          f"{_fmt(_shift(v['eye'], AXES.index(key[-1]), val), 2)} where the scene says "
