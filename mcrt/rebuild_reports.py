@@ -175,6 +175,16 @@ REPORTS: tuple[Report, ...] = (
            "the grader (post-processing, writing the file, materials, geometry, camera and light models, the "
            "integrator, samples and passes): named right, confidently wrong, partial, false alarms, with a held-out "
            "half fixed before any grading"),
+    Report("grading_accuracy/unvisited", "grade-accuracy --class unvisited --out reports/grading_accuracy/unvisited",
+           "grading on a twenty-first class of mistakes in students' tracers, scene input and output, written blind to "
+           "the grader (post-processing, writing the file, materials, geometry, camera and light models, the "
+           "integrator, samples and passes): named right, confidently wrong, partial, false alarms, with a held-out "
+           "half fixed before any grading"),
+    Report("grading_accuracy/unlooked", "grade-accuracy --class unlooked --out reports/grading_accuracy/unlooked",
+           "grading on a twenty-second class of mistakes in students' tracers, scene input and output, written blind to "
+           "the grader (post-processing, writing the file, materials, geometry, camera and light models, the "
+           "integrator, samples and passes): named right, confidently wrong, partial, false alarms, with a held-out "
+           "half fixed before any grading"),
     Report("grading/false_alarms", "grade-false-alarms --out reports/grading/false_alarms",
            "grading's false alarms on correct renders: estimators, samplers, spp 16-1024, 64x64 to 800x800, PNG curves"),
 )

@@ -401,6 +401,31 @@ _UNBEKNOWN = (
     "room black; the first hit's light sample with its albedo left out or twice. Both rows here are of rules that "
     "saw the class.")
 
+def _twin_blind(module: str, ordinal: str) -> str:
+    """The opening of the twenty-first and twenty-second classes' introductions, written blind the same day and
+    graded once on the same frozen rules."""
+    return (
+        f"The wrong renders are a {ordinal} class of mistakes in students' tracers, their scene input and their output "
+        f"that no other class or the catalogue tried (mcrt.grade.accuracy.{module}), written blind to the grader's "
+        "rules and not graded by their author: post-processing, writing the file, materials, geometry, camera and "
+        "light models, the integrator, and samples and passes; from Mitsuba renders of edited scenes, Mitsuba renders "
+        "combined, Mitsuba's samples added up as students' loops add them, or correct renders written as students' "
+        "programs write files. The correct ones come from Mitsuba and mcrt in ways no other class used. *Named "
+        "right*, *confidently wrong*, *partial or none*: as for the other classes. **Held-out** cases (marked H) were "
+        "fixed by the rule stated in the module (every other case of each category) before any case was graded. Its "
+        "author reported counts only (no case named or described); the grader's rules were frozen at commit cca957e "
+        "before any case of it or of its twin class was read or graded, and the whole class was graded once, on "
+        "them: ")
+
+
+_UNVISITED = _twin_blind("unvisited", "twenty-first") + (
+    "this report (held out, 4 of 12 named right, 1 of 12 confidently wrong, 11 of 12 detected; all 28, 12 named "
+    "right, 1 confidently wrong, 27 detected; 0 of 8 correct hand-ins lost points).")
+
+_UNLOOKED = _twin_blind("unlooked", "twenty-second") + (
+    "this report (held out, 1 of 12 named right, 2 of 12 confidently wrong, 12 of 12 detected; all 28, 6 named "
+    "right, 4 confidently wrong, 27 detected; 0 of 8 correct hand-ins lost points).")
+
 #: Each class's title, after "Grading accuracy on a class of realistic hand-ins".
 TITLES = {
     "outside": ": mistakes outside the scene file", "programs": ": mistakes of students' programs",
@@ -420,7 +445,9 @@ TITLES = {
     "unprompted": ": a seventeenth class of mistakes, written blind",
     "unbidden": ": an eighteenth class of mistakes, written blind",
     "unheralded": ": a nineteenth class of mistakes, written blind",
-    "unbeknown": ": a twentieth class of mistakes, written blind"}
+    "unbeknown": ": a twentieth class of mistakes, written blind",
+    "unvisited": ": a twenty-first class of mistakes, written blind",
+    "unlooked": ": a twenty-second class of mistakes, written blind"}
 
 #: The scene class's introduction (mcrt.grade.accuracy.cases).
 _SCENE = (
@@ -437,14 +464,14 @@ INTROS = {"outside": _OUTSIDE, "programs": _PROGRAMS, "fresh": _FRESH, "blind": 
           "untried": _UNTRIED, "novel": _NOVEL, "untold": _UNTOLD, "unmet": _UNMET, "unheard": _UNHEARD,
           "unsaid": _UNSAID, "unasked": _UNASKED, "unsought": _UNSOUGHT, "unguessed": _UNGUESSED,
           "unforeseen": _UNFORESEEN, "unprompted": _UNPROMPTED, "unbidden": _UNBIDDEN, "unheralded": _UNHERALDED,
-          "unbeknown": _UNBEKNOWN}
+          "unbeknown": _UNBEKNOWN, "unvisited": _UNVISITED, "unlooked": _UNLOOKED}
 
 
 def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta: dict, gradescope: list[dict],
                  klass: str = "scene") -> Path:
     """Write index.md and data.json under ``out``; returns the Markdown's path. ``klass`` is the class graded:
     'scene' (mcrt.grade.accuracy.cases) or another name of :data:`mcrt.grade.accuracy.cli.CLASSES` ('outside',
-    'programs', 'fresh', ..., 'unheralded', 'unbeknown': the module of that name under mcrt.grade.accuracy); an empty half
+    'programs', 'fresh', ..., 'unbeknown', 'unvisited', 'unlooked': the module of that name under mcrt.grade.accuracy); an empty half
     (tuned on or held out) is left out of the rates table."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
