@@ -1049,6 +1049,49 @@ def test_a_blur_over_the_channels_is_named(ctx):
         ex["sentence"]
 
 
+def _cone_45(p, n, q):
+    from mcrt.grade.accuracy import unbeknown, unsaid
+
+    return unbeknown._geometry(p, n, q) * (unsaid._unit(q - p)[:, 2] >= np.cos(np.radians(45.0)))
+
+
+def test_a_spotlights_cone_left_on_the_light_sample_is_named(ctx):
+    """Mitsuba's path with its first vertex's light sample redone by hand (the blind classes' helpers, seed 114, 1024
+    spp) with a spotlight's cone of 45 degrees in the geometry term: claimed as that cone."""
+    from functools import partial
+
+    from mcrt.grade.accuracy import unbeknown, unheralded
+
+    img = unheralded._first_vertex(np.zeros((RES, RES, 3)), spp=1024, seed=114,
+                                   direct=partial(unbeknown._light_sampled, geometry=_cone_45))
+    res = grade_image("cone", ctx, [img], spp=1024)
+    ex = res.details["explanation"]
+    assert ex["verdict"] == "claimed" and "a spotlight's cone of 45 degrees" in ex["sentence"], ex["sentence"]
+    assert named_causes(res)[0] == ["light_model"]
+
+
+@pytest.mark.parametrize("klass, case, words", [
+    ("unvisited", "light_opengl_attenuation", "1 / (1 + 0.09 d + 0.032 d^2)"),
+    ("unlooked", "light_spot_cone_left_on", "a spotlight's cone of 60 degrees"),
+    ("unbeknown", "cos_light_from_surface_normal", "the cosine at the light taken with the surface's normal"),
+])
+def test_light_samples_geometry_terms_of_the_blind_classes_are_named(ctx, klass, case, words):
+    """Three blind classes' tuning cases of a light sample's geometry term written wrongly at the first vertex
+    (Mitsuba's path after it, written blind to the grader; seeds fixed by name) at 32 x 32: an OpenGL point light's
+    attenuation kept, a spotlight's cone, the light's cosine taken with the surface's normal; each named, in its
+    words, and points are lost."""
+    import importlib
+
+    from mcrt.grade.accuracy.cases import build_class
+    from mcrt.grade.accuracy.run import grade_cases
+
+    (c,) = build_class(width=RES, height=RES, max_depth=8, names=(case,),
+                       specs=importlib.import_module(f"mcrt.grade.accuracy.{klass}").SPECS)
+    assert not c.held_out
+    (o,) = grade_cases([c], ctx)
+    assert o.right and o.lost and words in o.said, (o.named, o.said)
+
+
 def test_the_light_at_height_zero_is_named(ctx):
     """A Mitsuba render (seed 111, 1024 spp) with the light's height left 0 (its centre (5, 0, 0), facing down from
     the middle of the room): claimed as the light moved down to z = 0."""

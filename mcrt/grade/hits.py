@@ -20,6 +20,51 @@ class FirstHits:
     cosines: np.ndarray  # (H, W, labels) sum of |n . d| over the rays meeting each surface (0 for 'nothing')
 
 
+def nearest(scene: Scene, o: np.ndarray, d: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The first surface each ray o + t d (o one point, shape (3,), or one per ray, (N, 3)) meets: (its label, an
+    index of :func:`mcrt.grade.expected.label_names`, the last for nothing; its distance t, inf for nothing; its unit
+    normal, facing the ray, 0 for nothing)."""
+    surfaces, spheres = scene.surfaces(), scene.spheres()
+    nothing = len(surfaces) + len(spheres)
+    tris = np.concatenate([s.triangles for s in surfaces])
+    owner = np.concatenate([[k] * len(s.triangles) for k, s in enumerate(surfaces)])
+    e1, e2 = tris[:, 1] - tris[:, 0], tris[:, 2] - tris[:, 0]
+    tri_n = np.cross(e1, e2)
+    tri_n /= np.linalg.norm(tri_n, axis=1, keepdims=True)
+    o = np.asarray(o, float)
+
+    def dot(a, b):  # rows of a with b, one vector or one row each (one eye's rays: the matrix product, as ever)
+        return a @ b if b.ndim == 1 else np.sum(a * b, axis=1)
+
+    best_t, best, n = np.full(len(d), np.inf), np.full(len(d), nothing), np.zeros((len(d), 3))
+    for t_i in range(len(tris)):  # Moller-Trumbore, one triangle against all rays
+        p = np.cross(d, e2[t_i])
+        det = p @ e1[t_i]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            inv = 1.0 / det
+            tv = o - tris[t_i, 0]
+            uu = dot(p, tv) * inv
+            q = np.cross(tv, e1[t_i])
+            vv = dot(d, q) * inv
+            t = (q @ e2[t_i]) * inv
+        ok = (np.abs(det) > 1e-12) & (uu >= 0) & (vv >= 0) & (uu + vv <= 1) & (t > 1e-6) & (t < best_t)
+        best_t = np.where(ok, t, best_t)
+        best = np.where(ok, owner[t_i], best)
+        n = np.where(ok[:, None], tri_n[t_i], n)
+    for k, sp in enumerate(spheres):
+        oc = o - np.asarray(sp.center)
+        b = dot(d, oc)
+        disc = b * b - (dot(oc, oc) - sp.radius**2)
+        with np.errstate(invalid="ignore"):
+            t = -b - np.sqrt(disc)
+        ok = (disc > 0) & (t > 1e-6) & (t < best_t)
+        best_t = np.where(ok, t, best_t)
+        best = np.where(ok, len(surfaces) + k, best)
+        n = np.where(ok[:, None], (o + t[:, None] * d - np.asarray(sp.center)) / sp.radius, n)
+    n *= np.where(np.sum(n * d, axis=1, keepdims=True) > 0, -1.0, 1.0)  # facing the ray
+    return best, best_t, n
+
+
 def first_hits(scene: Scene, camera: str, width: int, height: int, sub: int = 4) -> FirstHits:
     """Each pixel's sub x sub pinhole rays (stratified at the strata's centres) traced to the first surface they
     meet: which surface, its normal and its distance."""
@@ -27,60 +72,19 @@ def first_hits(scene: Scene, camera: str, width: int, height: int, sub: int = 4)
 
     cam = scene.camera(camera)
     jj, ii = np.mgrid[0:height, 0:width]
-    surfaces = scene.surfaces()
-    spheres = scene.spheres()
-    n_labels = len(surfaces) + len(spheres) + 1
+    n_labels = len(scene.surfaces()) + len(scene.spheres()) + 1
     counts = np.zeros((height, width, n_labels), np.int32)
     normals, dist, hits = np.zeros((height * width, 3)), np.zeros(height * width), np.zeros(height * width)
     cosines = np.zeros((height, width, n_labels))
-    o = np.asarray(cam.eye, float)
-    tris, owner = [], []
-    for k, s in enumerate(surfaces):
-        tris.append(s.triangles)
-        owner += [k] * len(s.triangles)
-    tris = np.concatenate(tris)
-    owner = np.asarray(owner)
-    e1 = tris[:, 1] - tris[:, 0]
-    e2 = tris[:, 2] - tris[:, 0]
-    tri_n = np.cross(e1, e2)
-    tri_n /= np.linalg.norm(tri_n, axis=1, keepdims=True)
     for su in range(sub):
         for sv in range(sub):
             u = np.full(ii.shape, (su + 0.5) / sub)
             v = np.full(ii.shape, (sv + 0.5) / sub)
             d = primary_directions(cam, width, height, ii, jj, u, v).reshape(-1, 3)
-            best_t = np.full(len(d), np.inf)
-            best = np.full(len(d), n_labels - 1)
-            n = np.zeros((len(d), 3))
-            for t_i in range(len(tris)):  # Moller-Trumbore, one triangle against all rays
-                p = np.cross(d, e2[t_i])
-                det = p @ e1[t_i]
-                with np.errstate(divide="ignore", invalid="ignore"):
-                    inv = 1.0 / det
-                    tv = o - tris[t_i, 0]
-                    uu = (p @ tv) * inv
-                    q = np.cross(tv, e1[t_i])
-                    vv = (d @ q) * inv
-                    t = (e2[t_i] @ q) * inv
-                ok = (np.abs(det) > 1e-12) & (uu >= 0) & (vv >= 0) & (uu + vv <= 1) & (t > 1e-6) & (t < best_t)
-                best_t = np.where(ok, t, best_t)
-                best = np.where(ok, owner[t_i], best)
-                n = np.where(ok[:, None], tri_n[t_i], n)
-            for k, sp in enumerate(spheres):
-                oc = o - np.asarray(sp.center)
-                b = d @ oc
-                c = oc @ oc - sp.radius**2
-                disc = b * b - c
-                with np.errstate(invalid="ignore"):
-                    t = -b - np.sqrt(disc)
-                ok = (disc > 0) & (t > 1e-6) & (t < best_t)
-                best_t = np.where(ok, t, best_t)
-                best = np.where(ok, len(surfaces) + k, best)
-                n = np.where(ok[:, None], (o + t[:, None] * d - np.asarray(sp.center)) / sp.radius, n)
+            best, best_t, n = nearest(scene, np.asarray(cam.eye, float), d)
             np.add.at(counts, (jj.ravel(), ii.ravel(), best), 1)
             hit = np.isfinite(best_t)
             np.add.at(cosines, (jj.ravel(), ii.ravel(), best), np.where(hit, np.abs(np.sum(n * d, axis=1)), 0.0))
-            n *= np.where(np.sum(n * d, axis=1, keepdims=True) > 0, -1.0, 1.0)  # facing the ray
             normals += np.where(hit[:, None], n, 0.0)
             dist += np.where(hit, best_t, 0.0)
             hits += hit

@@ -75,7 +75,12 @@ CAUSE_OF: dict[str, tuple[str, ...]] = {
     # finishing order; a row's or the image's channels one after another (the words name the channels' order).
     "lines_order": ("row_stride",), "layout": ("channels",),
     # Added before the twenty-first class was graded: a tiled render's tiles showing the whole view or the first tile.
-    "tiles": ("row_stride",), "reflectance_rounded": ("albedo",),
+    "tiles": ("row_stride",),
+    # Added after the twenty-first and twenty-second classes were graded, with them in view: the light sample's
+    # geometry term written wrongly, on the light's side (its cosine, its pdf) or its fall-off (another light model);
+    # at the surface, Lambert's cosine twice or a half-Lambert (the material's shading).
+    "light_cosine": ("light_pdf",), "light_falloff": ("light_model",),
+    "surface_cosine_twice": ("material",), "shading_cosine": ("material",), "reflectance_rounded": ("albedo",),
     # Added after the unbidden class was graded, with it in view: every albedo through a gamma of 2.2.
     "reflectance_gamma_encoded": ("albedo",), "reflectance_gamma_decoded": ("albedo",),
     # Added after unheralded was graded, with it in view: every diffuse surface black, whose words name an integer film
