@@ -391,6 +391,18 @@ def test_a_light_a_little_lower_is_not_read_as_fewer_samples(ctx):
     assert "light_two_sided" not in noise.output and "spp_claim" not in named and "light_position" in named, named
 
 
+def test_a_field_of_view_a_little_off_names_the_camera_beside_the_lights_outline(ctx):
+    """The field of view 91 degrees for 90 (Mitsuba, seed 115, 256 spp; at 32 x 32 a pixel is twice the course's): the
+    light's outline, the image's sharpest edge, moves by a fraction of a pixel and the noise criterion fails on it;
+    its words name the camera's view beside the light's geometry, and the camera's causes are named."""
+    from mcrt.grade.accuracy import cases
+
+    res = grade_image("fov", ctx, [_mitsuba(cases._camera(load_scene(), fov_x_deg=91.0), 115, 256)], spp=256)
+    noise = next(t for t in res.tests if t.name == "noise")
+    assert noise.status == "failed" and "the camera's view a little off" in noise.output, noise.output
+    assert "camera_fov" in named_causes(res)[0]
+
+
 def test_black_pixels_on_the_mirror_are_worded_as_the_mirror_black(ctx):
     """The mirror sphere's pixels written 0 in a correct Mitsuba render (seed 15; a light tracer's image, whose
     paths cannot reach the camera through a mirror): the black pixels are claimed, as the mirror sphere's, with what

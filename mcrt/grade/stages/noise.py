@@ -211,8 +211,9 @@ def edge_text(var_ratio: float, spp: int, spp_eff: float, spp_away: float) -> st
     return (f"about {times}x the spread {spp} spp should give (like about {spp_text(spp_eff)} spp), but away from the "
             f"light's edges the noise is as at {spp} spp (like about {spp_text(spp_away)}): the excess is on the "
             "light's outline, which differs from the reference by more than noise, not noise of fewer samples: the "
-            "light's position, size or shape a little off, or its bright edge pixels changed after rendering (a "
-            "firefly or outlier filter, a clamp)")
+            "light's position, size or shape a little off, the camera's view a little off (its field of view, place "
+            "or direction: the light's outline is the image's sharpest edge, the first to show it), or its bright "
+            "edge pixels changed after rendering (a firefly or outlier filter, a clamp)")
 
 
 def misplaced_lines(img: np.ndarray, R: np.ndarray, var: np.ndarray, mask: np.ndarray) -> tuple[str, int, int] | None:
