@@ -139,11 +139,12 @@ def test_a_light_facing_the_ceiling_is_named(low_light):
     assert res.score == res.max_score and named_causes(res)[0] == [], res.summary
 
 
-@pytest.mark.parametrize("name", ["block", "scattered", "unlit"])
+@pytest.mark.parametrize("name", ["block", "scattered", "unlit", "unlit and one lit"])
 def test_black_pixels_are_named_and_lose_points(ctx, name):
     """A Mitsuba render (seed 65) with a 6 x 5 block written as 0, 12 scattered pixels (seed 66), or every pixel
     that Mitsuba's direct integrator (seed 67) finds unlit by the light, the light's own aside (Mitsuba, max depth
-    1): the black pixels are claimed, the block by its rows and columns, the unlit ones as the bounced light lost
+    1), alone or with one lit pixel of the floor beside them (a penumbra's pixel whose every sample was stopped):
+    the black pixels are claimed, the block by its rows and columns, the unlit ones as the bounced light lost
     where the light is hidden (no other set is, nor the light's own pixels written black), and the image loses
     points."""
     img = _mitsuba(65)
@@ -155,17 +156,20 @@ def test_black_pixels_are_named_and_lose_points(ctx, name):
     else:
         seen = _render_spec(Spec("t", None, spp=64), load_scene(), width=RES, height=RES, max_depth=1, seed=67).mean
         unlit = np.all(_mitsuba_direct(67) == 0.0, axis=-1) & np.all(np.asarray(seen) == 0.0, axis=-1)
+        if name == "unlit and one lit":
+            assert unlit.sum() >= 100 and not unlit[RES - 2, RES // 2]
+            unlit[RES - 2, RES // 2] = True  # the floor, lit
         img[unlit] = 0.0
     res = grade_image(name, ctx, [img], spp=1024)
     fam, said = _claimed(res)
     assert fam == "bad_pixels", said
-    assert ("where the light is hidden" in said) == (name == "unlit"), said
-    if name == "unlit":
+    assert ("where the light is hidden" in said) == name.startswith("unlit"), said
+    if name.startswith("unlit"):
         light = _mitsuba(65)
         light[light.max(axis=-1) > 10.0] = 0.0  # the light's own pixels get no light sample either
         said_light = _claimed(grade_image("light_black", ctx, [light], spp=1024))[1]
         assert "where the light is hidden" not in said_light, said_light
-        assert named_causes(res)[0] == ["indirect_scale"], said
+        assert named_causes(res)[0] == ["indirect_scale", "roulette"], said
         return
     value = res.details["explanation"]["candidates"][0]["value"]
     assert value["pixels"] == (30 if name == "block" else 12)

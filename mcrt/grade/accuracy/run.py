@@ -302,7 +302,9 @@ def _explanation_causes(expl: dict) -> list[str]:
                             # pi in the light sample, worded also as the BRDF's 1/pi left out (since unheralded)
                             ("light_sampling", "BRDF's 1/pi left out", "brdf_norm"),
                             # black pixels where the light is hidden: the bounced light lost (since unbeknown)
-                            ("bad_pixels", "the light bounced there lost", "indirect_scale")):
+                            ("bad_pixels", "the light bounced there lost", "indirect_scale"),
+                            # ... Russian roulette that stops every path with no light yet (since unlooked)
+                            ("bad_pixels", "Russian roulette stops every path", "roulette")):
         if fam == f and words in expl["sentence"]:
             causes.append(cause)
     for alt in (expl.get("adequacy") or {}).get("alternatives", []):  # named beside it as fitting as well

@@ -122,10 +122,11 @@ def _black(fit: Fit, inputs: Inputs) -> list[Candidate]:
     obj = _on_one_object(bad, inputs)
     hole = _hole(bad, inputs) if not obj and box is None else ""
     if n >= 2 and _in_shadow(bad, inputs):
-        text = (f"{n} pixels ({100 * n / bad.size:.2g} % of the image) black where the scene is not, every one where the "
-                "light is hidden from the surface (no direct light there): the light bounced there lost, as when the "
-                "path ends where its shadow ray is blocked (an early exit meant for the shadow test, in the path's "
-                "loop) or no light is bounced at all")
+        text = (f"{n} pixels ({100 * n / bad.size:.2g} % of the image) black where the scene is not, nearly every one "
+                "where the light is hidden from the surface (no direct light there): the light bounced there lost, as "
+                "when the path ends where its shadow ray is blocked (an early exit meant for the shadow test, in the "
+                "path's loop), no light is bounced at all, or Russian roulette stops every path that has gathered no "
+                "light yet (its survival probability taken from the radiance so far)")
     elif obj:  # one object's pixels: neither a tile left out nor NaNs scattered, first of all that object
         text = (f"{n} pixels ({100 * n / bad.size:.2g} % of the image) black where the scene is not{obj}; or a NaN or "
                 "infinite sample written as 0 on it (a division by a zero pdf or cosine there)")
@@ -147,17 +148,23 @@ def _black(fit: Fit, inputs: Inputs) -> list[Candidate]:
                       value={"pixels": n, "block": box, "first": [int(rows[0]), int(cols[0])]}, change=change)]
 
 
+#: The share of black pixels that may have some direct light and still be read as where the light is hidden (a
+#: penumbra's or an edge's pixel the basis's few samples lit, the light seen in the mirror).
+LIT_SHARE = 0.01
+
+
 def _in_shadow(bad: np.ndarray, inputs: Inputs) -> bool:
-    """Whether every black pixel is one the light does not reach directly: its direct light (the basis's paths of
-    depth 2 less those of depth 1: next-event estimation alone lights a surface there) none, to the last bit, and
-    no emission seen there (the light's own pixels get no light sample either). A shadow ray always blocked gives
-    such a pixel no sample of direct light, whatever the basis's seed."""
+    """Whether (all but :data:`LIT_SHARE` of) the black pixels are ones the light does not reach directly: their
+    direct light (the basis's paths of depth 2 less those of depth 1: next-event estimation alone lights a surface
+    there) none, to the last bit, and no emission seen there (the light's own pixels get no light sample either). A
+    shadow ray always blocked gives such a pixel no sample of direct light, whatever the basis's seed."""
     depth = dict(inputs.basis.nodes.get("depth", ())) if inputs.basis is not None else {}
     if 1 not in depth or 2 not in depth:
         return False
     seen = np.asarray(depth[1], np.float64)  # the emission the camera sees: the light's own pixels
     direct = np.asarray(depth[2], np.float64) - seen
-    return bool(np.all(direct[bad] == 0.0) and np.all(seen[bad] == 0.0))
+    lit = np.any(direct[bad] != 0.0, axis=-1) | np.any(seen[bad] != 0.0, axis=-1)
+    return int(lit.sum()) <= int(LIT_SHARE * int(bad.sum()))
 
 
 def _hole(bad: np.ndarray, inputs: Inputs) -> str:
