@@ -1050,6 +1050,24 @@ def test_rays_left_in_camera_space_are_named(ctx):
     assert "camera_rotation" in named_causes(res)[0]
 
 
+def test_a_colour_space_conversion_where_none_was_due_is_named(ctx):
+    """A Mitsuba render (seed 116, 1024 spp) taken for Display P3 and converted to linear sRGB (the matrices computed
+    here from the primaries' published chromaticities and D65, not taken from mcrt's table), negatives clipped:
+    claimed as that conversion, in its words."""
+    def to_xyz(xy):  # RGB -> XYZ of primaries xy (red, green, blue) and the D65 white
+        xyz = np.array([[x / y, 1.0, (1 - x - y) / y] for x, y in xy]).T
+        white = np.array([0.3127 / 0.3290, 1.0, (1 - 0.3127 - 0.3290) / 0.3290])
+        return xyz * np.linalg.solve(xyz, white)
+
+    srgb = to_xyz([(0.64, 0.33), (0.30, 0.60), (0.15, 0.06)])
+    p3 = to_xyz([(0.680, 0.320), (0.265, 0.690), (0.150, 0.060)])
+    img = np.maximum(_mitsuba(load_scene(), 116) @ (np.linalg.inv(srgb) @ p3).T, 0.0)
+    res = grade_image("p3", ctx, [img], spp=1024)
+    ex = res.details["explanation"]
+    assert ex["verdict"] == "claimed" and "taken for Display P3 and converted to linear sRGB" in ex["sentence"], \
+        ex["sentence"]
+
+
 def test_a_blur_over_the_channels_is_named(ctx):
     """A Mitsuba render (seed 113, 1024 spp) through scipy.ndimage.gaussian_filter(img, 1) on its (H, W, 3) array:
     claimed as a blur over the colour channels too."""

@@ -5,7 +5,10 @@ fitted by weighted least squares (one parameter) within a factor :data:`GAIN`
 of 1. M is one of the matrices a student's program applies by mistake
 (:func:`common_matrices`): the channels in another order (BGR), one grey
 value in every channel (luminance with the Rec. 709 or Rec. 601 weights, or
-the mean), one channel copied to all, a channel written as 0. Any other M is fitted per output channel
+the mean), one channel copied to all, a channel written as 0, or a colour
+space's conversion applied where none was due (the render taken for Adobe RGB,
+Display P3 or Rec. 2020 and converted to sRGB, or the other way; XYZ written as
+RGB, or converted from), negatives clipped to 0. Any other M is fitted per output channel
 (nine parameters; each costs ln n like every fitted parameter) and worded by
 its rows: a named M with one parameter wins wherever it fits as well. In a
 file clipped at 1 (an 8-bit image) the model is clipped as the file stores
@@ -21,6 +24,36 @@ from mcrt.grade.explain.fit import Fit
 from mcrt.grade.feedback import num as _num
 
 _RGB = ("red", "green", "blue")
+
+#: Linear RGB to CIE XYZ (D65) of each space's primaries (IEC 61966-2-1, Adobe RGB (1998), Display P3, ITU-R BT.2020).
+TO_XYZ = {
+    "sRGB": np.array([[0.4124564, 0.3575761, 0.1804375], [0.2126729, 0.7151522, 0.0721750],
+                      [0.0193339, 0.1191920, 0.9503041]]),
+    "Adobe RGB (1998)": np.array([[0.5767309, 0.1855540, 0.1881852], [0.2973769, 0.6273491, 0.0752741],
+                                  [0.0270343, 0.0706872, 0.9911085]]),
+    "Display P3": np.array([[0.4865709, 0.2656677, 0.1982173], [0.2289746, 0.6917385, 0.0792869],
+                            [0.0, 0.0451134, 1.0439444]]),
+    "Rec. 2020": np.array([[0.6369580, 0.1446169, 0.1688810], [0.2627002, 0.6779981, 0.0593017],
+                           [0.0, 0.0280727, 1.0609851]]),
+}
+
+
+def conversions() -> dict[str, tuple[str, str, np.ndarray]]:
+    """name -> (family, words, M): a colour space's conversion applied to the render where none was due."""
+    srgb = TO_XYZ["sRGB"]
+    out = {"XYZ written": ("colour_matrix", "the colours converted to CIE XYZ and written as RGB (XYZ for linear sRGB)",
+                           srgb),
+           "XYZ matrix on RGB": ("colour_matrix", "the XYZ-to-sRGB matrix applied to the render's RGB (the film taken "
+                                 "for XYZ), negatives clipped to 0", np.linalg.inv(srgb))}
+    for space, m in TO_XYZ.items():
+        if space == "sRGB":
+            continue
+        out[f"{space} to sRGB"] = ("colour_matrix", f"the render taken for {space} and converted to linear sRGB (a "
+                                   "colour-managed step's assumed profile), negatives clipped to 0",
+                                   np.linalg.inv(srgb) @ m)
+        out[f"sRGB to {space}"] = ("colour_matrix", f"the render converted from linear sRGB to {space}'s primaries "
+                                   "and written as sRGB, negatives clipped to 0", np.linalg.inv(m) @ srgb)
+    return out
 
 
 def common_matrices() -> dict[str, tuple[str, str, np.ndarray]]:
@@ -105,8 +138,8 @@ def colour(fit: Fit, inputs: Inputs) -> list[Candidate]:
     """The common colour matrices, each with a fitted scale, and the best free 3x3 matrix."""
     R, top = fit.R, stored_top(fit)
     out = []
-    for name, (family, words, M) in common_matrices().items():
-        k, model = _scaled(fit, R @ M.T, top)
+    for name, (family, words, M) in {**common_matrices(), **conversions()}.items():
+        k, model = _scaled(fit, np.maximum(R @ M.T, 0.0), top)
         if not 1 / GAIN <= k <= GAIN:
             continue
         scale = f" (and scaled by {_num(k)})" if abs(k - 1.0) > 0.02 else ""
