@@ -1068,6 +1068,48 @@ def test_a_colour_space_conversion_where_none_was_due_is_named(ctx):
         ex["sentence"]
 
 
+@pytest.mark.parametrize("how, words", [
+    ("median3", "a median filter of size 3 over the (H, W, 3) array's three axes"),
+    ("tonemap", "raised to 1/2 before saving (OpenCV's Tonemap with gamma 2)"),
+])
+def test_a_median_over_the_channels_and_a_normalised_gamma_are_named(ctx, how, words):
+    """A Mitsuba render (seed 117, 1024 spp) through scipy.ndimage.median_filter(img, size=3) on its (H, W, 3) array,
+    or mapped from its minimum and maximum to [0, 1] and raised to 1/2: each claimed in its words."""
+    from scipy.ndimage import median_filter
+
+    img = _mitsuba(load_scene(), 117)
+    img = median_filter(img, size=3) if how == "median3" else ((img - img.min()) / (img.max() - img.min())) ** 0.5
+    res = grade_image(how, ctx, [img], spp=1024)
+    ex = res.details["explanation"]
+    assert ex["verdict"] == "claimed" and words in ex["sentence"], ex["sentence"]
+
+
+@pytest.mark.parametrize("how, words", [
+    ("decoding inverted", "((v + 0.055) / 1.055)^(1/2.4)"),
+    ("table of 9", "through a table of 9 entries interpolated linearly"),
+])
+def test_srgb_encodings_written_wrongly_are_named(ctx, tmp_path, how, words):
+    """8-bit PNGs (Pillow) of a Mitsuba render (seed 118): encoded with the sRGB decoding's inner formula with its
+    exponent inverted, or through a 9-entry table of the sRGB curve interpolated by np.interp (the curve computed
+    here by the standard's formula): each claimed in its words."""
+    import io
+
+    from PIL import Image
+
+    x = np.clip(_mitsuba(load_scene(), 118), 0.0, 1.0)
+    if how == "decoding inverted":
+        v = ((x + 0.055) / 1.055) ** (1 / 2.4)
+    else:
+        grid = np.linspace(0.0, 1.0, 9)
+        v = np.interp(x, grid, _srgb8(grid) / 255.0)
+    buf = io.BytesIO()
+    Image.fromarray(np.floor(v * 255 + 0.5).astype(np.uint8), "RGB").save(buf, format="PNG")
+    res = _grade_file(ctx, tmp_path / how.replace(" ", "_"), "render.png", buf.getvalue())
+    ex = res.details["explanation"]
+    assert ex["verdict"] == "claimed" and words in ex["sentence"], ex["sentence"]
+    assert "encoding" in named_causes(res)[0]
+
+
 def test_a_blur_over_the_channels_is_named(ctx):
     """A Mitsuba render (seed 113, 1024 spp) through scipy.ndimage.gaussian_filter(img, 1) on its (H, W, 3) array:
     claimed as a blur over the colour channels too."""

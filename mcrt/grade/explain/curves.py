@@ -10,8 +10,9 @@ from mcrt.grade.feedback import num as _num
 
 
 def curves(fit: Fit, inputs: Inputs) -> list[Candidate]:
-    """Encoding curves on the reference: sRGB (and its inverse), BT.709's, HDR video's PQ and limited range, power
-    curves; a Gaussian blur; an unsharp mask."""
+    """Encoding curves on the reference: sRGB (and its inverse, its decoding's formula inverted, a coarse table of
+    it), BT.709's, HDR video's PQ and limited range, power curves; a Gaussian blur
+    (over the channels too); 3 x 3 filters; an unsharp mask."""
     from scipy.ndimage import gaussian_filter
 
     from mcrt.image_files import srgb_eotf, srgb_oetf
@@ -31,6 +32,11 @@ def curves(fit: Fit, inputs: Inputs) -> list[Candidate]:
                      "taken for display values and decoded), in a float file where values above 1 are decoded too",
                      fit.model(srgb_eotf(R)), 0, value="srgb-inverse-float", change=srgb_eotf(R) - fit.R),
            # Another standard's camera curve where the file says sRGB (the reader decodes it with sRGB's).
+           # The decoding's inner formula with its exponent inverted, ((v + 0.055) / 1.055)^(1/2.4), for the encoding.
+           Candidate("encoding", "sRGB's decoding inverted", "the values encoded with ((v + 0.055) / 1.055)^(1/2.4), "
+                     "the sRGB decoding's formula with its exponent inverted, where the encoding 1.055 v^(1/2.4) - "
+                     "0.055 belongs (black written as code 74)", fit.model(srgb_eotf(((C + 0.055) / 1.055) ** (1 / 2.4))),
+                     0, value="srgb-decoding-inverted", change=srgb_eotf(((C + 0.055) / 1.055) ** (1 / 2.4)) - fit.R),
            Candidate("encoding", "BT.709 curve", "the values encoded with BT.709's camera curve (4.5 x below 0.018, "
                      "1.099 x^0.45 - 0.099 above) where the file's sRGB curve belongs", fit.model(srgb_eotf(bt709(C))),
                      0, value="bt709", change=srgb_eotf(bt709(C)) - fit.R)]
@@ -60,6 +66,7 @@ def curves(fit: Fit, inputs: Inputs) -> list[Candidate]:
     out.append(_blur_over_channels(fit, sig, gaussian_filter))
     out += _three_by_three(fit)
     out.append(_unsharp(fit, gaussian_filter))
+    out.append(_coarse_table(fit, C, srgb_eotf, srgb_oetf))
     return out
 
 
@@ -207,6 +214,13 @@ def _three_by_three(fit: Fit) -> list[Candidate]:
         M = f(fit.R, size=(3, 3, 1), mode="nearest")
         out.append(Candidate("blur", f"{name} filter", f"the image filtered after rendering by {what}", fit.model(M),
                              0, value={"filter": name, "size": 3}, change=M - fit.R))
+    # The median given size=3 for an (H, W, 3) array: its channels among each value's neighbours (its ends reflected).
+    M = median_filter(fit.R, size=3)
+    out.append(Candidate("blur", "median filter over the channels", "the image filtered after rendering by a median "
+                         "filter of size 3 over the (H, W, 3) array's three axes (scipy.ndimage.median_filter(img, "
+                         "size=3)): each value the median of a 3 x 3 x 3 block, its neighbours' other channels among "
+                         "them, the colours pulled towards grey", fit.model(M), 0,
+                         value={"filter": "median", "size": 3, "channels": True}, change=M - fit.R))
     best = None
     for name, (k, what) in KERNELS.items():
         for mode in BORDERS:
@@ -251,6 +265,21 @@ def _unsharp(fit: Fit, gaussian_filter) -> Candidate:
     return Candidate("sharpen", "unsharp mask", f"the image sharpened after rendering: an unsharp mask of radius about "
                      f"{_num(s)} pixel and amount {_num(a)}", e, 2, value={"radius": s, "amount": a}, change=dm)
 
+
+
+#: Entries of a lookup table of the sRGB curve interpolated linearly (a shader's or a script's table).
+TABLE_SIZES = (5, 9, 17, 33)
+
+
+def _coarse_table(fit: Fit, C: np.ndarray, srgb_eotf, srgb_oetf) -> Candidate:
+    """The sRGB curve looked up in a table of n entries by linear interpolation (its chords), n scanned (one
+    parameter)."""
+    err, n, M = min(((fit.model(M), n, M) for n in TABLE_SIZES
+                     for M in (srgb_eotf(np.interp(C, np.linspace(0.0, 1.0, n), srgb_oetf(np.linspace(0.0, 1.0, n)))),)),
+                    key=lambda t: t[0])
+    return Candidate("encoding", "sRGB from a table", f"the values sRGB-encoded through a table of {n} entries "
+                     "interpolated linearly (the curve's chords: the darkest values too dark)", err, 1,
+                     value={"table": n}, change=M - fit.R)
 
 
 curves.name = "curves"

@@ -13,7 +13,8 @@ Reinhard's curves, ACES and Hable's applied to the luminance L alone, each
 pixel's colour scaled by :math:`f(L) / L` (hue and saturation kept, as
 tone-mapping guides teach), and the sRGB curve so; a constant subtracted from every value,
 clipped at 0 (a black level), or added; a contrast slider; a contrast stretch
-between two percentiles of the image onto [0, 1]; and a sigmoid contrast curve
+between two percentiles of the image onto [0, 1]; the values normalised from
+their minimum and maximum and raised to 1/gamma (OpenCV's Tonemap); and a sigmoid contrast curve
 :math:`1 / (1 + e^{g (c - x)})` (scikit-image's ``adjust_sigmoid``), its cut-off and gain scanned. Any other monotone curve is fitted as an
 isotonic regression of S on R per channel
 (:func:`scipy.optimize.isotonic_regression`) on :data:`BINS` quantile bins
@@ -119,6 +120,7 @@ def tone_curve(fit: Fit, inputs: Inputs) -> list[Candidate]:
     out += _offset(fit, R)
     out += _contrast(fit, R)
     out += _stretch(fit, R)
+    out.append(_normalised_gamma(fit, R))
     out.append(_sigmoid(fit, R))
     out.append(_isotonic(fit))
     return out
@@ -201,6 +203,21 @@ def _stretch(fit: Fit, R: np.ndarray) -> list[Candidate]:
                       f"saving (a contrast stretch, as scikit-image's rescale_intensity with in_range does{space})",
                       err, 1, value={"curve": "stretch", "percentiles": (lo, hi), "space": space.strip(" ,")},
                       change=M - fit.R)]
+
+
+#: The gammas of a normalise-then-gamma tone map (OpenCV's Tonemap(gamma) takes 1 by default; 2.2 the usual).
+GAMMAS = (1.8, 2.0, 2.2, 2.4, 2.6)
+
+
+def _normalised_gamma(fit: Fit, R: np.ndarray) -> Candidate:
+    """The values mapped linearly from the image's minimum and maximum to [0, 1], then raised to 1 / gamma (OpenCV's
+    ``cv2.createTonemap(gamma).process``), gamma scanned (one parameter)."""
+    lo, hi = float(R.min()), float(R.max())
+    V = (R - lo) / max(hi - lo, 1e-300)
+    err, g, M = min(((fit.model(M), g, M) for g in GAMMAS for M in (V ** (1.0 / g),)), key=lambda t: t[0])
+    return Candidate("tone_curve", "normalised and gamma", "the values mapped from their minimum and maximum to "
+                     f"[0, 1] and raised to 1/{_num(g)} before saving (OpenCV's Tonemap with gamma {_num(g)})", err, 1,
+                     value={"curve": "normalised gamma", "gamma": g}, change=M - fit.R)
 
 
 #: Cut-offs and gains scanned for a sigmoid contrast curve (scikit-image's adjust_sigmoid defaults: 0.5 and 10).
