@@ -1142,6 +1142,23 @@ def test_a_spotlights_cone_left_on_the_light_sample_is_named(ctx):
     assert named_causes(res)[0] == ["light_model"]
 
 
+def test_a_light_sample_taken_from_the_eye_is_named(ctx):
+    """Mitsuba's path with its first vertex's light sample taken from the eye (the ray's origin for the hit point,
+    with the surface's normal and the eye's shadow ray; the blind classes' helpers, seed 119, 1024 spp): claimed as
+    that light sample, the light's sampling named."""
+    from mcrt.grade.accuracy import unbeknown, unheralded, unsaid
+
+    def from_eye(mscene, rng, p, n, rho, mitsuba):
+        return unbeknown._light_sampled(mscene, rng, np.broadcast_to(unsaid._frame()[0], p.shape), n, rho, mitsuba)
+
+    img = unheralded._first_vertex(np.zeros((RES, RES, 3)), spp=1024, seed=119, direct=from_eye)
+    res = grade_image("from_eye", ctx, [img], spp=1024)
+    ex = res.details["explanation"]
+    assert ex["verdict"] == "claimed" and "the light sample taken from the ray's origin" in ex["sentence"], \
+        ex["sentence"]
+    assert named_causes(res)[0] == ["light_pdf"]
+
+
 @pytest.mark.parametrize("klass, case, words", [
     ("unvisited", "light_opengl_attenuation", "1 / (1 + 0.09 d + 0.032 d^2)"),
     ("unlooked", "light_spot_cone_left_on", "a spotlight's cone of 60 degrees"),

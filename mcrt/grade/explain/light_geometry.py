@@ -24,7 +24,10 @@ cosines and the distance taken from the light's centre; the fall-off
 :math:`1/d`, or a point light's attenuation :math:`1/(1 + a d + b d^2)`
 (OpenGL tutorials' table, by range) for the inverse square or beside it;
 the light's cosine taken with the surface's normal; a spotlight's cone
-left on; the surface's cosine twice; Valve's half-Lambert. Each is a candidate with no free parameter
+left on; the surface's cosine twice; Valve's half-Lambert; and the light
+sample taken from the eye (the ray's origin for the hit point), whose
+direct light replaces :math:`D` outright (unshadowed: the eye sees the
+light). Each is a candidate with no free parameter
 or with the one its table scans (the clamp, the range, the cone). Its
 change is made once per assignment (:func:`_prepare`); only its fit is per
 hand-in. The model changes the light sample at the surfaces the camera sees
@@ -143,9 +146,12 @@ def _prepare(a, scene, render) -> dict:
             rays.append((label, np.asarray(cam.eye, float) + np.where(np.isfinite(t), t, 0.0)[:, None] * d, n))
     area = scene.light.size[0] * scene.light.size[1]
     sums: dict = {}
+    eye_lit = 0.0  # each pixel's light sample taken from the eye with its surface's normal (no shadow: the eye sees it)
     for label, p, n in rays:
         (cs, cl, dist), centre = _geometry(scene, p, n)
         on = diffuse[label]
+        (ce, le, de), _ = _geometry(scene, np.broadcast_to(np.asarray(cam.eye, float), p.shape), n)
+        eye_lit = eye_lit + np.where(on, (_pos(ce) * _pos(le) / de**2).sum(axis=1), 0.0)[:, None] * albedo[label]
         G = np.where(on, (_pos(cs) * _pos(cl) / dist**2).sum(axis=1), 0.0)
         for family, vs in variants().items():
             for value, words, g in vs:
@@ -161,6 +167,12 @@ def _prepare(a, scene, render) -> dict:
         k = (1.0 + share * (k - 1.0)).reshape(h, w, 1)
         added = extra.reshape(h, w, 3) / (SUB**2 * QUADRATURE**2) * area / np.pi * np.asarray(scene.light.radiance)
         out[key] = (words, k, added)
+    # The light sample taken from the ray's origin: the direct light of the pixel's surfaces replaced outright.
+    out[("light_cosine", "ray origin")] = (
+        "the light sample taken from the ray's origin (ray.o, the eye for a camera ray) where the hit point belongs, "
+        "with the surface's normal: no shadows, every surface lit as if it stood at the eye",
+        (1.0 - share).reshape(h, w, 1),
+        eye_lit.reshape(h, w, 3) / (SUB**2 * QUADRATURE**2) * area / np.pi * np.asarray(scene.light.radiance))
     return out
 
 
