@@ -1281,17 +1281,20 @@ def _albedos(s, f):
     ("normalised", 85, "reflectance_normalised", "albedo divided by its length", "albedo"),
     ("gamma_encoded", 97, "reflectance_gamma_encoded", "albedo gamma-encoded", "albedo"),
     ("gamma_decoded", 98, "reflectance_gamma_decoded", "albedo gamma-decoded", "albedo"),
+    ("energy", 120, "reflectance_energy", "divided by the sum of its channels where that sum exceeds 1", "albedo"),
 ])
 def test_colours_given_to_the_wrong_surfaces_are_named(ctx, case, seed, family, words, cause):
     """Mitsuba renders (1024 spp) of the scene with walls AB's and DE's colours exchanged, the sphere's and the
     tetrahedron's materials exchanged, every wall given the colour of the wall before it (edited here, not by the
-    family's own scene builder), every albedo its complement, every albedo divided by its length, and every albedo
-    through a gamma of 2.2 either way: each is claimed, in those words, as a major mistake."""
+    family's own scene builder), every albedo its complement, every albedo divided by its length, every albedo
+    through a gamma of 2.2 either way, and every albedo divided by its channels' sum where it exceeds 1: each is
+    claimed, in those words, as a major mistake."""
     edit = {"walls_exchanged": _walls_exchanged, "materials_exchanged": _materials_exchanged,
             "walls_one_off": _walls_one_off, "absorption": lambda s: _albedos(s, lambda v: 1.0 - v),
             "normalised": lambda s: _albedos(s, lambda v: v / np.linalg.norm(v)),
             "gamma_encoded": lambda s: _albedos(s, lambda v: v ** (1 / 2.2)),
-            "gamma_decoded": lambda s: _albedos(s, lambda v: v ** 2.2)}[case]
+            "gamma_decoded": lambda s: _albedos(s, lambda v: v ** 2.2),
+            "energy": lambda s: _albedos(s, lambda v: v / max(float(np.sum(v)), 1.0))}[case]
     res = grade_image(case, ctx, [_mitsuba(edit(load_scene()), seed)], spp=1024)
     ex = res.details["explanation"]
     assert ex["verdict"] == "claimed" and ex["family"] == family and words in ex["sentence"], ex["sentence"]

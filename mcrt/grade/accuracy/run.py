@@ -80,7 +80,9 @@ CAUSE_OF: dict[str, tuple[str, ...]] = {
     # geometry term written wrongly, on the light's side (its cosine, its pdf) or its fall-off (another light model);
     # at the surface, Lambert's cosine twice or a half-Lambert (the material's shading).
     "light_cosine": ("light_pdf",), "light_falloff": ("light_model",),
-    "surface_cosine_twice": ("material",), "shading_cosine": ("material",), "reflectance_rounded": ("albedo",),
+    "surface_cosine_twice": ("material",), "shading_cosine": ("material",),
+    # ... every albedo divided by its channels' sum past 1 (an energy check): every surface's colour wrong.
+    "reflectance_energy": ("albedo",), "reflectance_rounded": ("albedo",),
     # Added after the unbidden class was graded, with it in view: every albedo through a gamma of 2.2.
     "reflectance_gamma_encoded": ("albedo",), "reflectance_gamma_decoded": ("albedo",),
     # Added after unheralded was graded, with it in view: every diffuse surface black, whose words name an integer film

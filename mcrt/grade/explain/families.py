@@ -58,6 +58,7 @@ MAJOR_FAMILIES = CAMERA_FAMILIES | {"object_missing", "object_moved", "light_pos
                                     "material", "mirror_normal", "object_size", "colour_lost", "light_facing",
                                     "surface_black", "object_black", "reflectance_scale", "reflectance_squared",
                                     "reflectance_complement", "reflectance_normalised", "reflectance_rounded",
+                                    "reflectance_energy",
                                     "reflectance_gamma_encoded", "reflectance_gamma_decoded", "reflectance_zero",
                                     "albedo_swap", "material_swap", "object_emits", "view_cosine"}
 

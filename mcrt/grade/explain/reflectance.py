@@ -90,6 +90,10 @@ REMAPS = (("reflectance_squared", lambda x: x * x, "every diffuse surface's refl
            "albedo divided by its length (a colour normalised as if it were a direction): every surface brighter, a "
            "grey one most"),
           # Python's round (a parser's round(a, 1)): 0.15 is 0.1499... in binary and rounds down, 0.75 to even.
+          # An "energy check": a colour whose channels sum past 1 taken to reflect more than it receives.
+          ("reflectance_energy", lambda x: x / max(float(np.sum(x)), 1.0), "every diffuse surface's albedo divided "
+           "by the sum of its channels where that sum exceeds 1 (an energy check that takes the channels to share "
+           "the energy): the grey floor and ceiling a third of theirs, the room darker"),
           ("reflectance_rounded", lambda x: np.array([round(float(v), 1) for v in x]), "every diffuse surface's "
            "albedo rounded to one decimal, channel by channel (a parser's or a format's round(a, 1))"),
           # The scene's colours are linear reflectances; a loader that treats them as display values, or as linear
