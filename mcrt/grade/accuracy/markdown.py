@@ -418,13 +418,24 @@ def _twin_blind(module: str, ordinal: str) -> str:
         "them: ")
 
 
+#: What changed after the twin classes' one grading, with both in view.
+_TWIN_AFTER = (
+    " Changes made after that grading, with both classes in view (commits 610c411 to 594541d): the light sample's "
+    "geometry term written wrongly (the light's cosine twice, clamped or taken with the surface's normal, a fall-off "
+    "or a point light's attenuation, a spotlight's cone, the surface's cosine twice, a half-Lambert, the sample taken "
+    "from the eye); the light's outline's words naming the camera's view too; black pixels where the light is "
+    "hidden read with 1 % of them lit, and worded as Russian roulette on the radiance too; colour spaces' "
+    "conversions; a median over the channels, OpenCV's Tonemap, the sRGB decoding's formula inverted, a coarse "
+    "table of the sRGB curve; every albedo divided by its channels' sum. Both rows here are of rules that saw the "
+    "class.")
+
 _UNVISITED = _twin_blind("unvisited", "twenty-first") + (
-    "this report (held out, 4 of 12 named right, 1 of 12 confidently wrong, 11 of 12 detected; all 28, 12 named "
-    "right, 1 confidently wrong, 27 detected; 0 of 8 correct hand-ins lost points).")
+    "this report's first grading (held out, 4 of 12 named right, 1 of 12 confidently wrong, 11 of 12 detected; all "
+    "28, 12 named right, 1 confidently wrong, 27 detected; 0 of 8 correct hand-ins lost points).") + _TWIN_AFTER
 
 _UNLOOKED = _twin_blind("unlooked", "twenty-second") + (
-    "this report (held out, 1 of 12 named right, 2 of 12 confidently wrong, 12 of 12 detected; all 28, 6 named "
-    "right, 4 confidently wrong, 27 detected; 0 of 8 correct hand-ins lost points).")
+    "this report's first grading (held out, 1 of 12 named right, 2 of 12 confidently wrong, 12 of 12 detected; all "
+    "28, 6 named right, 4 confidently wrong, 27 detected; 0 of 8 correct hand-ins lost points).") + _TWIN_AFTER
 
 #: Each class's title, after "Grading accuracy on a class of realistic hand-ins".
 TITLES = {
