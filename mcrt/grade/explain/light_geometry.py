@@ -54,6 +54,9 @@ CONES = (30.0, 45.0, 60.0, 75.0)
 ATTENUATION = {7: (0.7, 1.8), 13: (0.35, 0.44), 20: (0.22, 0.20), 32: (0.14, 0.07), 50: (0.09, 0.032),
                65: (0.07, 0.017), 100: (0.045, 0.0075), 160: (0.027, 0.0028), 200: (0.022, 0.0019),
                325: (0.014, 0.0007), 600: (0.007, 0.0002)}
+#: The shortest range whose attenuation, kept beside the inverse square, leaves a tenth of the direct light ten units
+#: away: a shorter one leaves almost none, which is the direct light missing in other words (the image cannot tell).
+KEPT_RANGE = 32
 
 
 def _pos(x):
@@ -89,7 +92,7 @@ def variants() -> dict[str, list[tuple[object, str, object]]]:
         + [(f"attenuated {r}", f"a point light's attenuation 1 / (1 + {a:g} d + {b:g} d^2) (an OpenGL tutorial's, for "
                                f"a range of {r}) kept in the area light's sample beside its 1 / d^2",
             lambda cs, cl, d, c, a=a, b=b: _pos(cs) * _pos(cl) / d**2 / (1.0 + a * d + b * d * d))
-           for r, (a, b) in ATTENUATION.items()]
+           for r, (a, b) in ATTENUATION.items() if r >= KEPT_RANGE]
         + [(f"cone {t:g}", f"a spotlight's cone of {t:g} degrees left on in the light sample: no light leaving the "
                            f"light more than {t:g} degrees from its normal",
             lambda cs, cl, d, c, t=t: _pos(cs) * _pos(cl) * (cl >= np.cos(np.radians(t))) / d**2) for t in CONES],
