@@ -420,7 +420,7 @@ def _twin_blind(module: str, ordinal: str) -> str:
 
 #: What changed after the twin classes' one grading, with both in view.
 _TWIN_AFTER = (
-    " Changes made after that grading, with both classes in view (commits 610c411 to 594541d): the light sample's "
+    " Changes made after that grading, with both classes in view (commits 610c411 to 014216e): the light sample's "
     "geometry term written wrongly (the light's cosine twice, clamped or taken with the surface's normal, a fall-off "
     "or a point light's attenuation, a spotlight's cone, the surface's cosine twice, a half-Lambert, the sample taken "
     "from the eye); the light's outline's words naming the camera's view too; black pixels where the light is "
