@@ -149,6 +149,7 @@ def _prepare(a, scene, render) -> dict:
             rays.append((label, np.asarray(cam.eye, float) + np.where(np.isfinite(t), t, 0.0)[:, None] * d, n))
     area = scene.light.size[0] * scene.light.size[1]
     sums: dict = {}
+    table = variants()
     eye_lit = 0.0  # each pixel's light sample taken from the eye with its surface's normal (no shadow: the eye sees it)
     for label, p, n in rays:
         (cs, cl, dist), centre = _geometry(scene, p, n)
@@ -156,7 +157,7 @@ def _prepare(a, scene, render) -> dict:
         (ce, le, de), _ = _geometry(scene, np.broadcast_to(np.asarray(cam.eye, float), p.shape), n)
         eye_lit = eye_lit + np.where(on, (_pos(ce) * _pos(le) / de**2).sum(axis=1), 0.0)[:, None] * albedo[label]
         G = np.where(on, (_pos(cs) * _pos(cl) / dist**2).sum(axis=1), 0.0)
-        for family, vs in variants().items():
+        for family, vs in table.items():
             for value, words, g in vs:
                 Gp = np.where(on, g(cs, cl, dist, centre).sum(axis=1), 0.0)
                 # Rays whose surface the right term does not light add their own (a half-Lambert's), apart.
