@@ -93,7 +93,9 @@ def mistaken_bounce(Vector3f, n, u1, u2, weight, how: str):
     * 'disk_radius_u': the disk radius u1 for sqrt(u1) (sin theta uniform,
       pdf cos / (2 pi sin)), weighted rho:
       :math:`(\rho / 2\pi) \int_H L \cos\theta / \sin\theta`;
-    * 'no_albedo': cosine-distributed, weight 1 (rho left out of the throughput).
+    * 'no_albedo': cosine-distributed, weight 1 (rho left out of the throughput);
+    * 'times_pdf': cosine-distributed, weighted f cos pdf for f cos / pdf
+      (rho cos^2 / pi^2): :math:`(\rho/\pi^3) \int_H L \cos^3\theta`.
 
     A direction below the surface goes on mirrored into the room with weight
     0: it carries nothing, as a ray through the wall would, and stays inside
@@ -115,7 +117,9 @@ def mistaken_bounce(Vector3f, n, u1, u2, weight, how: str):
         w = weight
     else:
         d = Vector3f(*cosine_about_normal(u1, u2, nn))
-        w = weight * dr.dot(d, n) if how == "cosine_squared" else type(weight)(1.0) if how == "no_albedo" else weight
+        cos = dr.dot(d, n)
+        w = (weight * cos if how == "cosine_squared" else type(weight)(1.0) if how == "no_albedo"
+             else weight * dr.square(cos / math.pi) if how == "times_pdf" else weight)
         if how.startswith("half_azimuth"):
             b = _second_tangent(Vector3f, n, how)
             d = dr.fma(-2.0 * fmin(dr.dot(d, b), 0.0), b, d)  # the other half mirrored onto this one

@@ -580,6 +580,24 @@ def test_a_diffuse_bounce_left_in_the_local_frame_is_named(ctx):
     assert named_causes(res)[0] == ["indirect_scale"] and res.score < res.max_score
 
 
+def test_a_bounce_times_its_pdf_is_named(ctx):
+    """The bounce at the first surface a camera ray meets weighted by f cos pdf for f cos / pdf (albedo cos^2 / pi^2
+    a bounce): unvisited's maker (tuned half, 512 spp, seed 9), Mitsuba's light sample there and its path after the
+    bounce. The bounce at the first hit fits it all (a roulette that never divides, which also leaves the indirect
+    light nearly gone, may tie), its words are in the feedback, and the image loses points."""
+    from functools import partial
+
+    from mcrt.grade.accuracy import unprompted, unvisited
+
+    S = partial(unprompted._first_bounce, spp=512, seed=9, draw=unvisited._times_pdf)(np.zeros((RES, RES, 3)))
+    res = grade_image("times_pdf", ctx, [S], spp=512)
+    ex = res.details["explanation"]
+    bounce = next(c for c in ex["candidates"] if c["family"] == "bounce")
+    assert bounce["value"] == {"bounce": "times_pdf", "at": "first"} and bounce["explained"] > 0.95, bounce
+    assert ex["verdict"] == "claimed" and "multiplied by the pdf" in ex["sentence"], ex["sentence"]
+    assert "indirect_scale" in named_causes(res)[0] and res.score < res.max_score
+
+
 def test_a_half_circle_azimuth_is_read_in_its_frame(ctx):
     """The bounce at the first surface a camera ray meets with the azimuth pi u, in a frame built from (1, 0, 0)
     (unforeseen's maker, tuned half, 512 spp, seed 6): the best fit is that bounce in that frame, not in the two
