@@ -18,7 +18,8 @@ CLASSES = {"scene": "cases", "outside": "outside", "programs": "programs", "fres
            "unsought": "unsought", "unguessed": "unguessed",
            "unforeseen": "unforeseen", "unprompted": "unprompted",
            "unbidden": "unbidden", "unheralded": "unheralded", "unbeknown": "unbeknown",
-           "unvisited": "unvisited", "unlooked": "unlooked", "unwonted": "unwonted"}
+           "unvisited": "unvisited", "unlooked": "unlooked", "unwonted": "unwonted",
+           "unremarked": "unremarked"}
 
 
 def register(sub) -> None:
@@ -51,9 +52,10 @@ def register(sub) -> None:
                    "mcrt.grade.accuracy.unheralded), 'unbeknown' (a twentieth, in tracers, scene input and output, "
                    "written blind, mcrt.grade.accuracy.unbeknown), 'unvisited' (a twenty-first, in tracers, scene "
                    "input and output, written blind, mcrt.grade.accuracy.unvisited), 'unlooked' (a twenty-second, "
-                   "in tracers, scene input and output, written blind, mcrt.grade.accuracy.unlooked) or 'unwonted' (a "
-                   "twenty-third, in tracers, scene input and output, written blind, mcrt.grade.accuracy.unwonted) "
-                   "(default: scene)")
+                   "in tracers, scene input and output, written blind, mcrt.grade.accuracy.unlooked), 'unwonted' (a "
+                   "twenty-third, in tracers, scene input and output, written blind, mcrt.grade.accuracy.unwonted) or "
+                   "'unremarked' (a twenty-fourth, in tracers, scene input and output, written blind, "
+                   "mcrt.grade.accuracy.unremarked) (default: scene)")
     p.add_argument("--held-out", choices=("all", "only", "none"), default="all",
                    help="grade all cases, only the held-out ones, or none of them (default: all)")
     p.add_argument("--out", default=None, help=f"report folder (default: {DEFAULT_OUT}, or {DEFAULT_OUT}/CLASS "
