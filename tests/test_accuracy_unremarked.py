@@ -18,12 +18,12 @@ from accuracy_helpers import (W, build as _build, by_name, check_builds, check_c
                               check_seeds, check_specs, image as _image, pillow_codes, plain as _plain)
 from mcrt.grade.accuracy import (blind, cases, fresh, novel, outside, programs, unasked, unbeknown, unbidden,
                                  unforeseen, unguessed, unheard, unheralded, unlooked, unmet, unprompted, unremarked,
-                                 unsaid, unseen, unsought, untold, untried, unvisited)
+                                 unsaid, unseen, unsought, untold, untried, unvisited, unwonted)
 from mcrt.image_files import read_image, srgb_eotf
 
 _by_name = partial(by_name, unremarked.SPECS)
 _OTHERS = (cases, outside, programs, fresh, blind, unseen, untried, novel, untold, unmet, unheard, unsaid, unasked,
-           unsought, unguessed, unforeseen, unprompted, unbidden, unheralded, unbeknown, unvisited, unlooked)
+           unsought, unguessed, unforeseen, unprompted, unbidden, unheralded, unbeknown, unvisited, unlooked, unwonted)
 
 
 @pytest.fixture(scope="module")
