@@ -401,9 +401,9 @@ _UNBEKNOWN = (
     "room black; the first hit's light sample with its albedo left out or twice. Both rows here are of rules that "
     "saw the class.")
 
-def _twin_blind(module: str, ordinal: str) -> str:
-    """The opening of the twenty-first and twenty-second classes' introductions, written blind the same day and
-    graded once on the same frozen rules."""
+def _twin_blind(module: str, ordinal: str, frozen: str = "cca957e") -> str:
+    """The opening of the introductions of two classes written blind the same day and graded once on the same rules,
+    frozen at commit ``frozen`` (the twenty-first and twenty-second, then the twenty-third and twenty-fourth)."""
     return (
         f"The wrong renders are a {ordinal} class of mistakes in students' tracers, their scene input and their output "
         f"that no other class or the catalogue tried (mcrt.grade.accuracy.{module}), written blind to the grader's "
@@ -413,7 +413,7 @@ def _twin_blind(module: str, ordinal: str) -> str:
         "programs write files. The correct ones come from Mitsuba and mcrt in ways no other class used. *Named "
         "right*, *confidently wrong*, *partial or none*: as for the other classes. **Held-out** cases (marked H) were "
         "fixed by the rule stated in the module (every other case of each category) before any case was graded. Its "
-        "author reported counts only (no case named or described); the grader's rules were frozen at commit cca957e "
+        f"author reported counts only (no case named or described); the grader's rules were frozen at commit {frozen} "
         "before any case of it or of its twin class was read or graded, and the whole class was graded once, on "
         "them: ")
 
@@ -437,6 +437,14 @@ _UNLOOKED = _twin_blind("unlooked", "twenty-second") + (
     "this report's first grading (held out, 1 of 12 named right, 2 of 12 confidently wrong, 12 of 12 detected; all "
     "28, 6 named right, 4 confidently wrong, 27 detected; 0 of 8 correct hand-ins lost points).") + _TWIN_AFTER
 
+_UNWONTED = _twin_blind("unwonted", "twenty-third", "5aa291d") + (
+    "this report's first grading (held out, 2 of 12 named right, 0 of 12 confidently wrong, 12 of 12 detected; all "
+    "28, 6 named right, 1 confidently wrong, 27 detected; 0 of 8 correct hand-ins lost points).")
+
+_UNREMARKED = _twin_blind("unremarked", "twenty-fourth", "5aa291d") + (
+    "this report's first grading (held out, 4 of 12 named right, 3 of 12 confidently wrong, 11 of 12 detected; all "
+    "28, 9 named right, 4 confidently wrong, 27 detected; 0 of 8 correct hand-ins lost points).")
+
 #: Each class's title, after "Grading accuracy on a class of realistic hand-ins".
 TITLES = {
     "outside": ": mistakes outside the scene file", "programs": ": mistakes of students' programs",
@@ -458,7 +466,9 @@ TITLES = {
     "unheralded": ": a nineteenth class of mistakes, written blind",
     "unbeknown": ": a twentieth class of mistakes, written blind",
     "unvisited": ": a twenty-first class of mistakes, written blind",
-    "unlooked": ": a twenty-second class of mistakes, written blind"}
+    "unlooked": ": a twenty-second class of mistakes, written blind",
+    "unwonted": ": a twenty-third class of mistakes, written blind",
+    "unremarked": ": a twenty-fourth class of mistakes, written blind"}
 
 #: The scene class's introduction (mcrt.grade.accuracy.cases).
 _SCENE = (
@@ -475,15 +485,16 @@ INTROS = {"outside": _OUTSIDE, "programs": _PROGRAMS, "fresh": _FRESH, "blind": 
           "untried": _UNTRIED, "novel": _NOVEL, "untold": _UNTOLD, "unmet": _UNMET, "unheard": _UNHEARD,
           "unsaid": _UNSAID, "unasked": _UNASKED, "unsought": _UNSOUGHT, "unguessed": _UNGUESSED,
           "unforeseen": _UNFORESEEN, "unprompted": _UNPROMPTED, "unbidden": _UNBIDDEN, "unheralded": _UNHERALDED,
-          "unbeknown": _UNBEKNOWN, "unvisited": _UNVISITED, "unlooked": _UNLOOKED}
+          "unbeknown": _UNBEKNOWN, "unvisited": _UNVISITED, "unlooked": _UNLOOKED, "unwonted": _UNWONTED,
+          "unremarked": _UNREMARKED}
 
 
 def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta: dict, gradescope: list[dict],
                  klass: str = "scene") -> Path:
     """Write index.md and data.json under ``out``; returns the Markdown's path. ``klass`` is the class graded:
     'scene' (mcrt.grade.accuracy.cases) or another name of :data:`mcrt.grade.accuracy.cli.CLASSES` ('outside',
-    'programs', 'fresh', ..., 'unbeknown', 'unvisited', 'unlooked': the module of that name under mcrt.grade.accuracy); an empty half
-    (tuned on or held out) is left out of the rates table."""
+    'programs', 'fresh', ..., 'unlooked', 'unwonted', 'unremarked': the module of that name under
+    mcrt.grade.accuracy); an empty half (tuned on or held out) is left out of the rates table."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     tuned = [o for o in outcomes if not o.held_out]
