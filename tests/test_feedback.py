@@ -1339,6 +1339,17 @@ def test_the_exponential_tone_map_is_named(ctx):
     assert ex["verdict"] == "claimed" and "the exponential tone map 1 - exp(-x)" in ex["sentence"], ex["sentence"]
 
 
+def test_khronos_pbr_neutral_is_named(ctx):
+    """A Mitsuba render (seed 93, 1024 spp) through Khronos' PBR Neutral tone map before an EXR, by unwonted's maker
+    (tuned half; written blind, not by the grader's code): claimed as that tone map."""
+    from mcrt.grade.accuracy.unwonted import _pbr_neutral
+
+    res = grade_image("pbr_neutral", ctx, [_pbr_neutral(_mitsuba(load_scene(), 93))], spp=1024)
+    ex = res.details["explanation"]
+    assert ex["verdict"] == "claimed" and "Khronos' PBR Neutral tone map" in ex["sentence"], ex["sentence"]
+    assert "tone_map" in named_causes(res)[0]
+
+
 def test_a_mirror_missing_names_rays_passing_through_it(ctx):
     """The mirror sphere left out of a Mitsuba render (seed 88, 1024 spp): its words name rays passing through the
     mirror unchanged beside it missing, which the image cannot tell apart (its shadow is small and soft)."""

@@ -5,7 +5,9 @@ Named curves come first, each with an exposure scanned before it (a
 student's exposure slider): Reinhard's :math:`x/(1+x)`, the ACES filmic
 curve (Narkowicz's fit), Hable's filmic curve (Uncharted 2's constants and
 white point 11.2), the exponential curve :math:`1 - e^{-x}` (tutorials'
-"exposure" tone map), each alone or followed by the sRGB curve, the
+"exposure" tone map), Khronos' PBR Neutral (on each pixel's colour: its
+smallest channel's offset taken off, its peak compressed and desaturated),
+each alone or followed by the sRGB curve, the
 smoothstep S-curve :math:`3c^2 - 2c^3` of the values clipped to [0, 1], a
 clamp to [0, 1], and 8-bit rounding; Reinhard's extended curve
 :math:`x (1 + x / w^2) / (1 + x)` with its white point w scanned too; and
@@ -63,6 +65,22 @@ def _reinhard_ext(x, w: float):
     return x * (1.0 + x / (w * w)) / (1.0 + x)
 
 
+def _pbr_neutral(x):
+    """Khronos' PBR Neutral tone map on each pixel's colour: the smallest channel's offset (x - 6.25 x^2 under 0.08,
+    0.04 above) taken off every channel; a peak (the largest channel) above 0.76 compressed towards 1, the colour
+    scaled with it and blended towards grey by 0.15 of the compression (glTF viewers' and three.js's Neutral)."""
+    start, desaturation = 0.76, 0.15
+    x = np.asarray(x, np.float64)
+    m = x.min(axis=-1, keepdims=True)
+    c = x - np.where(m < 0.08, m - 6.25 * m * m, 0.04)
+    peak = c.max(axis=-1, keepdims=True)
+    d = 1.0 - start
+    new_peak = 1.0 - d * d / (np.maximum(peak, start) + d - start)
+    g = 1.0 - 1.0 / (desaturation * (peak - new_peak) + 1.0)
+    compressed = (1.0 - g) * c * (new_peak / np.maximum(peak, start)) + g * new_peak
+    return np.where(peak < start, c, compressed)
+
+
 def _smoothstep(x):
     """The S-curve 3 c^2 - 2 c^3 of c the values clipped to [0, 1] (GLSL's smoothstep(0, 1, x), a contrast curve)."""
     c = np.clip(x, 0.0, 1.0)
@@ -97,6 +115,9 @@ def _named_curves() -> dict[str, tuple[str, callable]]:
         "exponential": ("put through the exponential tone map 1 - exp(-x)", lambda x: -np.expm1(-x)),
         "exponential+srgb": ("put through the exponential tone map 1 - exp(-x), then the sRGB curve",
                              lambda x: srgb_oetf(-np.expm1(-x))),
+        "pbr_neutral": ("put through Khronos' PBR Neutral tone map (glTF viewers', three.js's Neutral)", _pbr_neutral),
+        "pbr_neutral+srgb": ("put through Khronos' PBR Neutral tone map (glTF viewers', three.js's Neutral), then "
+                             "the sRGB curve", lambda x: srgb_oetf(np.clip(_pbr_neutral(x), 0.0, None))),
         "smoothstep": ("put through the smoothstep S-curve 3 c^2 - 2 c^3 of c the values clipped to [0, 1]",
                        _smoothstep),
         "clamp": ("clamped to [0, 1]", lambda x: np.clip(x, 0.0, 1.0)),
