@@ -95,7 +95,10 @@ def mistaken_bounce(Vector3f, n, u1, u2, weight, how: str):
       :math:`(\rho / 2\pi) \int_H L \cos\theta / \sin\theta`;
     * 'no_albedo': cosine-distributed, weight 1 (rho left out of the throughput);
     * 'times_pdf': cosine-distributed, weighted f cos pdf for f cos / pdf
-      (rho cos^2 / pi^2): :math:`(\rho/\pi^3) \int_H L \cos^3\theta`.
+      (rho cos^2 / pi^2): :math:`(\rho/\pi^3) \int_H L \cos^3\theta`;
+    * 'albedo_mean': cosine-distributed, weighted by the mean of rho's
+      channels (a scalar kept for Russian roulette) for rho: the light that
+      bounces grey-weighted, the surface's colour lost from it.
 
     A direction below the surface goes on mirrored into the room with weight
     0: it carries nothing, as a ray through the wall would, and stays inside
@@ -119,7 +122,8 @@ def mistaken_bounce(Vector3f, n, u1, u2, weight, how: str):
         d = Vector3f(*cosine_about_normal(u1, u2, nn))
         cos = dr.dot(d, n)
         w = (weight * cos if how == "cosine_squared" else type(weight)(1.0) if how == "no_albedo"
-             else weight * dr.square(cos / math.pi) if how == "times_pdf" else weight)
+             else weight * dr.square(cos / math.pi) if how == "times_pdf"
+             else type(weight)((weight.x + weight.y + weight.z) / 3.0) if how == "albedo_mean" else weight)
         if how.startswith("half_azimuth"):
             b = _second_tangent(Vector3f, n, how)
             d = dr.fma(-2.0 * fmin(dr.dot(d, b), 0.0), b, d)  # the other half mirrored onto this one

@@ -598,6 +598,21 @@ def test_a_bounce_times_its_pdf_is_named(ctx):
     assert "indirect_scale" in named_causes(res)[0] and res.score < res.max_score
 
 
+def test_a_bounce_weighted_by_the_albedos_mean_is_named(ctx):
+    """The bounce at the first surface a camera ray meets weighted by the mean of the albedo's channels for the
+    albedo: unremarked's maker (tuned half, 512 spp, seed 11; Mitsuba's light sample and path after the bounce).
+    The best fit is that bounce at the first hit, its words in the feedback, and the image loses points."""
+    from mcrt.grade.accuracy import unremarked
+
+    res = grade_image("albedo_mean", ctx, [unremarked._albedo_mean(np.zeros((RES, RES, 3)), spp=512, seed=11)],
+                      spp=512)
+    ex = res.details["explanation"]
+    best = ex["candidates"][0]
+    assert best["family"] == "bounce" and best["value"] == {"bounce": "albedo_mean", "at": "first"}, ex["sentence"]
+    assert "mean of the albedo's channels" in ex["sentence"] and res.score < res.max_score
+    assert "indirect_scale" in named_causes(res)[0]
+
+
 def test_a_half_circle_azimuth_is_read_in_its_frame(ctx):
     """The bounce at the first surface a camera ray meets with the azimuth pi u, in a frame built from (1, 0, 0)
     (unforeseen's maker, tuned half, 512 spp, seed 6): the best fit is that bounce in that frame, not in the two

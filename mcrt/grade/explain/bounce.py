@@ -5,7 +5,7 @@ and weighs it by f cos / pdf. Getting either wrong (a direction on the whole
 sphere weighted as the hemisphere's, the cosine applied twice, a direction
 left in the local frame, the azimuth pi u for 2 pi u, the disk's radius u
 for sqrt(u), the albedo left out of the throughput, the weight times the pdf
-for over it) changes only the light
+for over it, the albedo's mean for the albedo) changes only the light
 that bounces, by a factor that depends on the direction
 (:func:`mcrt.bsdf.mistaken_bounce` gives each one's expectation), so no
 constant factor (:mod:`.path_weight`) and no depth cut reproduces it.
@@ -53,6 +53,9 @@ WORDS = {
                  "the light sample there right",
     "times_pdf": "the diffuse bounce's throughput multiplied by the pdf, beta *= f cos pdf for f cos / pdf (albedo "
                  "cos^2 / pi^2 a bounce): the light that bounces nearly gone",
+    "albedo_mean": "the diffuse bounce weighted by the mean of the albedo's channels (a scalar, as kept for "
+                   "Russian roulette) for the albedo: the light that bounces grey, the surface's own colour lost from "
+                   "it",
 }
 #: Where the mistake applies, in the student's terms.
 AT_WORDS = {"every": "at every diffuse surface a path meets",
