@@ -347,6 +347,8 @@ def named_causes(res) -> tuple[list[str], str]:
         # brightness off by more than it allows, which no constant explains, names no cause.
         if t is not None and t.status == "failed" and (crit != "exposure" or "passes the bias test" in t.output):
             causes.append(cause)
+            if crit == "linear" and "a NaN was written as 0" in t.output:
+                causes.append("bad_pixels")  # white pixels holding 0: an overflow or a NaN cast (since unremarked)
             if crit == "orientation" and ("up vector" in t.output or "up and right vectors" in t.output):
                 # A quarter turn's words name the camera's up vector too; a flip's its up and right vectors (the
                 # latter counted since unheralded was graded, with it in view).

@@ -116,8 +116,10 @@ WRAPPED = ("the pixels that should be white (the light and its reflections, far 
            "converting to 8 bits")
 
 WHITE_ZERO = ("the pixels that should be white (the light and its reflections, far above 1) hold 0: the top code "
-              "overflowed (a value of 1 times 256, or times 65536 at 16 bits, wraps to 0 in the file's integers), or "
-              "those pixels were never drawn; scale by 255 (65535 at 16 bits) and clip to [0, 1] before the cast")
+              "overflowed (a value of 1 times 256, or times 65536 at 16 bits, wraps to 0 in the file's integers), "
+              "a NaN was written as 0 (a value past the end of a lookup table, such as interp1d's NaN fill value, "
+              "cast to an integer), or those pixels were never drawn; scale by 255 (65535 at 16 bits) and clip to "
+              "[0, 1] before any lookup and the cast")
 
 ROUNDED_FIRST = ("the dark codes are only those that linear values rounded to 8 bits give through the curve (none of "
                  "1-12 where the sRGB curve is the file's, then 13, 22, 28, ...): the values were rounded to 8 bits "
