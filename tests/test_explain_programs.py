@@ -613,6 +613,20 @@ def test_a_bounce_weighted_by_the_albedos_mean_is_named(ctx):
     assert "indirect_scale" in named_causes(res)[0]
 
 
+def test_the_first_hits_light_samples_averaged_over_the_batch_are_named(ctx):
+    """The light samples at the first surface a camera ray meets averaged over the whole batch and broadcast back (a
+    mean over the wrong axis): unremarked's maker (tuned half, 512 spp, seed 12; Mitsuba's own light samples, its path
+    after them). Claimed as one colour of direct light on every surface, the cause a light sample's, and the image
+    loses points."""
+    from mcrt.grade.accuracy import unheralded, unremarked
+
+    S = unheralded._first_vertex(np.zeros((RES, RES, 3)), spp=512, seed=12, direct=unremarked._batch_mean_light)
+    res = grade_image("batch_mean", ctx, [S], spp=512)
+    fam, said = _claimed(res)
+    assert fam == "direct_mean" and "one and the same colour" in said, said
+    assert "light_pdf" in named_causes(res)[0] and res.score < res.max_score
+
+
 def test_a_half_circle_azimuth_is_read_in_its_frame(ctx):
     """The bounce at the first surface a camera ray meets with the azimuth pi u, in a frame built from (1, 0, 0)
     (unforeseen's maker, tuned half, 512 spp, seed 6): the best fit is that bounce in that frame, not in the two

@@ -110,6 +110,8 @@ CAUSE_OF: dict[str, tuple[str, ...]] = {
     "view_cosine": ("material", "brdf_norm"),
     # The first hit's light sample with its albedo left out or twice (added after unbeknown was graded).
     "direct_albedo": ("albedo",),
+    # The first hit's light samples averaged over the batch (added after unremarked was graded, with it in view).
+    "direct_mean": ("light_pdf",),
     # A surface black (mcrt.grade.explain.surface_black): a surface of the closed room missing, of albedo 0, or with
     # its normals facing away under one-sided shading looks the same, and the words name every cause; an object
     # black is not missing (what lies behind it would show).

@@ -11,6 +11,7 @@ from mcrt.grade.explain.camera import camera, plane_width
 from mcrt.grade.explain.catalogue import catalogue
 from mcrt.grade.explain.colour import colour
 from mcrt.grade.explain.direct_albedo import direct_albedo
+from mcrt.grade.explain.direct_mean import direct_mean
 from mcrt.grade.explain.curves import curves
 from mcrt.grade.explain.emission import emission
 from mcrt.grade.explain.falloff import falloff
@@ -43,12 +44,13 @@ from mcrt.grade.explain.walls import walls_one_colour
 #: path's weight off from a bounce on, the diffuse bounce drawn or weighted wrongly, the mirror's reflection computed
 #: wrongly, a light sample's weight, the light facing the wrong way, surfaces emitting, each pixel's samples combined
 #: by a median or trimmed mean, black pixels, another of the film's buffers written, an auxiliary buffer written, Lambert's cosine taken to the eye too, the first hit's light
-#: sample with its albedo left out or twice, the light sample's geometry term written wrongly).
+#: sample with its albedo left out or twice, or averaged over the batch, the light sample's geometry term written
+#: wrongly).
 FAMILIES = (scale, colour, curves, albedo, albedos, walls_one_colour, surface_black, rendered, camera, plane_width,
             catalogue, tone_curve, sample_clamp, falloff, resampling, layout, bloom, material, object_size, swap,
             reflectance_scale, reflectance_remapped, light_twice, path_weight, bounce, mirror, light_sampling,
             light_facing, emission, pixel_statistic, bad_pixels, wrong_buffer, aov, view_cosine,
-            direct_albedo, light_geometry)
+            direct_albedo, direct_mean, light_geometry)
 
 #: The families that are mistakes of the camera (what the misregistration test of mcrt.grade.structure also sees).
 CAMERA_FAMILIES = frozenset({"fov", "aspect", "pixel_offset", "rotation", "eye", "camera_model"})
