@@ -1350,6 +1350,29 @@ def test_khronos_pbr_neutral_is_named(ctx):
     assert "tone_map" in named_causes(res)[0]
 
 
+@pytest.mark.parametrize("how", ["permuted", "rows_interleaved", "brighter"])
+def test_a_correct_renders_values_in_other_places_are_named(ctx, how):
+    """A Mitsuba render (seed 94, 1024 spp) whose pixels were written in the order np.random.permutation gave (never
+    put back), or whose rows were interleaved as two workers' halves (the even rows first): the values are a correct
+    render's, in the wrong places, and the words say so and name where pixels are written. The same render 30 %
+    brighter is biased with its values in their places: nothing is said of places."""
+    S = _mitsuba(load_scene(), 94)
+    if how == "permuted":
+        S = S.reshape(-1, 3)[np.random.default_rng(5).permutation(RES * RES)].reshape(S.shape)
+    elif how == "rows_interleaved":
+        S = np.concatenate([S[0::2], S[1::2]])
+    else:
+        S = 1.3 * S
+    res = grade_image(how, ctx, [S], spp=1024)
+    unbiased = next(t for t in res.tests if t.name == "unbiased")
+    assert res.score < res.max_score
+    if how == "brighter":
+        assert "in the wrong places" not in unbiased.output, unbiased.output
+    else:
+        assert "a correct render's values in the wrong places" in unbiased.output, unbiased.output
+        assert "row_stride" in named_causes(res)[0]
+
+
 def test_a_mirror_missing_names_rays_passing_through_it(ctx):
     """The mirror sphere left out of a Mitsuba render (seed 88, 1024 spp): its words name rays passing through the
     mirror unchanged beside it missing, which the image cannot tell apart (its shadow is small and soft)."""

@@ -195,6 +195,15 @@ def filter_text(st, blur: bool, spp_eff: float, spp: int | None) -> str:
             + "; a Monte-Carlo render's pixels are independent: hand in the unfiltered render")
 
 
+def places_text(pixels: float, ordered: float) -> str:
+    """The finding of a correct render's values in other places (mcrt.grade.stages.bias.values_elsewhere)."""
+    return (f"the image holds a correct render's values in the wrong places: sorted, its values match the reference's "
+            f"(within {fmt_pct(ordered)} of the mean on average), but pixel by pixel they differ by {fmt_pct(pixels)}; "
+            "pixels were written to other pixels' places: check where each pixel is written (a permutation or an "
+            "index array not undone, an array compacted while its pixel indices were not, workers' rows or tiles "
+            "placed wrongly)")
+
+
 def patches_text(patch: np.ndarray, effects: list[float], names: list[str]) -> str:
     """The patch finding: where the pixels off together lie, how many, and by how much (no cause is claimed: a
     shadow missing, light leaking and a highlight misplaced all look so)."""

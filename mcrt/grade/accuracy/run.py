@@ -356,6 +356,10 @@ def named_causes(res) -> tuple[list[str], str]:
                 # latter counted since unheralded was graded, with it in view).
                 causes.append("camera_rotation")
             said.append(t.output.split(";")[0])
+    unbiased = tests.get("unbiased")
+    if unbiased is not None and unbiased.status == "failed" and "in the wrong places" in unbiased.output:
+        causes.append("row_stride")  # a correct render's values elsewhere (added after unremarked was graded)
+        said.append(next(p for p in unbiased.output.split(". ") if "in the wrong places" in p).split(":")[0])
     cam = tests.get("camera")
     if cam is not None and cam.status == "failed":
         causes += ["camera_fov", "camera_rotation", "camera_eye", "pixel_offset"]

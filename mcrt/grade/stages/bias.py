@@ -91,7 +91,8 @@ def record(g: Grading, hand: Hand, lvl: Level, t: Tested) -> dict:
 
 
 def findings(g: Grading, hand: Hand, lvl: Level, t: Tested) -> dict[str, str]:
-    """Feedback for each structured error found (rejected and relevant): registration, filter, pixels, patches."""
+    """Feedback for each structured error found (rejected and relevant): registration, filter, pixels, the values in
+    other places, patches."""
     from mcrt.grade.scoring import wrong_surfaces
 
     st, bt = t.st, t.bt
@@ -108,12 +109,39 @@ def findings(g: Grading, hand: Hand, lvl: Level, t: Tested) -> dict[str, str]:
         out["filter"] = fb.filter_text(st, blur, lvl.spp_eff, hand.spp)
     if "pixels" in ex and ex["pixels"].any():
         out["pixels"] = fb.pixels_text(ex["pixels"].reshape(bt.shape + (3,)).any(axis=2))
+    # The noise of the declared spp, not the measured one: values in other places measure as noise themselves.
+    declared = g.ctx.model_var[hand.cam].astype(np.float64) / max(hand.spp or g.a.min_spp, 1)
+    moved = values_elsewhere(t.img, hand.R, declared + lvl.noise.reference, lvl.clip_mask)
+    if flagged(bt) and moved is not None:
+        out["places"] = fb.places_text(*moved)
     if t.patches is not None and t.patches.any():
         labels = g.ctx.labels[hand.cam]
         names = [g.ctx.label_names[k] for k in np.unique(labels[t.patches])]
         effects = [float(e) for e, f in zip(st.patch_effect, ex["patches"]) if f]
         out["patches"] = fb.patches_text(t.patches, effects, names)
     return out
+
+
+#: How many times the pixels' differences must exceed their sorted values' (and the noise's) for the image to be read
+#: as a correct render's values in other places (:func:`values_elsewhere`).
+PLACES_RATIO = 10.0
+
+
+def values_elsewhere(img: np.ndarray, ref: np.ndarray, var: np.ndarray, mask: np.ndarray) -> tuple[float, float] | None:
+    """(pixel by pixel, sorted): the mean absolute luminance differences of the image and the reference, each
+    relative to the reference's mean, where the image holds the reference's values in other places: its values,
+    sorted, match the reference's, and pixel by pixel they differ PLACES_RATIO times as much, and as much beside the
+    noise (each pixel's expected absolute noise, sqrt(2 / pi) sd). None otherwise. Luminance is clipped at 2 first, so
+    that the light's pixels (20) weigh as bright ones, not forty times a wall (a permutation keeps them all)."""
+    lum = np.minimum(np.nan_to_num(img, nan=0.0) @ LUMINANCE, 2.0)[mask]
+    lref = np.minimum(ref @ LUMINANCE, 2.0)[mask]
+    if lum.size == 0 or lref.mean() <= 0:
+        return None
+    scale = lref.mean()
+    pixels = float(np.mean(np.abs(lum - lref))) / scale
+    ordered = float(np.mean(np.abs(np.sort(lum) - np.sort(lref)))) / scale
+    noise = float(np.mean(np.sqrt(2.0 / np.pi * np.maximum(var, 0.0)[mask] @ LUMINANCE**2))) / scale
+    return (pixels, ordered) if pixels >= PLACES_RATIO * max(ordered, noise) else None
 
 
 def where(g: Grading, hand: Hand, bt) -> str:
@@ -188,6 +216,8 @@ def verdict(g: Grading, hand: Hand, lvl: Level, t: Tested, found: dict[str, str]
         # change that is not motion (a missing object, a cut path depth): where a cause outside
         # the camera explains the difference, the camera is not blamed beside it.
         found.pop("registration", None)
+    if named is not None:  # a cause that explains the difference says where the values went, if they moved
+        found.pop("places", None)
     if named is not None and named.family != "blur":
         # Likewise the residual of any structured mistake is correlated between neighbours:
         # where another cause explains it, the image is not also called filtered.
