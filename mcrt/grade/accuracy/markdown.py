@@ -437,13 +437,20 @@ _UNLOOKED = _twin_blind("unlooked", "twenty-second") + (
     "this report's first grading (held out, 1 of 12 named right, 2 of 12 confidently wrong, 12 of 12 detected; all "
     "28, 6 named right, 4 confidently wrong, 27 detected; 0 of 8 correct hand-ins lost points).") + _TWIN_AFTER
 
+#: What changed after the second pair of twin classes' one grading, with both in view.
+_TWIN2_AFTER = (
+    " Changes made after that grading, with both classes in view (commits b8576e1 to 2f9a6c0): Khronos' PBR Neutral "
+    "tone map; the diffuse bounce weighted by its albedo's mean; white pixels holding 0 worded as a NaN cast too; "
+    "the first hit's light samples averaged over the batch; a correct render's values in the wrong places; every "
+    "diffuse reflectance times pi / 3. Both rows here are of rules that saw the class.")
+
 _UNWONTED = _twin_blind("unwonted", "twenty-third", "5aa291d") + (
     "this report's first grading (held out, 2 of 12 named right, 0 of 12 confidently wrong, 12 of 12 detected; all "
-    "28, 6 named right, 1 confidently wrong, 27 detected; 0 of 8 correct hand-ins lost points).")
+    "28, 6 named right, 1 confidently wrong, 27 detected; 0 of 8 correct hand-ins lost points).") + _TWIN2_AFTER
 
 _UNREMARKED = _twin_blind("unremarked", "twenty-fourth", "5aa291d") + (
     "this report's first grading (held out, 4 of 12 named right, 3 of 12 confidently wrong, 11 of 12 detected; all "
-    "28, 9 named right, 4 confidently wrong, 27 detected; 0 of 8 correct hand-ins lost points).")
+    "28, 9 named right, 4 confidently wrong, 27 detected; 0 of 8 correct hand-ins lost points).") + _TWIN2_AFTER
 
 #: Each class's title, after "Grading accuracy on a class of realistic hand-ins".
 TITLES = {
