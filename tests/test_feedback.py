@@ -928,17 +928,6 @@ def test_a_brdf_normalisation_is_only_a_factor_a_program_gets_wrong():
             assert c.value["factor"] == pytest.approx(expect) and "1/pi applied twice" in c.text
 
 
-def test_pi_declared_an_integer_is_named(ctx):
-    """A Mitsuba render (seed 95, 1024 spp) with every Lambertian albedo times pi / 3, as a BRDF albedo / PI with PI
-    declared an integer (3) makes it: claimed as every diffuse reflectance that factor, in those words."""
-    from mcrt.grade.explain.reflectance import scaled_reflectance
-
-    res = grade_image("pi_int", ctx, [_mitsuba(scaled_reflectance(load_scene(), np.pi / 3.0), 95)], spp=1024)
-    ex = res.details["explanation"]
-    assert ex["verdict"] == "claimed" and ex["family"] == "reflectance_scale", ex["sentence"]
-    assert "pi declared an integer" in ex["sentence"] and res.score < res.max_score
-
-
 def test_too_much_noise_names_passes_that_repeat_one_seed(ctx):
     """A correct mcrt render at 16 spp declared as 256 (seed 54): the noise criterion fails, and its words name
     fewer samples and passes that repeat one seed, the two mistakes that give such an image."""

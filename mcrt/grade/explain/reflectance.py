@@ -4,8 +4,7 @@ A Lambertian surface reflects :math:`f = \rho / \pi`; sampled by the cosine,
 a path's weight is :math:`f \cos\theta / p = \rho`. A tracer that divides
 by :math:`\pi` twice (in the BRDF and in the weight), forgets it, or takes
 a hemisphere's pdf for the cosine's, scales every diffuse surface's
-reflectance by one factor k (:math:`1/\pi`, :math:`\pi`, 2, or :math:`\pi/3` where
-:math:`\pi` is declared an integer) in direct and
+reflectance by one factor k (:math:`1/\pi`, :math:`\pi`, 2) in direct and
 indirect light alike, and no surface's colour alone explains the image: the
 room darkens (or brightens) more where light has bounced more.
 
@@ -52,8 +51,7 @@ NODES = (0.0, 0.25, 0.5, 0.75, 1.5, 2.0)
 FACTORS = ((1.0 / np.pi, "1/pi: the BRDF's 1/pi applied twice"),
            (0.5 / np.pi, "1/(2 pi): the BRDF's 1/pi applied twice and a hemisphere's 1/2 once"),
            (0.5, "1/2: a factor of 2 missing (a pdf or weight off by 2)"),
-           (2.0, "2: a factor of 2 too many (a pdf or weight off by 2)"),
-           (np.pi / 3.0, "pi / 3: pi declared an integer, 3 (the BRDF albedo / 3 for albedo / pi)"))
+           (2.0, "2: a factor of 2 too many (a pdf or weight off by 2)"))
 
 
 
