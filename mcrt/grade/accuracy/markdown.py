@@ -439,10 +439,11 @@ _UNLOOKED = _twin_blind("unlooked", "twenty-second") + (
 
 #: What changed after the second pair of twin classes' one grading, with both in view.
 _TWIN2_AFTER = (
-    " Changes made after that grading, with both classes in view (commits b8576e1 to 2f9a6c0): Khronos' PBR Neutral "
+    " Changes made after that grading, with both classes in view (commits b8576e1 to RULES): Khronos' PBR Neutral "
     "tone map; the diffuse bounce weighted by its albedo's mean; white pixels holding 0 worded as a NaN cast too; "
-    "the first hit's light samples averaged over the batch; a correct render's values in the wrong places; every "
-    "diffuse reflectance times pi / 3. Both rows here are of rules that saw the class.")
+    "the first hit's light samples averaged over the batch; a correct render's values in the wrong places. (Every "
+    "diffuse reflectance times pi / 3 was tried and dropped: it fitted unheard's overlapping tiles to noise.) Both "
+    "rows here are of rules that saw the class.")
 
 _UNWONTED = _twin_blind("unwonted", "twenty-third", "5aa291d") + (
     "this report's first grading (held out, 2 of 12 named right, 0 of 12 confidently wrong, 12 of 12 detected; all "
