@@ -617,7 +617,7 @@ def test_the_first_hits_light_samples_averaged_over_the_batch_are_named(ctx):
     """The light samples at the first surface a camera ray meets averaged over the whole batch and broadcast back (a
     mean over the wrong axis): unremarked's maker (tuned half, 512 spp, seed 12; Mitsuba's own light samples, its path
     after them). Claimed as one colour of direct light on every surface, the cause a light sample's, and the image
-    loses points."""
+    loses points. With no light sample there at all, no batch's mean is read (that is the direct light missing)."""
     from mcrt.grade.accuracy import unheralded, unremarked
 
     S = unheralded._first_vertex(np.zeros((RES, RES, 3)), spp=512, seed=12, direct=unremarked._batch_mean_light)
@@ -625,6 +625,12 @@ def test_the_first_hits_light_samples_averaged_over_the_batch_are_named(ctx):
     fam, said = _claimed(res)
     assert fam == "direct_mean" and "one and the same colour" in said, said
     assert "light_pdf" in named_causes(res)[0] and res.score < res.max_score
+    # No light sample there at all (seed 13): a mean of nothing is the direct light missing, not read as a batch's.
+    S = unheralded._first_vertex(np.zeros((RES, RES, 3)), spp=512, seed=13,
+                                 direct=lambda mscene, rng, p, n, rho, mitsuba: np.zeros(np.shape(mitsuba)))
+    res = grade_image("unlit", ctx, [S], spp=512)
+    ex = res.details["explanation"]
+    assert "direct_mean" not in [c["family"] for c in ex["candidates"]], ex["sentence"]
 
 
 def test_a_half_circle_azimuth_is_read_in_its_frame(ctx):

@@ -17,7 +17,9 @@ prepares), the model image is
 
 with the colour :math:`c` fitted (three parameters, a weighted least
 squares in closed form): the batch's mean depends on which rays the
-program keeps in it.
+program keeps in it. A colour of next to nothing (under :data:`MIN_SHARE`
+of the mean direct light) is not read so: that is the direct light
+missing, which the catalogue names.
 """
 
 from __future__ import annotations
@@ -27,6 +29,11 @@ import numpy as np
 from mcrt.grade.candidates import Candidate, Inputs
 from mcrt.grade.explain.fit import Fit
 from mcrt.grade.feedback import num as _num
+from mcrt.grade.score import LUMINANCE
+
+#: The least the fitted colour's luminance may be, as a share of the first hits' mean direct light: the batch's mean
+#: is that mean (of the rays the program keeps in it); next to nothing is no mean but the direct light missing.
+MIN_SHARE = 0.25
 
 
 def direct_mean(fit: Fit, inputs: Inputs) -> list[Candidate]:
@@ -44,6 +51,8 @@ def direct_mean(fit: Fit, inputs: Inputs) -> list[Candidate]:
         return []
     w = np.where(m, fit.w, 0.0)
     c = (w * (fit.D + D)).sum(axis=(0, 1)) / np.maximum(w.sum(axis=(0, 1)), 1e-300)
+    if float(c @ LUMINANCE) < MIN_SHARE * float(D[m[..., 0]].mean(axis=0) @ LUMINANCE):
+        return []  # a batch's mean of next to nothing is the direct light missing (mcrt.grade.explain.catalogue's)
     change = np.where(m, c - D, 0.0)
     colour = ", ".join(_num(float(v)) for v in c)
     text = (f"every surface's direct light at the first surface a camera ray meets one and the same colour, "
