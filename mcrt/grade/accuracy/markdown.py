@@ -439,7 +439,7 @@ _UNLOOKED = _twin_blind("unlooked", "twenty-second") + (
 
 #: What changed after the second pair of twin classes' one grading, with both in view.
 _TWIN2_AFTER = (
-    " Changes made after that grading, with both classes in view (commits b8576e1 to RULES): Khronos' PBR Neutral "
+    " Changes made after that grading, with both classes in view (commits b8576e1 to 41e58af): Khronos' PBR Neutral "
     "tone map; the diffuse bounce weighted by its albedo's mean; white pixels holding 0 worded as a NaN cast too; "
     "the first hit's light samples averaged over the batch; a correct render's values in the wrong places. (Every "
     "diffuse reflectance times pi / 3 was tried and dropped: it fitted unheard's overlapping tiles to noise.) Both "
