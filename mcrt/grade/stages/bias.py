@@ -244,22 +244,6 @@ def verdict(g: Grading, hand: Hand, lvl: Level, t: Tested, found: dict[str, str]
 
 #: Objects off, at the least, for the camera finding to stand where no reading says anything (:func:`_findings_rule`).
 VIEW_OBJECTS = 3
-#: :func:`edges_alike` below which the image's edges are elsewhere than the reference's (a view the same, with its
-#: shading or light wrong, keeps it near 1; a view that differs leaves it near 0).
-EDGES_ALIKE = 0.5
-
-
-def edges_alike(img: np.ndarray, ref: np.ndarray) -> float:
-    """The correlation of the two images' edge strengths: the gradient magnitudes of their log luminance, smoothed
-    by a Gaussian of one pixel against the noise (a log, so that a brightness or tone change leaves it be)."""
-    from scipy import ndimage
-
-    def strength(x):
-        lum = ndimage.gaussian_filter(np.log(np.maximum(np.nan_to_num(x) @ LUMINANCE, 1e-3)), 1.0)
-        return np.hypot(ndimage.sobel(lum, 0), ndimage.sobel(lum, 1)).ravel()
-
-    a, b = strength(img), strength(ref)
-    return float(np.corrcoef(a, b)[0, 1]) if a.std() > 0 and b.std() > 0 else 0.0
 
 
 def _findings_rule(g: Grading, hand: Hand, lvl: Level, t: Tested, found: dict[str, str]) -> None:
@@ -274,13 +258,12 @@ def _findings_rule(g: Grading, hand: Hand, lvl: Level, t: Tested, found: dict[st
     every other, and none says anything). Where no reading is worth
     mentioning, the camera finding stands on its own evidence if the
     view differs beyond a first-order fit (its border moved by more than
-    FIRST_ORDER_LIMIT pixels) on VIEW_OBJECTS objects or more, its edges
-    elsewhere than the reference's (:func:`edges_alike`): a view that
-    differs moves every object's edges, a mistake on one object (a light
-    seen twice as wide) the edges of that one, shading gone wrong none (a
-    triangle's normal unnormalised), and a small motion fitted where no
-    camera reading fits is what a first-order fit absorbs of any change
-    near the edges (a light sampled on one triangle). The wrong-pixels
+    FIRST_ORDER_LIMIT pixels) on VIEW_OBJECTS objects or more: a view
+    that differs moves every object's edges, a mistake on one object (a
+    light seen twice as wide) the edges of that one, and a small motion
+    fitted where no camera reading fits is what a first-order fit absorbs
+    of any change near the edges (a light sampled on one triangle). The
+    wrong-pixels
     finding (cracks, shadow rays) only if its pixels are a minor share of
     the image.
     """
@@ -292,8 +275,7 @@ def _findings_rule(g: Grading, hand: Hand, lvl: Level, t: Tested, found: dict[st
     camera = _families("CAMERA_FAMILIES")
     spread = int(np.count_nonzero(bt.extra["objects"].reshape(-1, 3).any(axis=1))) if "objects" in bt.extra else 0
     view_differs = (best is not None and best.explained < PARTIAL_SHARE and spread >= VIEW_OBJECTS
-                    and t.st.registration is not None and t.st.registration.edge_displacement > fb.FIRST_ORDER_LIMIT
-                    and edges_alike(t.img, hand.R) < EDGES_ALIKE)
+                    and t.st.registration is not None and t.st.registration.edge_displacement > fb.FIRST_ORDER_LIMIT)
     if best is None or (best.family not in camera and not any(
             c.family in camera and c.explained >= max(best.explained - TIE, PARTIAL_SHARE)
             for c in g.explanation.candidates) and not view_differs):
