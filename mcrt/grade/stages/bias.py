@@ -242,10 +242,6 @@ def verdict(g: Grading, hand: Hand, lvl: Level, t: Tested, found: dict[str, str]
         g.headline = next(iter(found.values())).split(":")[0] + "."
 
 
-#: Objects off, at the least, for the camera finding to stand where no reading says anything (:func:`_findings_rule`).
-VIEW_OBJECTS = 3
-
-
 def _findings_rule(g: Grading, hand: Hand, lvl: Level, t: Tested, found: dict[str, str]) -> None:
     """The adequacy rule for the checks' own findings, where no cause is claimed (mcrt.grade.adequacy).
 
@@ -255,15 +251,7 @@ def _findings_rule(g: Grading, hand: Hand, lvl: Level, t: Tested, found: dict[st
     if a candidate of the camera's is the best or tied with it (within
     TIE: which of the two is ahead is then chance) and explains a share
     worth mentioning (PARTIAL_SHARE: below it every reading ties with
-    every other, and none says anything). Where no reading is worth
-    mentioning, the camera finding stands on its own evidence if the
-    view differs beyond a first-order fit (its border moved by more than
-    FIRST_ORDER_LIMIT pixels) on VIEW_OBJECTS objects or more: a view
-    that differs moves every object's edges, a mistake on one object (a
-    light seen twice as wide) the edges of that one, and a small motion
-    fitted where no camera reading fits is what a first-order fit absorbs
-    of any change near the edges (a light sampled on one triangle). The
-    wrong-pixels
+    every other, and none says anything), the wrong-pixels
     finding (cracks, shadow rays) only if its pixels are a minor share of
     the image.
     """
@@ -273,12 +261,9 @@ def _findings_rule(g: Grading, hand: Hand, lvl: Level, t: Tested, found: dict[st
 
     bt, th, best = t.bt, g.th, g.explanation.best
     camera = _families("CAMERA_FAMILIES")
-    spread = int(np.count_nonzero(bt.extra["objects"].reshape(-1, 3).any(axis=1))) if "objects" in bt.extra else 0
-    view_differs = (best is not None and best.explained < PARTIAL_SHARE and spread >= VIEW_OBJECTS
-                    and t.st.registration is not None and t.st.registration.edge_displacement > fb.FIRST_ORDER_LIMIT)
     if best is None or (best.family not in camera and not any(
             c.family in camera and c.explained >= max(best.explained - TIE, PARTIAL_SHARE)
-            for c in g.explanation.candidates) and not view_differs):
+            for c in g.explanation.candidates)):
         found.pop("registration", None)
     if "pixels" in found and bt.extra["pixels"].reshape(bt.shape + (3,)).any(axis=2).mean() > th.minor_area:
         found.pop("pixels")
