@@ -439,11 +439,12 @@ _UNLOOKED = _twin_blind("unlooked", "twenty-second") + (
 
 #: What changed after the second pair of twin classes' one grading, with both in view.
 _TWIN2_AFTER = (
-    " Changes made after that grading, with both classes in view (commits b8576e1 to 41e58af): Khronos' PBR Neutral "
+    " Changes made after that grading, with both classes in view (commits b8576e1 to e19f1a5): Khronos' PBR Neutral "
     "tone map; the diffuse bounce weighted by its albedo's mean; white pixels holding 0 worded as a NaN cast too; "
     "the first hit's light samples averaged over the batch; a correct render's values in the wrong places. (Every "
-    "diffuse reflectance times pi / 3 was tried and dropped: it fitted unheard's overlapping tiles to noise.) Both "
-    "rows here are of rules that saw the class.")
+    "diffuse reflectance times pi / 3 was tried and dropped: it fitted unheard's overlapping tiles to noise; the "
+    "camera finding kept where no reading fits and the view differs, made before the freeze, was dropped: it named "
+    "two garbled files' rows as a camera.) Both rows here are of rules that saw the class.")
 
 _UNWONTED = _twin_blind("unwonted", "twenty-third", "5aa291d") + (
     "this report's first grading (held out, 2 of 12 named right, 0 of 12 confidently wrong, 12 of 12 detected; all "
