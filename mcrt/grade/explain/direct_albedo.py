@@ -28,17 +28,26 @@ WORDS = {0: "the light sample at the first surface a camera ray meets without th
             "saturated, the bounced light right"}
 
 
-def direct_albedo(fit: Fit, inputs: Inputs) -> list[Candidate]:
-    """R + D (rho^(e - 1) - 1) for e in 0 and 2 (the module docstring)."""
+def first_hit_direct(fit: Fit, inputs: Inputs) -> tuple[np.ndarray, np.ndarray] | None:
+    """(D, rho): the direct light at the first hit (the basis's paths of depth 2 less those of depth 1) and each
+    pixel's first-hit albedo (the camera's first hits that :mod:`mcrt.grade.explain.aov` prepares), (H, W, 3) each;
+    None where the basis has not both."""
     from mcrt.grade.explain.aov import aov
 
     b = inputs.basis
     hits = b.extra.get(aov.name) if b is not None else None
     depth = dict(b.nodes.get("depth", ())) if b is not None else {}
     if hits is None or 1 not in depth or 2 not in depth or hits["cover"].shape[:2] != fit.R.shape[:2]:
+        return None
+    return np.asarray(depth[2], np.float64) - np.asarray(depth[1], np.float64), hits["cover"] @ hits["albedo"]
+
+
+def direct_albedo(fit: Fit, inputs: Inputs) -> list[Candidate]:
+    """R + D (rho^(e - 1) - 1) for e in 0 and 2 (the module docstring)."""
+    got = first_hit_direct(fit, inputs)
+    if got is None:
         return []
-    D = np.asarray(depth[2], np.float64) - np.asarray(depth[1], np.float64)
-    rho = hits["cover"] @ hits["albedo"]
+    D, rho = got
     diffuse = rho > 0.0
     out = []
     for e, words in WORDS.items():

@@ -27,6 +27,7 @@ from __future__ import annotations
 import numpy as np
 
 from mcrt.grade.candidates import Candidate, Inputs
+from mcrt.grade.explain.direct_albedo import first_hit_direct
 from mcrt.grade.explain.fit import Fit
 from mcrt.grade.feedback import num as _num
 from mcrt.grade.score import LUMINANCE
@@ -38,15 +39,11 @@ MIN_SHARE = 0.25
 
 def direct_mean(fit: Fit, inputs: Inputs) -> list[Candidate]:
     """R + m (c - D), c fitted (the module docstring)."""
-    from mcrt.grade.explain.aov import aov
-
-    b = inputs.basis
-    hits = b.extra.get(aov.name) if b is not None else None
-    depth = dict(b.nodes.get("depth", ())) if b is not None else {}
-    if hits is None or 1 not in depth or 2 not in depth or hits["cover"].shape[:2] != fit.R.shape[:2]:
+    got = first_hit_direct(fit, inputs)
+    if got is None:
         return []
-    D = np.asarray(depth[2], np.float64) - np.asarray(depth[1], np.float64)
-    m = np.broadcast_to((hits["cover"] @ hits["albedo"]).max(axis=-1, keepdims=True) > 0.0, D.shape) & fit.ok
+    D, rho = got
+    m = np.broadcast_to(rho.max(axis=-1, keepdims=True) > 0.0, D.shape) & fit.ok
     if not m.any():
         return []
     w = np.where(m, fit.w, 0.0)
