@@ -109,11 +109,12 @@ def findings(g: Grading, hand: Hand, lvl: Level, t: Tested) -> dict[str, str]:
         out["filter"] = fb.filter_text(st, blur, lvl.spp_eff, hand.spp)
     if "pixels" in ex and ex["pixels"].any():
         out["pixels"] = fb.pixels_text(ex["pixels"].reshape(bt.shape + (3,)).any(axis=2))
-    # The noise of the declared spp, not the measured one: values in other places measure as noise themselves.
-    declared = g.ctx.model_var[hand.cam].astype(np.float64) / max(hand.spp or g.a.min_spp, 1)
-    moved = values_elsewhere(t.img, hand.R, declared + lvl.noise.reference, lvl.clip_mask)
-    if flagged(bt) and moved is not None:
-        out["places"] = fb.places_text(*moved)
+    if flagged(bt):
+        # The noise of the declared spp, not the measured one: values in other places measure as noise themselves.
+        declared = g.ctx.model_var[hand.cam].astype(np.float64) / max(hand.spp or g.a.min_spp, 1)
+        moved = values_elsewhere(t.img, hand.R, declared + lvl.noise.reference, lvl.clip_mask)
+        if moved is not None:
+            out["places"] = fb.places_text(*moved)
     if t.patches is not None and t.patches.any():
         labels = g.ctx.labels[hand.cam]
         names = [g.ctx.label_names[k] for k in np.unique(labels[t.patches])]
