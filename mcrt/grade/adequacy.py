@@ -18,7 +18,10 @@ relevance threshold ``min_effect``), with the per-object tests of
 * **partial**: the candidate explains a share of the difference but a
   structured remainder is left: it is named as partial, with the share and
   the objects the remainder sits on ("partly like X, which explains 56 %;
-  something else is wrong on the ceiling and the light");
+  something else is wrong on the ceiling and the light"); where the
+  candidate and its remainder point to one part of the program together (an
+  object's geometry, faces missing from the room: :mod:`mcrt.grade.broader`),
+  that part is said too, and only it is named;
 * **none**: no candidate explains enough (:data:`PARTIAL_LEAD` of the
   difference) to lead: the objects the difference sits on are named
   instead, with how they differ, and the closest cause with its share.
@@ -78,6 +81,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from mcrt.grade import broader
 from mcrt.grade import objects as obj
 from mcrt.stats.onesample import Noise, multiscale_test
 
@@ -409,6 +413,7 @@ def claim_rule(S: np.ndarray, R: np.ndarray, mask: np.ndarray, noise: Noise, sc:
                     e.verdict = e.adequacy.verdict = cd.AMBIGUOUS
                 return
         if _partial(e, tried, test, S - R, mask):
+            e.broader = broader.reading(e.best, e.remainder, R, mask, noise.model + noise.reference, sc.labels, sc.names)
             return
         e.verdict = cd.NONE if e.verdict == cd.CLAIMED else e.verdict
         ad = remainder_test(S, R, 0.0, mask, noise, sc, explained=0.0)

@@ -153,6 +153,8 @@ class Explanation:
     remainder_where: str = ""  # where the remainder lies, when the rule found it structured (PARTIAL); for NONE,
     # where the difference itself lies (the adequacy rule, by object)
     adequacy: object = None  # what the claim rule measured of the remainder (mcrt.grade.adequacy.Adequacy), if it did
+    broader: tuple[str, str] | None = None  # PARTIAL: (family, words) of what the lead and its remainder point to
+    # together (mcrt.grade.broader), if they do
     seconds: float = 0.0
 
     @property
@@ -174,6 +176,7 @@ class Explanation:
                 "family": named.family if named else None, "sentence": self.sentence,
                 "where": self.where, "seconds": self.seconds, "verdict": self.verdict,
                 "adequacy": self.adequacy.to_dict() if self.adequacy is not None else None,
+                "broader": self.broader[0] if self.broader else None,
                 "candidates": [c.to_dict() for c in self.candidates[:8]]}
 
 

@@ -116,8 +116,9 @@ def explanation_words(e: Explanation) -> tuple[str, str]:
         rest = f"something else is wrong {e.remainder_where}" if e.remainder_where else "something else is wrong too"
         # The share is of the difference's chi^2 beyond noise: a remainder on one object can be a sliver of it.
         share = (f"{100 * best.explained:.0f} %" if best.explained < 0.995 else "nearly all") + " of the difference"
-        sentence = f"Partly like {best.text}, which explains {share}; {rest}."
-        return sentence, f"Partly like {best.text}; {rest}."
+        more = f"; {e.broader[1]}" if e.broader else ""
+        sentence = f"Partly like {best.text}, which explains {share}; {rest}{more}."
+        return sentence, f"Partly like {best.text}; {rest}{more}."
     if e.verdict == INDISTINCT:  # it fits, but no better than noise would let anything fit
         gain = e.chi2_none - best.chi2
         sentence = (f"{_TRIED} stands out: the difference is too close to the noise to tell them apart (the closest, "

@@ -125,6 +125,10 @@ CAUSE_OF: dict[str, tuple[str, ...]] = {
     # The mirror's reflection computed wrongly (mcrt.grade.explain.mirror; added after the unprompted class was
     # graded): its normal wrong, or its material's handling (the family 'material').
     "mirror_normal": ("normals",),
+    # A partial reading's broader cause (mcrt.grade.broader; added after unremarked was graded, with it in view): an
+    # object's geometry, worded as its shape, size or place (its vertices, transform or intersection), names each of
+    # those; black pixels with the room darker, faces missing from the room.
+    "object_geometry": ("object_shape", "object_moved", "object_size", "mesh_face"), "room_faces": ("mesh_face",),
 }
 
 
@@ -156,6 +160,10 @@ _ACCEPTED.update({"orientation": ("orientation", "camera_rotation"),
 # A shift's words name sub-pixel offsets not spread over the pixel beside the pixel centres (since unheard).
 for _c in ("pixel_offset", "camera_rotation", "row_stride"):
     _ACCEPTED[_c] += ("pixel_footprint",)
+# An object's geometry names its shape, size and place in one statement: each is the others in other words (since
+# unremarked was graded).
+for _c in CAUSE_OF["object_geometry"]:
+    _ACCEPTED[_c] = _ACCEPTED.get(_c, (_c,)) + CAUSE_OF["object_geometry"]
 
 #: Causes of the fresh class (mcrt.grade.accuracy.fresh) that another cause word names as the same mistake, fixed
 #: before the class was graded: the feedback sends the student to the line that is wrong. Truncated 8-bit codes
@@ -325,6 +333,7 @@ def named_causes(res) -> tuple[list[str], str]:
         causes += _explanation_causes(expl)
         said.append(expl["sentence"])
     elif expl:
+        causes += CAUSE_OF.get(expl.get("broader"), ())  # a partial reading's broader cause (mcrt.grade.broader)
         said.append(expl["sentence"])
     elif res.diagnosis:  # the catalogue alone (no explanation basis): its best entry
         m = res.diagnosis[0]["mutant"]

@@ -1,0 +1,106 @@
+r"""What a partial reading and its remainder point to together: a broader cause, said where both agree.
+
+A partial reading ("partly like X, which explains 59 %; something else is
+wrong on ...") names no cause: X leaves structure. Two kinds of X, though,
+tell on their own which part of the program is wrong even where the exact
+change is none the families render:
+
+* **an object's geometry** (:data:`GEOMETRY`: the tetrahedron or the sphere
+  resized, moved or missing) that explains at least
+  :data:`mcrt.grade.adequacy.PARTIAL_LEAD` of the difference: most of what
+  differs is that object's outline, its shadow and its reflections, so its
+  shape, size or place is wrong, in a way one scale or one shift does not
+  capture (a vertex elsewhere, a face missing, an ellipsoid). The words
+  send the student to that object's vertices, transform and intersection,
+  without claiming which;
+* **black pixels on the room's surfaces with the rest of the room darker**
+  (:func:`room_faces`): black pixels alone are pixels never written or NaN
+  samples, and the room around them is then as rendered. If the camera
+  sees the void through faces missing from the room, light escapes through
+  them too, and every other surface is darker, by one factor roughly: the
+  remainder's least-squares fit :math:`r = -k R` off the black pixels,
+  weighted by the noise (a firefly's pixel counts little, no pixel beyond
+  a relative error of :data:`mcrt.grade.candidates.FLOOR`, the light's own
+  pixels left out), must give :math:`k \ge` :data:`MIN_LOSS` at
+  :data:`LOSS_Z` standard errors. Black pixels that are the reference's
+  brightest (:data:`BRIGHTEST`) are codes overflowing, not holes. Both
+  together point to the faces.
+
+Neither changes the verdict (PARTIAL) or the points; only the words and
+the causes they name (``Explanation.broader``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from mcrt.grade.candidates import FLOOR
+from mcrt.stats import LUMINANCE_WEIGHTS
+
+#: The families whose fit moves, resizes or removes one object (value: the object's name).
+GEOMETRY = ("object_size", "object_moved", "object_missing")
+#: The objects (scene names) whose geometry a program builds itself: the room's surfaces have families of their own.
+OBJECTS = ("tetrahedron", "sphere")
+#: Least relative darkening of the room off the black pixels for the light to be escaping through holes.
+MIN_LOSS = 0.005
+#: ... and its least size in standard errors of the noise of that sum.
+LOSS_Z = 4.0
+#: Share of the black pixels that must lie on the room's walls, floor and ceiling.
+ON_ROOM = 0.9
+#: Black pixels (nearly) all above this quantile of the reference's luminance are its brightest values: codes that
+#: overflow (a value past the top of the file's range written 0) blacken those, holes any.
+BRIGHTEST = 0.75
+
+_LUM = np.asarray(LUMINANCE_WEIGHTS)
+
+
+def reading(lead, remainder: np.ndarray, R: np.ndarray, mask: np.ndarray, var: np.ndarray, labels: np.ndarray,
+            names) -> tuple[str, str] | None:
+    """(family, words) of the broader cause of partial reading ``lead`` (its remainder ``remainder``, (H, W, 3);
+    ``var`` the noise's variance per pixel; ``labels`` and ``names`` the surfaces), or None."""
+    obj = geometry_object(lead)
+    if obj is not None:
+        return ("object_geometry", f"together they point to the {obj}'s geometry: its shape, size or place is not "
+                "the scene's in a way one scale or one shift does not capture (check its vertices or centre and "
+                "radius, its transform and its ray intersection test)")
+    loss = room_faces(lead, remainder, R, mask, var, labels, names)
+    if loss is not None:
+        return ("room_faces", "together they point to faces missing from the room: the black pixels are the void "
+                f"seen through them, and the rest of the room is darker by {100 * loss:.1f} % as light escapes "
+                "through them (check how the walls', the floor's and the ceiling's polygons are split into "
+                "triangles, and which of those are built)")
+    return None
+
+
+def geometry_object(lead) -> str | None:
+    """The object whose size, place or presence ``lead`` fits, where it is one of :data:`OBJECTS`; else None."""
+    if lead is None or lead.family not in GEOMETRY:
+        return None
+    v = lead.value
+    name = v.get("object") if isinstance(v, dict) else v[0] if isinstance(v, (tuple, list)) else v
+    return name if name in OBJECTS else None
+
+
+def room_faces(lead, remainder, R, mask, var, labels, names) -> float | None:
+    """The room's relative darkening off ``lead``'s black pixels, where they lie on its walls, floor and ceiling
+    (:data:`ON_ROOM`; not where the light is hidden, which is another reading) and the darkening is significant
+    (module docstring); else None."""
+    if lead is None or lead.family != "bad_pixels" or lead.name != "black pixels" or lead.change is None:
+        return None
+    if "where the light is hidden" in lead.text:
+        return None
+    bad = np.any(lead.change != 0.0, axis=-1) & mask
+    room = np.array([n.startswith("wall ") or n in ("the floor", "the ceiling") for n in names])
+    if not bad.any() or float(np.mean(room[np.minimum(labels[bad], len(names) - 1)])) < ON_ROOM:
+        return None
+    lum = R @ _LUM
+    if float(np.mean(lum[bad] > np.quantile(lum[mask], BRIGHTEST))) >= ON_ROOM:
+        return None  # the brightest values black: codes overflowing, not holes
+    off = mask & ~bad & (R @ _LUM < 1.0)  # the light's own pixels get no light from the room
+    r, ref = remainder[off] @ _LUM, R[off] @ _LUM
+    v = var[off] @ _LUM**2 + (FLOOR * ref) ** 2  # no pixel's weight beyond a relative error of FLOOR
+    info = float(np.sum(ref * ref / v))  # the least-squares fit of r = -k R, weighted by the noise: k's information
+    if info <= 0:
+        return None
+    loss = -float(np.sum(ref * r / v)) / info
+    return loss if loss >= MIN_LOSS and loss * np.sqrt(info) >= LOSS_Z else None
