@@ -841,3 +841,17 @@ def test_black_pixels_are_faces_only_with_the_room_darker_and_not_the_brightest(
     rest = np.where(bright[..., None], 0.0, 1.0)
     assert room_faces(lead(bright), -0.04 * R * rest, R, mask, var, labels, names) is None
 
+
+def test_light_moved_between_surfaces_is_no_colours_typed_wrong(ctx):
+    """The cosine-weighted bounce's disk sample drawn in the square (its rejection left out) at the first surface a
+    camera ray meets: unlooked's maker (tuned half; Mitsuba's light sample and path after it). It darkens the ceiling
+    and moves a few hundredths of light between other surfaces, up on some and down on others: no colours of several
+    surfaces are claimed for it (nor any colour)."""
+    from mcrt.grade.accuracy import unlooked
+
+    c = _tuned(unlooked, "bounce_disk_in_square")
+    res = grade_image("disk_in_square", ctx, [c.image], spp=c.spp)
+    ex = res.details["explanation"]
+    assert "albedo" not in named_causes(res)[0], ex["sentence"]
+    assert not any(x["mutant"] == "albedos of several surfaces" for x in ex["candidates"]), ex["sentence"]
+    assert res.score < res.max_score

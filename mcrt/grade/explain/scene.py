@@ -115,7 +115,12 @@ def albedos(fit: Fit, inputs: Inputs) -> list[Candidate]:
     fit's weights), and the candidate's chi^2 is the fit's full criterion.
     Every such surface's three albedos count as parameters, so one surface's
     colour alone is :func:`albedo`'s; the candidate needs two or more
-    surfaces changed by more than :data:`CHANGED`, one by :data:`TYPED`. It is flexible
+    surfaces changed by more than :data:`CHANGED`, one by :data:`TYPED`, and
+    either every one by :data:`TYPED` (colours typed or read from the wrong
+    place) or all in one direction (one rule on every colour: a clamp, a
+    scale); small changes up on some surfaces and down on others are what a
+    mistake in how light bounces makes (it moves light between surfaces),
+    which colours typed wrongly seldom are. It is flexible
     (:attr:`~mcrt.grade.candidates.Candidate.flexible`): claimed only where
     its remainder is noise and no other candidate's is.
     """
@@ -154,6 +159,9 @@ def albedos(fit: Fit, inputs: Inputs) -> list[Candidate]:
     changed = [lab for lab in labels if moved[lab] > CHANGED]
     if len(changed) < 2 or max(moved.values()) < TYPED:
         return []
+    ways = {np.sign(np.mean(np.subtract(fitted[lab], b.albedo[lab][2]))) for lab in changed}
+    if len(ways) > 1 and min(moved[lab] for lab in changed) < TYPED:
+        return []  # a few hundredths up here and down there: light moved between surfaces, not colours typed
     words = "; ".join(f"{lab} {_fmt(fitted[lab])} where the scene says {_fmt(b.albedo[lab][2])}" for lab in changed)
     text = f"the colours of {len(changed)} surfaces other than the scene's: {words}"
     return [Candidate("albedo", "albedos of several surfaces", text, fit.delta(dm), 3 * len(labels),
