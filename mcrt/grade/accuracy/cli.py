@@ -19,7 +19,7 @@ CLASSES = {"scene": "cases", "outside": "outside", "programs": "programs", "fres
            "unforeseen": "unforeseen", "unprompted": "unprompted",
            "unbidden": "unbidden", "unheralded": "unheralded", "unbeknown": "unbeknown",
            "unvisited": "unvisited", "unlooked": "unlooked", "unwonted": "unwonted",
-           "unremarked": "unremarked"}
+           "unremarked": "unremarked", "unremembered": "unremembered"}
 
 
 def register(sub) -> None:
@@ -53,9 +53,10 @@ def register(sub) -> None:
                    "written blind, mcrt.grade.accuracy.unbeknown), 'unvisited' (a twenty-first, in tracers, scene "
                    "input and output, written blind, mcrt.grade.accuracy.unvisited), 'unlooked' (a twenty-second, "
                    "in tracers, scene input and output, written blind, mcrt.grade.accuracy.unlooked), 'unwonted' (a "
-                   "twenty-third, in tracers, scene input and output, written blind, mcrt.grade.accuracy.unwonted) or "
+                   "twenty-third, in tracers, scene input and output, written blind, mcrt.grade.accuracy.unwonted), "
                    "'unremarked' (a twenty-fourth, in tracers, scene input and output, written blind, "
-                   "mcrt.grade.accuracy.unremarked) (default: scene)")
+                   "mcrt.grade.accuracy.unremarked) or 'unremembered' (a twenty-fifth, in tracers, scene input and "
+                   "output, written blind, mcrt.grade.accuracy.unremembered) (default: scene)")
     p.add_argument("--held-out", choices=("all", "only", "none"), default="all",
                    help="grade all cases, only the held-out ones, or none of them (default: all)")
     p.add_argument("--out", default=None, help=f"report folder (default: {DEFAULT_OUT}, or {DEFAULT_OUT}/CLASS "
