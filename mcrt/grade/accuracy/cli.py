@@ -19,7 +19,7 @@ CLASSES = {"scene": "cases", "outside": "outside", "programs": "programs", "fres
            "unforeseen": "unforeseen", "unprompted": "unprompted",
            "unbidden": "unbidden", "unheralded": "unheralded", "unbeknown": "unbeknown",
            "unvisited": "unvisited", "unlooked": "unlooked", "unwonted": "unwonted",
-           "unremarked": "unremarked", "unremembered": "unremembered"}
+           "unremarked": "unremarked", "unremembered": "unremembered", "unnoticed": "unnoticed"}
 
 
 def register(sub) -> None:
@@ -55,8 +55,9 @@ def register(sub) -> None:
                    "in tracers, scene input and output, written blind, mcrt.grade.accuracy.unlooked), 'unwonted' (a "
                    "twenty-third, in tracers, scene input and output, written blind, mcrt.grade.accuracy.unwonted), "
                    "'unremarked' (a twenty-fourth, in tracers, scene input and output, written blind, "
-                   "mcrt.grade.accuracy.unremarked) or 'unremembered' (a twenty-fifth, in tracers, scene input and "
-                   "output, written blind, mcrt.grade.accuracy.unremembered) (default: scene)")
+                   "mcrt.grade.accuracy.unremarked), 'unremembered' (a twenty-fifth, in tracers, scene input and "
+                   "output, written blind, mcrt.grade.accuracy.unremembered) or 'unnoticed' (a twenty-sixth, in tracers, "
+                   "scene input and output, written blind, mcrt.grade.accuracy.unnoticed) (default: scene)")
     p.add_argument("--held-out", choices=("all", "only", "none"), default="all",
                    help="grade all cases, only the held-out ones, or none of them (default: all)")
     p.add_argument("--out", default=None, help=f"report folder (default: {DEFAULT_OUT}, or {DEFAULT_OUT}/CLASS "
