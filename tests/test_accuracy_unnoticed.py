@@ -19,13 +19,14 @@ from accuracy_helpers import (W, build as _build, by_name, check_builds, check_c
                               check_seeds, check_specs, image as _image, pillow_codes, plain as _plain)
 from mcrt.grade.accuracy import (blind, cases, fresh, novel, outside, programs, unasked, unbeknown, unbidden,
                                  unforeseen, unguessed, unheard, unheralded, unlooked, unmet, unnoticed, unprompted,
-                                 unremarked, unsaid, unseen, unsought, untold, untried, unvisited, unwonted)
+                                 unremarked, unremembered, unsaid, unseen, unsought, untold, untried, unvisited,
+                                 unwonted)
 from mcrt.image_files import read_image, srgb_eotf, srgb_oetf
 
 _by_name = partial(by_name, unnoticed.SPECS)
 _OTHERS = (cases, outside, programs, fresh, blind, unseen, untried, novel, untold, unmet, unheard, unsaid, unasked,
            unsought, unguessed, unforeseen, unprompted, unbidden, unheralded, unbeknown, unvisited, unlooked, unwonted,
-           unremarked)
+           unremarked, unremembered)  # the last, its twin: written the same day, apart
 
 
 @pytest.fixture(scope="module")
