@@ -855,3 +855,24 @@ def test_light_moved_between_surfaces_is_no_colours_typed_wrong(ctx):
     assert "albedo" not in named_causes(res)[0], ex["sentence"]
     assert not any(x["mutant"] == "albedos of several surfaces" for x in ex["candidates"]), ex["sentence"]
     assert res.score < res.max_score
+
+
+def test_an_objects_geometry_is_not_said_from_its_own_pixels_alone(ctx):
+    """The rule on its own (mcrt.grade.broader.reading): the sphere's size leading a partial reading says the
+    sphere's geometry only where what is left lies beside it too (a wall); left on the mirror sphere alone, it could
+    as well be the mirror's reflections (its material), and nothing broader is said."""
+    from mcrt.grade.broader import reading
+    from mcrt.grade.candidates import Candidate
+
+    R = _mitsuba(72)
+    labels, names = ctx.labels["near"], ctx.label_names
+    var = ctx.model_var["near"].astype(np.float64) / 1024
+    mask = np.ones(R.shape[:2], bool)
+    lead = Candidate("object_size", "size of the sphere", "the sphere's radius 0.98 times the scene's", 0.0, 1,
+                     value={"object": "sphere", "scale": 0.98}, change=np.zeros_like(R))
+    sphere, wall = names.index("the mirror sphere"), next(k for k, n in enumerate(names) if n.startswith("wall DE"))
+    rest = np.zeros_like(R)
+    assert reading(lead, rest, R, mask, var, labels, names, [sphere]) is None
+    fam, words = reading(lead, rest, R, mask, var, labels, names, [sphere, wall])
+    assert fam == "object_geometry" and "the sphere's geometry" in words
+

@@ -413,7 +413,8 @@ def claim_rule(S: np.ndarray, R: np.ndarray, mask: np.ndarray, noise: Noise, sc:
                     e.verdict = e.adequacy.verdict = cd.AMBIGUOUS
                 return
         if _partial(e, tried, test, S - R, mask):
-            e.broader = broader.reading(e.best, e.remainder, R, mask, noise.model + noise.reference, sc.labels, sc.names)
+            e.broader = broader.reading(e.best, e.remainder, R, mask, noise.model + noise.reference, sc.labels, sc.names,
+                                        e.adequacy.objects)
             return
         e.verdict = cd.NONE if e.verdict == cd.CLAIMED else e.verdict
         ad = remainder_test(S, R, 0.0, mask, noise, sc, explained=0.0)

@@ -10,9 +10,12 @@ change is none the families render:
   :data:`mcrt.grade.adequacy.PARTIAL_LEAD` of the difference: most of what
   differs is that object's outline, its shadow and its reflections, so its
   shape, size or place is wrong, in a way one scale or one shift does not
-  capture (a vertex elsewhere, a face missing, an ellipsoid). The words
-  send the student to that object's vertices, transform and intersection,
-  without claiming which;
+  capture (a vertex elsewhere, a face missing, an ellipsoid), where what is
+  left lies beside the object too (its outline's other side, its shadow,
+  what it hides): on the object's own pixels alone it could as well be its
+  material (a mirror's reflections changed, a surface shaded otherwise). The
+  words send the student to that object's vertices, transform and
+  intersection, without claiming which;
 * **black pixels on the room's surfaces with the rest of the room darker**
   (:func:`room_faces`): black pixels alone are pixels never written or NaN
   samples, and the room around them is then as rendered. If the camera
@@ -55,11 +58,14 @@ _LUM = np.asarray(LUMINANCE_WEIGHTS)
 
 
 def reading(lead, remainder: np.ndarray, R: np.ndarray, mask: np.ndarray, var: np.ndarray, labels: np.ndarray,
-            names) -> tuple[str, str] | None:
+            names, objects) -> tuple[str, str] | None:
     """(family, words) of the broader cause of partial reading ``lead`` (its remainder ``remainder``, (H, W, 3);
-    ``var`` the noise's variance per pixel; ``labels`` and ``names`` the surfaces), or None."""
+    ``var`` the noise's variance per pixel; ``labels`` and ``names`` the surfaces; ``objects`` the labels the
+    remainder was found on), or None."""
     obj = geometry_object(lead)
-    if obj is not None:
+    # The object's own pixels cannot tell its shape from its material (a mirror's reflections, a surface's shading):
+    # only a remainder on what lies around it (its outline's other side, its shadow) points to its geometry.
+    if obj is not None and any(obj not in names[k] for k in objects):
         return ("object_geometry", f"together they point to the {obj}'s geometry: its shape, size or place is not "
                 "the scene's in a way one scale or one shift does not capture (check its vertices or centre and "
                 "radius, its transform and its ray intersection test)")
