@@ -876,3 +876,23 @@ def test_an_objects_geometry_is_not_said_from_its_own_pixels_alone(ctx):
     fam, words = reading(lead, rest, R, mask, var, labels, names, [sphere, wall])
     assert fam == "object_geometry" and "the sphere's geometry" in words
 
+
+def test_a_matrix_near_one_gain_mixes_no_colour(ctx):
+    """The free 3x3 colour matrix (mcrt.grade.explain.colour) on a Mitsuba render (seed 73) through matrices: one
+    within a few thousandths of 1.01 times the identity is no candidate (no colour changed: such a fit only bends to
+    values an encoding or a curve changed); a white balance of a few per cent per channel is, and is fitted."""
+    from mcrt.grade.candidates import Inputs
+    from mcrt.grade.explain.colour import colour
+    from mcrt.grade.explain.fit import Fit
+
+    X = _mitsuba(73)
+    R = ctx.references["near"].mean.astype(np.float64)
+    V = ctx.model_var["near"].astype(np.float64) / 1024
+
+    def free(M):
+        fit = Fit(X @ np.asarray(M).T, R, V, np.ones(R.shape, bool), ctx.explain.var.astype(np.float64) / ctx.explain.spp)
+        return next((c for c in colour(fit, Inputs(ctx.explain)) if c.name == "colour matrix"), None)
+
+    assert free([[1.01, 0.002, -0.001], [0.003, 1.008, 0.0], [0.0, -0.002, 1.012]]) is None
+    c = free(np.diag([1.06, 1.0, 0.9]))
+    assert c is not None and np.allclose(np.diag(c.value["matrix"]), [1.06, 1.0, 0.9], atol=0.02), c.value

@@ -10,7 +10,8 @@ space's conversion applied where none was due (the render taken for Adobe RGB,
 Display P3 or Rec. 2020 and converted to sRGB, or the other way; XYZ written as
 RGB, or converted from), negatives clipped to 0. Any other M is fitted per output channel
 (nine parameters; each costs ln n like every fitted parameter) and worded by
-its rows: a named M with one parameter wins wherever it fits as well. In a
+its rows: a named M with one parameter wins wherever it fits as well; a
+free M within :data:`NEAR` of one gain on every channel is none. In a
 file clipped at 1 (an 8-bit image) the model is clipped as the file stores
 it, and the clipped pixels set no parameter.
 """
@@ -24,6 +25,10 @@ from mcrt.grade.explain.fit import Fit
 from mcrt.grade.feedback import num as _num
 
 _RGB = ("red", "green", "blue")
+#: A free matrix within this of one gain times the identity (every entry) mixes no colour: a white balance or a
+#: change of primaries moves a channel by several hundredths, and a near-identity fit only bends itself to values a
+#: curve or an encoding changed (dark codes a step off).
+NEAR = 0.025
 
 #: Linear RGB to CIE XYZ (D65) of each space's primaries (IEC 61966-2-1, Adobe RGB (1998), Display P3, ITU-R BT.2020).
 TO_XYZ = {
@@ -148,6 +153,8 @@ def colour(fit: Fit, inputs: Inputs) -> list[Candidate]:
     M = _free_matrix(fit, top)
     if not np.all((M.sum(axis=1) >= 1 / GAIN) & (M.sum(axis=1) <= GAIN)):
         return out
+    if np.abs(M - np.mean(np.diag(M)) * np.eye(3)).max() < NEAR:
+        return out  # one gain on every channel, give or take a few thousandths: no colour changed
     model = np.minimum(R @ M.T, top)
     rows = "; ".join(f"{_RGB[c]} = " + _terms(M[c]) for c in range(3))
     out.append(Candidate("colour_matrix", "colour matrix", f"the colours mixed by a 3x3 matrix ({rows}): a change of colour "
