@@ -403,7 +403,8 @@ _UNBEKNOWN = (
 
 def _twin_blind(module: str, ordinal: str, frozen: str = "cca957e") -> str:
     """The opening of the introductions of two classes written blind the same day and graded once on the same rules,
-    frozen at commit ``frozen`` (the twenty-first and twenty-second, then the twenty-third and twenty-fourth)."""
+    frozen at commit ``frozen`` (the twenty-first and twenty-second, the twenty-third and twenty-fourth, then the
+    twenty-fifth and twenty-sixth)."""
     return (
         f"The wrong renders are a {ordinal} class of mistakes in students' tracers, their scene input and their output "
         f"that no other class or the catalogue tried (mcrt.grade.accuracy.{module}), written blind to the grader's "
@@ -454,6 +455,23 @@ _UNREMARKED = _twin_blind("unremarked", "twenty-fourth", "5aa291d") + (
     "this report's first grading (held out, 4 of 12 named right, 3 of 12 confidently wrong, 11 of 12 detected; all "
     "28, 9 named right, 4 confidently wrong, 27 detected; 0 of 8 correct hand-ins lost points).") + _TWIN2_AFTER
 
+#: What changed after the third pair of twin classes' one grading, with both in view.
+_TWIN3_AFTER = (
+    " Changes made after that grading, with both classes in view (commits 5f5dcef and 57891fc): an object's geometry "
+    "is said beside a partial reading only where what is left lies beside the object too (a cube map seen from the "
+    "sphere's centre had been read as the sphere's geometry); a free colour matrix within 0.025 of one gain on every "
+    "channel is no candidate (two 8-bit encodings a step off in the dark codes had been claimed as such matrices). "
+    "Both rows here are of rules that saw the class.")
+
+_UNREMEMBERED = _twin_blind("unremembered", "twenty-fifth", "9a0fc85") + (
+    "this report's first grading (held out, 0 of 12 named right, 4 of 12 confidently wrong, 10 of 12 detected; all "
+    "28, 3 named right, 4 confidently wrong, 25 detected; 0 of 8 correct hand-ins lost points).") + _TWIN3_AFTER
+
+_UNNOTICED = _twin_blind("unnoticed", "twenty-sixth", "9a0fc85") + (
+    "this report's first grading (held out, 3 of 12 named right, 1 of 12 confidently wrong, 11 of 12 detected; all "
+    "28, 7 named right, 1 confidently wrong, 26 detected; 1 of 8 correct hand-ins lost points, a held-out PPM of a "
+    "correct render, 94.5).") + _TWIN3_AFTER
+
 #: Each class's title, after "Grading accuracy on a class of realistic hand-ins".
 TITLES = {
     "outside": ": mistakes outside the scene file", "programs": ": mistakes of students' programs",
@@ -477,7 +495,9 @@ TITLES = {
     "unvisited": ": a twenty-first class of mistakes, written blind",
     "unlooked": ": a twenty-second class of mistakes, written blind",
     "unwonted": ": a twenty-third class of mistakes, written blind",
-    "unremarked": ": a twenty-fourth class of mistakes, written blind"}
+    "unremarked": ": a twenty-fourth class of mistakes, written blind",
+    "unremembered": ": a twenty-fifth class of mistakes, written blind",
+    "unnoticed": ": a twenty-sixth class of mistakes, written blind"}
 
 #: The scene class's introduction (mcrt.grade.accuracy.cases).
 _SCENE = (
@@ -495,14 +515,14 @@ INTROS = {"outside": _OUTSIDE, "programs": _PROGRAMS, "fresh": _FRESH, "blind": 
           "unsaid": _UNSAID, "unasked": _UNASKED, "unsought": _UNSOUGHT, "unguessed": _UNGUESSED,
           "unforeseen": _UNFORESEEN, "unprompted": _UNPROMPTED, "unbidden": _UNBIDDEN, "unheralded": _UNHERALDED,
           "unbeknown": _UNBEKNOWN, "unvisited": _UNVISITED, "unlooked": _UNLOOKED, "unwonted": _UNWONTED,
-          "unremarked": _UNREMARKED}
+          "unremarked": _UNREMARKED, "unremembered": _UNREMEMBERED, "unnoticed": _UNNOTICED}
 
 
 def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta: dict, gradescope: list[dict],
                  klass: str = "scene") -> Path:
     """Write index.md and data.json under ``out``; returns the Markdown's path. ``klass`` is the class graded:
     'scene' (mcrt.grade.accuracy.cases) or another name of :data:`mcrt.grade.accuracy.cli.CLASSES` ('outside',
-    'programs', 'fresh', ..., 'unlooked', 'unwonted', 'unremarked': the module of that name under
+    'programs', 'fresh', ..., 'unremarked', 'unremembered', 'unnoticed': the module of that name under
     mcrt.grade.accuracy); an empty half (tuned on or held out) is left out of the rates table."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
