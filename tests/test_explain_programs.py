@@ -827,7 +827,7 @@ def test_black_pixels_are_faces_only_with_the_room_darker_and_not_the_brightest(
 
     def lead(bad):
         return Candidate("bad_pixels", "black pixels", "pixels black where the scene is not", 0.0, 1,
-                         change=np.where(bad[..., None], -R, 0.0))
+                         value={"pixels": int(bad.sum()), "in_shadow": False}, change=np.where(bad[..., None], -R, 0.0))
 
     floor = labels == names.index("the floor")
     patch = floor & (np.cumsum(floor, axis=1) <= 3)  # a few pixels of the floor in each of its rows

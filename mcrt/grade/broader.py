@@ -46,7 +46,7 @@ GEOMETRY = ("object_size", "object_moved", "object_missing")
 OBJECTS = ("tetrahedron", "sphere")
 #: Least relative darkening of the room off the black pixels for the light to be escaping through holes.
 MIN_LOSS = 0.005
-#: ... and its least size in standard errors of the noise of that sum.
+#: ... and its least size in standard errors of that darkening (its weighted least-squares fit's).
 LOSS_Z = 4.0
 #: Share of the black pixels that must lie on the room's walls, floor and ceiling.
 ON_ROOM = 0.9
@@ -93,7 +93,7 @@ def room_faces(lead, remainder, R, mask, var, labels, names) -> float | None:
     (module docstring); else None."""
     if lead is None or lead.family != "bad_pixels" or lead.name != "black pixels" or lead.change is None:
         return None
-    if "where the light is hidden" in lead.text:
+    if not isinstance(lead.value, dict) or lead.value.get("in_shadow"):  # black where the light is hidden: the bounced light lost, another reading
         return None
     bad = np.any(lead.change != 0.0, axis=-1) & mask
     room = np.array([n.startswith("wall ") or n in ("the floor", "the ceiling") for n in names])

@@ -121,7 +121,8 @@ def _black(fit: Fit, inputs: Inputs) -> list[Candidate]:
     box = _block(bad)
     obj = _on_one_object(bad, inputs)
     hole = _hole(bad, inputs) if not obj and box is None else ""
-    if n >= 2 and _in_shadow(bad, inputs):
+    shadow = n >= 2 and _in_shadow(bad, inputs)
+    if shadow:
         text = (f"{n} pixels ({100 * n / bad.size:.2g} % of the image) black where the scene is not, nearly every one "
                 "where the light is hidden from the surface (no direct light there): the light bounced there lost, as "
                 "when the path ends where its shadow ray is blocked (an early exit meant for the shadow test, in the "
@@ -145,7 +146,8 @@ def _black(fit: Fit, inputs: Inputs) -> list[Candidate]:
                 "skipped; check for a division by a zero pdf or cosine")
     rows, cols = np.nonzero(bad)
     return [Candidate("bad_pixels", "black pixels", text, fit.delta(change), 1,
-                      value={"pixels": n, "block": box, "first": [int(rows[0]), int(cols[0])]}, change=change)]
+                      value={"pixels": n, "block": box, "first": [int(rows[0]), int(cols[0])], "in_shadow": shadow},
+                      change=change)]
 
 
 #: The share of black pixels that may have some direct light and still be read as where the light is hidden (a
