@@ -896,3 +896,21 @@ def test_a_matrix_near_one_gain_mixes_no_colour(ctx):
     assert free([[1.01, 0.002, -0.001], [0.003, 1.008, 0.0], [0.0, -0.002, 1.012]]) is None
     c = free(np.diag([1.06, 1.0, 0.9]))
     assert c is not None and np.allclose(np.diag(c.value["matrix"]), [1.06, 1.0, 0.9], atol=0.02), c.value
+
+
+def test_an_image_of_one_value_is_said_to_hold_no_view(ctx):
+    """A hand-in that is one value everywhere but for its noise (a Mitsuba render's mean in every pixel, seed 74, plus
+    noise of its size): no view of the scene is left. A monotone curve describes it only by mapping every value to
+    that one (mcrt.grade.feedback.flat_level), and the words say the image holds no view, not that the values went
+    through a curve; no cause is claimed, and the image loses points. A curve that bends the values is no such image."""
+    from mcrt.grade.feedback import flat_level
+
+    X = _mitsuba(74)
+    rng = np.random.default_rng(74)
+    S = np.full_like(X, float(X.mean())) * (1.0 + 0.02 * rng.standard_normal(X.shape))
+    res = grade_image("one_value", ctx, [S], spp=1024)
+    ex = res.details["explanation"]
+    assert ex["named"] is None and "nearly one value everywhere" in ex["sentence"], ex["sentence"]
+    assert res.score < res.max_score
+    assert flat_level({"maps": [[0.03, 0.02], [0.1, 0.021], [20.0, 0.023]]}) == pytest.approx(0.021)
+    assert flat_level({"maps": [[0.03, 0.02], [0.1, 0.12], [20.0, 0.98]]}) is None

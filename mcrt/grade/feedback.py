@@ -73,6 +73,21 @@ _TRIED = ("No single mistake we tried (the catalogued bugs, the scene's colours,
           "and blur)")
 
 
+#: A monotone curve whose outputs over the reference's values (its 10th, 50th and 99th percentiles, the light among
+#: them) stay within this ratio maps the scene to one value: the image holds no view, not values bent by a curve.
+FLAT = 1.25
+
+
+def flat_level(value) -> float | None:
+    """The one value a monotone curve's ``value`` (its 'maps': [reference, image] pairs) maps the scene to, where its
+    outputs are within :data:`FLAT` of one another and above 0; else None."""
+    maps = value.get("maps") if isinstance(value, dict) else None
+    out = [q for _, q in maps] if maps else []
+    if len(out) < 2 or min(out) <= 0 or max(out) > FLAT * min(out):
+        return None
+    return float(np.median(out))
+
+
 def explanation_words(e: Explanation) -> tuple[str, str]:
     """The sentence (for the bias test's output) and the headline (for the summary) of an explanation."""
     best, where = e.best, e.where
@@ -107,6 +122,13 @@ def explanation_words(e: Explanation) -> tuple[str, str]:
         return sentence, f"It could be {each}: the image cannot tell which."
     if e.verdict == DESCRIBED:  # only a description leaves noise (Candidate.describes): how it differs, no cause
         where_b = f", changing the image {best.where}" if best.where else ""
+        level = flat_level(best.value)
+        if level is not None:  # the curve maps the darkest wall and the light alike: no view of the scene is left
+            sentence = (f"The image is nearly one value everywhere (about {num(level)}), where the scene's light and its "
+                        f"darkest walls alike should show{where_b}: no view of the scene is left, so no cause is "
+                        "claimed; look at what each pixel's ray meets first (the camera's field of view and directions, "
+                        "a surface covering the view) and at how the values are written (every pixel given one value)")
+            return sentence + ".", "The image is nearly one value everywhere: no view of the scene is left."
         sentence = (f"The difference depends on each pixel's value alone, as {best.text} would make it (what is left "
                     f"is consistent with noise){where_b}; no common tone map, clamp or encoding matches that curve, "
                     "so no cause is claimed: if your program changes the values before saving, check that step; if "
