@@ -877,6 +877,45 @@ def test_an_objects_geometry_is_not_said_from_its_own_pixels_alone(ctx):
     assert fam == "object_geometry" and "the sphere's geometry" in words
 
 
+def test_a_bounce_drawn_otherwise_is_said_where_a_bounce_mistake_explains_most(ctx):
+    """Two mistakes on a Mitsuba render (seed 74): the bounce's disk radius u for sqrt(u) at every diffuse hit (mcrt's
+    render of it, the explanation basis's) and the floor 5 % brighter. The bounce mistake explains most of the
+    difference and leaves the floor: the reading stays partial and says the diffuse bounce, which names the light
+    that bounces; the points are those of the partial reading."""
+    labels, names = ctx.labels["near"], ctx.label_names
+    R = _mitsuba(74)
+    bounce = dict(ctx.explain.extra["bounce"])[("disk_radius_u", "every")]
+    S = R + bounce + np.where((labels == names.index("the floor"))[..., None], 0.05 * R, 0.0)
+    res = grade_image("disk_radius_and_floor", ctx, [S], spp=1024)
+    ex = res.details["explanation"]
+    assert ex["verdict"] == "partial" and ex["broader"] == "diffuse_bounce", ex["sentence"]
+    assert "point to the diffuse bounce" in ex["sentence"] and "indirect_scale" in named_causes(res)[0]
+    assert res.score < res.max_score
+
+
+def test_a_bounce_is_not_said_where_the_light_seen_differs(ctx):
+    """The rule on its own (mcrt.grade.broader.reading): a bounce mistake leading a partial reading says the diffuse
+    bounce where what is left lies on the room's surfaces; left on the light's own pixels too, which no bounce
+    changes, nothing broader is said."""
+    from mcrt.grade.broader import reading
+    from mcrt.grade.candidates import Candidate
+
+    R = _mitsuba(72)
+    labels, names = ctx.labels["near"], ctx.label_names
+    var = ctx.model_var["near"].astype(np.float64) / 1024
+    mask = np.ones(R.shape[:2], bool)
+    lead = Candidate("catalogue", "ball_plus_normal", "Lambertian directions from a random point inside the unit ball",
+                     0.0, 0, catalogue=True, change=np.zeros_like(R))
+    floor, light = names.index("the floor"), names.index("the light")
+    rest = np.zeros_like(R)
+    assert reading(lead, rest, R, mask, var, labels, names, [floor, light]) is None
+    fam, words = reading(lead, rest, R, mask, var, labels, names, [floor])
+    assert fam == "diffuse_bounce" and "the diffuse bounce" in words
+    other = Candidate("catalogue", "rr_no_divide", "Russian roulette without dividing", 0.0, 0, catalogue=True,
+                      change=np.zeros_like(R))
+    assert reading(other, rest, R, mask, var, labels, names, [floor]) is None
+
+
 def test_a_matrix_near_one_gain_mixes_no_colour(ctx):
     """The free 3x3 colour matrix (mcrt.grade.explain.colour) on a Mitsuba render (seed 73) through matrices: one
     within a few thousandths of 1.01 times the identity is no candidate (no colour changed: such a fit only bends to

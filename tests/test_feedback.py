@@ -1215,6 +1215,9 @@ def test_coordinates_read_y_x_are_named(ctx, what):
     ("once", lambda j: 4.0 if j >= 3 else 1.0, "4 rays traced on from it summed"),
     # Russian roulette from the 2nd hit with survival 0.5 and no division: each later continuation halved.
     ("from", lambda j: 0.5 ** max(j - 3, 0), "Russian roulette's survivors divided by the wrong probability"),
+    # The light of paths of 5 segments or more 0.8 times over from the 3rd hit on, as a trimmed mean leaves it: a
+    # clamp or robust mean named beside the weight.
+    ("from", lambda j: 0.8 ** max(j - 4, 0), "clamped or dropped (a firefly clamp on the light that bounces"),
 ])
 def test_a_path_weight_off_from_a_bounce_on_is_named(ctx, shape, weights, words):
     """Mitsuba's paths of each length (same-seed renders cut at depths 1 to 8, seed 79, 1024 spp; max depth k minus
@@ -1228,6 +1231,17 @@ def test_a_path_weight_off_from_a_bounce_on_is_named(ctx, shape, weights, words)
     ex = res.details["explanation"]
     assert ex["verdict"] == "claimed" and ex["family"] == "path_weight", ex["sentence"]
     assert words in ex["sentence"] and "indirect_scale" in named_causes(res)[0], ex["sentence"]
+
+
+def test_a_clamp_is_named_beside_a_weight_only_where_long_paths_are_a_little_darker():
+    """The path weight's words (mcrt.grade.explain.path_weight) name a clamp or a robust mean only for the light of
+    long paths (from the third hit on) a little darker (0.7 to 1 times): not from the second hit, not brighter, not
+    halved."""
+    from mcrt.grade.explain.path_weight import CLAMP, _from_words, _once_words
+
+    assert CLAMP in _from_words(0.8, 3) and CLAMP in _once_words(0.75, 4)
+    for q, s in ((0.8, 2), (1.25, 3), (0.5, 3), (0.32, 4)):
+        assert CLAMP not in _from_words(q, s) and CLAMP not in _once_words(q, s), (q, s)
 
 
 def test_the_direct_light_missing_after_a_mirror_is_named(ctx):

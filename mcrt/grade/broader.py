@@ -42,6 +42,9 @@ from mcrt.stats import LUMINANCE_WEIGHTS
 
 #: The families whose fit moves, resizes or removes one object (value: the object's name).
 GEOMETRY = ("object_size", "object_moved", "object_missing")
+#: The families whose fit draws or weights the diffuse bounce otherwise than cosine-weighted: (family, name) with
+#: name None for every candidate of the family (mcrt.grade.explain.bounce) or a catalogue mutant's name.
+BOUNCE = (("bounce", None), ("catalogue", "ball_plus_normal"), ("catalogue", "uniform_as_cosine"))
 #: The objects (scene names) whose geometry a program builds itself: the room's surfaces have families of their own.
 OBJECTS = ("tetrahedron", "sphere")
 #: Least relative darkening of the room off the black pixels for the light to be escaping through holes.
@@ -75,7 +78,17 @@ def reading(lead, remainder: np.ndarray, R: np.ndarray, mask: np.ndarray, var: n
                 f"seen through them, and the rest of the room is darker by {100 * loss:.1f} % as light escapes "
                 "through them (check how the walls', the floor's and the ceiling's polygons are split into "
                 "triangles, and which of those are built)")
+    if _is_bounce(lead) and not any(names[k] == "the light" for k in objects):
+        return ("diffuse_bounce", "together they point to the diffuse bounce: the directions a path goes on in "
+                "from a diffuse surface are not cosine-distributed, or not weighted by f cos / pdf for the pdf they "
+                "were drawn from, in a way none of the mistakes we render captures exactly (check how the "
+                "direction is drawn, the frame that turns it about the normal, and its weight)")
     return None
+
+
+def _is_bounce(lead) -> bool:
+    """Whether ``lead`` draws or weights the diffuse bounce wrongly (:data:`BOUNCE`)."""
+    return lead is not None and any(lead.family == f and (n is None or lead.name == n) for f, n in BOUNCE)
 
 
 def geometry_object(lead) -> str | None:

@@ -129,6 +129,9 @@ CAUSE_OF: dict[str, tuple[str, ...]] = {
     # object's geometry, worded as its shape, size or place (its vertices, transform or intersection), names each of
     # those; black pixels with the room darker, faces missing from the room.
     "object_geometry": ("object_shape", "object_moved", "object_size", "mesh_face"), "room_faces": ("mesh_face",),
+    # The diffuse bounce, a partial reading's broader cause (added after unnoticed was graded, with every class's
+    # partial readings in view): the light that bounces wrong by a factor that depends on the direction.
+    "diffuse_bounce": ("indirect_scale",),
 }
 
 
@@ -304,6 +307,9 @@ def _explanation_causes(expl: dict) -> list[str]:
                             ("mirror_wrong_sign", "another material", "material"),
                             # roulette's divisor, where the words name it (added after unheard was graded)
                             ("path_weight", "Russian roulette", "roulette"),
+                            # ... and a clamp or robust mean, where the words name one (added after unnoticed was
+                            # graded, with every class in view)
+                            ("path_weight", "clamped or dropped", "sample_clamp"),
                             ("object_missing", "rays passing through it", "material"),  # a mirror (since unsaid)
                             # a constant factor from a count that is not the samples' (since unguessed)
                             ("scale", "another count than the samples", "sample_count"),
