@@ -860,7 +860,7 @@ def test_light_moved_between_surfaces_is_no_colours_typed_wrong(ctx):
 def test_an_objects_geometry_is_not_said_from_its_own_pixels_alone(ctx):
     """The rule on its own (mcrt.grade.broader.reading): the sphere's size leading a partial reading says the
     sphere's geometry only where what is left lies beside it too (a wall); left on the mirror sphere alone, it could
-    as well be the mirror's reflections (its material), and nothing broader is said."""
+    as well be the mirror's reflections (its material), and its geometry is not said."""
     from mcrt.grade.broader import reading
     from mcrt.grade.candidates import Candidate
 
@@ -875,6 +875,34 @@ def test_an_objects_geometry_is_not_said_from_its_own_pixels_alone(ctx):
     assert reading(lead, rest, R, mask, var, labels, names, [sphere]) is None
     fam, words = reading(lead, rest, R, mask, var, labels, names, [sphere, wall])
     assert fam == "object_geometry" and "the sphere's geometry" in words
+
+
+def test_one_objects_own_pixels_are_said_as_how_it_looks(ctx):
+    """The rule on its own (mcrt.grade.broader.surface_object), on a Mitsuba render (seed 72): a lead that changes
+    the tetrahedron's (or the mirror sphere's) pixels, with what is left on that object alone, says how the object
+    itself looks (its material, normals or faces; for the mirror, the directions it reflects), naming no one of them;
+    with what is left beside it too, or a lead that changes another surface most, nothing is said."""
+    from mcrt.grade.broader import reading
+    from mcrt.grade.candidates import Candidate
+
+    R = _mitsuba(72)
+    labels, names = ctx.labels["near"], ctx.label_names
+    var = ctx.model_var["near"].astype(np.float64) / 1024
+    mask = np.ones(R.shape[:2], bool)
+    tetra = next(k for k, n in enumerate(names) if n.startswith("the tetrahedron"))
+    sphere, floor = names.index("the mirror sphere"), names.index("the floor")
+
+    def lead(*on, k=0.1):
+        where = np.isin(labels, on)[..., None]
+        return Candidate("scene", "albedo", "the surface's albedo", 0.0, 3, change=np.where(where, -k * R, 0.0))
+
+    rest = np.zeros_like(R)
+    fam, words = reading(lead(tetra), rest, R, mask, var, labels, names, [tetra])
+    assert fam == "object_surface" and "how the tetrahedron itself looks" in words and "its normals" in words
+    fam, words = reading(lead(sphere), rest, R, mask, var, labels, names, [sphere])
+    assert fam == "object_surface" and "what the mirror sphere shows" in words
+    assert reading(lead(tetra), rest, R, mask, var, labels, names, [tetra, floor]) is None
+    assert reading(lead(floor), rest, R, mask, var, labels, names, [tetra]) is None
 
 
 def test_a_bounce_drawn_otherwise_is_said_where_a_bounce_mistake_explains_most(ctx):

@@ -27,9 +27,28 @@ change is none the families render:
   pixels left out), must give :math:`k \ge` :data:`MIN_LOSS` at
   :data:`LOSS_Z` standard errors. Black pixels that are the reference's
   brightest (:data:`BRIGHTEST`) are codes overflowing, not holes. Both
-  together point to the faces.
+  together point to the faces;
+* **the diffuse bounce** (:data:`BOUNCE`: a bounce drawn or weighted wrongly,
+  :mod:`mcrt.grade.explain.bounce`, or the catalogue's samplers that are
+  not cosine-distributed) leading, where nothing is left on the light's own
+  pixels: only the bounce's directions or their weight move light between
+  the room's surfaces that way, and the light seen directly is the one
+  thing a bounce cannot change. The mistakes the families render are a few
+  of the many ways to draw a direction (a disk's radius, a frame's axes, a
+  random vector's range); the words send the student to the sampling of
+  the bounce and its weight, without claiming which;
+* **one object's own pixels** (:func:`surface_object`): a lead that acts
+  on one of :data:`OBJECTS` (at least :data:`ON_OBJECT` of its change, by
+  the noise's weights, on its pixels) with a remainder on that object's
+  pixels alone. Nothing around the object changed (its shadow, its outline's
+  other side), so what differs is how the object itself looks: for the
+  mirror sphere, the directions it reflects (the reflection's code, the
+  sphere's normal, or a shape that is not the sphere: facets, a squashed
+  or partial mesh) or what its reflected rays gather; for the tetrahedron,
+  its shading (its material, normals, a second material mixed in) or its
+  faces. The image cannot tell these apart, and the words say so.
 
-Neither changes the verdict (PARTIAL) or the points; only the words and
+None changes the verdict (PARTIAL) or the points; only the words and
 the causes they name (``Explanation.broader``).
 """
 
@@ -45,6 +64,8 @@ GEOMETRY = ("object_size", "object_moved", "object_missing")
 #: The families whose fit draws or weights the diffuse bounce otherwise than cosine-weighted: (family, name) with
 #: name None for every candidate of the family (mcrt.grade.explain.bounce) or a catalogue mutant's name.
 BOUNCE = (("bounce", None), ("catalogue", "ball_plus_normal"), ("catalogue", "uniform_as_cosine"))
+#: Least share of a lead's change (its square, weighted by the noise) on one object for it to act on that object.
+ON_OBJECT = 0.5
 #: The objects (scene names) whose geometry a program builds itself: the room's surfaces have families of their own.
 OBJECTS = ("tetrahedron", "sphere")
 #: Least relative darkening of the room off the black pixels for the light to be escaping through holes.
@@ -83,7 +104,36 @@ def reading(lead, remainder: np.ndarray, R: np.ndarray, mask: np.ndarray, var: n
                 "from a diffuse surface are not cosine-distributed, or not weighted by f cos / pdf for the pdf they "
                 "were drawn from, in a way none of the mistakes we render captures exactly (check how the "
                 "direction is drawn, the frame that turns it about the normal, and its weight)")
+    obj = surface_object(lead, R, var, mask, labels, names, objects)
+    if obj == "sphere":
+        return ("object_surface", "together they point to what the mirror sphere shows, with nothing around it "
+                "changed: the directions it reflects (the reflection's code, the sphere's normal, or a surface that "
+                "is not the sphere's: facets, a squashed or partial mesh) or what its reflected rays gather (check "
+                "the mirror's reflect, the normal at its hit point, and how the sphere is built and intersected)")
+    if obj is not None:
+        return ("object_surface", f"together they point to how the {obj} itself looks, with nothing around it "
+                f"changed: its material or shading (its colour, its normals, a second material mixed in) or its "
+                f"faces (check the {obj}'s material, its normals and the faces its mesh is built from)")
     return None
+
+
+def surface_object(lead, R, var, mask, labels, names, objects) -> str | None:
+    """The one of :data:`OBJECTS` whose own pixels hold the whole remainder (``objects``, labels) and at least
+    :data:`ON_OBJECT` of ``lead``'s change, weighted by the noise (module docstring); else None."""
+    if lead is None or lead.change is None or not objects:
+        return None
+    found = {next((o for o in OBJECTS if o in names[k]), None) for k in objects}
+    if len(found) != 1 or None in found:
+        return None
+    obj = found.pop()
+    on = np.zeros(mask.shape, bool)
+    for k, n in enumerate(names):
+        if obj in n:
+            on |= labels == k
+    v = var + (FLOOR * R) ** 2
+    e = np.where(mask[..., None], lead.change**2 / np.maximum(v, 1e-30), 0.0).sum(axis=-1)
+    total = float(e.sum())
+    return obj if total > 0 and float(e[on].sum()) >= ON_OBJECT * total else None
 
 
 def _is_bounce(lead) -> bool:

@@ -132,6 +132,9 @@ CAUSE_OF: dict[str, tuple[str, ...]] = {
     # The diffuse bounce, a partial reading's broader cause (added after unnoticed was graded, with every class's
     # partial readings in view): the light that bounces wrong by a factor that depends on the direction.
     "diffuse_bounce": ("indirect_scale",),
+    # One object's own pixels, a partial reading's broader cause (added after unnoticed was graded, with every class's
+    # partial readings in view): its material, its normals, its shape or its faces, which the words name together.
+    "object_surface": ("material", "normals", "object_shape", "mesh_face"),
 }
 
 
