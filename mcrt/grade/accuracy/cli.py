@@ -19,7 +19,8 @@ CLASSES = {"scene": "cases", "outside": "outside", "programs": "programs", "fres
            "unforeseen": "unforeseen", "unprompted": "unprompted",
            "unbidden": "unbidden", "unheralded": "unheralded", "unbeknown": "unbeknown",
            "unvisited": "unvisited", "unlooked": "unlooked", "unwonted": "unwonted",
-           "unremarked": "unremarked", "unremembered": "unremembered", "unnoticed": "unnoticed"}
+           "unremarked": "unremarked", "unremembered": "unremembered", "unnoticed": "unnoticed",
+           "unrecorded": "unrecorded"}
 
 
 def register(sub) -> None:
@@ -56,8 +57,10 @@ def register(sub) -> None:
                    "twenty-third, in tracers, scene input and output, written blind, mcrt.grade.accuracy.unwonted), "
                    "'unremarked' (a twenty-fourth, in tracers, scene input and output, written blind, "
                    "mcrt.grade.accuracy.unremarked), 'unremembered' (a twenty-fifth, in tracers, scene input and "
-                   "output, written blind, mcrt.grade.accuracy.unremembered) or 'unnoticed' (a twenty-sixth, in tracers, "
-                   "scene input and output, written blind, mcrt.grade.accuracy.unnoticed) (default: scene)")
+                   "output, written blind, mcrt.grade.accuracy.unremembered), 'unnoticed' (a twenty-sixth, in tracers, "
+                   "scene input and output, written blind, mcrt.grade.accuracy.unnoticed) or 'unrecorded' (a "
+                   "twenty-seventh, in tracers, scene input and output, written blind, "
+                   "mcrt.grade.accuracy.unrecorded) (default: scene)")
     p.add_argument("--held-out", choices=("all", "only", "none"), default="all",
                    help="grade all cases, only the held-out ones, or none of them (default: all)")
     p.add_argument("--out", default=None, help=f"report folder (default: {DEFAULT_OUT}, or {DEFAULT_OUT}/CLASS "
