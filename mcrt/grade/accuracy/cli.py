@@ -20,7 +20,7 @@ CLASSES = {"scene": "cases", "outside": "outside", "programs": "programs", "fres
            "unbidden": "unbidden", "unheralded": "unheralded", "unbeknown": "unbeknown",
            "unvisited": "unvisited", "unlooked": "unlooked", "unwonted": "unwonted",
            "unremarked": "unremarked", "unremembered": "unremembered", "unnoticed": "unnoticed",
-           "unrecorded": "unrecorded"}
+           "unrecorded": "unrecorded", "unattended": "unattended"}
 
 
 def register(sub) -> None:
@@ -58,9 +58,10 @@ def register(sub) -> None:
                    "'unremarked' (a twenty-fourth, in tracers, scene input and output, written blind, "
                    "mcrt.grade.accuracy.unremarked), 'unremembered' (a twenty-fifth, in tracers, scene input and "
                    "output, written blind, mcrt.grade.accuracy.unremembered), 'unnoticed' (a twenty-sixth, in tracers, "
-                   "scene input and output, written blind, mcrt.grade.accuracy.unnoticed) or 'unrecorded' (a "
+                   "scene input and output, written blind, mcrt.grade.accuracy.unnoticed), 'unrecorded' (a "
                    "twenty-seventh, in tracers, scene input and output, written blind, "
-                   "mcrt.grade.accuracy.unrecorded) (default: scene)")
+                   "mcrt.grade.accuracy.unrecorded) or 'unattended' (a twenty-eighth, in tracers, scene input and "
+                   "output, written blind, mcrt.grade.accuracy.unattended) (default: scene)")
     p.add_argument("--held-out", choices=("all", "only", "none"), default="all",
                    help="grade all cases, only the held-out ones, or none of them (default: all)")
     p.add_argument("--out", default=None, help=f"report folder (default: {DEFAULT_OUT}, or {DEFAULT_OUT}/CLASS "
