@@ -205,6 +205,16 @@ REPORTS: tuple[Report, ...] = (
            "the grader (post-processing, writing the file, materials, geometry, camera and light models, the "
            "integrator, samples and passes): named right, confidently wrong, partial, false alarms, with a held-out "
            "half fixed before any grading"),
+    Report("grading_accuracy/unrecorded", "grade-accuracy --class unrecorded --out reports/grading_accuracy/unrecorded",
+           "grading on a twenty-seventh class of mistakes in students' tracers, scene input and output, written blind "
+           "to the grader (post-processing, writing the file, materials, geometry, camera and light models, the "
+           "integrator, samples and passes): named right, confidently wrong, partial, false alarms, with a held-out "
+           "half fixed before any grading"),
+    Report("grading_accuracy/unattended", "grade-accuracy --class unattended --out reports/grading_accuracy/unattended",
+           "grading on a twenty-eighth class of mistakes in students' tracers, scene input and output, written blind "
+           "to the grader (post-processing, writing the file, materials, geometry, camera and light models, the "
+           "integrator, samples and passes): named right, confidently wrong, partial, false alarms, with a held-out "
+           "half fixed before any grading"),
     Report("grading/false_alarms", "grade-false-alarms --out reports/grading/false_alarms",
            "grading's false alarms on correct renders: estimators, samplers, spp 16-1024, 64x64 to 800x800, PNG curves"),
 )

@@ -403,8 +403,8 @@ _UNBEKNOWN = (
 
 def _twin_blind(module: str, ordinal: str, frozen: str = "cca957e") -> str:
     """The opening of the introductions of two classes written blind the same day and graded once on the same rules,
-    frozen at commit ``frozen`` (the twenty-first and twenty-second, the twenty-third and twenty-fourth, then the
-    twenty-fifth and twenty-sixth)."""
+    frozen at commit ``frozen`` (the twenty-first and twenty-second, the twenty-third and twenty-fourth, the
+    twenty-fifth and twenty-sixth, then the twenty-seventh and twenty-eighth)."""
     return (
         f"The wrong renders are a {ordinal} class of mistakes in students' tracers, their scene input and their output "
         f"that no other class or the catalogue tried (mcrt.grade.accuracy.{module}), written blind to the grader's "
@@ -472,6 +472,18 @@ _UNNOTICED = _twin_blind("unnoticed", "twenty-sixth", "9a0fc85") + (
     "28, 7 named right, 1 confidently wrong, 26 detected; 1 of 8 correct hand-ins lost points, a held-out PPM of a "
     "correct render, 94.5).") + _TWIN3_AFTER
 
+#: What changed after the fourth pair of twin classes' one grading, with both in view.
+_TWIN4_AFTER = (
+    " The rows here are that grading's.")
+
+_UNRECORDED = _twin_blind("unrecorded", "twenty-seventh", "332f552") + (
+    "this report's first grading (held out, 3 of 12 named right, 0 of 12 confidently wrong, 10 of 12 detected; all "
+    "28, 12 named right, 2 confidently wrong, 26 detected; 0 of 8 correct hand-ins lost points).") + _TWIN4_AFTER
+
+_UNATTENDED = _twin_blind("unattended", "twenty-eighth", "332f552") + (
+    "this report's first grading (held out, 8 of 12 named right, 1 of 12 confidently wrong, 11 of 12 detected; all "
+    "28, 17 named right, 1 confidently wrong, 22 detected; 0 of 8 correct hand-ins lost points).") + _TWIN4_AFTER
+
 #: Each class's title, after "Grading accuracy on a class of realistic hand-ins".
 TITLES = {
     "outside": ": mistakes outside the scene file", "programs": ": mistakes of students' programs",
@@ -497,7 +509,9 @@ TITLES = {
     "unwonted": ": a twenty-third class of mistakes, written blind",
     "unremarked": ": a twenty-fourth class of mistakes, written blind",
     "unremembered": ": a twenty-fifth class of mistakes, written blind",
-    "unnoticed": ": a twenty-sixth class of mistakes, written blind"}
+    "unnoticed": ": a twenty-sixth class of mistakes, written blind",
+    "unrecorded": ": a twenty-seventh class of mistakes, written blind",
+    "unattended": ": a twenty-eighth class of mistakes, written blind"}
 
 #: The scene class's introduction (mcrt.grade.accuracy.cases).
 _SCENE = (
@@ -515,14 +529,15 @@ INTROS = {"outside": _OUTSIDE, "programs": _PROGRAMS, "fresh": _FRESH, "blind": 
           "unsaid": _UNSAID, "unasked": _UNASKED, "unsought": _UNSOUGHT, "unguessed": _UNGUESSED,
           "unforeseen": _UNFORESEEN, "unprompted": _UNPROMPTED, "unbidden": _UNBIDDEN, "unheralded": _UNHERALDED,
           "unbeknown": _UNBEKNOWN, "unvisited": _UNVISITED, "unlooked": _UNLOOKED, "unwonted": _UNWONTED,
-          "unremarked": _UNREMARKED, "unremembered": _UNREMEMBERED, "unnoticed": _UNNOTICED}
+          "unremarked": _UNREMARKED, "unremembered": _UNREMEMBERED, "unnoticed": _UNNOTICED,
+          "unrecorded": _UNRECORDED, "unattended": _UNATTENDED}
 
 
 def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta: dict, gradescope: list[dict],
                  klass: str = "scene") -> Path:
     """Write index.md and data.json under ``out``; returns the Markdown's path. ``klass`` is the class graded:
     'scene' (mcrt.grade.accuracy.cases) or another name of :data:`mcrt.grade.accuracy.cli.CLASSES` ('outside',
-    'programs', 'fresh', ..., 'unremarked', 'unremembered', 'unnoticed': the module of that name under
+    'programs', 'fresh', ..., 'unnoticed', 'unrecorded', 'unattended': the module of that name under
     mcrt.grade.accuracy); an empty half (tuned on or held out) is left out of the rates table."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
