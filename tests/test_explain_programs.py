@@ -85,6 +85,37 @@ def test_the_display_curve_on_two_channels_is_named_per_channel(ctx):
     assert res.score < res.max_score
 
 
+def test_a_display_curve_on_a_noisy_render_is_named(ctx, tmp_path):
+    """stbi_write_hdr called on the film after it was sRGB-encoded and clipped in place for the PNG: unrecorded's maker
+    (tuned half; a Mitsuba render at 256 spp, written as a Radiance picture). The curve is steep near black, where
+    it grows the render's noise several times over, which the remainder test allows
+    (mcrt.grade.explain.fit.bent_noise): claimed as the sRGB curve, clipped, not only described as a curve; the
+    image loses points."""
+    from mcrt.grade.accuracy import unrecorded
+    from mcrt.grade.accuracy.cases import write_submission
+    from mcrt.grade.grader import grade_submission
+    from mcrt.grade.submissions import discover
+
+    c = _tuned(unrecorded, "file_stbi_hdr_display_buffer")
+    write_submission(c, tmp_path / c.name)
+    res = grade_submission(discover(tmp_path / c.name, single=True, student=c.name)[0], ctx)
+    fam, said = _claimed(res)
+    assert fam == "encoding" and "clipped to 1" in said, said
+    assert res.score < res.max_score
+
+
+def test_a_curve_bends_the_noise_of_the_values_it_maps():
+    """mcrt.grade.explain.fit.bent_noise: through the identity the noise is the render's; through a square root it is
+    about f'(R)^2 times it where the noise is small; through a clamp at 1 it vanishes above 1."""
+    from mcrt.grade.explain.fit import bent_noise
+
+    R = np.array([0.04, 0.2, 20.0])
+    var = (0.02 * R) ** 2
+    assert np.allclose(bent_noise(lambda x: x, R, var), var, rtol=1e-3)
+    assert np.allclose(bent_noise(np.sqrt, R, var), var / (4 * R), rtol=0.01)
+    assert bent_noise(lambda x: np.minimum(x, 1.0), R, var)[2] == pytest.approx(0.0, abs=1e-12)
+
+
 def test_the_display_curve_on_the_luminance_is_named(ctx):
     """A Mitsuba render (seed 65) whose pixels' luminance went through the sRGB curve, each colour scaled along to keep
     its hue, saved as floats: claimed as that curve on the luminance; the image loses points."""

@@ -80,6 +80,8 @@ CAUSE_OF: dict[str, tuple[str, ...]] = {
     # geometry term written wrongly, on the light's side (its cosine, its pdf) or its fall-off (another light model);
     # at the surface, Lambert's cosine twice or a half-Lambert (the material's shading).
     "light_cosine": ("light_pdf",), "light_falloff": ("light_model",),
+    # The light sample's pdf in area measure or half converted (added after unattended was graded, with it in view).
+    "light_measure": ("light_pdf",),
     "surface_cosine_twice": ("material",), "shading_cosine": ("material",),
     # ... every albedo divided by its channels' sum past 1 (an energy check): every surface's colour wrong.
     "reflectance_energy": ("albedo",), "reflectance_rounded": ("albedo",),

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from mcrt.grade.candidates import Candidate, Inputs
-from mcrt.grade.explain.fit import Fit, refine
+from mcrt.grade.explain.fit import Fit, curve_change, refine
 from mcrt.grade.feedback import num as _num
 
 
@@ -19,39 +19,46 @@ def curves(fit: Fit, inputs: Inputs) -> list[Candidate]:
 
     R = np.maximum(fit.R, 0.0)
     C = np.minimum(R, 1.0)  # a display file clips the encoded values; an EXR keeps them
-    out = [Candidate("encoding", "sRGB curve", "the values sRGB-encoded (a display curve) instead of linear",
-                     fit.model(srgb_oetf(R)), 0, value="srgb", change=srgb_oetf(R) - fit.R),
-           Candidate("encoding", "sRGB curve, clipped", "the values sRGB-encoded (a display curve) instead of linear, "
-                     "clipped to 1 (in an 8-bit file: the sRGB curve applied twice)", fit.model(srgb_oetf(C)), 0,
-                     value="srgb-clipped", change=srgb_oetf(C) - fit.R),
-           Candidate("encoding", "decoded twice", "the values decoded from sRGB once too often (linear values written "
-                     "to a PNG that says sRGB, or decoded twice)", fit.model(srgb_eotf(C)), 0,
-                     value="srgb-inverse", change=srgb_eotf(C) - fit.R),
+
+    def curve(name: str, text: str, f, value) -> Candidate:
+        """An encoding f of the render's noisy values (:func:`mcrt.grade.explain.fit.curve_change`)."""
+        chi2, change, nz = curve_change(fit, f)
+        return Candidate("encoding", name, text, chi2, 0, value=value, change=change, noise=nz)
+
+    out = [curve("sRGB curve", "the values sRGB-encoded (a display curve) instead of linear", srgb_oetf, "srgb"),
+           curve("sRGB curve, clipped", "the values sRGB-encoded (a display curve) instead of linear, clipped to 1 (in "
+                 "an 8-bit file: the sRGB curve applied twice)", lambda x: srgb_oetf(np.minimum(x, 1.0)), "srgb-clipped"),
+           curve("decoded twice", "the values decoded from sRGB once too often (linear values written to a PNG that "
+                 "says sRGB, or decoded twice)", lambda x: srgb_eotf(np.minimum(x, 1.0)), "srgb-inverse"),
            # In a float file nothing clips: values above 1 (the light) go through the decoding's power law too.
-           Candidate("encoding", "decoded, float", "the values decoded from sRGB once too often (linear values "
-                     "taken for display values and decoded), in a float file where values above 1 are decoded too",
-                     fit.model(srgb_eotf(R)), 0, value="srgb-inverse-float", change=srgb_eotf(R) - fit.R),
+           curve("decoded, float", "the values decoded from sRGB once too often (linear values taken for display "
+                 "values and decoded), in a float file where values above 1 are decoded too", srgb_eotf,
+                 "srgb-inverse-float"),
            # Another standard's camera curve where the file says sRGB (the reader decodes it with sRGB's).
            # The decoding's inner formula with its exponent inverted, ((v + 0.055) / 1.055)^(1/2.4), for the encoding.
-           Candidate("encoding", "sRGB's decoding inverted", "the values encoded with ((v + 0.055) / 1.055)^(1/2.4), "
-                     "the sRGB decoding's formula with its exponent inverted, where the encoding 1.055 v^(1/2.4) - "
-                     "0.055 belongs (black written as code 74)", fit.model(srgb_eotf(((C + 0.055) / 1.055) ** (1 / 2.4))),
-                     0, value="srgb-decoding-inverted", change=srgb_eotf(((C + 0.055) / 1.055) ** (1 / 2.4)) - fit.R),
-           Candidate("encoding", "BT.709 curve", "the values encoded with BT.709's camera curve (4.5 x below 0.018, "
-                     "1.099 x^0.45 - 0.099 above) where the file's sRGB curve belongs", fit.model(srgb_eotf(bt709(C))),
-                     0, value="bt709", change=srgb_eotf(bt709(C)) - fit.R)]
+           curve("sRGB's decoding inverted", "the values encoded with ((v + 0.055) / 1.055)^(1/2.4), the sRGB "
+                 "decoding's formula with its exponent inverted, where the encoding 1.055 v^(1/2.4) - 0.055 belongs "
+                 "(black written as code 74)",
+                 lambda x: srgb_eotf(((np.minimum(x, 1.0) + 0.055) / 1.055) ** (1 / 2.4)), "srgb-decoding-inverted"),
+           curve("BT.709 curve", "the values encoded with BT.709's camera curve (4.5 x below 0.018, 1.099 x^0.45 - "
+                 "0.099 above) where the file's sRGB curve belongs", lambda x: srgb_eotf(bt709(np.minimum(x, 1.0))),
+                 "bt709")]
     out += _per_channel(fit, R, C)
     out += _hdr_video(fit, R, srgb_eotf)
     out += _video_range(fit, C, srgb_eotf, srgb_oetf)
     exps = np.linspace(0.25, 2.5, 91)
-    errs = np.array([fit.model(R**p) for p in exps])
-    i = int(np.argmin(errs))
-    p = refine(exps, errs, i)
-    g = 1.0 / p
-    what = (f"a power curve x^(1/{_num(g)}) (gamma {_num(g)} encoding)" if p < 1 else
-            f"a power curve x^{_num(p)} (decoded with gamma {_num(p)} once too often)")
-    out.append(Candidate("encoding", "power curve", f"the values through {what} instead of linear", fit.model(R**p), 1,
-                         value=g, change=R**p - fit.R))
+    # A power curve, and one clipped to 1 after it (a display writer's encode-and-clamp kept in front of a float
+    # file): the exponent scanned on the curve alone, then scored on the noisy values.
+    for base, clip in ((R, ""), (C, ", clipped to 1 (a display file's encoding and clamp)")):
+        errs = np.array([fit.model(base**p) for p in exps])
+        p = refine(exps, errs, int(np.argmin(errs)))
+        g = 1.0 / p
+        what = (f"a power curve x^(1/{_num(g)}) (gamma {_num(g)} encoding)" if p < 1 else
+                f"a power curve x^{_num(p)} (decoded with gamma {_num(p)} once too often)")
+        chi2, change, nz = curve_change(fit, (lambda x, p=p: x**p) if not clip else (lambda x, p=p: np.minimum(x, 1.0)**p))
+        out.append(Candidate("encoding", "power curve" + (", clipped" if clip else ""),
+                             f"the values through {what} instead of linear{clip}", chi2, 1,
+                             value=g if not clip else f"{_num(g)}-clipped", change=change, noise=nz))
     sig = np.array([0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 1.0, 1.2, 1.5, 2.0, 3.0])
     errs = np.array([fit.model(gaussian_filter(fit.R, (s, s, 0), mode="nearest")) for s in sig])
     i = int(np.argmin(errs))

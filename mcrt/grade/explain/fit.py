@@ -36,6 +36,7 @@ class Fit:
         self.S, self.R, self.ok = S, R, ok
         V = np.where(np.isfinite(V), V, 0.0)
         V = np.maximum(V, uniform_filter(V, (3, 3, 1), mode="nearest"))
+        self.V = V  # the noise variance of S - R per pixel, as the weights take it
         gy, gx = np.gradient(R, axis=(0, 1))
         edge = EDGE**2 * (gx**2 + gy**2)
         var = V + W + (FLOOR * R) ** 2 + edge
@@ -83,6 +84,32 @@ class Fit:
         """Weights of a least-squares step that caps like chi^2: w where z^2 < CAP, w CAP / z^2 beyond (pixels)."""
         z2 = (self.D - dm) ** 2 * self.w
         return self.w * np.minimum(1.0, CAP / np.maximum(z2, 1e-300))
+
+
+#: Nodes and weights of the probabilists' Gauss-Hermite rule: E[g(Z)] for a standard normal Z as a weighted sum.
+_GH_Z, _GH_W = np.polynomial.hermite_e.hermegauss(5)
+_GH_W = _GH_W / _GH_W.sum()
+
+
+def bent_noise(f, R: np.ndarray, var: np.ndarray) -> np.ndarray:
+    """The variance of f(X) for X a noisy render's value: mean R, variance ``var``, log-normal (a Monte Carlo mean is
+    never negative and is skewed to the bright side). A curve on the values bends the render's noise with it: a steep
+    one (an encoding near black) grows it, a flat one (a clamp, a tone map's shoulder) shrinks it."""
+    R = np.maximum(R, 0.0)
+    sl2 = np.log1p(np.maximum(var, 0.0) / np.maximum(R * R, 1e-300))
+    sl = np.sqrt(sl2)
+    vals = np.stack([f(R * np.exp(sl * z - 0.5 * sl2)) for z in _GH_Z])
+    m = np.tensordot(_GH_W, vals, axes=1)
+    return np.maximum(np.tensordot(_GH_W, vals**2, axes=1) - m**2, 0.0)
+
+
+def curve_change(fit: Fit, f) -> tuple[float, np.ndarray, np.ndarray]:
+    """(chi^2, change, noise variance) of the hand-in as curve f on the render's values: what a curve's candidate is
+    scored by, its predicted change f(R) - R, and the noise the remainder test allows it (:func:`bent_noise`). The
+    mean is taken as f(R): the shift a curve's bend puts on a noisy pixel's mean is of second order, and the
+    variance held here can be the one measured on the hand-in, which the mistake itself inflates."""
+    change = f(np.maximum(fit.R, 0.0)) - fit.R
+    return fit.delta(change), change, bent_noise(f, fit.R, fit.V)
 
 
 def refine(grid: np.ndarray, err: np.ndarray, i: int) -> float:

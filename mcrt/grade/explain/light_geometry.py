@@ -20,7 +20,8 @@ Where :math:`G` sums to 0 and :math:`G'` does not (a surface facing away
 that a half-Lambert lights), the model adds the unshadowed
 :math:`\rho L_e A \bar{G'} / \pi`. The mistakes (:func:`variants`): the
 light's cosine applied twice, or clamped from below in the pdf; the
-cosines and the distance taken from the light's centre; the fall-off
+pdf left in area measure, or converted without its :math:`d^2` or its
+cosine at the light; the cosines and the distance taken from the light's centre; the fall-off
 :math:`1/d`, or a point light's attenuation :math:`1/(1 + a d + b d^2)`
 (OpenGL tutorials' table, by range) for the inverse square or beside it;
 the light's cosine taken with the surface's normal; a spotlight's cone
@@ -100,6 +101,17 @@ def variants() -> dict[str, list[tuple[object, str, object]]]:
             ("cos_s^2", "the cosine at the surface applied twice in the light sample (Lambert's cosine written into "
                         "the BRDF and kept in the geometry term): cos_s^2 cos_l / d^2",
              lambda cs, cl, d, c: _pos(cs) ** 2 * _pos(cl) / d**2),
+        ],
+        # The light sample's pdf 1 / A left in area measure, or turned into solid angle with a factor missing.
+        "light_measure": [
+            ("area pdf", "the light sample's pdf 1 / A in area measure used where the solid angle's d^2 / (A cos_l) "
+                         "belongs (never converted): no fall-off with distance and no cosine at the light, cos_s in "
+                         "the light sample", lambda cs, cl, d, c: _pos(cs) * (cl > 0)),
+            ("no inverse square", "the light sample's pdf converted to solid angle without its d^2: cos_s cos_l in the "
+                                  "light sample, no fall-off with distance", lambda cs, cl, d, c: _pos(cs) * _pos(cl)),
+            ("no light cosine", "the light sample's pdf converted to solid angle without the cosine at the light: "
+                                "cos_s / d^2 in the light sample, light leaving the light obliquely too bright",
+             lambda cs, cl, d, c: _pos(cs) * (cl > 0) / d**2),
         ],
         "shading_cosine": [
             ("half-Lambert", "Valve's half-Lambert (0.5 cos_s + 0.5)^2 for the cosine at the surface in the light "

@@ -32,7 +32,7 @@ from __future__ import annotations
 import numpy as np
 
 from mcrt.grade.candidates import Candidate, Inputs
-from mcrt.grade.explain.fit import Fit
+from mcrt.grade.explain.fit import Fit, curve_change
 from mcrt.grade.feedback import num as _num
 
 #: Quantile bins of R per channel for the isotonic fit (each bin's fitted level is one parameter at most).
@@ -135,8 +135,10 @@ def tone_curve(fit: Fit, inputs: Inputs) -> list[Candidate]:
         i = int(np.argmin(errs))
         k = scan[i]
         exp = f" after an exposure of {_num(k)}" if k != 1.0 else ""
+        chi2, change, nz = curve_change(fit, lambda x, f=f, k=k: f(k * x))  # on the noisy values, its exposure scanned on R
         out.append(Candidate("tone_curve", f"tone map {key}", f"the values {words}{exp} before saving",
-                              errs[i], 1 if len(scan) > 1 else 0, value={"curve": key, "exposure": k}, change=f(k * R) - fit.R))
+                              chi2, 1 if len(scan) > 1 else 0, value={"curve": key, "exposure": k}, change=change,
+                              noise=nz))
     out += _reinhard_extended(fit, R)
     out += _offset(fit, R)
     out += _contrast(fit, R)
@@ -284,9 +286,10 @@ def _reinhard_extended(fit: Fit, R: np.ndarray) -> list[Candidate]:
     for key, (err, words, w, k, f) in best.items():
         white = f" with white point {_num(w)}" if w is not None else ""
         exp = f" after an exposure of {_num(k)}" if k != 1.0 else ""
-        out.append(Candidate("tone_curve", f"tone map {key}", f"the values {words}{white}{exp} before saving", err,
-                             1 + (w is not None), value={"curve": key, "exposure": k, "white": w},
-                             change=f(k * R) - fit.R))
+        chi2, change, nz = curve_change(fit, lambda x, f=f, k=k: f(k * x))
+        out.append(Candidate("tone_curve", f"tone map {key}", f"the values {words}{white}{exp} before saving", chi2,
+                             1 + (w is not None), value={"curve": key, "exposure": k, "white": w}, change=change,
+                             noise=nz))
     return out
 
 

@@ -36,6 +36,8 @@ def _change_var(g: Grading, c, basis, noise: Noise, R: np.ndarray) -> np.ndarray
         m, b = g.ctx.mutants[c.name], g.ctx.baseline
         return m.var.astype(np.float64) / m.spp + b.var.astype(np.float64) / b.spp
     var = basis.var.astype(np.float64) / basis.spp
+    if c.noise is not None:  # a curve on the values: the hand-in's noise bent with it
+        var = var + np.maximum(c.noise - np.asarray(noise.model, np.float64), 0.0)
     if c.gain and c.change is not None:
         ratio = np.where(R > 0, (R + c.change) / np.where(R > 0, R, 1.0), 1.0)
         var = (var * np.maximum((ratio - 1.0) ** 2, 1.0)
