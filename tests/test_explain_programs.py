@@ -104,6 +104,27 @@ def test_a_display_curve_on_a_noisy_render_is_named(ctx, tmp_path):
     assert res.score < res.max_score
 
 
+def test_a_clamp_alone_is_no_clipped_power_curve(ctx):
+    """The clipped power curve (mcrt.grade.explain.curves) on a Mitsuba render (seed 67): its values clipped to 1 and
+    nothing more give no such candidate (an exponent near 1 is the tone curves' clamp, not an encoding); square-rooted
+    and clipped, it is one, with gamma 2."""
+    from mcrt.grade.candidates import Inputs
+    from mcrt.grade.explain.curves import curves
+    from mcrt.grade.explain.fit import Fit
+
+    X = _mitsuba(67)
+    R = ctx.references["near"].mean.astype(np.float64)
+    V = ctx.model_var["near"].astype(np.float64) / 1024
+
+    def clipped_power(S):
+        fit = Fit(S, R, V, np.ones(R.shape, bool), ctx.explain.var.astype(np.float64) / ctx.explain.spp)
+        return next((c for c in curves(fit, Inputs(ctx.explain)) if c.name == "power curve, clipped"), None)
+
+    assert clipped_power(np.minimum(X, 1.0)) is None
+    c = clipped_power(np.sqrt(np.minimum(X, 1.0)))
+    assert c is not None and c.value == "2-clipped", c and c.value
+
+
 def test_a_curve_bends_the_noise_of_the_values_it_maps():
     """mcrt.grade.explain.fit.bent_noise: through the identity the noise is the render's; through a square root it is
     about f'(R)^2 times it where the noise is small; through a clamp at 1 it vanishes above 1."""

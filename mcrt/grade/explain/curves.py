@@ -9,6 +9,10 @@ from mcrt.grade.explain.fit import Fit, curve_change, refine
 from mcrt.grade.feedback import num as _num
 
 
+#: A clipped power curve whose exponent is this near 1 is a clamp to [0, 1] alone (:mod:`.tonecurve`'s), no encoding.
+NOT_A_POWER = 0.05
+
+
 def curves(fit: Fit, inputs: Inputs) -> list[Candidate]:
     """Encoding curves on the reference: sRGB (and its inverse, its decoding's formula inverted, a coarse table of
     it), BT.709's, HDR video's PQ and limited range, power curves; a Gaussian blur
@@ -52,6 +56,8 @@ def curves(fit: Fit, inputs: Inputs) -> list[Candidate]:
     for base, clip in ((R, ""), (C, ", clipped to 1 (a display file's encoding and clamp)")):
         errs = np.array([fit.model(base**p) for p in exps])
         p = refine(exps, errs, int(np.argmin(errs)))
+        if clip and abs(p - 1.0) < NOT_A_POWER:
+            continue  # values clipped to 1 and nothing more: the tone curves' clamp says so
         g = 1.0 / p
         what = (f"a power curve x^(1/{_num(g)}) (gamma {_num(g)} encoding)" if p < 1 else
                 f"a power curve x^{_num(p)} (decoded with gamma {_num(p)} once too often)")
