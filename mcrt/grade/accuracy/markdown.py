@@ -474,10 +474,11 @@ _UNNOTICED = _twin_blind("unnoticed", "twenty-sixth", "9a0fc85") + (
 
 #: What changed after the fourth pair of twin classes' one grading, with both in view.
 _TWIN4_AFTER = (
-    " Changes made after that grading, with both classes in view (commit b7fcedf): a curve on the values carries the "
-    "noise it bends (a display curve steep near black grows a noisy render's noise, which the remainder test allows); "
-    "a power curve clipped to 1; the light sample's pdf left in area measure or converted without d^2 or the cosine "
-    "at the light. Both rows here are of rules that saw the class.")
+    " Changes made after that grading, with both classes in view (commits b7fcedf and 579bae1): a curve on the values "
+    "carries the noise it bends (a display curve steep near black grows a noisy render's noise, which the remainder "
+    "test allows); a power curve clipped to 1, unless its exponent is within 0.05 of 1 (a clamp alone); the light "
+    "sample's pdf left in area measure or converted without d^2 or the cosine at the light. Both rows here are of "
+    "rules that saw the class.")
 
 _UNRECORDED = _twin_blind("unrecorded", "twenty-seventh", "332f552") + (
     "this report's first grading (held out, 3 of 12 named right, 0 of 12 confidently wrong, 10 of 12 detected; all "
