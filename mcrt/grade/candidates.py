@@ -90,7 +90,7 @@ class Candidate:
     # factor): the hand-in's noise grows with it, which the remainder test allows (mcrt.grade.stages.explanation).
     gain: bool = False
     # The hand-in's noise variance (H, W, 3) the change implies, where a curve on the values bends the render's noise
-    # (mcrt.grade.explain.fit.through): the remainder test allows its growth over the model's.
+    # (mcrt.grade.explain.fit.bent_noise): the remainder test allows its growth over the model's.
     noise: np.ndarray | None = None
 
     def to_dict(self) -> dict:

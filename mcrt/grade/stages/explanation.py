@@ -28,8 +28,8 @@ CLAIM_RULE = claim_rule
 
 
 def _change_var(g: Grading, c, basis, noise: Noise, R: np.ndarray) -> np.ndarray:
-    """The noise of a candidate's predicted change: its expected images' (a catalogued bug) or the basis renders';
-    for a gain (:attr:`mcrt.grade.candidates.Candidate.gain`) the basis renders' grown with the factor it puts on
+    """The noise of a candidate's predicted change: its expected images' (a catalogued bug) or the basis renders',
+    with what a curve on the values adds to the hand-in's noise (:attr:`Candidate.noise`) where it grows it; for a gain (:attr:`mcrt.grade.candidates.Candidate.gain`) the basis renders' grown with the factor it puts on
     them, (M / R - 1)^2 times theirs where that is more than 1 (M the model image), and the hand-in's own noise grown
     with it, a correct render's times (M / R)^2 - 1 where M is brighter than R."""
     if c.catalogue and c.name in g.ctx.mutants:
