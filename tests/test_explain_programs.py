@@ -506,6 +506,56 @@ def test_the_light_sampled_elsewhere_is_named_where_its_samples_are(ctx):
     assert named_causes(res)[0] == ["light_pdf"] and res.score < res.max_score
 
 
+def test_the_light_sampled_over_a_rectangle_is_named_with_its_edges(ctx):
+    """A first vertex's light sample drawn over x in [5, 9] (its random number's range 2 where 1 was meant, from the
+    light's centre, the light's pdf 1/A kept), y on the light: Mitsuba's path on the pinhole's rays with that vertex's light sample made
+    as a program makes it (mcrt.grade.accuracy.unheralded._first_vertex, seed 104, 256 spp). The rectangle the
+    samples come from is claimed with its edges, at the first surface a camera ray meets, with the light's pdf, and
+    the image loses points."""
+    from mcrt.grade.accuracy import unheralded, unnoticed
+
+    def direct(mscene, rng, p, n, rho, mitsuba):
+        m = len(p)
+        return unnoticed._light_at(mscene, p, n, rho, unnoticed._light_points(2.0 * rng.random(m) + 0.5,
+                                                                                rng.random(m)))
+
+    S = unheralded._first_vertex(np.zeros((RES, RES, 3)), spp=256, seed=104, direct=direct)
+    res = grade_image("sampled_over", ctx, [S], spp=256)
+    fam, said = _claimed(res)
+    ex = res.details["explanation"]
+    assert fam == "light_sampling" and ex["named"] == "light sampled over a rectangle", said
+    v = ex["candidates"][0]["value"]
+    assert v["x"] == pytest.approx((5.0, 9.0)) and v["y"] == pytest.approx((-1.0, 1.0)), said
+    assert v["vertices"] == "first" and v["pdf"] == "whole light", said
+    assert named_causes(res)[0] == ["light_pdf"] and res.score < res.max_score
+
+
+def test_where_the_light_is_sampled_is_said_where_its_samples_lead(ctx):
+    """The rule on its own (mcrt.grade.broader.reading): the light sampled elsewhere leading a partial reading says
+    where the light's samples are drawn, which names the light's sampling, where what is left lies on the room's
+    surfaces; left on the light's own pixels too, which no light sample changes, nothing broader is said; a light
+    sample's weight alone (a factor a BRDF or an emitter can hold) says nothing broader either."""
+    from mcrt.grade.accuracy.run import CAUSE_OF
+    from mcrt.grade.broader import reading
+    from mcrt.grade.candidates import Candidate
+
+    R = _mitsuba(72)
+    labels, names = ctx.labels["near"], ctx.label_names
+    var = ctx.model_var["near"].astype(np.float64) / 1024
+    mask = np.ones(R.shape[:2], bool)
+    floor, light = names.index("the floor"), names.index("the light")
+    rest = np.zeros_like(R)
+    for name in ("light sampled elsewhere", "light sampled over a rectangle", "light sampled on a quarter"):
+        lead = Candidate("light_sampling", name, "the light's samples drawn elsewhere", 0.0, 4, change=rest)
+        assert reading(lead, rest, R, mask, var, labels, names, [floor, light]) is None
+        fam, words = reading(lead, rest, R, mask, var, labels, names, [floor])
+        assert fam == "light_region" and "where the light's samples are drawn" in words
+        assert CAUSE_OF[fam] == ("light_pdf",)
+    weight = Candidate("light_sampling", "light sample's weight", "the light reaching surfaces 2 times", 0.0, 0,
+                       change=rest)
+    assert reading(weight, rest, R, mask, var, labels, names, [floor]) is None
+
+
 def test_several_surfaces_colours_are_named_together(ctx):
     """A Mitsuba render (seed 99) with every diffuse albedo's channels clamped at 0.6 (a guard against reflecting
     more than came in, set too low): five walls, the ceiling and the tetrahedron change, no single surface explains

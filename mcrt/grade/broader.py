@@ -37,6 +37,15 @@ change is none the families render:
   of the many ways to draw a direction (a disk's radius, a frame's axes, a
   random vector's range); the words send the student to the sampling of
   the bounce and its weight, without claiming which;
+* **where the light's samples come from** (:data:`LIGHT_REGION`: the light
+  sampled on a quarter of itself, about another centre, over another
+  square or rectangle of its plane, :mod:`mcrt.grade.explain.light_sampling`)
+  leading, where nothing is left on the light's own pixels: the light on
+  surfaces then comes from points other than the light's own, and the
+  light seen directly, which no light sample makes, is right. The families
+  render uniform rectangles; a triangle of the light, a parallelogram, a
+  sampler crowding its points or a clamped range are others, which the
+  words name together (the sample point's code and its pdf), claiming none;
 * **one object's own pixels** (:func:`surface_object`): a lead that acts
   on one of :data:`OBJECTS` (at least :data:`ON_OBJECT` of its change, by
   the noise's weights, on its pixels) with a remainder on that object's
@@ -64,6 +73,10 @@ GEOMETRY = ("object_size", "object_moved", "object_missing")
 #: The families whose fit draws or weights the diffuse bounce otherwise than cosine-weighted: (family, name) with
 #: name None for every candidate of the family (mcrt.grade.explain.bounce) or a catalogue mutant's name.
 BOUNCE = (("bounce", None), ("catalogue", "ball_plus_normal"), ("catalogue", "uniform_as_cosine"))
+#: The light-sampling candidates (mcrt.grade.explain.light_sampling, by name) that draw the light's samples from
+#: points other than the light's own (not its weight alone: a factor on the light's samples is also a BRDF's or
+#: an emitter's constant).
+LIGHT_REGION = ("light sampled on a quarter", "light sampled elsewhere", "light sampled over a rectangle")
 #: Least share of a lead's change (its square, weighted by the noise) on one object for it to act on that object.
 ON_OBJECT = 0.5
 #: The objects (scene names) whose geometry a program builds itself: the room's surfaces have families of their own.
@@ -104,6 +117,13 @@ def reading(lead, remainder: np.ndarray, R: np.ndarray, mask: np.ndarray, var: n
                 "from a diffuse surface are not cosine-distributed, or not weighted by f cos / pdf for the pdf they "
                 "were drawn from, in a way none of the mistakes we render captures exactly (check how the "
                 "direction is drawn, the frame that turns it about the normal, and its weight)")
+    if lead is not None and lead.family == "light_sampling" and lead.name in LIGHT_REGION and \
+            not any(names[k] == "the light" for k in objects):
+        return ("light_region", "together they point to where the light's samples are drawn: the light on surfaces "
+                "comes from points other than the light's own, or spread otherwise over it, or weighted by another "
+                "pdf than theirs, in a way none of the mistakes we render captures exactly, the light itself seen "
+                "right (check how a sample point is drawn on the light: its corner, its sides, its random numbers' "
+                "range, and the pdf it is divided by)")
     obj = surface_object(lead, R, var, mask, labels, names, objects)
     if obj == "sphere":
         return ("object_surface", "together they point to what the mirror sphere shows, with nothing around it "

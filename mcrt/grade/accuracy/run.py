@@ -137,6 +137,9 @@ CAUSE_OF: dict[str, tuple[str, ...]] = {
     # One object's own pixels, a partial reading's broader cause (added after unnoticed was graded, with every class's
     # partial readings in view): its material, its normals, its shape or its faces, which the words name together.
     "object_surface": ("material", "normals", "object_shape", "mesh_face"),
+    # Where the light's samples come from, a partial reading's broader cause (added after unattended was graded, with
+    # every class's partial readings in view): the light sampled wrongly, the light seen right.
+    "light_region": ("light_pdf",),
 }
 
 

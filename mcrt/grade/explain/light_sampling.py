@@ -30,6 +30,23 @@ quadrant at 4 times the radiance, :math:`B_q - D_{1,q}` (mcrt renders of
 the scene with the light replaced by the brighter quadrant, full and cut at
 depth 1), the light seen directly unchanged. Each quadrant is a candidate
 with no free parameter.
+
+More generally a light sample drawn uniformly over a rectangle :math:`Q` of
+the light's plane (a corner taken for the centre, a side for a half-side,
+a range's arguments read as offset and width) sheds, weighted by the pdf of
+:math:`Q`, the light of an emitter covering :math:`Q` at the light's
+radiance; weighted by the light's pdf :math:`1/A`, that of :math:`Q` at
+:math:`A/|Q|` times it. Light on surfaces is linear in the emitter's
+radiance over the plane, so with :math:`S_c` the light a cell :math:`c` of a
+grid in the plane sheds (mcrt renders, the cell as the light, full minus
+cut at depth 1), :math:`Q`'s is :math:`\sum_{c \in Q} S_c`, and the
+change is taken against the light's own cells (their noise cancels where
+:math:`Q` and the light share cells). A program may sample the light so at
+every surface hit or only at the first a camera ray meets (a direct-light
+routine of its own there): the cells cut at depth 2 instead give the
+latter. Every rectangle of the grid's cells, both weights and both kinds of
+vertices are tried (:func:`_rectangle`): a discrete choice of four edges,
+counted as four parameters.
 """
 
 from __future__ import annotations
@@ -93,8 +110,35 @@ def _quadrants(scene):
         yield f"{'+' if sx > 0 else '-'}x {'+' if sy > 0 else '-'}y", replace(scene, light=q)
 
 
+#: Cells of the grid in the light's plane (:func:`_cells`) across each side of the light, and how far the grid
+#: reaches beyond the light's edges, in light sides: a rectangle up to a side and a half off still lies on it.
+CELLS_ACROSS = 4
+REACH = 1.5
+
+
+def _cells(scene):
+    """(i, j, scene or None) for each cell of a grid of squares in the light's plane, CELLS_ACROSS across the light
+    and REACH light sides beyond each of its edges: the scene with the light replaced by that cell at the light's
+    radiance, None for a cell not inside the room (it lights nothing the camera sees)."""
+    from dataclasses import replace
+
+    from mcrt.grade.explain.basis import _light_inside
+
+    lt = scene.light
+    n = int(round(CELLS_ACROSS * (1 + 2 * REACH)))
+    side = (lt.size[0] / CELLS_ACROSS, lt.size[1] / CELLS_ACROSS)
+    x0 = lt.center[0] - lt.size[0] * (0.5 + REACH)
+    y0 = lt.center[1] - lt.size[1] * (0.5 + REACH)
+    for i in range(n):
+        for j in range(n):
+            c = replace(lt, center=(x0 + (i + 0.5) * side[0], y0 + (j + 0.5) * side[1], lt.center[2]), size=side)
+            s = replace(scene, light=c)
+            yield i, j, (s if _light_inside(s) else None)
+
+
 def _prepare(a, scene, render) -> dict[str, np.ndarray]:
-    """quadrant -> the light it sheds on surfaces (its render minus its render cut at depth 1), basis spp and seed."""
+    """quadrant -> the light it sheds on surfaces (its render minus its render cut at depth 1), basis spp and seed;
+    the same for every cell of :func:`_cells` (at every surface hit, and at the first alone: cut at depth 2)."""
     from mcrt.grade.explain.basis import basis_settings
 
     spp, seed = basis_settings(a)
@@ -102,8 +146,15 @@ def _prepare(a, scene, render) -> dict[str, np.ndarray]:
     def img(s, depth):
         return render(s, a.camera, a.grade_width, a.grade_height, depth, spp, seed).mean.astype(np.float32)
 
+    n = int(round(CELLS_ACROSS * (1 + 2 * REACH)))
+    cells = np.zeros((2, n, n, a.grade_height, a.grade_width, 3), np.float32)
+    for i, j, s in _cells(scene):
+        if s is not None:
+            seen = img(s, 1)
+            cells[:, i, j] = img(s, a.max_depth) - seen, img(s, 2) - seen
     return {"quarters": {name: img(s, a.max_depth) - img(s, 1) for name, s in _quadrants(scene)},
-            "elsewhere": [(what, img(s, a.max_depth) - img(s, 1)) for what, s in _elsewhere(scene)]}
+            "elsewhere": [(what, img(s, a.max_depth) - img(s, 1)) for what, s in _elsewhere(scene)],
+            "cells": cells}
 
 
 def _quadrant(fit: Fit, inputs: Inputs, x: np.ndarray) -> Candidate | None:
@@ -156,6 +207,98 @@ def _sampled_elsewhere(fit: Fit, inputs: Inputs, x: np.ndarray) -> Candidate | N
     return Candidate("light_sampling", "light sampled elsewhere", text, err, 0, value=value, change=change)
 
 
+#: Rectangles of :func:`_rectangle` ranked by the uncapped chi^2 whose capped chi^2 is computed.
+RECTANGLES_CHECKED = 8
+
+
+def _rectangles(n: int):
+    """(i0, j0, i1, j1) of every rectangle [i0, i1) x [j0, j1) of an n x n grid's cells, as flat arrays."""
+    lo, hi = np.triu_indices(n + 1, 1)
+    I0, J0 = np.meshgrid(lo, lo, indexing="ij")
+    I1, J1 = np.meshgrid(hi, hi, indexing="ij")
+    return I0.ravel(), J0.ravel(), I1.ravel(), J1.ravel()
+
+
+def _ranked(fit: Fit, cells: np.ndarray, x: np.ndarray, k_of_area, rects) -> np.ndarray:
+    """chi^2 (uncapped, less a constant) of every rectangle's change k S_Q - x for Q's cells: with a the indicator
+    of Q over the cells, y = D + x and G, b the cells' Gram matrix and products with y, it is
+    k^2 a'Ga - 2 k a'b, summed over rectangles by inclusion and exclusion over cumulative sums."""
+    n = cells.shape[0]
+    sw = np.sqrt(fit.w).ravel()
+    y = (fit.D + x).ravel() * sw
+    flat = cells.reshape(n * n, -1)
+    lit = np.flatnonzero(np.any(flat != 0, axis=1))  # cells inside the room: the Gram matrix of those alone
+    S = flat[lit].astype(np.float64) * sw
+    G = np.zeros((n * n, n * n))
+    G[np.ix_(lit, lit)] = S @ S.T
+    b = np.zeros(n * n)
+    b[lit] = S @ y
+    B = np.zeros((n + 1, n + 1))
+    B[1:, 1:] = b.reshape(n, n).cumsum(0).cumsum(1)
+    Q = np.zeros((n + 1,) * 4)
+    Q[1:, 1:, 1:, 1:] = G.reshape(n, n, n, n).cumsum(0).cumsum(1).cumsum(2).cumsum(3)
+    I0, J0, I1, J1 = rects
+    ab = B[I1, J1] - B[I0, J1] - B[I1, J0] + B[I0, J0]
+    aga = np.zeros_like(ab)
+    for si, i in ((1, I1), (-1, I0)):
+        for sj, j in ((1, J1), (-1, J0)):
+            for sk, k in ((1, I1), (-1, I0)):
+                for sl, l in ((1, J1), (-1, J0)):
+                    aga += si * sj * sk * sl * Q[i, j, k, l]
+    k = k_of_area
+    return k * k * aga - 2.0 * k * ab
+
+
+def _rectangle(fit: Fit, inputs: Inputs) -> Candidate | None:
+    """The best rectangle of the grid's cells as the region the light's samples come from, at every surface hit or
+    at the first alone, weighted by its own pdf or the light's (the module docstring), None without cell renders.
+    The change is taken against the light's own cells, not the basis's render: the cells a rectangle shares with
+    the light cancel with their noise."""
+    stacks = (inputs.basis.extra.get(light_sampling.name) or {}).get("cells")
+    if stacks is None or not np.any(stacks):
+        return None
+    v = inputs.basis.values
+    n = stacks.shape[1]
+    size = np.asarray(v["light_size"], np.float64)
+    centre = np.asarray(v["light_center"], np.float64)
+    side = size / CELLS_ACROSS
+    origin = centre[:2] - size * (0.5 + REACH)
+    m = int(CELLS_ACROSS * REACH)
+    rects = I0, J0, I1, J1 = _rectangles(n)
+    area = (I1 - I0) * (J1 - J0) * side[0] * side[1]
+    light = (I0 == m) & (J0 == m) & (I1 == n - m) & (J1 == n - m)
+    best = None
+    for first, cells in enumerate(stacks):
+        x = cells[m:n - m, m:n - m].sum(axis=(0, 1), dtype=np.float64)  # the light's own, as its cells shed it
+        for own, k in ((True, np.ones_like(area)), (False, size[0] * size[1] / area)):
+            chi = _ranked(fit, cells, x, k, rects)
+            chi[light] = np.inf  # the light itself: no change
+            for r in np.argsort(chi)[:RECTANGLES_CHECKED]:
+                change = k[r] * cells[I0[r]:I1[r], J0[r]:J1[r]].sum(axis=(0, 1), dtype=np.float64) - x
+                err = fit.delta(change)
+                if best is None or err < best[0]:
+                    best = (err, r, own, float(k[r]), bool(first), change)
+    err, r, own, k, first, change = best
+    lo_xy = origin + side * np.array([I0[r], J0[r]])
+    hi_xy = origin + side * np.array([I1[r], J1[r]])
+    span = " x ".join(f"[{_num(float(a))}, {_num(float(c))}]" for a, c in zip(lo_xy, hi_xy))
+    where = " x ".join(f"[{_num(float(a))}, {_num(float(c))}]" for a, c in zip(centre[:2] - size / 2,
+                                                                               centre[:2] + size / 2))
+    how = "the pdf of that rectangle" if own else "the light's pdf"
+    power = "its radiance" if own else f"{_num(k)} times its radiance"
+    at = "at the first surface a camera ray meets (the rest of the path sampling the light right)" if first else \
+        "at every surface hit"
+    text = (f"the light's samples drawn over x, y in {span} where the light covers {where}, {at}, weighted by {how}: "
+            f"its light on surfaces comes from that rectangle at {power}, the light itself seen right (the light "
+            "sample's corner, side or range wrong in the sampling code)")
+    value = {"x": (float(lo_xy[0]), float(hi_xy[0])), "y": (float(lo_xy[1]), float(hi_xy[1])),
+             "pdf": "rectangle" if own else "whole light", "vertices": "first" if first else "all"}
+    # More light on surfaces with the light seen right is also what counting the light twice (its light sample and
+    # the paths that hit it) does: a rectangle about the light fits it nearly as well, and is no other cause for it.
+    return Candidate("light_sampling", "light sampled over a rectangle", text, err, 4, value=value, change=change,
+                     generalises=("direct_twice",))
+
+
 def light_sampling(fit: Fit, inputs: Inputs) -> list[Candidate]:
     """The light on surfaces k times the truth for the best k of :func:`factors`, from the best quarter of the
     light (:func:`_quadrant`) and from the best light as sampled elsewhere (:func:`_sampled_elsewhere`), the light
@@ -172,7 +315,8 @@ def light_sampling(fit: Fit, inputs: Inputs) -> list[Candidate]:
             f"sample weighted wrongly (k = {words})")
     out = [Candidate("light_sampling", "light sample's weight", text, err, 0, value={"factor": k},
                      change=(k - 1.0) * x, gain=True)]
-    return out + [c for c in (_quadrant(fit, inputs, x), _sampled_elsewhere(fit, inputs, x)) if c is not None]
+    return out + [c for c in (_quadrant(fit, inputs, x), _sampled_elsewhere(fit, inputs, x),
+                               _rectangle(fit, inputs)) if c is not None]
 
 
 light_sampling.name, light_sampling.prepare = "light_sampling", _prepare
