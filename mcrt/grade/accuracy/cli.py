@@ -20,7 +20,7 @@ CLASSES = {"scene": "cases", "outside": "outside", "programs": "programs", "fres
            "unbidden": "unbidden", "unheralded": "unheralded", "unbeknown": "unbeknown",
            "unvisited": "unvisited", "unlooked": "unlooked", "unwonted": "unwonted",
            "unremarked": "unremarked", "unremembered": "unremembered", "unnoticed": "unnoticed",
-           "unrecorded": "unrecorded", "unattended": "unattended"}
+           "unrecorded": "unrecorded", "unattended": "unattended", "unattested": "unattested"}
 
 
 def register(sub) -> None:
@@ -60,8 +60,9 @@ def register(sub) -> None:
                    "output, written blind, mcrt.grade.accuracy.unremembered), 'unnoticed' (a twenty-sixth, in tracers, "
                    "scene input and output, written blind, mcrt.grade.accuracy.unnoticed), 'unrecorded' (a "
                    "twenty-seventh, in tracers, scene input and output, written blind, "
-                   "mcrt.grade.accuracy.unrecorded) or 'unattended' (a twenty-eighth, in tracers, scene input and "
-                   "output, written blind, mcrt.grade.accuracy.unattended) (default: scene)")
+                   "mcrt.grade.accuracy.unrecorded), 'unattended' (a twenty-eighth, in tracers, scene input and "
+                   "output, written blind, mcrt.grade.accuracy.unattended) or 'unattested' (a twenty-ninth, in array "
+                   "and GPU frameworks' tracers, written blind, mcrt.grade.accuracy.unattested) (default: scene)")
     p.add_argument("--held-out", choices=("all", "only", "none"), default="all",
                    help="grade all cases, only the held-out ones, or none of them (default: all)")
     p.add_argument("--out", default=None, help=f"report folder (default: {DEFAULT_OUT}, or {DEFAULT_OUT}/CLASS "
