@@ -20,7 +20,8 @@ CLASSES = {"scene": "cases", "outside": "outside", "programs": "programs", "fres
            "unbidden": "unbidden", "unheralded": "unheralded", "unbeknown": "unbeknown",
            "unvisited": "unvisited", "unlooked": "unlooked", "unwonted": "unwonted",
            "unremarked": "unremarked", "unremembered": "unremembered", "unnoticed": "unnoticed",
-           "unrecorded": "unrecorded", "unattended": "unattended", "unattested": "unattested"}
+           "unrecorded": "unrecorded", "unattended": "unattended", "unattested": "unattested",
+           "unconsidered": "unconsidered"}
 
 
 def register(sub) -> None:
@@ -61,8 +62,10 @@ def register(sub) -> None:
                    "scene input and output, written blind, mcrt.grade.accuracy.unnoticed), 'unrecorded' (a "
                    "twenty-seventh, in tracers, scene input and output, written blind, "
                    "mcrt.grade.accuracy.unrecorded), 'unattended' (a twenty-eighth, in tracers, scene input and "
-                   "output, written blind, mcrt.grade.accuracy.unattended) or 'unattested' (a twenty-ninth, in array "
-                   "and GPU frameworks' tracers, written blind, mcrt.grade.accuracy.unattested) (default: scene)")
+                   "output, written blind, mcrt.grade.accuracy.unattended), 'unattested' (a twenty-ninth, in array "
+                   "and GPU frameworks' tracers, written blind, mcrt.grade.accuracy.unattested) or 'unconsidered' (a "
+                   "thirtieth, in Rust, Go, Java and C# tracers, written blind, mcrt.grade.accuracy.unconsidered) "
+                   "(default: scene)")
     p.add_argument("--held-out", choices=("all", "only", "none"), default="all",
                    help="grade all cases, only the held-out ones, or none of them (default: all)")
     p.add_argument("--out", default=None, help=f"report folder (default: {DEFAULT_OUT}, or {DEFAULT_OUT}/CLASS "
