@@ -215,6 +215,17 @@ REPORTS: tuple[Report, ...] = (
            "to the grader (post-processing, writing the file, materials, geometry, camera and light models, the "
            "integrator, samples and passes): named right, confidently wrong, partial, false alarms, with a held-out "
            "half fixed before any grading"),
+    Report("grading_accuracy/unattested", "grade-accuracy --class unattested --out reports/grading_accuracy/unattested",
+           "grading on a twenty-ninth class of mistakes in students' tracers (array and GPU frameworks), written "
+           "blind to the grader (post-processing, writing the file, materials, geometry, camera and light models, the "
+           "integrator, samples and passes): named right, confidently wrong, partial, false alarms, with a held-out "
+           "half fixed before any grading"),
+    Report("grading_accuracy/unconsidered",
+           "grade-accuracy --class unconsidered --out reports/grading_accuracy/unconsidered",
+           "grading on a thirtieth class of mistakes in students' tracers (Rust, Go, Java, C# and others), written "
+           "blind to the grader (post-processing, writing the file, materials, geometry, camera and light models, the "
+           "integrator, samples and passes): named right, confidently wrong, partial, false alarms, with a held-out "
+           "half fixed before any grading"),
     Report("grading/false_alarms", "grade-false-alarms --out reports/grading/false_alarms",
            "grading's false alarms on correct renders: estimators, samplers, spp 16-1024, 64x64 to 800x800, PNG curves"),
 )

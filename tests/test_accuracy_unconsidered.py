@@ -16,7 +16,7 @@ import mcrt  # noqa: F401  (before mitsuba and drjit)
 from accuracy_helpers import (W, build as _build, by_name, check_builds, check_command, check_correct_agree,
                               check_held_out_rule, check_new_truths, check_not_catalogued, check_old_causes,
                               check_seeds, check_specs, image as _image, pillow_codes, plain as _plain)
-from mcrt.grade.accuracy import (blind, cases, fresh, novel, outside, programs, unasked, unattended, unbeknown,
+from mcrt.grade.accuracy import (unattested, blind, cases, fresh, novel, outside, programs, unasked, unattended, unbeknown,
                                  unbidden, unconsidered, unforeseen, unguessed, unheard, unheralded, unlooked, unmet,
                                  unnoticed, unprompted, unrecorded, unremarked, unremembered, unsaid, unseen, unsought,
                                  untold, untried, unvisited, unwonted)
@@ -25,7 +25,7 @@ from mcrt.image_files import read_image, srgb_eotf
 _by_name = partial(by_name, unconsidered.SPECS)
 _OTHERS = (cases, outside, programs, fresh, blind, unseen, untried, novel, untold, unmet, unheard, unsaid, unasked,
            unsought, unguessed, unforeseen, unprompted, unbidden, unheralded, unbeknown, unvisited, unlooked, unwonted,
-           unremarked, unremembered, unnoticed, unrecorded, unattended)
+           unremarked, unremembered, unnoticed, unrecorded, unattended, unattested)  # the last, its twin: written the same day, apart
 
 
 @pytest.fixture(scope="module")

@@ -404,7 +404,7 @@ _UNBEKNOWN = (
 def _twin_blind(module: str, ordinal: str, frozen: str = "cca957e") -> str:
     """The opening of the introductions of two classes written blind the same day and graded once on the same rules,
     frozen at commit ``frozen`` (the twenty-first and twenty-second, the twenty-third and twenty-fourth, the
-    twenty-fifth and twenty-sixth, then the twenty-seventh and twenty-eighth)."""
+    twenty-fifth and twenty-sixth, the twenty-seventh and twenty-eighth, then the twenty-ninth and thirtieth)."""
     return (
         f"The wrong renders are a {ordinal} class of mistakes in students' tracers, their scene input and their output "
         f"that no other class or the catalogue tried (mcrt.grade.accuracy.{module}), written blind to the grader's "
@@ -488,6 +488,13 @@ _UNATTENDED = _twin_blind("unattended", "twenty-eighth", "332f552") + (
     "this report's first grading (held out, 8 of 12 named right, 1 of 12 confidently wrong, 11 of 12 detected; all "
     "28, 17 named right, 1 confidently wrong, 22 detected; 0 of 8 correct hand-ins lost points).") + _TWIN4_AFTER
 
+#: The fifth pair of twin classes: this report is their one grading, on the rules frozen at 892ae57.
+_TWIN5_ONCE = "this report is that one grading; no rule has changed since."
+
+_UNATTESTED = _twin_blind("unattested", "twenty-ninth", "892ae57") + _TWIN5_ONCE
+
+_UNCONSIDERED = _twin_blind("unconsidered", "thirtieth", "892ae57") + _TWIN5_ONCE
+
 #: Each class's title, after "Grading accuracy on a class of realistic hand-ins".
 TITLES = {
     "outside": ": mistakes outside the scene file", "programs": ": mistakes of students' programs",
@@ -515,7 +522,9 @@ TITLES = {
     "unremembered": ": a twenty-fifth class of mistakes, written blind",
     "unnoticed": ": a twenty-sixth class of mistakes, written blind",
     "unrecorded": ": a twenty-seventh class of mistakes, written blind",
-    "unattended": ": a twenty-eighth class of mistakes, written blind"}
+    "unattended": ": a twenty-eighth class of mistakes, written blind",
+    "unattested": ": a twenty-ninth class of mistakes, written blind",
+    "unconsidered": ": a thirtieth class of mistakes, written blind"}
 
 #: The scene class's introduction (mcrt.grade.accuracy.cases).
 _SCENE = (
@@ -534,14 +543,15 @@ INTROS = {"outside": _OUTSIDE, "programs": _PROGRAMS, "fresh": _FRESH, "blind": 
           "unforeseen": _UNFORESEEN, "unprompted": _UNPROMPTED, "unbidden": _UNBIDDEN, "unheralded": _UNHERALDED,
           "unbeknown": _UNBEKNOWN, "unvisited": _UNVISITED, "unlooked": _UNLOOKED, "unwonted": _UNWONTED,
           "unremarked": _UNREMARKED, "unremembered": _UNREMEMBERED, "unnoticed": _UNNOTICED,
-          "unrecorded": _UNRECORDED, "unattended": _UNATTENDED}
+          "unrecorded": _UNRECORDED, "unattended": _UNATTENDED, "unattested": _UNATTESTED,
+          "unconsidered": _UNCONSIDERED}
 
 
 def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta: dict, gradescope: list[dict],
                  klass: str = "scene") -> Path:
     """Write index.md and data.json under ``out``; returns the Markdown's path. ``klass`` is the class graded:
     'scene' (mcrt.grade.accuracy.cases) or another name of :data:`mcrt.grade.accuracy.cli.CLASSES` ('outside',
-    'programs', 'fresh', ..., 'unnoticed', 'unrecorded', 'unattended': the module of that name under
+    'programs', 'fresh', ..., 'unrecorded', 'unattended', 'unattested', 'unconsidered': the module of that name under
     mcrt.grade.accuracy); an empty half (tuned on or held out) is left out of the rates table."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
