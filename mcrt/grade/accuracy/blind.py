@@ -618,6 +618,16 @@ def alternating(categories: dict[str, tuple[str, ...]], specs: tuple[Spec, ...])
     return out
 
 
+def class_causes(mistakes: tuple[Spec, ...], earlier, new_causes: dict[str, str],
+                 reworded: dict[str, str]) -> dict[str, str]:
+    """The causes of a blind class's ``mistakes`` as its report words them: the words of the scene's and outside
+    classes and the new causes of the ``earlier`` class modules, overridden by the class's ``new_causes`` and then
+    by its ``reworded`` ones."""
+    words = {**cases.CAUSES, **outside.CAUSES, **{c: w for m in earlier for c, w in m.NEW_CAUSES.items()},
+             **new_causes, **reworded}
+    return {c: words[c] for c in dict.fromkeys(s.cause for s in mistakes)}
+
+
 def held_out_rule(specs: tuple[Spec, ...] = SPECS) -> dict[str, bool]:
     """Which cases the rule of the module docstring holds out (:func:`alternating` over :data:`CATEGORIES`)."""
     return alternating(CATEGORIES, specs)

@@ -970,10 +970,8 @@ _REWORDED = {
                  "stream)",
     "spp_claim": "fewer samples per pixel than declared (a kernel compiled with the preview's count)",
 }
-_WORDS = {**cases.CAUSES, **outside.CAUSES, **{c: w for m in _EARLIER for c, w in m.NEW_CAUSES.items()},
-          **NEW_CAUSES, **_REWORDED}
 #: The causes of this class's cases, as the report words them.
-CAUSES: dict[str, str] = {c: _WORDS[c] for c in dict.fromkeys(s.cause for s in MISTAKES)}
+CAUSES: dict[str, str] = blind.class_causes(MISTAKES, _EARLIER, NEW_CAUSES, _REWORDED)
 
 
 def held_out_rule(specs: tuple[Spec, ...] = SPECS) -> dict[str, bool]:

@@ -878,10 +878,8 @@ _REWORDED = {
     "sample_count": "each pixel's sum divided by more samples than it got (a pass short, three times the count)",
     "spp_claim": "fewer samples per pixel than declared (passes counted by integer division)",
 }
-_WORDS = {**cases.CAUSES, **outside.CAUSES, **{c: w for m in _EARLIER for c, w in m.NEW_CAUSES.items()},
-          **NEW_CAUSES, **_REWORDED}
 #: The causes of this class's cases, as the report words them.
-CAUSES: dict[str, str] = {c: _WORDS[c] for c in dict.fromkeys(s.cause for s in MISTAKES)}
+CAUSES: dict[str, str] = blind.class_causes(MISTAKES, _EARLIER, NEW_CAUSES, _REWORDED)
 
 
 def held_out_rule(specs: tuple[Spec, ...] = SPECS) -> dict[str, bool]:
