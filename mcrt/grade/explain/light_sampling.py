@@ -41,12 +41,13 @@ radiance over the plane, so with :math:`S_c` the light a cell :math:`c` of a
 grid in the plane sheds (mcrt renders, the cell as the light, full minus
 cut at depth 1), :math:`Q`'s is :math:`\sum_{c \in Q} S_c`, and the
 change is taken against the light's own cells (their noise cancels where
-:math:`Q` and the light share cells). A program may sample the light so at
-every surface hit or only at the first a camera ray meets (a direct-light
-routine of its own there): the cells cut at depth 2 instead give the
-latter. Every rectangle of the grid's cells, both weights and both kinds of
-vertices are tried (:func:`_rectangle`): a discrete choice of four edges,
-counted as four parameters.
+:math:`Q` and the light share cells). Every rectangle of the grid's cells
+and both weights are tried (:func:`_rectangle`): a discrete choice of four
+edges, counted as four parameters. The light sampled so at the first
+surface a camera ray meets alone (a direct-light routine of its own there)
+is not a candidate: its change is a little of the direct light on the
+surfaces in view, which a rectangle's fits freely (walls moved 0.1 inwards,
+lit a little more, were claimed as such a rectangle).
 """
 
 from __future__ import annotations
@@ -138,7 +139,7 @@ def _cells(scene):
 
 def _prepare(a, scene, render) -> dict[str, np.ndarray]:
     """quadrant -> the light it sheds on surfaces (its render minus its render cut at depth 1), basis spp and seed;
-    the same for every cell of :func:`_cells` (at every surface hit, and at the first alone: cut at depth 2)."""
+    the same for every cell of :func:`_cells`."""
     from mcrt.grade.explain.basis import basis_settings
 
     spp, seed = basis_settings(a)
@@ -147,11 +148,10 @@ def _prepare(a, scene, render) -> dict[str, np.ndarray]:
         return render(s, a.camera, a.grade_width, a.grade_height, depth, spp, seed).mean.astype(np.float32)
 
     n = int(round(CELLS_ACROSS * (1 + 2 * REACH)))
-    cells = np.zeros((2, n, n, a.grade_height, a.grade_width, 3), np.float32)
+    cells = np.zeros((n, n, a.grade_height, a.grade_width, 3), np.float32)
     for i, j, s in _cells(scene):
         if s is not None:
-            seen = img(s, 1)
-            cells[:, i, j] = img(s, a.max_depth) - seen, img(s, 2) - seen
+            cells[i, j] = img(s, a.max_depth) - img(s, 1)
     return {"quarters": {name: img(s, a.max_depth) - img(s, 1) for name, s in _quadrants(scene)},
             "elsewhere": [(what, img(s, a.max_depth) - img(s, 1)) for what, s in _elsewhere(scene)],
             "cells": cells}
@@ -250,15 +250,15 @@ def _ranked(fit: Fit, cells: np.ndarray, x: np.ndarray, k_of_area, rects) -> np.
 
 
 def _rectangle(fit: Fit, inputs: Inputs) -> Candidate | None:
-    """The best rectangle of the grid's cells as the region the light's samples come from, at every surface hit or
-    at the first alone, weighted by its own pdf or the light's (the module docstring), None without cell renders.
+    """The best rectangle of the grid's cells as the region the light's samples come from, weighted by its own pdf or
+    the light's (the module docstring), None without cell renders.
     The change is taken against the light's own cells, not the basis's render: the cells a rectangle shares with
     the light cancel with their noise."""
-    stacks = (inputs.basis.extra.get(light_sampling.name) or {}).get("cells")
-    if stacks is None or not np.any(stacks):
+    cells = (inputs.basis.extra.get(light_sampling.name) or {}).get("cells")
+    if cells is None or not np.any(cells):
         return None
     v = inputs.basis.values
-    n = stacks.shape[1]
+    n = cells.shape[0]
     size = np.asarray(v["light_size"], np.float64)
     centre = np.asarray(v["light_center"], np.float64)
     side = size / CELLS_ACROSS
@@ -268,17 +268,16 @@ def _rectangle(fit: Fit, inputs: Inputs) -> Candidate | None:
     area = (I1 - I0) * (J1 - J0) * side[0] * side[1]
     light = (I0 == m) & (J0 == m) & (I1 == n - m) & (J1 == n - m)
     best = None
-    for first, cells in enumerate(stacks):
-        x = cells[m:n - m, m:n - m].sum(axis=(0, 1), dtype=np.float64)  # the light's own, as its cells shed it
-        for own, k in ((True, np.ones_like(area)), (False, size[0] * size[1] / area)):
-            chi = _ranked(fit, cells, x, k, rects)
-            chi[light] = np.inf  # the light itself: no change
-            for r in np.argsort(chi)[:RECTANGLES_CHECKED]:
-                change = k[r] * cells[I0[r]:I1[r], J0[r]:J1[r]].sum(axis=(0, 1), dtype=np.float64) - x
-                err = fit.delta(change)
-                if best is None or err < best[0]:
-                    best = (err, r, own, float(k[r]), bool(first), change)
-    err, r, own, k, first, change = best
+    x = cells[m:n - m, m:n - m].sum(axis=(0, 1), dtype=np.float64)  # the light's own, as its cells shed it
+    for own, k in ((True, np.ones_like(area)), (False, size[0] * size[1] / area)):
+        chi = _ranked(fit, cells, x, k, rects)
+        chi[light] = np.inf  # the light itself: no change
+        for r in np.argsort(chi)[:RECTANGLES_CHECKED]:
+            change = k[r] * cells[I0[r]:I1[r], J0[r]:J1[r]].sum(axis=(0, 1), dtype=np.float64) - x
+            err = fit.delta(change)
+            if best is None or err < best[0]:
+                best = (err, r, own, float(k[r]), change)
+    err, r, own, k, change = best
     lo_xy = origin + side * np.array([I0[r], J0[r]])
     hi_xy = origin + side * np.array([I1[r], J1[r]])
     span = " x ".join(f"[{_num(float(a))}, {_num(float(c))}]" for a, c in zip(lo_xy, hi_xy))
@@ -286,13 +285,11 @@ def _rectangle(fit: Fit, inputs: Inputs) -> Candidate | None:
                                                                                centre[:2] + size / 2))
     how = "the pdf of that rectangle" if own else "the light's pdf"
     power = "its radiance" if own else f"{_num(k)} times its radiance"
-    at = "at the first surface a camera ray meets (the rest of the path sampling the light right)" if first else \
-        "at every surface hit"
-    text = (f"the light's samples drawn over x, y in {span} where the light covers {where}, {at}, weighted by {how}: "
+    text = (f"the light's samples drawn over x, y in {span} where the light covers {where}, weighted by {how}: "
             f"its light on surfaces comes from that rectangle at {power}, the light itself seen right (the light "
             "sample's corner, side or range wrong in the sampling code)")
     value = {"x": (float(lo_xy[0]), float(hi_xy[0])), "y": (float(lo_xy[1]), float(hi_xy[1])),
-             "pdf": "rectangle" if own else "whole light", "vertices": "first" if first else "all"}
+             "pdf": "rectangle" if own else "whole light"}
     # More light on surfaces with the light seen right is also what counting the light twice (its light sample and
     # the paths that hit it) does: a rectangle about the light fits it nearly as well, and is no other cause for it.
     return Candidate("light_sampling", "light sampled over a rectangle", text, err, 4, value=value, change=change,
