@@ -547,6 +547,12 @@ INTROS = {"outside": _OUTSIDE, "programs": _PROGRAMS, "fresh": _FRESH, "blind": 
           "unconsidered": _UNCONSIDERED}
 
 
+def _regraded(r: dict) -> str:
+    """The line that says which cases were graded again after the run, on which commit and why."""
+    return (f"After this run, the cases {', '.join(f'`{n}`' for n in r['cases'])} were graded again on commit "
+            f"{r['commit']} ({r['why']}); their rows and the rates are of that commit's rules.")
+
+
 def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta: dict, gradescope: list[dict],
                  klass: str = "scene") -> Path:
     """Write index.md and data.json under ``out``; returns the Markdown's path. ``klass`` is the class graded:
@@ -565,6 +571,7 @@ def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta
     L = [f"# {title}", "",
          f"Written by `{command}` ({meta.get('date', '')}, {meta.get('seconds', 0):.0f} s). "
          f"Assignment: `{meta.get('assignment')}`; reference: {meta.get('reference')}.", "",
+         *([_regraded(meta["regraded"]), ""] if meta.get("regraded") else []),
          INTROS.get(klass, _SCENE), "",
          "## Rates", "",
          "| | mistakes | detected (lost points) | named right | confidently wrong | partial or none | also wrong | "
