@@ -219,10 +219,10 @@ def _rectangles(n: int):
     return I0.ravel(), J0.ravel(), I1.ravel(), J1.ravel()
 
 
-def _ranked(fit: Fit, cells: np.ndarray, x: np.ndarray, k_of_area, rects) -> np.ndarray:
-    """chi^2 (uncapped, less a constant) of every rectangle's change k S_Q - x for Q's cells: with a the indicator
-    of Q over the cells, y = D + x and G, b the cells' Gram matrix and products with y, it is
-    k^2 a'Ga - 2 k a'b, summed over rectangles by inclusion and exclusion over cumulative sums."""
+def _sums(fit: Fit, cells: np.ndarray, x: np.ndarray, rects) -> tuple[np.ndarray, np.ndarray]:
+    """(a'b, a'Ga) of every rectangle, whose change k S_Q - x for Q's cells leaves the uncapped chi^2
+    k^2 a'Ga - 2 k a'b (less a constant): a the indicator of Q over the cells, y = D + x, and G, b the cells' Gram
+    matrix and products with y, summed over rectangles by inclusion and exclusion over cumulative sums."""
     n = cells.shape[0]
     sw = np.sqrt(fit.w).ravel()
     y = (fit.D + x).ravel() * sw
@@ -245,8 +245,7 @@ def _ranked(fit: Fit, cells: np.ndarray, x: np.ndarray, k_of_area, rects) -> np.
             for sk, k in ((1, I1), (-1, I0)):
                 for sl, l in ((1, J1), (-1, J0)):
                     aga += si * sj * sk * sl * Q[i, j, k, l]
-    k = k_of_area
-    return k * k * aga - 2.0 * k * ab
+    return ab, aga
 
 
 def _rectangle(fit: Fit, inputs: Inputs) -> Candidate | None:
@@ -269,8 +268,9 @@ def _rectangle(fit: Fit, inputs: Inputs) -> Candidate | None:
     light = (I0 == m) & (J0 == m) & (I1 == n - m) & (J1 == n - m)
     best = None
     x = cells[m:n - m, m:n - m].sum(axis=(0, 1), dtype=np.float64)  # the light's own, as its cells shed it
+    ab, aga = _sums(fit, cells, x, rects)
     for own, k in ((True, np.ones_like(area)), (False, size[0] * size[1] / area)):
-        chi = _ranked(fit, cells, x, k, rects)
+        chi = k * k * aga - 2.0 * k * ab
         chi[light] = np.inf  # the light itself: no change
         for r in np.argsort(chi)[:RECTANGLES_CHECKED]:
             change = k[r] * cells[I0[r]:I1[r], J0[r]:J1[r]].sum(axis=(0, 1), dtype=np.float64) - x
