@@ -219,23 +219,52 @@ def test_a_camera_family_must_be_seen_beyond_the_emitters():
                                               change=change), fit, sc)
 
 
-def test_closeness_is_significant_for_a_clearly_better_fit_and_signed():
-    """Vuong's statistic: the exact change against one 30 % too weak, on noise of seed 3 (sd 0.01): far beyond
-    OCCAM_Z for the exact one, as far below it the other way round, and 0 for a candidate against itself."""
-    from mcrt.grade.adequacy import OCCAM_Z, closeness
+def _step_fit(seed: int):
+    """(fit, step): a flat image 0.5 whose right half is 0.05 brighter, with noise of sd 0.01 (``seed``)."""
     from mcrt.grade.explain.fit import Fit
 
-    rng = np.random.default_rng(3)
+    rng = np.random.default_rng(seed)
     R = np.full((H, W, 3), 0.5)
     step = np.zeros_like(R)
     step[:, W // 2:] = 0.05
     S = R + step + rng.normal(0.0, 1e-2, R.shape)
-    fit = Fit(S, R, np.full(R.shape, 1e-4), np.ones(R.shape, bool), np.zeros(R.shape))
+    return Fit(S, R, np.full(R.shape, 1e-4), np.ones(R.shape, bool), np.zeros(R.shape)), step
+
+
+def test_closeness_is_significant_for_a_clearly_better_fit_and_signed():
+    """Vuong's statistic: the exact change against one 30 % too weak, on noise of seed 3 (sd 0.01): far beyond
+    OCCAM_Z for the exact one, as far below it the other way round, and 0 for a candidate against itself."""
+    from mcrt.grade.adequacy import OCCAM_Z, closeness
+
+    fit, step = _step_fit(3)
     exact = Candidate("a", "exact", "", fit.delta(step), 1, change=step)
     weak = Candidate("b", "weak", "", fit.delta(0.7 * step), 1, change=0.7 * step)
     assert closeness(fit, exact, weak) > 3 * OCCAM_Z
     assert closeness(fit, weak, exact) < -3 * OCCAM_Z
     assert closeness(fit, exact, exact) == 0.0
+
+
+def test_another_change_of_the_same_objects_geometry_that_fits_better_is_a_rival():
+    """mcrt.grade.adequacy.geometry_rival on noise of seed 4 (sd 0.01): a claimed size of the tetrahedron that fits
+    a step 80 % as well as its place does has that place for a rival (the words then say its geometry); the place
+    of the sphere is no rival of it, nor is a place that fits worse, nor one the size beats by CONFIRM_Z."""
+    from mcrt.grade.adequacy import geometry_rival
+
+    fit, step = _step_fit(4)
+
+    def cand(family, value, k):
+        return Candidate(family, family, "", fit.delta(k * step), 1, value=value, change=k * step)
+
+    size = cand("object_size", {"object": "tetrahedron", "scale": 0.7}, 0.8)
+    place = cand("object_moved", ["tetrahedron", "y", 0.5], 1.0)
+    sphere = cand("object_moved", ["sphere", "x", 0.5], 1.0)
+    assert geometry_rival(size, [size, place], fit) is place
+    assert geometry_rival(size, [size, sphere], fit) is None
+    assert geometry_rival(place, [place, size], fit) is None  # the size fits worse
+    exact = cand("object_size", {"object": "tetrahedron", "scale": 0.7}, 1.0)
+    weak = cand("object_moved", ["tetrahedron", "y", 0.5], 0.3)
+    assert geometry_rival(exact, [exact, weak], fit) is None
+    assert geometry_rival(cand("albedo", [0.5, 0.5, 0.5], 0.8), [place], fit) is None  # not a geometry claim
 
 
 def test_the_camera_warp_shifts_a_point_of_light_without_changing_its_footprint():

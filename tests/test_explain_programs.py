@@ -912,6 +912,61 @@ def test_black_pixels_with_the_room_darker_are_faces_missing(ctx, module, name):
     assert "faces missing from the room" in ex["sentence"] and "mesh_face" in named_causes(res)[0]
 
 
+@pytest.mark.parametrize("walls, seed", [(("wall_CD", "wall_EF"), 73), (("wall_BC", "wall_CD"), 75)])
+def test_walls_missing_are_no_colours_and_point_to_faces(ctx, walls, seed):
+    """Two walls left out of the scene: Mitsuba renders of the room with the void behind them. A black wall reflects
+    as little as a missing one, so darker colours of several surfaces come close in chi^2; but the hand-in is 0 where
+    the light reaches those walls, which no colour of theirs but black makes: the words name them black, missing
+    among the causes, or point to faces missing from the room, and name no colour alone. The image loses points."""
+    from mcrt.grade.accuracy import fresh
+    from mcrt.grade.accuracy.run import is_named
+
+    def edit(d):
+        for name in walls:
+            d = fresh._without_mesh(d, name)
+        return d
+
+    res = grade_image("walls_missing", ctx, [_mitsuba(seed, mitsuba_edit=edit)], spp=1024)
+    ex = res.details["explanation"]
+    named = named_causes(res)[0]
+    assert is_named("mesh_face", named) and ("albedo" not in named or "object_missing" in named), ex["sentence"]
+    assert res.score < res.max_score
+
+
+def test_a_change_that_lights_black_pixels_is_not_adequate(ctx):
+    """The rule on its own (mcrt.grade.adequacy.black_holes and holes_left), on a Mitsuba render (seed 74) as the
+    reference: a patch of the floor 0 in the hand-in is a hole; a change that keeps 5 % of the floor's light there
+    leaves it (at the reference's noise of 1024 spp), one that keeps 1 % does not, nor one that keeps 5 % with noise
+    ten times the reference's there; the same patch in a shadow-only image (no pixel lit) is no hole, nor is a
+    patch under the least share of pixels, nor are the same pixels scattered (every other one), nor the patch in an
+    image a tenth as bright around it."""
+    from mcrt.grade.adequacy import HOLE_LIT, MIN_HOLES, black_holes, holes_left
+
+    R = _mitsuba(74)
+    labels, names = ctx.labels["near"], ctx.label_names
+    floor = labels == names.index("the floor")
+    r, c = (int(np.median(x)) for x in np.nonzero(floor))
+    patch = np.zeros_like(floor)
+    patch[r - 3:r + 4, c - 3:c + 4] = True  # a 7 x 7 patch in the floor's middle
+    assert floor[patch].all() and MIN_HOLES * patch.size <= patch.sum() < floor.sum()
+    S = np.where(patch[..., None], 0.0, R)
+    mask, lit = np.ones(R.shape[:2], bool), np.ones(R.shape[:2], bool)
+    holes = black_holes(S, R, mask, lit)
+    assert holes is not None and np.array_equal(holes, patch)
+    var = ctx.model_var["near"].astype(np.float64) / 1024
+    for keep, noise, left in ((0.05, 1, True), (0.01, 1, False), (0.05, 100, False)):
+        change = np.where(patch[..., None], (keep - 1.0) * R, 0.0)
+        assert (holes_left(R, change, holes, noise * var, labels) is not None) == left
+    assert HOLE_LIT == 0.02
+    assert black_holes(S, R, mask, ~lit) is None
+    few = patch & (np.cumsum(patch.ravel()).reshape(patch.shape) <= int(MIN_HOLES * patch.size) - 1)
+    assert black_holes(np.where(few[..., None], 0.0, R), R, mask, lit) is None
+    yy, xx = np.indices(patch.shape)
+    scattered = floor & ((yy + xx) % 2 == 0)
+    assert scattered.sum() >= patch.sum() and black_holes(np.where(scattered[..., None], 0.0, R), R, mask, lit) is None
+    assert black_holes(np.where(patch[..., None], 0.0, 0.1 * R), R, mask, lit) is None
+
+
 def test_black_pixels_are_faces_only_with_the_room_darker_and_not_the_brightest(ctx):
     """The rule on its own (mcrt.grade.broader.room_faces), on a Mitsuba render (seed 71) as the reference: black
     pixels on the floor with the rest 4 % darker are faces missing (k = 0.04); with it 4 % brighter, or 0.2 %

@@ -710,6 +710,16 @@ def test_every_row_one_row_is_named(ctx):
     assert named_causes(res)[0] == ["row_stride"] and res.score < res.max_score
 
 
+def test_an_image_of_one_colour_is_no_row_repeated(ctx):
+    """An image of one colour, white (every code past the top written as the largest), has every row and every
+    column the same: no row or column repeated is named for it, and it loses points."""
+    res = grade_image("white", ctx, [np.ones((RES, RES, 3))], spp=1024)
+    ex = res.details.get("explanation") or {}
+    assert "row_stride" not in named_causes(res)[0], ex.get("sentence", res.summary)
+    assert not any(c["family"] == "lines_aliased" for c in ex.get("candidates", [])), ex.get("sentence")
+    assert res.score < res.max_score
+
+
 def test_a_mirrored_image_names_the_cameras_vectors_beside_the_writer(ctx):
     """A Mitsuba render (seed 105, 1024 spp) mirrored left to right, as a camera whose right vector is up x forward
     makes it: the orientation criterion fails, and its words name the camera's up and right vectors beside the order

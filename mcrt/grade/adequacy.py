@@ -26,6 +26,16 @@ relevance threshold ``min_effect``), with the per-object tests of
   difference) to lead: the objects the difference sits on are named
   instead, with how they differ, and the closest cause with its share.
 
+**Black where the light reaches is never noise.** A sample of a surface the
+light reaches directly is never 0, so a hand-in's pixels 0 in every channel
+there (:func:`black_holes`: a face missing, the void seen through it, a
+surface black, pixels never written) are explained only by a change that
+makes them dark: a candidate whose prediction keeps :data:`HOLE_LIT` of the
+reference's light on enough of them (:func:`holes_left`) is not adequate,
+however small its chi^2 there (a wall's colour fitted a tenth of the
+scene's reads a missing wall within a noise model made for lit pixels), and
+the surfaces the holes lie on are where its remainder is.
+
 **A claim must beat every other reading that leaves noise.** Occam's rule
 picks among candidates; it does not say the image confirmed the pick. The
 BIC's credit for fewer parameters is largest where two predictions are
@@ -132,9 +142,11 @@ class Scene2D:
 
 def remainder_test(S: np.ndarray, R: np.ndarray, delta: np.ndarray | float, mask: np.ndarray, noise: Noise,
                    sc: Scene2D, *, extra_var: np.ndarray | None = None, explained: float = 1.0,
-                   structure: bool = True) -> Adequacy:
+                   structure: bool = True, holes: np.ndarray | None = None) -> Adequacy:
     """Test S - R - delta (the module docstring); ``explained`` is the candidate's share, for the verdict's words;
-    ``structure``: with the per-object structure test (:func:`mcrt.grade.objects.structure_family`)."""
+    ``structure``: with the per-object structure test (:func:`mcrt.grade.objects.structure_family`); ``holes``: the
+    hand-in's black pixels where the light reaches (:func:`black_holes`), which a change that lights them leaves
+    (:func:`holes_left`)."""
     S, R = np.asarray(S, np.float64), np.asarray(R, np.float64)
     d = np.broadcast_to(np.asarray(delta, np.float64), S.shape)
     ok = mask & np.isfinite(S).all(axis=-1) & np.isfinite(d).all(axis=-1)
@@ -157,14 +169,79 @@ def remainder_test(S: np.ndarray, R: np.ndarray, delta: np.ndarray | float, mask
     rej_o = bt.extra.get("objects", np.zeros(K * 3, bool)).reshape(K, 3) | rej_s[:, None]
     n_rej = sum(int(np.count_nonzero(s.penalised)) for s in bt.scales) + int(np.count_nonzero(rej_o))
     n_tests = bt.n_tests + K * 4
+    left = holes_left(R, d, holes, nz.reference, sc.labels)
+    n_rej += left is not None
     if n_rej == 0:
         return Adequacy("adequate", explained, 0, n_tests, excess_rms=bt.excess_rms)
     where = obj.flagged_objects(ot, rej_o, tile_effect=bt.pixel_effect, labels=sc.labels, mask=ok)
+    if left is not None:  # the holes' surfaces, most of them first, after the tests' own
+        k, n = np.unique(sc.labels[left], return_counts=True)
+        where = list(where) + [int(x) for x in k[np.argsort(-n, kind="stable")] if int(x) not in where]
     nv = nz.model + nz.reference
     words = obj.sentence(S - d, R, ok, nv, sc.labels, sc.names, where)
     verdict = "partial" if explained >= PARTIAL_SHARE else "none"
     return Adequacy(verdict, explained, n_rej, n_tests, where, words, obj.effect_map(ot, rej_o, sc.labels, ok),
                     bt.excess_rms)
+
+
+#: A change lights a hole where its prediction there is at least this share of the reference's luminance (a surface
+#: of a fiftieth of its albedo is dark, not black: a sample of it is never 0).
+HOLE_LIT = 0.02
+#: ... by this many standard errors of the prediction's noise over a surface's holes.
+HOLE_Z = 4.0
+#: Least share of the image's pixels that are holes for them to count (a few NaN samples written 0 are no surface).
+MIN_HOLES = 0.005
+#: Least share of the holes with both neighbours along a row or along a column black too: holes are patches or
+#: lines (rows never written), not a sparse render's zeros scattered (at a share p of zeros, about 2 p^2 of them).
+HOLE_INTERIOR = 0.5
+#: Least luminance off the holes, as a share of the reference's there, for the image to be lit around them: an image
+#: dark throughout (the light hardly ever found) may have dark pixels 0 by chance.
+LIT_AROUND = 0.25
+
+
+def black_holes(S: np.ndarray, R: np.ndarray, mask: np.ndarray, lit: np.ndarray | None) -> np.ndarray | None:
+    """(H, W) the hand-in's pixels 0 in every channel where the reference is clearly not
+    (:func:`mcrt.grade.explain.pixels.black_pixels`' rule) and the light reaches directly (``lit``,
+    :func:`mcrt.grade.explain.pixels.directly_lit`), where they are at least :data:`MIN_HOLES` of the pixels; else None.
+
+    A sample of a surface the light reaches directly is never 0 (next-event estimation finds the light), so a
+    patch of such pixels 0 in every channel, in an image lit around it, says no surface is there, or a black one, or
+    nothing was written: no change that leaves light there explains it, however close its chi^2
+    (:func:`holes_left`). They count as holes where at least :data:`HOLE_INTERIOR` of them are black with both
+    neighbours along a row or a column (a sparse render's zeros are scattered) and the image off them keeps
+    :data:`LIT_AROUND` of the reference's light. Black pixels in shadow are the bounced light lost, another reading
+    (:mod:`mcrt.grade.explain.pixels`)."""
+    from mcrt.grade.explain.pixels import DARK
+
+    used = mask & np.isfinite(S).all(axis=-1)
+    if lit is None or not used.any():
+        return None
+    lum = R @ obj.LUMINANCE
+    black = used & lit & np.all(S == 0.0, axis=-1) & (lum >= DARK * float(np.median(lum[used])))
+    if int(black.sum()) < MIN_HOLES * int(used.sum()):
+        return None
+    pad = np.pad(black, 1)
+    inner = black & ((pad[:-2, 1:-1] & pad[2:, 1:-1]) | (pad[1:-1, :-2] & pad[1:-1, 2:]))
+    off = used & ~black & (lum < 1.0)  # the light's own pixels say nothing of the room's light
+    around = float(np.sum(S[off] @ obj.LUMINANCE)) >= LIT_AROUND * float(np.sum(lum[off]))
+    return black if around and int(inner.sum()) >= HOLE_INTERIOR * int(black.sum()) else None
+
+
+def holes_left(R: np.ndarray, delta: np.ndarray, holes: np.ndarray | None, var: np.ndarray,
+               labels: np.ndarray) -> np.ndarray | None:
+    """(H, W) the ``holes`` (:func:`black_holes`) a change ``delta`` of R lights, where they are at least
+    :data:`MIN_HOLES` of the pixels; else None. A surface's holes are lit where the prediction's luminance over them
+    exceeds :data:`HOLE_LIT` of R's by :data:`HOLE_Z` standard errors (``var``: the prediction's noise per pixel, the
+    reference's and the change's own: a change rendered with the surface black still carries their noise there)."""
+    if holes is None:
+        return None
+    lum, pred, v = R @ obj.LUMINANCE, (R + delta) @ obj.LUMINANCE, var @ obj.LUMINANCE**2
+    left = np.zeros_like(holes)
+    for k in np.unique(labels[holes]):
+        on = holes & (labels == k)
+        if float(np.sum(pred[on] - HOLE_LIT * lum[on])) > HOLE_Z * float(np.sqrt(np.sum(v[on]))):
+            left |= on
+    return left if int(left.sum()) >= MIN_HOLES * R.shape[0] * R.shape[1] else None
 
 
 def _energy(x: np.ndarray, mask: np.ndarray, labels: np.ndarray, K: int) -> np.ndarray:
@@ -318,6 +395,21 @@ def unconfirmed(c, adequate: list, fit, named: list) -> list:
     return out
 
 
+def geometry_rival(c, cands: list, fit):
+    """The best candidate that changes the same object's geometry as claimed c otherwise (another of
+    :data:`mcrt.grade.broader.GEOMETRY`: its size for its place, its place for its size), adequate or not, with a
+    smaller chi^2 than c's, that c does not beat by :data:`CONFIRM_Z` (:func:`closeness` without the BIC's credit);
+    else None. Such a rival leaves more than noise somewhere, but it fits the image as a whole at least as well: the
+    image confirms only that the object's geometry is wrong, not which part of it (a tetrahedron moved reads partly as
+    one resized: its outline and shadow shift either way)."""
+    obj = broader.geometry_object(c)
+    if obj is None:
+        return None
+    return next((a for a in cands if a is not c and a.family != c.family and a.change is not None
+                 and broader.geometry_object(a) == obj and a.chi2 < c.chi2
+                 and closeness(fit, c, a, bic=False) < CONFIRM_Z), None)
+
+
 #: Pixels within this many of one that sees an emitter (directly or in the mirror) are its outline.
 OUTLINE = 2
 
@@ -372,14 +464,20 @@ def claim_rule(S: np.ndarray, R: np.ndarray, mask: np.ndarray, noise: Noise, sc:
     from mcrt.grade import candidates as cd
     from mcrt.grade.explain.claim import GAIN_SIGMAS, share_rule
 
+    from mcrt.grade.explain.pixels import directly_lit
+
+    holes = None
+
     def test(c):
         var = extra_var(c) if extra_var is not None else None
         # A denoiser's kernel is no Gaussian: where the detectors found a filter over the image, the structure a
         # blur leaves on objects is the denoiser's, not another mistake's.
         return remainder_test(S, R, c.change, mask, noise, sc, extra_var=var, explained=c.explained,
-                              structure=not (sc.filtered and c.family == "blur"))
+                              structure=not (sc.filtered and c.family == "blur"), holes=holes)
 
     def rule(e, fit, inputs) -> None:
+        nonlocal holes
+        holes = black_holes(S, R, mask, directly_lit(inputs.basis))
         share_rule(e, fit, inputs)
         tried = {}
         if e.verdict in (cd.CLAIMED, cd.INDISTINCT):  # a share of NAMED; a small gain over noise is no objection
@@ -404,17 +502,23 @@ def claim_rule(S: np.ndarray, R: np.ndarray, mask: np.ndarray, noise: Noise, sc:
                     if a is not None and not any(x.family == fam for x in alts):
                         alts.append(a)
                 others = unconfirmed(c, adequate, fit, alts)
-                _claim(e, c, tried[id(c)], others or alts, np.where(mask[..., None], S - R - c.change, 0.0))
+                rival = None if others else geometry_rival(c, e.candidates, fit)
+                _claim(e, c, tried[id(c)], others or ([rival] if rival else alts),
+                       np.where(mask[..., None], S - R - c.change, 0.0))
                 e.adequacy.also_adequate = [(a.family if a.family != "catalogue" else a.name, a.params,
                                              round(closeness(fit, c, a, bic=False), 2)) for a in adequate if a is not c]
                 # Another reading fits as well, or the cause is a surface out of view: the image cannot say which
-                # (or cannot confirm it), no cause is claimed.
-                if others or c.out_of_view:
+                # (or cannot confirm it), no cause is claimed. Another change of the object's geometry that fits
+                # better leaves the object's geometry, which the words say.
+                if others or c.out_of_view or rival:
                     e.verdict = e.adequacy.verdict = cd.AMBIGUOUS
+                if rival:
+                    obj = broader.geometry_object(c)
+                    e.broader = ("object_geometry", f"both point to the {obj}'s geometry: {broader.GEOMETRY_WORDS}")
                 return
         if _partial(e, tried, test, S - R, mask):
             e.broader = broader.reading(e.best, e.remainder, R, mask, noise.model + noise.reference, sc.labels, sc.names,
-                                        e.adequacy.objects)
+                                        e.adequacy.objects, holes=holes)
             return
         e.verdict = cd.NONE if e.verdict == cd.CLAIMED else e.verdict
         ad = remainder_test(S, R, 0.0, mask, noise, sc, explained=0.0)

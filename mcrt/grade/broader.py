@@ -27,7 +27,10 @@ change is none the families render:
   pixels left out), must give :math:`k \ge` :data:`MIN_LOSS` at
   :data:`LOSS_Z` standard errors. Black pixels that are the reference's
   brightest (:data:`BRIGHTEST`) are codes overflowing, not holes. Both
-  together point to the faces;
+  together point to the faces. Where another reading leads (a wall's colour
+  darkened, fitted as close as it gets), the black pixels are the hand-in's
+  where the light reaches (:func:`mcrt.grade.adequacy.black_holes`), which
+  that reading leaves lit, none of them on the light itself;
 * **the diffuse bounce** (:data:`BOUNCE`: a bounce drawn or weighted wrongly,
   :mod:`mcrt.grade.explain.bounce`, or the catalogue's samplers that are
   not cosine-distributed) leading, where nothing is left on the light's own
@@ -68,6 +71,9 @@ import numpy as np
 from mcrt.grade.candidates import FLOOR
 from mcrt.stats import LUMINANCE_WEIGHTS
 
+#: An object's geometry wrong, in words: what it means, and where to look.
+GEOMETRY_WORDS = ("its shape, size or place is not the scene's in a way one scale or one shift does not capture (check "
+                  "its vertices or centre and radius, its transform and its ray intersection test)")
 #: The families whose fit moves, resizes or removes one object (value: the object's name).
 GEOMETRY = ("object_size", "object_moved", "object_missing")
 #: The families whose fit draws or weights the diffuse bounce otherwise than cosine-weighted: (family, name) with
@@ -95,18 +101,17 @@ _LUM = np.asarray(LUMINANCE_WEIGHTS)
 
 
 def reading(lead, remainder: np.ndarray, R: np.ndarray, mask: np.ndarray, var: np.ndarray, labels: np.ndarray,
-            names, objects) -> tuple[str, str] | None:
+            names, objects, *, holes: np.ndarray | None = None) -> tuple[str, str] | None:
     """(family, words) of the broader cause of partial reading ``lead`` (its remainder ``remainder``, (H, W, 3);
     ``var`` the noise's variance per pixel; ``labels`` and ``names`` the surfaces; ``objects`` the labels the
-    remainder was found on), or None."""
+    remainder was found on; ``holes`` the hand-in's black pixels where the light reaches,
+    :func:`mcrt.grade.adequacy.black_holes`), or None."""
     obj = geometry_object(lead)
     # The object's own pixels cannot tell its shape from its material (a mirror's reflections, a surface's shading):
     # only a remainder on what lies around it (its outline's other side, its shadow) points to its geometry.
     if obj is not None and any(obj not in names[k] for k in objects):
-        return ("object_geometry", f"together they point to the {obj}'s geometry: its shape, size or place is not "
-                "the scene's in a way one scale or one shift does not capture (check its vertices or centre and "
-                "radius, its transform and its ray intersection test)")
-    loss = room_faces(lead, remainder, R, mask, var, labels, names)
+        return ("object_geometry", f"together they point to the {obj}'s geometry: {GEOMETRY_WORDS}")
+    loss = room_faces(lead, remainder, R, mask, var, labels, names, holes=holes)
     if loss is not None:
         return ("room_faces", "together they point to faces missing from the room: the black pixels are the void "
                 f"seen through them, and the rest of the room is darker by {100 * loss:.1f} % as light escapes "
@@ -170,15 +175,23 @@ def geometry_object(lead) -> str | None:
     return name if name in OBJECTS else None
 
 
-def room_faces(lead, remainder, R, mask, var, labels, names) -> float | None:
-    """The room's relative darkening off ``lead``'s black pixels, where they lie on its walls, floor and ceiling
+def room_faces(lead, remainder, R, mask, var, labels, names, *, holes=None) -> float | None:
+    """The room's relative darkening off the black pixels, where they lie on its walls, floor and ceiling
     (:data:`ON_ROOM`; not where the light is hidden, which is another reading) and the darkening is significant
-    (module docstring); else None."""
-    if lead is None or lead.family != "bad_pixels" or lead.name != "black pixels" or lead.change is None:
+    (module docstring); else None. The black pixels are ``lead``'s where it is the black pixels' reading, else the
+    ``holes`` (the hand-in's black pixels where the light reaches, none on the light itself: the void seen through
+    the room is never the light) whatever the lead: a lead that lights them (a wall's colour darkened, the light's
+    samples moved) leaves them, and the room around them says whether light escapes there."""
+    if lead is None or lead.change is None:
         return None
-    if not isinstance(lead.value, dict) or lead.value.get("in_shadow"):  # black where the light is hidden: the bounced light lost, another reading
+    if lead.family == "bad_pixels" and lead.name == "black pixels":
+        if not isinstance(lead.value, dict) or lead.value.get("in_shadow"):  # black where the light is hidden: the bounced light lost, another reading
+            return None
+        bad = np.any(lead.change != 0.0, axis=-1) & mask
+    elif holes is not None and not any(names[k] == "the light" for k in np.unique(labels[holes & mask])):
+        bad = holes & mask
+    else:
         return None
-    bad = np.any(lead.change != 0.0, axis=-1) & mask
     room = np.array([n.startswith("wall ") or n in ("the floor", "the ceiling") for n in names])
     if not bad.any() or float(np.mean(room[np.minimum(labels[bad], len(names) - 1)])) < ON_ROOM:
         return None
@@ -186,7 +199,7 @@ def room_faces(lead, remainder, R, mask, var, labels, names) -> float | None:
     if float(np.mean(lum[bad] > np.quantile(lum[mask], BRIGHTEST))) >= ON_ROOM:
         return None  # the brightest values black: codes overflowing, not holes
     off = mask & ~bad & (R @ _LUM < 1.0)  # the light's own pixels get no light from the room
-    r, ref = remainder[off] @ _LUM, R[off] @ _LUM
+    r, ref = (remainder + lead.change)[off] @ _LUM, R[off] @ _LUM  # the hand-in's difference there, whatever the lead
     v = var[off] @ _LUM**2 + (FLOOR * ref) ** 2  # no pixel's weight beyond a relative error of FLOOR
     info = float(np.sum(ref * ref / v))  # the least-squares fit of r = -k R, weighted by the noise: k's information
     if info <= 0:

@@ -106,6 +106,11 @@ def explanation_words(e: Explanation) -> tuple[str, str]:
                     + (f" (so would {alt.text}, {100 * alt.explained:.0f} %)" if alt else "")
                     + (f"; it changes the image {best.where}" if best.where else "") + ".")
         return sentence, f"It looks like {best.text}."
+    if e.verdict == AMBIGUOUS and e.broader and e.adequacy.alternatives:  # an object's geometry, which part unsaid
+        other = e.adequacy.alternatives[0][1]
+        sentence = (f"It could be {best.text}, which leaves only noise, or {other}, which fits as well or better "
+                    f"though it leaves more than noise somewhere: {e.broader[1]}.")
+        return sentence, f"It could be {best.text}, or {other}: {e.broader[1]}."
     if e.verdict == AMBIGUOUS:  # causes of other readings leave noise as well: the image cannot say which
         texts = [best.text] + [t for _, t, _ in e.adequacy.alternatives]
         each = ", ".join(texts[:-1]) + ", or " + texts[-1]

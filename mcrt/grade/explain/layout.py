@@ -156,12 +156,14 @@ def _one_line(fit: Fit) -> list[Candidate]:
     """Every row (column) one, where the hand-in's lines are all one to the last bit (no render's lines are equal by
     chance): the model repeats its own line (its noise repeated too), and the words name the render's line k it
     matches best. No candidate otherwise: a render's line repeated fits nothing else, and would stand as the closest
-    cause of images nothing explains."""
+    cause of images nothing explains. Nor where that line is one colour too: an image of one colour (white where the
+    codes overflowed, black where nothing was written) has every row and every column the same without any line
+    repeated, and the model, the hand-in itself, would explain it whatever made it."""
     out = []
     for axis, word in ((0, "row"), (1, "column")):
         n = fit.R.shape[axis]
         own = np.take(fit.S, [0], axis=axis)
-        if not np.array_equal(np.broadcast_to(own, fit.S.shape), fit.S):
+        if not np.array_equal(np.broadcast_to(own, fit.S.shape), fit.S) or np.all(own == own.flat[:3]):
             continue
         errs = [fit.model(np.repeat(np.take(fit.R, [k], axis=axis), n, axis=axis)) for k in range(n)]
         k = int(np.argmin(errs))

@@ -155,18 +155,24 @@ def _black(fit: Fit, inputs: Inputs) -> list[Candidate]:
 LIT_SHARE = 0.01
 
 
-def _in_shadow(bad: np.ndarray, inputs: Inputs) -> bool:
-    """Whether (all but :data:`LIT_SHARE` of) the black pixels are ones the light does not reach directly: their
-    direct light (the basis's paths of depth 2 less those of depth 1: next-event estimation alone lights a surface
-    there) none, to the last bit, and no emission seen there (the light's own pixels get no light sample either). A
-    shadow ray always blocked gives such a pixel no sample of direct light, whatever the basis's seed."""
-    depth = dict(inputs.basis.nodes.get("depth", ())) if inputs.basis is not None else {}
+def directly_lit(basis) -> np.ndarray | None:
+    """(H, W) the pixels the light reaches directly or the camera sees emitting: their direct light (the ``basis``'s
+    paths of depth 2 less those of depth 1: next-event estimation alone lights a surface there) or the emission seen
+    there (the light's own pixels get no light sample) not 0, to the last bit; None without the basis's depths. A
+    shadow ray always blocked gives a pixel no sample of direct light, whatever the basis's seed."""
+    depth = dict(basis.nodes.get("depth", ())) if basis is not None else {}
     if 1 not in depth or 2 not in depth:
-        return False
+        return None
     seen = np.asarray(depth[1], np.float64)  # the emission the camera sees: the light's own pixels
     direct = np.asarray(depth[2], np.float64) - seen
-    lit = np.any(direct[bad] != 0.0, axis=-1) | np.any(seen[bad] != 0.0, axis=-1)
-    return int(lit.sum()) <= int(LIT_SHARE * int(bad.sum()))
+    return np.any(direct != 0.0, axis=-1) | np.any(seen != 0.0, axis=-1)
+
+
+def _in_shadow(bad: np.ndarray, inputs: Inputs) -> bool:
+    """Whether (all but :data:`LIT_SHARE` of) the black pixels are ones the light does not reach directly
+    (:func:`directly_lit`)."""
+    lit = directly_lit(inputs.basis)
+    return lit is not None and int(lit[bad].sum()) <= int(LIT_SHARE * int(bad.sum()))
 
 
 def _hole(bad: np.ndarray, inputs: Inputs) -> str:

@@ -162,10 +162,41 @@ def albedos(fit: Fit, inputs: Inputs) -> list[Candidate]:
     ways = {np.sign(np.mean(np.subtract(fitted[lab], b.albedo[lab][2]))) for lab in changed}
     if len(ways) > 1 and min(moved[lab] for lab in changed) < TYPED:
         return []  # a few hundredths up here and down there: light moved between surfaces, not colours typed
-    words = "; ".join(f"{lab} {_fmt(fitted[lab])} where the scene says {_fmt(b.albedo[lab][2])}" for lab in changed)
+    black = _black_in_hand_in(fit, inputs, changed)
+    words = "; ".join(f"{lab} {_fmt(fitted[lab])} where the scene says {_fmt(b.albedo[lab][2])}"
+                      for lab in changed if lab not in black)
     text = f"the colours of {len(changed)} surfaces other than the scene's: {words}"
-    return [Candidate("albedo", "albedos of several surfaces", text, fit.delta(dm), 3 * len(labels),
+    if black:  # black in the hand-in: every cause of that named, a face missing among them
+        them = "them" if len(black) > 1 else "it"
+        text = (f"{' and '.join(black)} black (missing from the scene, as nothing lies behind {them} in the closed "
+                f"room; or with albedo 0; or with normals facing away, so that one-sided shading (max(0, n.l)) gives "
+                f"0: check the list of surfaces, the triangles' winding, each normal's direction)"
+                + (f", and the colours of other surfaces: {words}" if words else ""))
+    fam = black_family(black[0]) if black else "albedo"
+    return [Candidate(fam, "albedos of several surfaces", text, fit.delta(dm), 3 * len(labels),
                       value={lab: tuple(fitted[lab]) for lab in changed}, change=dm, flexible=True)]
+
+
+#: A surface is black in the hand-in where at least this share of its pixels are holes (0 where the light reaches).
+HOLED = 0.5
+
+
+def _black_in_hand_in(fit: Fit, inputs: Inputs, labels: list[str]) -> list[str]:
+    """Those of ``labels`` (the albedo basis's: 'wall BC') the hand-in shows black: :data:`HOLED` of the surface's
+    pixels 0 in every channel where the light reaches it (:func:`mcrt.grade.adequacy.black_holes`). The fit of
+    several surfaces at once leaves a black surface's colour loosely fixed (the others' changes reach its pixels
+    too: a wall fitted (0.02, 0.01, 0.08) predicts it black), so the hand-in says it: black, with every cause of
+    that (:mod:`.surface_black`), a wall missing among them."""
+    from mcrt.grade.adequacy import black_holes
+    from mcrt.grade.explain.pixels import directly_lit
+
+    if inputs.labels is None:
+        return []
+    holes = black_holes(fit.S, fit.R, fit.ok.all(axis=-1), directly_lit(inputs.basis))
+    if holes is None:
+        return []
+    names = np.array([n.split(" (")[0] for n in inputs.label_names])[inputs.labels]
+    return [lab for lab in labels if (names == lab).any() and float(np.mean(holes[names == lab])) >= HOLED]
 
 
 def _seen(inputs: Inputs) -> set[str] | None:

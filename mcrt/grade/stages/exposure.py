@@ -49,7 +49,17 @@ def stage(g: Grading, hand: Hand, lvl: Level, t: bias.Tested) -> bias.Tested:
 
 
 def _rescaled(g: Grading, hand: Hand, lvl: Level, k: float) -> tuple[float, bias.Tested] | None:
-    """The image divided by the nearest nice factor, tested again; None when it still fails."""
+    """The image divided by the nearest nice factor, tested again; None when it still fails, or where the image is
+    black in patches or lines the light reaches (:func:`mcrt.grade.adequacy.black_holes`), which no factor lights: the
+    bias test's tiles average rows never written with the rest (three rows in four black read as a quarter of the
+    light)."""
+    from mcrt.grade.adequacy import black_holes
+    from mcrt.grade.explain.pixels import directly_lit
+
+    basis = getattr(g.ctx, "explain", None)
+    if basis is not None and basis.camera == hand.cam and basis.base.shape == hand.R.shape and \
+            black_holes(lvl.img, hand.R, lvl.clip_mask, directly_lit(basis)) is not None:
+        return None
     ks = ck.nice_scale(k)
     img_s = lvl.img / ks
     pair_s = lvl.pair / ks**2 if lvl.pair is not None else None
