@@ -21,7 +21,7 @@ CLASSES = {"scene": "cases", "outside": "outside", "programs": "programs", "fres
            "unvisited": "unvisited", "unlooked": "unlooked", "unwonted": "unwonted",
            "unremarked": "unremarked", "unremembered": "unremembered", "unnoticed": "unnoticed",
            "unrecorded": "unrecorded", "unattended": "unattended", "unattested": "unattested",
-           "unconsidered": "unconsidered"}
+           "unconsidered": "unconsidered", "unanticipated": "unanticipated"}
 
 
 def register(sub) -> None:
@@ -63,9 +63,10 @@ def register(sub) -> None:
                    "twenty-seventh, in tracers, scene input and output, written blind, "
                    "mcrt.grade.accuracy.unrecorded), 'unattended' (a twenty-eighth, in tracers, scene input and "
                    "output, written blind, mcrt.grade.accuracy.unattended), 'unattested' (a twenty-ninth, in array "
-                   "and GPU frameworks' tracers, written blind, mcrt.grade.accuracy.unattested) or 'unconsidered' (a "
-                   "thirtieth, in Rust, Go, Java and C# tracers, written blind, mcrt.grade.accuracy.unconsidered) "
-                   "(default: scene)")
+                   "and GPU frameworks' tracers, written blind, mcrt.grade.accuracy.unattested), 'unconsidered' (a "
+                   "thirtieth, in Rust, Go, Java and C# tracers, written blind, mcrt.grade.accuracy.unconsidered) or "
+                   "'unanticipated' (a thirty-first, in the mathematics students derive by hand and type in, written "
+                   "blind, mcrt.grade.accuracy.unanticipated) (default: scene)")
     p.add_argument("--held-out", choices=("all", "only", "none"), default="all",
                    help="grade all cases, only the held-out ones, or none of them (default: all)")
     p.add_argument("--out", default=None, help=f"report folder (default: {DEFAULT_OUT}, or {DEFAULT_OUT}/CLASS "
