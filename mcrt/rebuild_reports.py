@@ -226,6 +226,17 @@ REPORTS: tuple[Report, ...] = (
            "blind to the grader (post-processing, writing the file, materials, geometry, camera and light models, the "
            "integrator, samples and passes): named right, confidently wrong, partial, false alarms, with a held-out "
            "half fixed before any grading"),
+    Report("grading_accuracy/unanticipated",
+           "grade-accuracy --class unanticipated --out reports/grading_accuracy/unanticipated",
+           "grading on a thirty-first class of mistakes in students' tracers (the mathematics derived by hand), "
+           "written blind to the grader (post-processing, writing the file, materials, geometry, camera and light "
+           "models, the integrator, samples and passes): named right, confidently wrong, partial, false alarms, with a "
+           "held-out half fixed before any grading"),
+    Report("grading_accuracy/unexamined", "grade-accuracy --class unexamined --out reports/grading_accuracy/unexamined",
+           "grading on a thirty-second class of mistakes in students' tracers (the workflow around them), written "
+           "blind to the grader (post-processing, writing the file, materials, geometry, camera and light models, the "
+           "integrator, samples and passes): named right, confidently wrong, partial, false alarms, with a held-out "
+           "half fixed before any grading"),
     Report("grading/false_alarms", "grade-false-alarms --out reports/grading/false_alarms",
            "grading's false alarms on correct renders: estimators, samplers, spp 16-1024, 64x64 to 800x800, PNG curves"),
 )

@@ -16,7 +16,7 @@ import mcrt  # noqa: F401  (before mitsuba and drjit)
 from accuracy_helpers import (W, build as _build, by_name, check_builds, check_command, check_correct_agree,
                               check_held_out_rule, check_new_truths, check_not_catalogued, check_old_causes,
                               check_seeds, check_specs, image as _image, pillow_codes, plain as _plain)
-from mcrt.grade.accuracy import (blind, cases, fresh, novel, outside, programs, unanticipated, unasked, unattended,
+from mcrt.grade.accuracy import (unexamined, blind, cases, fresh, novel, outside, programs, unanticipated, unasked, unattended,
                                  unattested, unbeknown, unbidden, unconsidered, unforeseen, unguessed, unheard,
                                  unheralded, unlooked, unmet, unnoticed, unprompted, unrecorded, unremarked,
                                  unremembered, unsaid, unseen, unsought, untold, untried, unvisited, unwonted)
@@ -25,7 +25,8 @@ from mcrt.image_files import RGB_TO_XYZ, read_image, srgb_eotf
 _by_name = partial(by_name, unanticipated.SPECS)
 _OTHERS = (cases, outside, programs, fresh, blind, unseen, untried, novel, untold, unmet, unheard, unsaid, unasked,
            unsought, unguessed, unforeseen, unprompted, unbidden, unheralded, unbeknown, unvisited, unlooked, unwonted,
-           unremarked, unremembered, unnoticed, unrecorded, unattended, unattested, unconsidered)
+           unremarked, unremembered, unnoticed, unrecorded, unattended, unattested, unconsidered,
+           unexamined)  # the last, its twin: written the same day, apart
 
 #: The sphere's centre and radius, the light's centre, size and radiance (scene.md).
 _C, _R = np.array([9.5, 2.0, -3.3]), 1.5

@@ -404,7 +404,8 @@ _UNBEKNOWN = (
 def _twin_blind(module: str, ordinal: str, frozen: str = "cca957e") -> str:
     """The opening of the introductions of two classes written blind the same day and graded once on the same rules,
     frozen at commit ``frozen`` (the twenty-first and twenty-second, the twenty-third and twenty-fourth, the
-    twenty-fifth and twenty-sixth, the twenty-seventh and twenty-eighth, then the twenty-ninth and thirtieth)."""
+    twenty-fifth and twenty-sixth, the twenty-seventh and twenty-eighth, the twenty-ninth and thirtieth, then the
+    thirty-first and thirty-second)."""
     return (
         f"The wrong renders are a {ordinal} class of mistakes in students' tracers, their scene input and their output "
         f"that no other class or the catalogue tried (mcrt.grade.accuracy.{module}), written blind to the grader's "
@@ -505,6 +506,10 @@ _UNCONSIDERED = _twin_blind("unconsidered", "thirtieth", "892ae57") + (
     "this report's first grading (held out, 2 of 12 named right, 2 of 12 confidently wrong, 12 of 12 detected; all "
     "28, 6 named right, 4 confidently wrong, 27 detected; 0 of 8 correct hand-ins lost points).") + _TWIN5_AFTER
 
+_UNANTICIPATED = _twin_blind("unanticipated", "thirty-first", "b587739") + "this report's first grading."
+
+_UNEXAMINED = _twin_blind("unexamined", "thirty-second", "b587739") + "this report's first grading."
+
 #: Each class's title, after "Grading accuracy on a class of realistic hand-ins".
 TITLES = {
     "outside": ": mistakes outside the scene file", "programs": ": mistakes of students' programs",
@@ -534,7 +539,9 @@ TITLES = {
     "unrecorded": ": a twenty-seventh class of mistakes, written blind",
     "unattended": ": a twenty-eighth class of mistakes, written blind",
     "unattested": ": a twenty-ninth class of mistakes, written blind",
-    "unconsidered": ": a thirtieth class of mistakes, written blind"}
+    "unconsidered": ": a thirtieth class of mistakes, written blind",
+    "unanticipated": ": a thirty-first class of mistakes, written blind",
+    "unexamined": ": a thirty-second class of mistakes, written blind"}
 
 #: The scene class's introduction (mcrt.grade.accuracy.cases).
 _SCENE = (
@@ -554,7 +561,7 @@ INTROS = {"outside": _OUTSIDE, "programs": _PROGRAMS, "fresh": _FRESH, "blind": 
           "unbeknown": _UNBEKNOWN, "unvisited": _UNVISITED, "unlooked": _UNLOOKED, "unwonted": _UNWONTED,
           "unremarked": _UNREMARKED, "unremembered": _UNREMEMBERED, "unnoticed": _UNNOTICED,
           "unrecorded": _UNRECORDED, "unattended": _UNATTENDED, "unattested": _UNATTESTED,
-          "unconsidered": _UNCONSIDERED}
+          "unconsidered": _UNCONSIDERED, "unanticipated": _UNANTICIPATED, "unexamined": _UNEXAMINED}
 
 
 def _regraded(r: dict) -> str:
@@ -567,7 +574,7 @@ def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta
                  klass: str = "scene") -> Path:
     """Write index.md and data.json under ``out``; returns the Markdown's path. ``klass`` is the class graded:
     'scene' (mcrt.grade.accuracy.cases) or another name of :data:`mcrt.grade.accuracy.cli.CLASSES` ('outside',
-    'programs', 'fresh', ..., 'unrecorded', 'unattended', 'unattested', 'unconsidered': the module of that name under
+    'programs', 'fresh', ..., 'unrecorded', 'unattended', 'unattested', 'unconsidered', 'unanticipated', 'unexamined': the module of that name under
     mcrt.grade.accuracy); an empty half (tuned on or held out) is left out of the rates table."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
