@@ -495,26 +495,7 @@ def claim_rule(S: np.ndarray, R: np.ndarray, mask: np.ndarray, noise: Noise, sc:
                 e.verdict = e.adequacy.verdict = cd.DESCRIBED
                 return
             if c is not None:
-                alts = [a for a in adequate if a is not c and a.family != c.family
-                        and a.params <= c.params and a.explained >= c.explained - AMBIGUOUS]
-                for fam in c.rivals:  # the best adequate one of each rival family
-                    a = next((a for a in adequate if a.family == fam and a not in alts), None)
-                    if a is not None and not any(x.family == fam for x in alts):
-                        alts.append(a)
-                others = unconfirmed(c, adequate, fit, alts)
-                rival = None if others else geometry_rival(c, e.candidates, fit)
-                _claim(e, c, tried[id(c)], others or ([rival] if rival else alts),
-                       np.where(mask[..., None], S - R - c.change, 0.0))
-                e.adequacy.also_adequate = [(a.family if a.family != "catalogue" else a.name, a.params,
-                                             round(closeness(fit, c, a, bic=False), 2)) for a in adequate if a is not c]
-                # Another reading fits as well, or the cause is a surface out of view: the image cannot say which
-                # (or cannot confirm it), no cause is claimed. Another change of the object's geometry that fits
-                # better leaves the object's geometry, which the words say.
-                if others or c.out_of_view or rival:
-                    e.verdict = e.adequacy.verdict = cd.AMBIGUOUS
-                if rival:
-                    obj = broader.geometry_object(c)
-                    e.broader = ("object_geometry", f"both point to the {obj}'s geometry: {broader.GEOMETRY_WORDS}")
+                _claim_simplest(e, c, adequate, tried[id(c)], fit, np.where(mask[..., None], S - R - c.change, 0.0))
                 return
         if _partial(e, tried, test, S - R, mask):
             e.broader = broader.reading(e.best, e.remainder, R, mask, noise.model + noise.reference, sc.labels, sc.names,
@@ -526,6 +507,34 @@ def claim_rule(S: np.ndarray, R: np.ndarray, mask: np.ndarray, noise: Noise, sc:
         e.remainder_where, e.adequacy = ad.where, ad
 
     return rule
+
+
+def _claim_simplest(e, c, adequate: list, ad: Adequacy, fit, remainder: np.ndarray) -> None:
+    """Claim c, the simplest adequate candidate (:func:`claim_rule`; ``ad`` its test, ``remainder`` what it leaves),
+    naming beside it the other families that fit as well and its rivals, unless another reading fits as well
+    (:func:`unconfirmed`), the cause is a surface out of view, or another change of the same object's geometry fits as
+    well or better (:func:`geometry_rival`): then AMBIGUOUS, the last saying the object's geometry."""
+    from mcrt.grade import candidates as cd
+
+    alts = [a for a in adequate if a is not c and a.family != c.family
+            and a.params <= c.params and a.explained >= c.explained - AMBIGUOUS]
+    for fam in c.rivals:  # the best adequate one of each rival family
+        a = next((a for a in adequate if a.family == fam and a not in alts), None)
+        if a is not None and not any(x.family == fam for x in alts):
+            alts.append(a)
+    others = unconfirmed(c, adequate, fit, alts)
+    rival = None if others else geometry_rival(c, e.candidates, fit)
+    _claim(e, c, ad, others or ([rival] if rival else alts), remainder)
+    e.adequacy.also_adequate = [(a.family if a.family != "catalogue" else a.name, a.params,
+                                 round(closeness(fit, c, a, bic=False), 2)) for a in adequate if a is not c]
+    # Another reading fits as well, or the cause is a surface out of view: the image cannot say which (or cannot
+    # confirm it), no cause is claimed. Another change of the object's geometry that fits as well leaves the object's
+    # geometry, which the words say.
+    if others or c.out_of_view or rival:
+        e.verdict = e.adequacy.verdict = cd.AMBIGUOUS
+    if rival:
+        obj = broader.geometry_object(c)
+        e.broader = ("object_geometry", f"both point to the {obj}'s geometry: {broader.GEOMETRY_WORDS}")
 
 
 def _partial(e, tried: dict, test, diff: np.ndarray, mask: np.ndarray) -> bool:
