@@ -785,6 +785,20 @@ def test_every_wall_of_one_colour_is_named_with_whose_colour(ctx):
     assert named_causes(res)[0] == ["albedo"] and res.score < res.max_score
 
 
+def test_every_wall_black_names_every_cause_of_black(ctx):
+    """A Mitsuba render (seed 108) with all six walls of albedo 0: every wall black, as it would be with every wall
+    missing from the closed room or facing away under one-sided shading. Where the reading is every wall of one
+    colour, it says black and names every cause of that, not a colour alone."""
+    s = load_scene()
+    res = grade_image("walls_black", ctx, [_mitsuba(108, _walls(s, [(0.0, 0.0, 0.0)] * len(s.room.walls)))], spp=1024)
+    ex = res.details["explanation"]
+    named = named_causes(res)[0]
+    assert "object_missing" in named and "normals" in named, ex["sentence"]
+    if ex["named"] == "every wall one colour":
+        assert ex["family"] == "surface_black" and "every wall black" in ex["sentence"], ex["sentence"]
+    assert res.score < res.max_score
+
+
 def test_the_walls_colours_two_places_off_are_named_with_their_step(ctx):
     """A Mitsuba render (seed 104) with each wall given the colour of the wall two places after it in the room's
     order (an index off by two): claimed as the walls' colours two places off, not one place. (Its colours make the

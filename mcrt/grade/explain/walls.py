@@ -25,6 +25,7 @@ from mcrt.grade.explain.fit import Fit
 from mcrt.grade.explain.basis import basis_renderer
 from mcrt.grade.explain.reflectance import remapped_reflectance
 from mcrt.grade.explain.scene import fit_channel
+from mcrt.grade.explain.surface_black import is_black
 from mcrt.grade.feedback import fmt_values as _fmt
 
 #: The albedos every wall is rendered with.
@@ -77,10 +78,15 @@ def walls_one_colour(fit: Fit, inputs: Inputs) -> list[Candidate]:
         return []
     base = b.base.astype(np.float64)
     colour, dm = _fitted(fit, base, r["nodes"], r["images"].astype(np.float64))
-    text = (f"every wall with the albedo {_fmt(colour)}{_which(colour, walls)}, where the scene gives the "
-            f"{len(walls)} walls their own colours (one colour read for all of them: a loop that reads one wall's, a "
-            "default, or their mean)")
-    out = [Candidate("albedo", "every wall one colour", text, fit.delta(dm), 3, value=tuple(colour), change=dm)]
+    fam, text = "albedo", (f"every wall with the albedo {_fmt(colour)}{_which(colour, walls)}, where the scene gives "
+                           f"the {len(walls)} walls their own colours (one colour read for all of them: a loop that "
+                           "reads one wall's, a default, or their mean)")
+    if is_black(colour):  # every wall black: missing, albedo 0 or facing away alike (as one wall's fit is worded)
+        fam, text = "surface_black", ("every wall black: missing from the scene (nothing lies behind them in the "
+                                      "closed room), with albedo 0, or with their normals facing away, so that "
+                                      "one-sided shading (max(0, n.l)) gives 0 (check the list of walls, the "
+                                      "triangles' winding, or flip each normal toward the incoming ray)")
+    out = [Candidate(fam, "every wall one colour", text, fit.delta(dm), 3, value=tuple(colour), change=dm)]
     if "all" in r:
         colour, dm = _fitted(fit, base, r["nodes"], r["all"].astype(np.float64))
         text = (f"every diffuse surface (the walls, the floor, the ceiling, the objects) with the albedo {_fmt(colour)}"
