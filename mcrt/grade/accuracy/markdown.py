@@ -506,9 +506,20 @@ _UNCONSIDERED = _twin_blind("unconsidered", "thirtieth", "892ae57") + (
     "this report's first grading (held out, 2 of 12 named right, 2 of 12 confidently wrong, 12 of 12 detected; all "
     "28, 6 named right, 4 confidently wrong, 27 detected; 0 of 8 correct hand-ins lost points).") + _TWIN5_AFTER
 
-_UNANTICIPATED = _twin_blind("unanticipated", "thirty-first", "b587739") + "this report's first grading."
+#: What changed after the sixth pair of twin classes' one grading, with both in view.
+_TWIN6_AFTER = (
+    " Changed after that grading, with both classes in view (commit 1407620): every wall of one colour fitted black "
+    "is worded as every wall black, naming every cause of black (a wall missing, albedo 0, normals facing away), as "
+    "one wall's fit already was (the thirty-first class's walls built below the floor had been read as every wall of "
+    "albedo 0.00); the cases whose feedback read every wall of one colour were graded again on it.")
 
-_UNEXAMINED = _twin_blind("unexamined", "thirty-second", "b587739") + "this report's first grading."
+_UNANTICIPATED = _twin_blind("unanticipated", "thirty-first", "b587739") + (
+    "this report's first grading (held out, 3 of 12 named right, 2 of 12 confidently wrong, 11 of 12 detected; all "
+    "28, 10 named right, 2 confidently wrong, 27 detected; 0 of 8 correct hand-ins lost points).") + _TWIN6_AFTER
+
+_UNEXAMINED = _twin_blind("unexamined", "thirty-second", "b587739") + (
+    "this report's first grading (held out, 3 of 12 named right, 1 of 12 confidently wrong, 11 of 12 detected; all "
+    "28, 12 named right, 1 confidently wrong, 25 detected; 0 of 8 correct hand-ins lost points).") + _TWIN6_AFTER
 
 #: Each class's title, after "Grading accuracy on a class of realistic hand-ins".
 TITLES = {
