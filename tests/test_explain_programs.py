@@ -948,13 +948,14 @@ def test_walls_missing_are_no_colours_and_point_to_faces(ctx, walls, seed):
 
 
 def test_a_change_that_lights_black_pixels_is_not_adequate(ctx):
-    """The rule on its own (mcrt.grade.adequacy.black_holes and holes_left), on a Mitsuba render (seed 74) as the
-    reference: a patch of the floor 0 in the hand-in is a hole; a change that keeps 5 % of the floor's light there
+    """The rules on their own (mcrt.grade.explain.pixels.black_holes, mcrt.grade.adequacy.holes_left), on a Mitsuba
+    render (seed 74) as the reference: a patch of the floor 0 in the hand-in is a hole; a change that keeps 5 % of the floor's light there
     leaves it (at the reference's noise of 1024 spp), one that keeps 1 % does not, nor one that keeps 5 % with noise
     ten times the reference's there; the same patch in a shadow-only image (no pixel lit) is no hole, nor is a
     patch under the least share of pixels, nor are the same pixels scattered (every other one), nor the patch in an
     image a tenth as bright around it."""
-    from mcrt.grade.adequacy import HOLE_LIT, MIN_HOLES, black_holes, holes_left
+    from mcrt.grade.adequacy import HOLE_LIT, holes_left
+    from mcrt.grade.explain.pixels import MIN_HOLES, black_holes
 
     R = _mitsuba(74)
     labels, names = ctx.labels["near"], ctx.label_names

@@ -28,7 +28,7 @@ relevance threshold ``min_effect``), with the per-object tests of
 
 **Black where the light reaches is never noise.** A sample of a surface the
 light reaches directly is never 0, so a hand-in's pixels 0 in every channel
-there (:func:`black_holes`: a face missing, the void seen through it, a
+there (:func:`mcrt.grade.explain.pixels.black_holes`: a face missing, the void seen through it, a
 surface black, pixels never written) are explained only by a change that
 makes them dark: a candidate whose prediction keeps :data:`HOLE_LIT` of the
 reference's light on enough of them (:func:`holes_left`) is not adequate,
@@ -92,6 +92,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from mcrt.grade import broader
+from mcrt.grade.explain.pixels import MIN_HOLES, black_holes
 from mcrt.grade import objects as obj
 from mcrt.stats.onesample import Noise, multiscale_test
 
@@ -145,8 +146,8 @@ def remainder_test(S: np.ndarray, R: np.ndarray, delta: np.ndarray | float, mask
                    structure: bool = True, holes: np.ndarray | None = None) -> Adequacy:
     """Test S - R - delta (the module docstring); ``explained`` is the candidate's share, for the verdict's words;
     ``structure``: with the per-object structure test (:func:`mcrt.grade.objects.structure_family`); ``holes``: the
-    hand-in's black pixels where the light reaches (:func:`black_holes`), which a change that lights them leaves
-    (:func:`holes_left`)."""
+    hand-in's black pixels where the light reaches (:func:`mcrt.grade.explain.pixels.black_holes`), which a change
+    that lights them leaves (:func:`holes_left`)."""
     S, R = np.asarray(S, np.float64), np.asarray(R, np.float64)
     d = np.broadcast_to(np.asarray(delta, np.float64), S.shape)
     ok = mask & np.isfinite(S).all(axis=-1) & np.isfinite(d).all(axis=-1)
@@ -189,48 +190,10 @@ def remainder_test(S: np.ndarray, R: np.ndarray, delta: np.ndarray | float, mask
 HOLE_LIT = 0.02
 #: ... by this many standard errors of the prediction's noise over a surface's holes.
 HOLE_Z = 4.0
-#: Least share of the image's pixels that are holes for them to count (a few NaN samples written 0 are no surface).
-MIN_HOLES = 0.005
-#: Least share of the holes with both neighbours along a row or along a column black too: holes are patches or
-#: lines (rows never written), not a sparse render's zeros scattered (at a share p of zeros, about 2 p^2 of them).
-HOLE_INTERIOR = 0.5
-#: Least luminance off the holes, as a share of the reference's there, for the image to be lit around them: an image
-#: dark throughout (the light hardly ever found) may have dark pixels 0 by chance.
-LIT_AROUND = 0.25
-
-
-def black_holes(S: np.ndarray, R: np.ndarray, mask: np.ndarray, lit: np.ndarray | None) -> np.ndarray | None:
-    """(H, W) the hand-in's pixels 0 in every channel where the reference is clearly not
-    (:func:`mcrt.grade.explain.pixels.black_pixels`' rule) and the light reaches directly (``lit``,
-    :func:`mcrt.grade.explain.pixels.directly_lit`), where they are at least :data:`MIN_HOLES` of the pixels; else None.
-
-    A sample of a surface the light reaches directly is never 0 (next-event estimation finds the light), so a
-    patch of such pixels 0 in every channel, in an image lit around it, says no surface is there, or a black one, or
-    nothing was written: no change that leaves light there explains it, however close its chi^2
-    (:func:`holes_left`). They count as holes where at least :data:`HOLE_INTERIOR` of them are black with both
-    neighbours along a row or a column (a sparse render's zeros are scattered) and the image off them keeps
-    :data:`LIT_AROUND` of the reference's light. Black pixels in shadow are the bounced light lost, another reading
-    (:mod:`mcrt.grade.explain.pixels`)."""
-    from mcrt.grade.explain.pixels import DARK
-
-    used = mask & np.isfinite(S).all(axis=-1)
-    if lit is None or not used.any():
-        return None
-    lum = R @ obj.LUMINANCE
-    black = used & lit & np.all(S == 0.0, axis=-1) & (lum >= DARK * float(np.median(lum[used])))
-    if int(black.sum()) < MIN_HOLES * int(used.sum()):
-        return None
-    pad = np.pad(black, 1)
-    inner = black & ((pad[:-2, 1:-1] & pad[2:, 1:-1]) | (pad[1:-1, :-2] & pad[1:-1, 2:]))
-    off = used & ~black & (lum < 1.0)  # the light's own pixels say nothing of the room's light
-    around = float(np.sum(S[off] @ obj.LUMINANCE)) >= LIT_AROUND * float(np.sum(lum[off]))
-    return black if around and int(inner.sum()) >= HOLE_INTERIOR * int(black.sum()) else None
-
-
 def holes_left(R: np.ndarray, delta: np.ndarray, holes: np.ndarray | None, var: np.ndarray,
                labels: np.ndarray) -> np.ndarray | None:
-    """(H, W) the ``holes`` (:func:`black_holes`) a change ``delta`` of R lights, where they are at least
-    :data:`MIN_HOLES` of the pixels; else None. A surface's holes are lit where the prediction's luminance over them
+    """(H, W) the ``holes`` (:func:`mcrt.grade.explain.pixels.black_holes`) a change ``delta`` of R lights, where
+    they are at least :data:`~mcrt.grade.explain.pixels.MIN_HOLES` of the pixels; else None. A surface's holes are lit where the prediction's luminance over them
     exceeds :data:`HOLE_LIT` of R's by :data:`HOLE_Z` standard errors (``var``: the prediction's noise per pixel, the
     reference's and the change's own: a change rendered with the surface black still carries their noise there)."""
     if holes is None:

@@ -29,7 +29,7 @@ change is none the families render:
   brightest (:data:`BRIGHTEST`) are codes overflowing, not holes. Both
   together point to the faces. Where another reading leads (a wall's colour
   darkened, fitted as close as it gets), the black pixels are the hand-in's
-  where the light reaches (:func:`mcrt.grade.adequacy.black_holes`), which
+  where the light reaches (:func:`mcrt.grade.explain.pixels.black_holes`), which
   that reading leaves lit, none of them on the light itself;
 * **the diffuse bounce** (:data:`BOUNCE`: a bounce drawn or weighted wrongly,
   :mod:`mcrt.grade.explain.bounce`, or the catalogue's samplers that are
@@ -105,7 +105,7 @@ def reading(lead, remainder: np.ndarray, R: np.ndarray, mask: np.ndarray, var: n
     """(family, words) of the broader cause of partial reading ``lead`` (its remainder ``remainder``, (H, W, 3);
     ``var`` the noise's variance per pixel; ``labels`` and ``names`` the surfaces; ``objects`` the labels the
     remainder was found on; ``holes`` the hand-in's black pixels where the light reaches,
-    :func:`mcrt.grade.adequacy.black_holes`), or None."""
+    :func:`mcrt.grade.explain.pixels.black_holes`), or None."""
     obj = geometry_object(lead)
     # The object's own pixels cannot tell its shape from its material (a mirror's reflections, a surface's shading):
     # only a remainder on what lies around it (its outline's other side, its shadow) points to its geometry.

@@ -30,6 +30,8 @@ from mcrt.grade.candidates import Candidate, Inputs
 from mcrt.grade.explain.fit import Fit
 from mcrt.stats import LUMINANCE_WEIGHTS
 
+_LUM = np.asarray(LUMINANCE_WEIGHTS)
+
 #: A black pixel is bad where the reference's luminance is at least this share of the image's median.
 DARK = 0.05
 #: Largest share of the image's pixels the family explains as bad pixels.
@@ -150,6 +152,16 @@ def _black(fit: Fit, inputs: Inputs) -> list[Candidate]:
                       change=change)]
 
 
+#: Least share of the image's pixels that are holes for them to count (a few NaN samples written 0 are no surface).
+MIN_HOLES = 0.005
+#: Least share of the holes with both neighbours along a row or along a column black too: holes are patches or
+#: lines (rows never written), not a sparse render's zeros scattered (at a share p of zeros, about 2 p^2 of them).
+HOLE_INTERIOR = 0.5
+#: Least luminance off the holes, as a share of the reference's there, for the image to be lit around them: an image
+#: dark throughout (the light hardly ever found) may have dark pixels 0 by chance.
+LIT_AROUND = 0.25
+
+
 #: The share of black pixels that may have some direct light and still be read as where the light is hidden (a
 #: penumbra's or an edge's pixel the basis's few samples lit, the light seen in the mirror).
 LIT_SHARE = 0.01
@@ -208,3 +220,29 @@ def _on_one_object(bad: np.ndarray, inputs: Inputs) -> str:
 
 
 bad_pixels.name = "bad_pixels"
+
+
+def black_holes(S: np.ndarray, R: np.ndarray, mask: np.ndarray, lit: np.ndarray | None) -> np.ndarray | None:
+    """(H, W) the hand-in's pixels 0 in every channel where the reference is clearly not
+    (:func:`black_pixels`' rule) and the light reaches directly (``lit``,
+    :func:`directly_lit`), where they are at least :data:`MIN_HOLES` of the pixels; else None.
+
+    A sample of a surface the light reaches directly is never 0 (next-event estimation finds the light), so a
+    patch of such pixels 0 in every channel, in an image lit around it, says no surface is there, or a black one, or
+    nothing was written: no change that leaves light there explains it, however close its chi^2
+    (:func:`mcrt.grade.adequacy.holes_left`). They count as holes where at least :data:`HOLE_INTERIOR` of them are
+    black with both neighbours along a row or a column (a sparse render's zeros are scattered) and the image off them keeps
+    :data:`LIT_AROUND` of the reference's light. Black pixels in shadow are the bounced light lost, another reading
+    (:func:`bad_pixels`)."""
+    used = mask & np.isfinite(S).all(axis=-1)
+    if lit is None or not used.any():
+        return None
+    lum = R @ _LUM
+    black = used & lit & np.all(S == 0.0, axis=-1) & (lum >= DARK * float(np.median(lum[used])))
+    if int(black.sum()) < MIN_HOLES * int(used.sum()):
+        return None
+    pad = np.pad(black, 1)
+    inner = black & ((pad[:-2, 1:-1] & pad[2:, 1:-1]) | (pad[1:-1, :-2] & pad[1:-1, 2:]))
+    off = used & ~black & (lum < 1.0)  # the light's own pixels say nothing of the room's light
+    around = float(np.sum(S[off] @ _LUM)) >= LIT_AROUND * float(np.sum(lum[off]))
+    return black if around and int(inner.sum()) >= HOLE_INTERIOR * int(black.sum()) else None

@@ -183,11 +183,11 @@ HOLED = 0.5
 
 def _black_in_hand_in(fit: Fit, inputs: Inputs, labels: list[str]) -> list[str]:
     """Those of ``labels`` (the albedo basis's: 'wall BC') the hand-in shows black: :data:`HOLED` of the surface's
-    pixels 0 in every channel where the light reaches it (:func:`mcrt.grade.adequacy.black_holes`). The fit of
+    pixels 0 in every channel where the light reaches it (:func:`mcrt.grade.explain.pixels.black_holes`). The fit of
     several surfaces at once leaves a black surface's colour loosely fixed (the others' changes reach its pixels
     too: a wall fitted (0.02, 0.01, 0.08) predicts it black), so the hand-in says it: black, with every cause of
     that (:mod:`.surface_black`), a wall missing among them."""
-    from mcrt.grade.adequacy import black_holes
+    from mcrt.grade.explain.pixels import black_holes
     from mcrt.grade.explain.pixels import directly_lit
 
     if inputs.labels is None:

@@ -50,10 +50,10 @@ def stage(g: Grading, hand: Hand, lvl: Level, t: bias.Tested) -> bias.Tested:
 
 def _rescaled(g: Grading, hand: Hand, lvl: Level, k: float) -> tuple[float, bias.Tested] | None:
     """The image divided by the nearest nice factor, tested again; None when it still fails, or where the image is
-    black in patches or lines the light reaches (:func:`mcrt.grade.adequacy.black_holes`), which no factor lights: the
-    bias test's tiles average rows never written with the rest (three rows in four black read as a quarter of the
-    light)."""
-    from mcrt.grade.adequacy import black_holes
+    black in patches or lines the light reaches (:func:`mcrt.grade.explain.pixels.black_holes`), which no factor
+    lights: the bias test's tiles average rows never written with the rest (three rows in four black read as a
+    quarter of the light)."""
+    from mcrt.grade.explain.pixels import black_holes
     from mcrt.grade.explain.pixels import directly_lit
 
     basis = getattr(g.ctx, "explain", None)
