@@ -193,9 +193,10 @@ HOLE_Z = 4.0
 def holes_left(R: np.ndarray, delta: np.ndarray, holes: np.ndarray | None, var: np.ndarray,
                labels: np.ndarray) -> np.ndarray | None:
     """(H, W) the ``holes`` (:func:`mcrt.grade.explain.pixels.black_holes`) a change ``delta`` of R lights, where
-    they are at least :data:`~mcrt.grade.explain.pixels.MIN_HOLES` of the pixels; else None. A surface's holes are lit where the prediction's luminance over them
-    exceeds :data:`HOLE_LIT` of R's by :data:`HOLE_Z` standard errors (``var``: the prediction's noise per pixel, the
-    reference's and the change's own: a change rendered with the surface black still carries their noise there)."""
+    they are at least :data:`~mcrt.grade.explain.pixels.MIN_HOLES` of the pixels; else None. A surface's holes are
+    lit where the prediction's luminance over them exceeds :data:`HOLE_LIT` of R's by :data:`HOLE_Z` standard errors
+    (``var``: the prediction's noise per pixel, the reference's and the change's own: a change rendered with the
+    surface black still carries their noise there)."""
     if holes is None:
         return None
     lum, pred, v = R @ obj.LUMINANCE, (R + delta) @ obj.LUMINANCE, var @ obj.LUMINANCE**2
