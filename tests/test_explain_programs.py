@@ -953,7 +953,8 @@ def test_a_change_that_lights_black_pixels_is_not_adequate(ctx):
     leaves it (at the reference's noise of 1024 spp), one that keeps 1 % does not, nor one that keeps 5 % with noise
     ten times the reference's there; the same patch in a shadow-only image (no pixel lit) is no hole, nor is a
     patch under the least share of pixels, nor are the same pixels scattered (every other one), nor the patch in an
-    image a tenth as bright around it."""
+    image a tenth as bright around it; three rows in four black (workers that each render the same rows) are holes,
+    lines of them."""
     from mcrt.grade.adequacy import HOLE_LIT, holes_left
     from mcrt.grade.explain.pixels import MIN_HOLES, black_holes
 
@@ -980,6 +981,9 @@ def test_a_change_that_lights_black_pixels_is_not_adequate(ctx):
     scattered = floor & ((yy + xx) % 2 == 0)
     assert scattered.sum() >= patch.sum() and black_holes(np.where(scattered[..., None], 0.0, R), R, mask, lit) is None
     assert black_holes(np.where(patch[..., None], 0.0, 0.1 * R), R, mask, lit) is None
+    rows = yy % 4 != 0
+    found = black_holes(np.where(rows[..., None], 0.0, R), R, mask, lit)
+    assert found is not None and found.sum() >= 0.9 * rows.sum()
 
 
 def test_black_pixels_are_faces_only_with_the_room_darker_and_not_the_brightest(ctx):
