@@ -46,9 +46,13 @@ ONE_OBJECT = 0.9
 
 def black_pixels(fit: Fit) -> np.ndarray:
     """(H, W) pixels 0 in every channel of the hand-in where the reference is clearly not."""
-    used = fit.ok.all(axis=-1)
-    black = used & np.all(fit.S == 0.0, axis=-1)
-    lum = fit.R @ np.asarray(LUMINANCE_WEIGHTS)
+    return _zero_where_bright(fit.S, fit.R, fit.ok.all(axis=-1))
+
+
+def _zero_where_bright(S: np.ndarray, R: np.ndarray, used: np.ndarray) -> np.ndarray:
+    """(H, W) the ``used`` pixels of S 0 in every channel where R's luminance is at least :data:`DARK` of its median."""
+    black = used & np.all(S == 0.0, axis=-1)
+    lum = R @ _LUM
     return black & (lum >= DARK * float(np.median(lum[used]))) if used.any() else black
 
 
@@ -238,7 +242,7 @@ def black_holes(S: np.ndarray, R: np.ndarray, mask: np.ndarray, lit: np.ndarray 
     if lit is None or not used.any():
         return None
     lum = R @ _LUM
-    black = used & lit & np.all(S == 0.0, axis=-1) & (lum >= DARK * float(np.median(lum[used])))
+    black = _zero_where_bright(S, R, used) & lit
     if int(black.sum()) < MIN_HOLES * int(used.sum()):
         return None
     pad = np.pad(black, 1)
