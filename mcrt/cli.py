@@ -164,8 +164,9 @@ def _add_trick_flags(p: argparse.ArgumentParser) -> None:
                    help="fixed survival probability (default: the scheme's, min(max throughput, 0.95) or 0.25)")
     g.add_argument("--roulette-start", type=int, default=None, metavar="DEPTH",
                    help="first depth roulette runs at (default: the scheme's, the scene's rr_depth or 1)")
-    g.add_argument("--light-sampling", choices=("area", "solid_angle"), default=None,
-                   help="points on the light uniform in area, or uniform in its solid angle (spherical rectangle) "
+    g.add_argument("--light-sampling", choices=("area", "solid_angle", "none"), default=None,
+                   help="points on the light uniform in area, or uniform in its solid angle (spherical rectangle), or "
+                        "none: no next-event estimation, the light found by bounces alone (unbiased, far noisier) "
                         "(default: area)")
     g.add_argument("--adaptive", choices=("naive", "two-stage"), default=None,
                    help="per-pixel sample counts, spp on average: naive stops a pixel by its own samples (biased), "

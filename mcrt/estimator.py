@@ -30,7 +30,10 @@ direction are combined by the balance heuristic, in solid angle.
 Sampling the light uniformly in the solid angle Omega it subtends instead
 (``light_sampling='solid_angle'``, a spherical rectangle) has the area
 density p_A = cos(theta_y) / (d^2 Omega), so the sample's weight
-Le V cos(theta_x) Omega is bounded without MIS.
+Le V cos(theta_x) Omega is bounded without MIS. Without light sampling
+(``light_sampling='none'``) the direct term is left out and emission is
+counted wherever a ray meets it, with weight 1: the same mean, far more
+noise (a student's tracer without next-event estimation).
 
 The host
 --------
@@ -166,7 +169,8 @@ class PathEstimator:
         self.caustic_pdfs = caustic_pdfs
         # Whether light found by a diffuse bounce counts: only then does a
         # path whose last vertex is diffuse need its final segment traced.
-        self.diffuse_sees_emission = (options.settings.mis or host.has_unsampled_emission
+        self.sample_light = options.tricks.light_sampling != "none"
+        self.diffuse_sees_emission = (options.settings.mis or host.has_unsampled_emission or not self.sample_light
                                       or options.mutations.count_emission == "always")
 
     # ------------------------------------------------------------------
@@ -233,7 +237,7 @@ class PathEstimator:
                 alive = alive & (hit.mirror | (depth + 1 < self.max_depth))
 
             # ---- Next-event estimation at diffuse vertices (depth + 1 <= max_depth holds here).
-            if host.has_diffuse and caustics != "only":
+            if host.has_diffuse and caustics != "only" and self.sample_light:
                 f = lambertian_f(hit.color, inv_pi=brdf_inv_pi)
                 L = dr.fma(beta * f, self.direct_light(origin, hit.n, sampler, diffuse), L)
 
@@ -282,8 +286,8 @@ class PathEstimator:
         cos_y = hit.light_cos if opt.mutations.light_one_sided else dr.abs(hit.light_cos)
         seen = hit.light & (cos_y > 0)
         weight = 1.0
-        if opt.mutations.count_emission == "always":
-            counted = seen
+        if opt.mutations.count_emission == "always" or not self.sample_light:
+            counted = seen  # counted twice (a bug), or the only way the light is found (no light sampling)
         elif not opt.settings.mis:
             counted = seen & specular
         else:

@@ -48,7 +48,7 @@ MIRROR_CAUSTICS = ("all", "skip", "only", "mis")
 
 #: Light sampling strategies: uniform in area on the light, or uniform in the solid angle it subtends
 #: (the spherical rectangle of :func:`mcrt.sampling.square_to_spherical_rectangle`).
-LIGHT_SAMPLING = ("area", "solid_angle")
+LIGHT_SAMPLING = ("area", "solid_angle", "none")
 
 
 @dataclass(frozen=True)
@@ -107,7 +107,10 @@ class Tricks:
 
     roulette_survival: float | None = None  # fixed survival probability; None: the scheme's (min(max beta, 0.95); 0.25)
     roulette_start: int | None = None  # first depth roulette runs at; None: the scheme's (rr_depth; 1)
-    light_sampling: str = "area"  # 'area': uniform on the light; 'solid_angle': uniform in its solid angle
+    # 'area': uniform on the light; 'solid_angle': uniform in its solid angle; 'none': no next-event estimation, the
+    # light found only where a bounce's direction meets it (correct, and far noisier: a student's tracer without light
+    # sampling, whose noise the grader tells from fewer samples by its shape, mcrt.grade.stages.noise).
+    light_sampling: str = "area"
     # Each camera path's radiance clamped per channel to this before it is added (fireflies removed, with their
     # energy: biased); None: no clamp. A student's mistake the grader's explanation renders (mcrt.grade.explain).
     sample_clamp: float | None = None
@@ -188,6 +191,8 @@ class EstimatorOptions:
             # Its weight Le cos_x Omega is bounded, which is what MIS is there for; the MIS weight of a
             # light hit would need the solid angle seen from the ray's origin, which no host provides.
             raise ValueError("solid-angle light sampling runs without MIS (its weight is bounded)")
+        if self.tricks.light_sampling == "none" and self.settings.mis:
+            raise ValueError("without light sampling there is nothing for MIS to weigh a light hit against")
 
     @classmethod
     def build(cls, **named) -> "EstimatorOptions":

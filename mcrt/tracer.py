@@ -131,10 +131,11 @@ class Tracer:
         tricks, overrides = dict(self.tricks), mutation_values(self.mutants)
         if set(tricks) & set(overrides):
             raise ValueError(f"option {sorted(set(tricks) & set(overrides))[0]} is set both by a trick and by a mutant")
-        solid_angle = tricks.get("light_sampling") == "solid_angle"  # bounded weights: no MIS needed
+        # Solid-angle samples have bounded weights, and without light samples there is nothing to weigh: no MIS.
+        no_mis = tricks.get("light_sampling") in ("solid_angle", "none")
         self.options = replace(EstimatorOptions.build(
             max_depth=self.max_depth, light_samples=self.light_samples, rr_depth=self.rr_depth,
-            mis=(needs_mis(scene) and not solid_angle) if self.mis is None else self.mis, **overrides, **tricks,
+            mis=(needs_mis(scene) and not no_mis) if self.mis is None else self.mis, **overrides, **tricks,
         ), caustics=self.caustics)
         self.estimator = PathEstimator(McrtHost(self.geometry), self.options, caustic_pdfs=self.caustic_pdfs)
         self.camera_model = Pinhole(scene.camera(self.camera), self.width, self.height, jitter=camera_jitter(self.mutants))

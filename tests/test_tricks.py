@@ -231,6 +231,7 @@ def test_a_mirror_for_camera_rays_only_is_black_to_every_other_ray(scene):
     ({"mirror_normal_length": 0.0}, "mirror_normal_length must be > 0"),
     ({"pixel_statistic": "mode"}, "pixel_statistic must be one of"),
     ({"light_sampling": "solid_angle", "mis": True}, "runs without MIS"),
+    ({"light_sampling": "none", "mis": True}, "nothing for MIS to weigh"),
 ])
 def test_bad_trick_values_are_refused(options, message):
     with pytest.raises(ValueError, match=message):
@@ -374,9 +375,10 @@ def _passes(result, reference, adaptive=None) -> bool:
     return all(c.passed for c in compare_with_reference(result, reference, adaptive, alpha=ALPHA, tiles=TILES))
 
 
-@pytest.mark.parametrize("options", [{"light_sampling": "solid_angle"}, {"roulette_survival": 0.8, "roulette_start": 1},
+@pytest.mark.parametrize("options", [{"light_sampling": "solid_angle"}, {"light_sampling": "none"},
+                                     {"roulette_survival": 0.8, "roulette_start": 1},
                                      {"roulette_survival": 0.5, "roulette_start": 3}],
-                         ids=["solid_angle", "fixed_q0.8_from_1", "fixed_q0.5_from_3"])
+                         ids=["solid_angle", "no_light_sampling", "fixed_q0.8_from_1", "fixed_q0.5_from_3"])
 def test_unbiased_tricks_pass_against_the_reference(scene, reference, options):
     """1024 spp, seed 1."""
     r = render(scene, _settings(scene, 1024), seed=1, progress=False, **options)

@@ -86,6 +86,11 @@ class Context:
     prepare_time: float = 0.0
     notes: list[str] = field(default_factory=list)
     explain: object = None  # mcrt.grade.explain.Basis: the scene's variations, for explaining a failing image
+    # mcrt without light sampling (the light found by bounces alone), assigned camera, diagnosis spp and seed, and its
+    # per-sample variance by camera: a correct tracer without next-event estimation, whose noise the noise criterion
+    # tells from fewer samples by its shape (mcrt.grade.stages.noise.unsampled_shape)
+    unsampled: Expected | None = None
+    model_var_unsampled: dict[str, np.ndarray] = field(default_factory=dict)
 
 
 # --------------------------------------------------------------------------
@@ -223,6 +228,9 @@ def prepare_context(a: Assignment, cache_dir: str | os.PathLike | None = None, *
         refs[cam] = reference_for(a, scene, cam, d, a.reference_spp, cache, log)
         if cam == a.camera:
             model[cam] = np.maximum(baseline.variance, 0).astype(np.float32)
+            unsampled = cached_render(scene, cam, w, h, d, a.diagnosis_spp, a.seed, "none", cache, log,
+                                      tricks={"light_sampling": "none"})
+            model_unsampled = {cam: np.maximum(unsampled.variance, 0).astype(np.float32)}
         else:  # the reference's own variance is the noise model's best stand-in for another camera
             other = cached_render(scene, cam, w, h, d, a.diagnosis_spp // 4 or 16, a.seed, "none", cache, log) \
                 if refs[cam].source.startswith("Mitsuba") else None
@@ -251,6 +259,8 @@ def prepare_context(a: Assignment, cache_dir: str | os.PathLike | None = None, *
         baseline=_expected(baseline, f"mcrt ({a.diagnosis_spp} spp)"), mutants=muts,
         mutant_texts={m: MUTANTS[m] for m in names}, direct_fraction=direct, labels=labels,
         label_names=label_names(scene), prepare_time=time.perf_counter() - t0, notes=notes, explain=basis,
+        unsampled=_expected(unsampled, f"mcrt without light sampling ({a.diagnosis_spp} spp)"),
+        model_var_unsampled=model_unsampled,
     )
 
 
@@ -340,15 +350,17 @@ def coarsen(ctx: Context, k: int) -> Context:
     """
     if k == 1:
         return ctx
-    model = {}
-    for cam, v in ctx.model_var.items():
+    def coarse_var(cam, v):
         m = (ctx.baseline.mean if cam == ctx.assignment.camera else ctx.references[cam].mean).astype(np.float64)
         between = block_means(m * m, k) - block_means(m, k) ** 2
-        model[cam] = (block_means(v.astype(np.float64), k) + np.maximum(between, 0)).astype(np.float32)
+        return (block_means(v.astype(np.float64), k) + np.maximum(between, 0)).astype(np.float32)
+
     return replace(
         ctx,
         references={c: _coarse_expected(e, k) for c, e in ctx.references.items()},
-        model_var=model,
+        model_var={cam: coarse_var(cam, v) for cam, v in ctx.model_var.items()},
+        unsampled=None if ctx.unsampled is None else _coarse_expected(ctx.unsampled, k),
+        model_var_unsampled={cam: coarse_var(cam, v) for cam, v in ctx.model_var_unsampled.items()},
         baseline=_coarse_expected(ctx.baseline, k),
         mutants={m: _coarse_expected(e, k) for m, e in ctx.mutants.items()},
         direct_fraction={c: block_means(d.astype(np.float64), k).astype(np.float32) for c, d in ctx.direct_fraction.items()},

@@ -4,7 +4,8 @@ Correct renders of the course scene from several estimators and samplers
 (mcrt; Mitsuba's ``path`` with its ``independent``, ``stratified``,
 ``ldsampler`` and ``multijitter`` samplers, ``volpath``; mcrt and Mitsuba's
 ``path`` with Russian roulette from the first bounce, less efficient than
-mcrt's default), at 16 to 1024
+mcrt's default; mcrt and Mitsuba's ``prb_basic`` without light sampling,
+far noisier, which the noise criterion knows by the shape of its noise), at 16 to 1024
 spp, at hand-in resolutions from 64x64 (graded at 64x64) to 800x800 (graded
 at 100x100), as float images and as 8-bit PNGs in the common encodings, are
 graded with the course's rubric. A *false alarm* is any point lost on a
@@ -15,7 +16,9 @@ detector (:mod:`mcrt.grade.structure`) and of the per-object tests
 (:mod:`mcrt.grade.objects`), whose share of those at or below
 0.01 should be near 0.01 (or below, for the conservative pixel bound), and
 the noise criterion's variance ratios (hand-in over mcrt at the declared
-spp): the spread that the rubric's ``noise.max_ratio`` must clear.
+spp): the spread that the rubric's ``noise.max_ratio`` must clear, and the
+shape of each render's noise (:func:`mcrt.grade.stages.noise.unsampled_shape`)
+on either side of the bound that tells a tracer without light sampling.
 
 Seeds are fixed (case k of a group uses seed ``base + k``), so the report is
 reproducible bit for bit on one machine. Mitsuba renders are the slow part
@@ -40,7 +43,9 @@ COMMAND = "grade-false-alarms --out reports/grading/false_alarms"
 
 @dataclass(frozen=True)
 class Case:
-    renderer: str  # "mcrt", or "path/<sampler>", "volpath/<sampler>" (Mitsuba); "-rr1": Russian roulette from the first bounce
+    # "mcrt", or "path/<sampler>", "volpath/<sampler>", "prb_basic/<sampler>" (Mitsuba); "-rr1": Russian roulette from
+    # the first bounce; "mcrt-none": mcrt without light sampling
+    renderer: str
     spp: int
     res: int  # hand-in width = height
     grade: int  # grade width = height
@@ -58,6 +63,8 @@ class Case:
 
 MITSUBA = ("path/independent", "path/stratified", "path/ldsampler", "path/multijitter", "volpath/independent")
 RR1 = ("mcrt-rr1", "path-rr1/independent")
+#: Correct estimators without light sampling (the light found by bouncing into it).
+UNSAMPLED = ("mcrt-none", "prb_basic/independent")
 
 
 def cases(seeds: int = 3) -> list[Case]:
@@ -87,6 +94,10 @@ def cases(seeds: int = 3) -> list[Case]:
         for spp in (16, 64, 256, 1024):
             for _ in range(max(1, seeds - 1)):
                 out.append(Case(r, spp, 64, 64, seed := seed + 1))
+    for r in UNSAMPLED:
+        for spp in (16, 64, 256, 1024):
+            for _ in range(max(1, seeds - 1)):
+                out.append(Case(r, spp, 64, 64, seed := seed + 1))
     return out
 
 
@@ -97,7 +108,8 @@ def render_case(scene, c: Case) -> np.ndarray:
         from mcrt.render import render
 
         s = scene.settings(camera="near", width=c.res, height=c.res, spp=c.spp, max_depth=8, rr_depth=rr_depth)
-        return render(scene, s, seed=c.seed, progress=False).mean.astype(np.float64)
+        tricks = {"light_sampling": "none"} if c.renderer == "mcrt-none" else {}
+        return render(scene, s, seed=c.seed, progress=False, **tricks).mean.astype(np.float64)
     from mcrt.mitsuba_scene import render_with_variance, scene_dict
 
     integrator, sampler = c.renderer.split("/")
@@ -179,7 +191,8 @@ def run_study(out: Path, *, seeds: int, cache: str | None, progress: bool = True
                          "p_object_structure": st.get("p_object_structure"), "objects_rel": st.get("objects_rel"),
                          "p_patches": st.get("p_patches"),
                          "penalised": st.get("penalised"),
-                         "var_ratio": c.spp / eff if eff else None,
+                         "var_ratio": c.spp / eff if eff else None, "unsampled_shape": nz.get("unsampled_shape"),
+                         "unsampled": bool(nz.get("unsampled")),
                          "encoding": (r.details.get("encoding") or {}).get("detected")})
             bar.update(k + 1)
     th = next(iter(contexts.values())).assignment.thresholds
@@ -224,6 +237,7 @@ def summarise(rows: list[dict], max_ratio: float | None = None) -> dict:
                      "at_or_below_0.05": sum(p <= 0.05 for p in ps), "at_or_below_0.001": sum(p <= 0.001 for p in ps)}
     out["detectors_raw"] = det
     out["noise_ratio"] = noise_ratios(rows, max_ratio)
+    out["noise_shape"] = noise_shapes(rows)
     out["object_bias"] = object_bias(rows)
     out["criteria_lost"] = {}
     for r in rows:
@@ -274,6 +288,22 @@ def noise_ratios(rows: list[dict], max_ratio: float | None) -> dict:
     return out
 
 
+def noise_shapes(rows: list[dict]) -> dict:
+    """Per renderer, the range of the noise's shape statistic (:func:`mcrt.grade.stages.noise.unsampled_shape`) and
+    how many renders were judged as a tracer's without light sampling, beside the bound: the estimators with light
+    sampling must fall below it at any spp (a hand-in with fewer samples than declared keeps its estimator's shape),
+    those without above it."""
+    from mcrt.grade.stages.noise import UNSAMPLED_SHAPE
+
+    out = {"bound": UNSAMPLED_SHAPE, "by_renderer": {}}
+    for name in sorted({r["renderer"] for r in rows}):
+        w = np.array([r["unsampled_shape"] for r in rows if r["renderer"] == name and r.get("unsampled_shape") is not None])
+        if w.size:
+            out["by_renderer"][name] = {"renders": int(w.size), "min": float(w.min()), "max": float(w.max()),
+                                        "judged_unsampled": sum(1 for r in rows if r["renderer"] == name and r.get("unsampled"))}
+    return out
+
+
 def markdown(data: dict) -> str:
     s = data["summary"]
     o = s["overall"]
@@ -298,6 +328,7 @@ def markdown(data: dict) -> str:
     lines.append("")
     lines += _bias_markdown(s.get("object_bias") or {}, data.get("min_effect"))
     lines += _noise_markdown(s.get("noise_ratio") or {})
+    lines += _shape_markdown(s.get("noise_shape") or {})
     fa = [r for r in data["cases"] if r["lost"]]
     if fa:
         lines += ["False alarms (the test that fired: the tile test, or a structured-error detector):", ""]
@@ -343,6 +374,24 @@ def _noise_markdown(n: dict) -> list[str]:
     for k, v in n["by_renderer"].items():
         det = "" if v["fewer_detected"] is None else f"{100 * v['fewer_detected']:.0f} %"
         lines.append(f"| {k} | {v['renders']} | {v['min']:.2f} | {v['median']:.2f} | {v['max']:.2f} | {det} |")
+    return lines + [""]
+
+
+def _shape_markdown(n: dict) -> list[str]:
+    if not n.get("by_renderer"):
+        return []
+    lines = ["## The shape of the noise: a tracer without light sampling", "",
+             "A hand-in noisier than noise.max_ratio allows is judged as a tracer's without light sampling (the light "
+             "found only by bouncing into it: correct, and far noisier where the light is direct) when its noise follows "
+             "that tracer's shape more closely than mcrt's by more than the bound "
+             f"(mcrt.grade.stages.noise.unsampled_shape: **{n['bound']:g}**); its ratio is then taken against that "
+             "tracer. The shape does not depend on the noise's level, so a hand-in with fewer samples than it declares "
+             "keeps its estimator's: the estimators with light sampling must stay below the bound, those without "
+             "above it.", "",
+             "| renderer | renders | smallest shape | largest shape | judged without light sampling |",
+             "|---|---:|---:|---:|---:|"]
+    for k, v in n["by_renderer"].items():
+        lines.append(f"| {k} | {v['renders']} | {v['min']:.2f} | {v['max']:.2f} | {v['judged_unsampled']} |")
     return lines + [""]
 
 

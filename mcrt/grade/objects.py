@@ -169,13 +169,14 @@ def _brightness(image: np.ndarray, ref: np.ndarray, mask: np.ndarray, labels: np
     return ratio[np.minimum(labels, n_labels)]
 
 
-def baseline_shares(ctx, cam: str, R: np.ndarray, ref, mask: np.ndarray) -> np.ndarray | None:
+def baseline_shares(ctx, cam: str, R: np.ndarray, ref, mask: np.ndarray, *, unsampled: bool = False) -> np.ndarray | None:
     """:func:`structure_shares` of the grading context's mcrt baseline (``ctx``: mcrt.grade.expected.Context) for
-    camera ``cam`` against its reference (``R`` its mean, ``ref`` its Expected); None for another camera."""
-    b = ctx.baseline
-    if cam != ctx.assignment.camera or b.mean.shape != R.shape:
+    camera ``cam`` against its reference (``R`` its mean, ``ref`` its Expected); None for another camera.
+    ``unsampled``: of its render without light sampling (a hand-in whose noise has that shape)."""
+    b, model = (ctx.unsampled, ctx.model_var_unsampled) if unsampled else (ctx.baseline, ctx.model_var)
+    if cam != ctx.assignment.camera or b is None or b.mean.shape != R.shape:
         return None
-    var = ctx.model_var[cam].astype(np.float64) / b.spp + ref.var.astype(np.float64) / ref.spp
+    var = model[cam].astype(np.float64) / b.spp + ref.var.astype(np.float64) / ref.spp
     return structure_shares(b.mean.astype(np.float64) - R, var @ LUMINANCE**2, mask, ctx.labels[cam],
                             len(ctx.label_names) - 1)
 

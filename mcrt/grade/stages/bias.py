@@ -55,13 +55,19 @@ def test(g: Grading, hand: Hand, lvl: Level, img: np.ndarray, resid: np.ndarray,
     K = len(ctx.label_names) - 1
     objs = object_tests(resid, R, lvl.clip_mask, noise, ctx.labels[hand.cam], K)
     shape = structure_family(resid, R, lvl.clip_mask, noise, ctx.labels[hand.cam], K, th.min_effect,
-                             shares=baseline_shares(ctx, hand.cam, hand.R, hand.ref, lvl.clip_mask),
+                             shares=baseline_shares(ctx, hand.cam, hand.R, hand.ref, lvl.clip_mask,
+                                                    unsampled=bool(lvl.unsampled)),
                              image=np.where(lvl.clip_mask[..., None], img, 0.0))
     # A relevant bias is tested (beyond min_effect), not a zero one: correct samplers are a few tenths of a per
     # cent off the reference on whole surfaces, which large tiles and objects resolve at high spp (mcrt.stats.onesample).
+    # The structure within objects is judged by each object's share of the image's noise tails in mcrt's diagnosis
+    # render, whose tails are those of thousands of samples: a tracer without light sampling at a few hundred spp or
+    # fewer has far heavier tails on the surfaces the light reaches (a pixel's few samples that found the light), and
+    # correct renders of it fail that test; its objects' means are tested all the same.
+    shapes = [] if lvl.unsampled else [shape]
     bt = multiscale_test(resid, R, lvl.clip_mask, noise, a.tiles, alpha=th.alpha, min_effect=th.min_effect,
                          full_effect=th.full_effect, relevant=True,
-                         extra=structure_families(st, th) + [objs.family(th.min_effect, relevant=True), shape])
+                         extra=structure_families(st, th) + [objs.family(th.min_effect, relevant=True)] + shapes)
     found = bt.extra.get("patches", np.zeros(2, bool))
     return Tested(bt, st, img, objs, shape, (st.patch_maps & found[:, None, None]).any(axis=0))
 
@@ -111,7 +117,7 @@ def findings(g: Grading, hand: Hand, lvl: Level, t: Tested) -> dict[str, str]:
         out["pixels"] = fb.pixels_text(ex["pixels"].reshape(bt.shape + (3,)).any(axis=2))
     if flagged(bt):
         # The noise of the declared spp, not the measured one: values in other places measure as noise themselves.
-        declared = g.ctx.model_var[hand.cam].astype(np.float64) / max(hand.spp or g.a.min_spp, 1)
+        declared = lvl.model_ps / max(hand.spp or g.a.min_spp, 1)
         moved = values_elsewhere(t.img, hand.R, declared + lvl.noise.reference, lvl.clip_mask)
         if moved is not None:
             out["places"] = fb.places_text(*moved)

@@ -57,6 +57,14 @@ MORE_EFFICIENT = 4.0
 #: exceeds one's), so a ratio of 0.1 is many standard errors below any independent pair: tests/test_intake_pairs.py
 #: holds a proper pair and a pair whose noise is correlated by 0.99 on either side.
 SAME_PAIR_RATIO = 0.1
+#: How much more closely the noise must follow the shape of a tracer's without light sampling than mcrt's
+#: (:func:`unsampled_shape`: the difference of the two slopes) for it to be judged as that tracer's. A tracer that
+#: finds the light only by bouncing into it is correct and far noisier where the light is direct, while noise of
+#: fewer samples keeps mcrt's shape at any level; ``mcrt grade-false-alarms`` reports the slopes of correct renders
+#: of both kinds and of renders with fewer samples than declared, on either side of this bound.
+UNSAMPLED_SHAPE = 0.55
+#: Fewest second differences :func:`unsampled_shape` fits.
+MIN_DIFFERENCES = 64
 
 
 def measure(g: Grading, hand: Hand, clip_mask: np.ndarray) -> Level:
@@ -73,26 +81,39 @@ def measure(g: Grading, hand: Hand, clip_mask: np.ndarray) -> Level:
     if pair is not None:
         pair = np.where(np.isfinite(pair), pair, 0.0)
     resid = np.where(hand.mask[..., None], img - hand.R, 0.0)
-    ratio = noise_ratio(resid, hand.R, clip_mask, model_ps, ref_noise + q, hand.base_tile, pair)
     per = n_r * hand.k_down**2
+    nominal = hand.spp or a.min_spp
+    ratio = noise_ratio(resid, hand.R, clip_mask, model_ps, ref_noise + q, hand.base_tile, pair)
+    # Noisier than the declared spp allows: the noise of fewer samples, or of a correct tracer without light
+    # sampling, which the shape of the noise tells apart (unsampled_shape).
+    unsampled, shape = 0.0, None
+    model_un = ctx.model_var_unsampled.get(hand.cam)
+    if model_un is not None:  # measured always: the false-alarm report shows it for every correct render
+        shape = unsampled_shape(resid, model_ps / (nominal * per) + ref_noise + q,
+                                model_un / (nominal * per) + ref_noise + q, clip_mask, ctx.labels[hand.cam])
+        if nominal * per * ratio > g.th.max_noise_ratio and shape > UNSAMPLED_SHAPE:
+            un_ratio = noise_ratio(resid, hand.R, clip_mask, model_un.astype(np.float64), ref_noise + q,
+                                   hand.base_tile, pair)
+            unsampled = ratio / un_ratio if un_ratio > 0 else 0.0  # as many times less noisy with light sampling
+            model_ps, ratio = model_un.astype(np.float64), un_ratio
     spp_eff = _spp(ratio, per)
     # Away from the light's edges too: a sub-pixel change of its outline (the light a little lower) is many noise
     # deviations there and reads as noise of far fewer samples; the verdict says where the excess is.
     away = clip_mask & ~beside_emitters(model_ps @ LUMINANCE**2, clip_mask)
     spp_away = _spp(noise_ratio(resid, hand.R, away, model_ps, ref_noise + q, hand.base_tile, pair), per)
     # The difference of two renders holds no bias; one render's tile spreads hold it as well as the noise.
-    nominal = hand.spp or a.min_spp
     spp_broad = spp_eff if pair is not None else _broad(
         nominal, spp_eff, body_ratio(resid, model_ps / (nominal * per) + ref_noise + q, clip_mask, ctx.labels[hand.cam]))
     g.details["noise"] = {"spp_declared": hand.spp, "renders": n_r,
                           "spp_effective": None if not np.isfinite(spp_eff) else spp_eff,
                           "spp_broad": None if not np.isfinite(spp_broad) else spp_broad,
-                          "spp_away_from_light_edges": None if not np.isfinite(spp_away) else spp_away}
+                          "spp_away_from_light_edges": None if not np.isfinite(spp_away) else spp_away,
+                          "unsampled_shape": shape, "unsampled": unsampled or None}
     spp = hand.spp
     # var_ratio, spp_model and the verdict are set by _declared or _undeclared.
     lvl = Level(img=img, q=q, pair=pair, resid=resid, clip_mask=clip_mask, model_ps=model_ps, ref_noise=ref_noise,
                 per=per, spp_eff=spp_eff, var_ratio=0.0, spp_nominal=spp or a.min_spp, spp_model=0,
-                verdict=("passed", "", False), spp_broad=spp_broad, spp_away=spp_away)
+                verdict=("passed", "", False), spp_broad=spp_broad, spp_away=spp_away, unsampled=unsampled)
     if spp:
         _declared(g, lvl, spp)
     else:
@@ -100,6 +121,33 @@ def measure(g: Grading, hand: Hand, clip_mask: np.ndarray) -> Level:
     g.details["noise"]["spp_model"] = lvl.spp_model
     lvl.noise = Noise(model=model_ps / (lvl.spp_model * per) + q, reference=ref_noise, pair=pair)
     return lvl
+
+
+def unsampled_shape(resid: np.ndarray, var_sampled: np.ndarray, var_unsampled: np.ndarray, mask: np.ndarray,
+                    labels: np.ndarray) -> float:
+    """Whether the noise has the shape of a tracer's without light sampling rather than mcrt's: the slope of log d^2
+    on log s_u^2 less that on log s^2, fitted together by least squares, where d is a second difference of the
+    residual's luminance within one surface (a smooth bias cancels) and s^2, s_u^2 its variance under each model
+    (v0 + 4 v1 + v2). Noise of either shape at any level gives its own model the larger slope (a level only moves
+    the intercept); NaN with too few differences."""
+    lum = LUMINANCE**2
+    vs, vu = var_sampled @ lum, var_unsampled @ lum
+    keep = mask & (vs > 0) & (vu > 0)
+    e = np.where(keep, resid @ LUMINANCE, 0.0)
+    ys, xs, xu = [], [], []
+    for ee, a, b, kk, ll in ((e, vs, vu, keep, labels), (e.T, vs.T, vu.T, keep.T, labels.T)):
+        m = kk[:, :-2] & kk[:, 1:-1] & kk[:, 2:] & (ll[:, :-2] == ll[:, 1:-1]) & (ll[:, 1:-1] == ll[:, 2:])
+        d = (ee[:, :-2] - 2 * ee[:, 1:-1] + ee[:, 2:])[m]
+        nz = d != 0
+        ys.append(np.log(d[nz] ** 2))
+        xs.append(np.log((a[:, :-2] + 4 * a[:, 1:-1] + a[:, 2:])[m][nz]))
+        xu.append(np.log((b[:, :-2] + 4 * b[:, 1:-1] + b[:, 2:])[m][nz]))
+    y = np.concatenate(ys)
+    if y.size < MIN_DIFFERENCES:
+        return float("nan")
+    x = np.column_stack([np.ones_like(y), np.concatenate(xs), np.concatenate(xu)])
+    coef, *_ = np.linalg.lstsq(x, y, rcond=None)
+    return float(coef[2] - coef[1])
 
 
 def same_pair(a: np.ndarray, b: np.ndarray, R: np.ndarray, var: np.ndarray, mask: np.ndarray,
@@ -171,12 +219,15 @@ def _declared(g: Grading, lvl: Level, spp: int) -> None:
     lvl.var_ratio = var_ratio = spp / spp_eff if np.isfinite(spp_eff) else 0.0
     if spp < a.min_spp:
         lvl.verdict = ("failed", f"you declared {spp} samples per pixel; the assignment asks for at least {a.min_spp}", True)
+    elif lvl.unsampled and var_ratio <= th.max_noise_ratio:
+        lvl.verdict = ("passed", unsampled_text(spp, spp_eff, lvl.unsampled), False)
     elif var_ratio > th.max_noise_ratio:
         # Trust the noise, not the declaration, where the excess is broad: a render whose noise belongs to
         # fewer samples would otherwise be judged with too small a noise model.
         if _follows_noise(lvl, spp, th.max_noise_ratio):
             lvl.spp_model = max(1, min(spp, int(lvl.spp_broad)))
-        lvl.verdict = ("failed", claim_text(var_ratio, spp, spp_eff, th.max_noise_ratio), False)
+        lvl.verdict = ("failed", claim_text(var_ratio, spp, spp_eff, th.max_noise_ratio, unsampled=bool(lvl.unsampled)),
+                       False)
         if np.isfinite(lvl.spp_away) and spp / lvl.spp_away <= th.max_noise_ratio:
             lvl.edge_excess = True
             lvl.verdict = ("failed", edge_text(var_ratio, spp, spp_eff, lvl.spp_away), False)
@@ -194,10 +245,25 @@ def _declared(g: Grading, lvl: Level, spp: int) -> None:
                        f"{spp_text(spp_eff)} spp); the bias test assumed {lvl.spp_model} spp")
 
 
-def claim_text(var_ratio: float, spp: int, spp_eff: float, max_ratio: float) -> str:
+def unsampled_text(spp: int, spp_eff: float, times: float) -> str:
+    """The noise criterion's pass for noise shaped like a tracer's without light sampling (:func:`unsampled_shape`)."""
+    return (f"noise consistent with {spp} spp of a tracer without light sampling (like mcrt without next-event "
+            f"estimation at about {spp_text(spp_eff)} spp): the noise is largest where the light is direct, as when the "
+            f"light is found only by bouncing into it; sampling the light at each diffuse bounce (next-event "
+            f"estimation) would make it about {times:.0f}x less noisy at the same spp")
+
+
+def claim_text(var_ratio: float, spp: int, spp_eff: float, max_ratio: float, *, unsampled: bool = False) -> str:
     """The noise criterion's failure for a declared spp, in the student's terms: how many times noisier than the
-    declared spp should be, and what spp the noise is like."""
+    declared spp should be, and what spp the noise is like (``unsampled``: of a tracer without light sampling,
+    whose shape the noise has)."""
     times = f"{var_ratio:.1f}" if var_ratio < 10 else f"{var_ratio:.0f}"
+    if unsampled:
+        return (f"about {times}x noisier than {spp} spp should be even for a tracer without light sampling, whose "
+                f"shape the noise has (largest where the light is direct): like mcrt without next-event estimation at "
+                f"about {spp_text(spp_eff)} spp (up to {max_ratio:g}x is accepted); render more samples, check the spp "
+                "you declared and that each pass or batch draws new random numbers, and sample the light at each "
+                "diffuse bounce (next-event estimation), which makes the noise far smaller")
     return (f"about {times}x noisier than {spp} spp should be: like about {spp_text(spp_eff)} spp (noise "
             f"variance against mcrt's at {spp} spp; up to {max_ratio:g}x is accepted, for estimators less efficient "
             "than mcrt's); render more samples, check the spp you declared and that each pass or batch draws new random "
@@ -241,12 +307,13 @@ def _undeclared(g: Grading, lvl: Level) -> None:
     follows = var_ratio <= th.max_noise_ratio or _follows_noise(lvl, a.min_spp, th.max_noise_ratio)
     spp_m = spp_eff if follows else lvl.spp_broad
     lvl.spp_model = max(1, min(a.spp, int(spp_m))) if np.isfinite(spp_m) else a.spp
+    like = "mcrt without light sampling" if lvl.unsampled else "mcrt"
     if var_ratio > th.max_noise_ratio:
-        lvl.verdict = ("failed", (f"spp not declared, and the noise is like mcrt with about {spp_text(spp_eff)} "
+        lvl.verdict = ("failed", (f"spp not declared, and the noise is like {like} with about {spp_text(spp_eff)} "
                                   f"spp, far fewer than the {a.min_spp} asked for at least; render more samples (and "
                                   "declare them in a manifest)"), False)
     else:
-        lvl.verdict = ("passed", (f"spp not declared (add a manifest with `spp = N`); the noise is like mcrt "
+        lvl.verdict = ("passed", (f"spp not declared (add a manifest with `spp = N`); the noise is like {like} "
                                   f"with about {spp_text(spp_eff)} spp"), False)
 
 

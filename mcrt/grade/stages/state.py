@@ -85,6 +85,9 @@ class Level:
     spp_broad: float = float("inf")  # spp_eff with the noisiest tiles left out (stages.noise.BIAS_TILES)
     spp_away: float = float("inf")  # spp_eff away from the light's edges (stages.noise.measure)
     edge_excess: bool = False  # the excess noise lies on the light's outline alone (stages.noise.edge_text)
+    # The noise is shaped like a tracer's without light sampling (stages.noise.unsampled_shape): model_ps is that
+    # tracer's, and this is how many times noisier it is than mcrt's at the same spp.
+    unsampled: float = 0.0
 
     @property
     def samples(self) -> int:
