@@ -1154,3 +1154,49 @@ def test_an_image_of_one_value_is_said_to_hold_no_view(ctx):
     assert res.score < res.max_score
     assert flat_level({"maps": [[0.03, 0.02], [0.1, 0.021], [20.0, 0.023]]}) == pytest.approx(0.021)
     assert flat_level({"maps": [[0.03, 0.02], [0.1, 0.12], [20.0, 0.98]]}) is None
+
+
+def _sphere_normals_inward(d, seg=48, rings=24):
+    """The Mitsuba scene dictionary with the mirror sphere as a UV mesh whose vertex normals point into it: a mirror
+    reflecting about wrong normals (the shading normal flipped), its surface where the sphere's is."""
+    import mitsuba as mi
+
+    sph = next(iter(load_scene().spheres()))
+    c, r = np.asarray(sph.center, float), float(sph.radius)
+    t, p = np.meshgrid(np.linspace(0, np.pi, rings + 1), np.linspace(0, 2 * np.pi, seg + 1), indexing="ij")
+    u = np.stack([np.sin(t) * np.cos(p), np.sin(t) * np.sin(p), np.cos(t)], -1).reshape(-1, 3)
+    k = (np.arange(rings)[:, None] * (seg + 1) + np.arange(seg)[None, :]).ravel()
+    faces = np.concatenate([np.stack([k, k + seg + 1, k + seg + 2], 1), np.stack([k, k + seg + 2, k + 1], 1)])
+    props = mi.Properties()
+    props["bsdf"] = mi.load_dict(d["sphere"]["bsdf"])
+    mesh = mi.Mesh("sphere", len(u), len(faces), props, has_vertex_normals=True)
+    params = mi.traverse(mesh)
+    params["vertex_positions"] = mi.Float((c + r * u).reshape(-1).astype(np.float32))
+    params["vertex_normals"] = mi.Float((-u).reshape(-1).astype(np.float32))
+    params["faces"] = mi.UInt32(faces.astype(np.uint32).reshape(-1))
+    params.update()
+    return {**d, "sphere": mesh}
+
+
+def test_a_mirror_reflecting_about_wrong_normals_is_named_with_its_normals(ctx):
+    """The mirror sphere with its shading normals pointing inward (Mitsuba, seed 85): black, as the catalogue's
+    reflection of the wrong sign leaves it; the image cannot tell the reflection's code from the normals it reflects
+    about, and the words name both (and a mesh that is not the sphere)."""
+    res = grade_image("normals_in", ctx, [_mitsuba(85, mitsuba_edit=_sphere_normals_inward)], spp=1024)
+    fam, said = _claimed(res)
+    assert fam is not None and {"normals", "object_shape"} <= set(named_causes(res)[0]), said
+    assert "it reflects about its normals" in said and res.score < res.max_score
+
+
+def test_paths_cut_short_name_the_roulette_that_would_cut_them_too(ctx):
+    """Mitsuba's paths cut at depth 3 (seed 86): the depth is claimed, and the words name the light past it lost to
+    Russian roulette as well, which gives the same image; paths longer than asked name no roulette."""
+    r = _render_spec(Spec("t", None, spp=1024), load_scene(), width=RES, height=RES, max_depth=3, seed=86)
+    res = grade_image("depth3", ctx, [np.asarray(r.mean, np.float64)], spp=1024)
+    fam, said = _claimed(res)
+    assert fam == "depth" and {"depth", "roulette"} <= set(named_causes(res)[0]), said
+    assert "paths cut at depth 3" in said and "Russian roulette from there" in said
+    from mcrt.grade.explain.scene import _node_candidate
+
+    for longer in (12, -1):
+        assert "roulette" not in _node_candidate("depth", longer, 0.0, {}, 8).text

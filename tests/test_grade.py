@@ -855,13 +855,14 @@ def test_the_false_alarm_report_shows_each_renderers_noise_shape_beside_the_boun
 
     def row(renderer, shape, unsampled):
         return {"renderer": renderer, "group": "64->64", "file": "float", "spp": 64, "lost": [], "var_ratio": 1.0,
-                "unsampled_shape": shape, "unsampled": unsampled}
+                "unsampled_shape": shape, "unsampled": unsampled, "unsampled_body": 1.0 if unsampled else None}
 
     rows = [row("mcrt", 0.1, False), row("mcrt", -0.2, False), row("mcrt-none", 0.9, True), row("mcrt-none", 1.1, True)]
     s = summarise(rows, 3.0)
     assert s["noise_shape"]["bound"] == UNSAMPLED_SHAPE
-    assert s["noise_shape"]["by_renderer"]["mcrt"] == {"renders": 2, "min": -0.2, "max": 0.1, "judged_unsampled": 0}
+    assert s["noise_shape"]["by_renderer"]["mcrt"] == {"renders": 2, "min": -0.2, "max": 0.1, "min_body": None,
+                                                       "judged_unsampled": 0}
     assert s["noise_shape"]["by_renderer"]["mcrt-none"]["judged_unsampled"] == 2
     md = markdown({"command": "mcrt grade-false-alarms", "wall_time_s": 60, "min_effect": 0.003, "summary": s,
                    "cases": rows})
-    assert "| mcrt-none | 2 | 0.90 | 1.10 | 2 |" in md
+    assert "| mcrt-none | 2 | 0.90 | 1.10 | 1.00 | 2 |" in md

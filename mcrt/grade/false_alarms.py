@@ -192,6 +192,7 @@ def run_study(out: Path, *, seeds: int, cache: str | None, progress: bool = True
                          "p_patches": st.get("p_patches"),
                          "penalised": st.get("penalised"),
                          "var_ratio": c.spp / eff if eff else None, "unsampled_shape": nz.get("unsampled_shape"),
+                         "unsampled_body": nz.get("unsampled_body"),
                          "unsampled": bool(nz.get("unsampled")),
                          "encoding": (r.details.get("encoding") or {}).get("detected")})
             bar.update(k + 1)
@@ -293,14 +294,17 @@ def noise_shapes(rows: list[dict]) -> dict:
     how many renders were judged as a tracer's without light sampling, beside the bound: the estimators with light
     sampling must fall below it at any spp (a hand-in with fewer samples than declared keeps its estimator's shape),
     those without above it."""
-    from mcrt.grade.stages.noise import UNSAMPLED_SHAPE
+    from mcrt.grade.stages.noise import UNSAMPLED_BODY, UNSAMPLED_SHAPE
 
-    out = {"bound": UNSAMPLED_SHAPE, "by_renderer": {}}
+    out = {"bound": UNSAMPLED_SHAPE, "body_bound": UNSAMPLED_BODY, "by_renderer": {}}
     for name in sorted({r["renderer"] for r in rows}):
-        w = np.array([r["unsampled_shape"] for r in rows if r["renderer"] == name and r.get("unsampled_shape") is not None])
+        mine = [r for r in rows if r["renderer"] == name]
+        w = np.array([r["unsampled_shape"] for r in mine if r.get("unsampled_shape") is not None])
+        body = [r["unsampled_body"] for r in mine if r.get("unsampled_body") is not None]
         if w.size:
             out["by_renderer"][name] = {"renders": int(w.size), "min": float(w.min()), "max": float(w.max()),
-                                        "judged_unsampled": sum(1 for r in rows if r["renderer"] == name and r.get("unsampled"))}
+                                        "min_body": min(body) if body else None,
+                                        "judged_unsampled": sum(1 for r in mine if r.get("unsampled"))}
     return out
 
 
@@ -384,14 +388,17 @@ def _shape_markdown(n: dict) -> list[str]:
              "A hand-in noisier than noise.max_ratio allows is judged as a tracer's without light sampling (the light "
              "found only by bouncing into it: correct, and far noisier where the light is direct) when its noise follows "
              "that tracer's shape more closely than mcrt's by more than the bound "
-             f"(mcrt.grade.stages.noise.unsampled_shape: **{n['bound']:g}**); its ratio is then taken against that "
-             "tracer. The shape does not depend on the noise's level, so a hand-in with fewer samples than it declares "
-             "keeps its estimator's: the estimators with light sampling must stay below the bound, those without "
-             "above it.", "",
-             "| renderer | renders | smallest shape | largest shape | judged without light sampling |",
-             "|---|---:|---:|---:|---:|"]
+             f"(mcrt.grade.stages.noise.unsampled_shape: **{n['bound']:g}**) and the body of its noise against that "
+             f"tracer's model is at least **{n.get('body_bound', 0):g}** (a bias the shape alone would take for it "
+             "gives less); its ratio is then taken against that tracer. The shape does not depend on the noise's "
+             "level, so a hand-in with fewer samples than it declares keeps its estimator's: the estimators with light "
+             "sampling must stay below the bound, those without above it. *Smallest body*: over the renders whose "
+             "shape passed.", "",
+             "| renderer | renders | smallest shape | largest shape | smallest body | judged without light sampling |",
+             "|---|---:|---:|---:|---:|---:|"]
     for k, v in n["by_renderer"].items():
-        lines.append(f"| {k} | {v['renders']} | {v['min']:.2f} | {v['max']:.2f} | {v['judged_unsampled']} |")
+        body = "" if v.get("min_body") is None else f"{v['min_body']:.2f}"
+        lines.append(f"| {k} | {v['renders']} | {v['min']:.2f} | {v['max']:.2f} | {body} | {v['judged_unsampled']} |")
     return lines + [""]
 
 

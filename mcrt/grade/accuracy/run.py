@@ -313,6 +313,15 @@ def _explanation_causes(expl: dict) -> list[str]:
                             ("bad_pixels", "a hole in", "mesh_face"),  # a patch on one surface (since unasked)
                             # the catalogue's black mirror worded with another material (since unsought)
                             ("mirror_wrong_sign", "another material", "material"),
+                            # ... and the sphere's normals or mesh, a reflected direction's look-alikes (since the
+                            # unanticipated and unexamined classes were graded, with both in view)
+                            ("mirror_wrong_sign", "it reflects about its normals", "normals"),
+                            ("mirror_wrong_sign", "it reflects about its normals", "object_shape"),
+                            ("material", "it reflects about its normals", "normals"),
+                            ("material", "it reflects about its normals", "object_shape"),
+                            ("mirror_normal", "it reflects about its normals", "object_shape"),
+                            # a depth cut, worded also as the light past it lost to roulette (since the same grading)
+                            ("depth", "Russian roulette from there", "roulette"),
                             # roulette's divisor, where the words name it (added after unheard was graded)
                             ("path_weight", "Russian roulette", "roulette"),
                             # ... and a clamp or robust mean, where the words name one (added after unnoticed was

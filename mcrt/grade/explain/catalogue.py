@@ -32,6 +32,7 @@ from __future__ import annotations
 import numpy as np
 
 from mcrt.grade.candidates import FLOOR, Candidate
+from mcrt.grade.explain.mirror import NORMALS_ALIKE
 from mcrt.grade.regions import short_text, tile_means, valid_counts
 from mcrt.stats.onesample import bias_scales
 from mcrt.stats.tiles import tile_counts, tile_sums
@@ -40,9 +41,10 @@ from mcrt.stats.tiles import tile_counts, tile_sums
 #: Bugs whose image another mistake of a student's program makes alike, worded beside the bug's own words: the
 #: catalogue names a line of code, and the image cannot tell it from these. (A mirror whose reflection points into
 #: the sphere turns it black; a sphere of glass or of a dark diffuse material reflects little too, and at a student's
-#: noise the difference is the few per cent they still reflect.)
+#: noise the difference is the few per cent they still reflect; a mirror reflecting about wrong normals, or a mesh that
+#: is not the sphere, turns it dark as well.)
 LOOK_ALIKES = {"mirror_wrong_sign": "or the sphere given another material that reflects little (glass, or a dark "
-                                    "diffuse one), which leaves it nearly black too"}
+                                    f"diffuse one), which leaves it nearly black too, {NORMALS_ALIKE}"}
 
 
 def catalogue(fit, inputs) -> list[Candidate]:

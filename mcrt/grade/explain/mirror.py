@@ -36,6 +36,13 @@ WORDS = {
     "camera_only": "the mirror handled for camera rays only: a path that meets it after a bounce ends there (the room "
                    "lit by no light the mirror reflects)",
 }
+#: What a reflected direction's mistake looks like too: a mirror shows only where its normals send the rays, so the
+#: reflection's code, the normal at a hit and a surface that is not the sphere's (a coarse, scrambled or squashed mesh)
+#: change what it shows alike, and the sphere's few dozen pixels at a hand-in's resolution cannot tell them apart.
+NORMALS_ALIKE = ("or the sphere's own surface wrong (the normal at a hit, or a mesh that is not the sphere: facets, "
+                 "scrambled or squashed vertices), which a mirror shows the same way: it reflects about its normals")
+#: The mistakes that change the reflected direction (the others change its weight or where paths end).
+DIRECTIONS = ("without_2", "normal_unnormalised", "normal_from_origin", "backwards")
 #: Where the mistake applies, in the student's terms ('camera_only' says it itself).
 AT_WORDS = {"every": ", at every mirror hit", "first": ", for the camera's rays (the mirror seen directly) only"}
 
@@ -65,7 +72,7 @@ def mirror(fit: Fit, inputs: Inputs) -> list[Candidate]:
         return []
     err, (how, at), change = best
     where = "" if how == "camera_only" else AT_WORDS[at]
-    text = WORDS[how].format(r=f"{r['radius']:g}") + where
+    text = WORDS[how].format(r=f"{r['radius']:g}") + where + (f", {NORMALS_ALIKE}" if how in DIRECTIONS else "")
     fam = "mirror_normal" if how.startswith("normal_") else "material"
     return [Candidate(fam, "mirror computed wrongly", text, err, 0, value={"mirror": how, "at": at}, change=change)]
 

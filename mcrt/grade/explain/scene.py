@@ -316,8 +316,12 @@ def _node_candidate(key: str, val, chi2: float, v: dict, max_depth: int) -> Cand
                          f"{_fmt(_shift(v['eye'], AXES.index(key[-1]), val), 2)} where the scene says "
                          f"{_fmt(v['eye'], 2)})", chi2, 1, value=val)
     elif key == "depth":
+        # A path cut at a depth and a path whose weight is lost there give one image: the words name both.
+        lost = "" if val == -1 or (max_depth != -1 and val > max_depth) else (
+            ", or each path's light past that depth lost (Russian roulette from there that ends every path or divides "
+            "by a survival probability far above 1, or a throughput that becomes 0)")
         cand = Candidate("depth", "path depth", f"paths cut at depth {'unbounded' if val == -1 else val} "
-                         f"(Mitsuba's convention, where the assignment asks for {max_depth})", chi2, 1,
+                         f"(Mitsuba's convention, where the assignment asks for {max_depth}){lost}", chi2, 1,
                          value=val)
     else:
         return None

@@ -60,9 +60,14 @@ SAME_PAIR_RATIO = 0.1
 #: How much more closely the noise must follow the shape of a tracer's without light sampling than mcrt's
 #: (:func:`unsampled_shape`: the difference of the two slopes) for it to be judged as that tracer's. A tracer that
 #: finds the light only by bouncing into it is correct and far noisier where the light is direct, while noise of
-#: fewer samples keeps mcrt's shape at any level; ``mcrt grade-false-alarms`` reports the slopes of correct renders
-#: of both kinds and of renders with fewer samples than declared, on either side of this bound.
-UNSAMPLED_SHAPE = 0.55
+#: fewer samples keeps mcrt's shape at any level; ``mcrt grade-false-alarms`` reports the statistic of correct renders
+#: of both kinds on either side of this bound.
+UNSAMPLED_SHAPE = 0.7
+#: The least body of the noise (:func:`body_ratio`) against that tracer's model at the declared spp for the noise to be
+#: judged as its: a correct one's is near 1, less at few samples (heavy tails shrink the median), while a bias under
+#: noise of mcrt's shape, which the shape alone can take for it, gives far less (the false-alarm report shows correct
+#: renders' bodies; tests/test_explain_programs.py's bounce drawn otherwise with the floor brighter is such a bias).
+UNSAMPLED_BODY = 0.2
 #: Fewest second differences :func:`unsampled_shape` fits.
 MIN_DIFFERENCES = 64
 
@@ -85,13 +90,18 @@ def measure(g: Grading, hand: Hand, clip_mask: np.ndarray) -> Level:
     nominal = hand.spp or a.min_spp
     ratio = noise_ratio(resid, hand.R, clip_mask, model_ps, ref_noise + q, hand.base_tile, pair)
     # Noisier than the declared spp allows: the noise of fewer samples, or of a correct tracer without light
-    # sampling, which the shape of the noise tells apart (unsampled_shape).
-    unsampled, shape = 0.0, None
+    # sampling, which the shape of the noise tells apart (unsampled_shape), where the excess is in the noise's body
+    # (a few pixels far off, black ones written over a correct render, raise the spread but not the body).
+    unsampled, shape, body_un = 0.0, None, None
     model_un = ctx.model_var_unsampled.get(hand.cam)
+    body = body_ratio(resid, model_ps / (nominal * per) + ref_noise + q, clip_mask, ctx.labels[hand.cam])
     if model_un is not None:  # measured always: the false-alarm report shows it for every correct render
         shape = unsampled_shape(resid, model_ps / (nominal * per) + ref_noise + q,
                                 model_un / (nominal * per) + ref_noise + q, clip_mask, ctx.labels[hand.cam])
-        if nominal * per * ratio > g.th.max_noise_ratio and shape > UNSAMPLED_SHAPE:
+        excess = min(nominal * per * ratio, body)
+        if excess > g.th.max_noise_ratio and shape > UNSAMPLED_SHAPE:
+            body_un = body_ratio(resid, model_un / (nominal * per) + ref_noise + q, clip_mask, ctx.labels[hand.cam])
+        if body_un is not None and body_un >= UNSAMPLED_BODY:
             un_ratio = noise_ratio(resid, hand.R, clip_mask, model_un.astype(np.float64), ref_noise + q,
                                    hand.base_tile, pair)
             unsampled = ratio / un_ratio if un_ratio > 0 else 0.0  # as many times less noisy with light sampling
@@ -102,13 +112,14 @@ def measure(g: Grading, hand: Hand, clip_mask: np.ndarray) -> Level:
     away = clip_mask & ~beside_emitters(model_ps @ LUMINANCE**2, clip_mask)
     spp_away = _spp(noise_ratio(resid, hand.R, away, model_ps, ref_noise + q, hand.base_tile, pair), per)
     # The difference of two renders holds no bias; one render's tile spreads hold it as well as the noise.
-    spp_broad = spp_eff if pair is not None else _broad(
-        nominal, spp_eff, body_ratio(resid, model_ps / (nominal * per) + ref_noise + q, clip_mask, ctx.labels[hand.cam]))
+    if unsampled:
+        body = body_ratio(resid, model_ps / (nominal * per) + ref_noise + q, clip_mask, ctx.labels[hand.cam])
+    spp_broad = spp_eff if pair is not None else _broad(nominal, spp_eff, body)
     g.details["noise"] = {"spp_declared": hand.spp, "renders": n_r,
                           "spp_effective": None if not np.isfinite(spp_eff) else spp_eff,
                           "spp_broad": None if not np.isfinite(spp_broad) else spp_broad,
                           "spp_away_from_light_edges": None if not np.isfinite(spp_away) else spp_away,
-                          "unsampled_shape": shape, "unsampled": unsampled or None}
+                          "unsampled_shape": shape, "unsampled_body": body_un, "unsampled": unsampled or None}
     spp = hand.spp
     # var_ratio, spp_model and the verdict are set by _declared or _undeclared.
     lvl = Level(img=img, q=q, pair=pair, resid=resid, clip_mask=clip_mask, model_ps=model_ps, ref_noise=ref_noise,
