@@ -21,7 +21,8 @@ CLASSES = {"scene": "cases", "outside": "outside", "programs": "programs", "fres
            "unvisited": "unvisited", "unlooked": "unlooked", "unwonted": "unwonted",
            "unremarked": "unremarked", "unremembered": "unremembered", "unnoticed": "unnoticed",
            "unrecorded": "unrecorded", "unattended": "unattended", "unattested": "unattested",
-           "unconsidered": "unconsidered", "unanticipated": "unanticipated", "unexamined": "unexamined"}
+           "unconsidered": "unconsidered", "unanticipated": "unanticipated", "unexamined": "unexamined",
+           "unconfirmed": "unconfirmed"}
 
 
 def register(sub) -> None:
@@ -66,8 +67,10 @@ def register(sub) -> None:
                    "and GPU frameworks' tracers, written blind, mcrt.grade.accuracy.unattested), 'unconsidered' (a "
                    "thirtieth, in Rust, Go, Java and C# tracers, written blind, mcrt.grade.accuracy.unconsidered), "
                    "'unanticipated' (a thirty-first, in the mathematics students derive by hand and type in, written "
-                   "blind, mcrt.grade.accuracy.unanticipated) or 'unexamined' (a thirty-second, in the workflow around "
-                   "students' tracers, written blind, mcrt.grade.accuracy.unexamined) (default: scene)")
+                   "blind, mcrt.grade.accuracy.unanticipated), 'unexamined' (a thirty-second, in the workflow around "
+                   "students' tracers, written blind, mcrt.grade.accuracy.unexamined) or 'unconfirmed' (a "
+                   "thirty-third, in what debugging, refactoring and version control leave in students' tracers, "
+                   "written blind, mcrt.grade.accuracy.unconfirmed) (default: scene)")
     p.add_argument("--held-out", choices=("all", "only", "none"), default="all",
                    help="grade all cases, only the held-out ones, or none of them (default: all)")
     p.add_argument("--out", default=None, help=f"report folder (default: {DEFAULT_OUT}, or {DEFAULT_OUT}/CLASS "
