@@ -22,7 +22,7 @@ CLASSES = {"scene": "cases", "outside": "outside", "programs": "programs", "fres
            "unremarked": "unremarked", "unremembered": "unremembered", "unnoticed": "unnoticed",
            "unrecorded": "unrecorded", "unattended": "unattended", "unattested": "unattested",
            "unconsidered": "unconsidered", "unanticipated": "unanticipated", "unexamined": "unexamined",
-           "unconfirmed": "unconfirmed"}
+           "unconfirmed": "unconfirmed", "unlisted": "unlisted"}
 
 
 def register(sub) -> None:
@@ -68,9 +68,11 @@ def register(sub) -> None:
                    "thirtieth, in Rust, Go, Java and C# tracers, written blind, mcrt.grade.accuracy.unconsidered), "
                    "'unanticipated' (a thirty-first, in the mathematics students derive by hand and type in, written "
                    "blind, mcrt.grade.accuracy.unanticipated), 'unexamined' (a thirty-second, in the workflow around "
-                   "students' tracers, written blind, mcrt.grade.accuracy.unexamined) or 'unconfirmed' (a "
+                   "students' tracers, written blind, mcrt.grade.accuracy.unexamined), 'unconfirmed' (a "
                    "thirty-third, in what debugging, refactoring and version control leave in students' tracers, "
-                   "written blind, mcrt.grade.accuracy.unconfirmed) (default: scene)")
+                   "written blind, mcrt.grade.accuracy.unconfirmed) or 'unlisted' (a thirty-fourth, in intersection "
+                   "code, acceleration structures and floating-point robustness, written blind, "
+                   "mcrt.grade.accuracy.unlisted) (default: scene)")
     p.add_argument("--held-out", choices=("all", "only", "none"), default="all",
                    help="grade all cases, only the held-out ones, or none of them (default: all)")
     p.add_argument("--out", default=None, help=f"report folder (default: {DEFAULT_OUT}, or {DEFAULT_OUT}/CLASS "
