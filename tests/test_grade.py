@@ -830,6 +830,23 @@ def test_a_tracer_without_light_sampling_is_told_from_fewer_samples_by_the_shape
     assert dark.details["noise"]["unsampled"] and dark.score < dark.max_score - 5, dark.summary
 
 
+def test_a_coarse_palette_is_no_tracer_without_light_sampling(context64):
+    """A correct Mitsuba render (256 spp, seed 75) saved through a web palette (sRGB codes rounded to multiples of 51):
+    its errors are larger where the light is, which a tracer without light sampling's noise is too, but they tie
+    neighbouring pixels, which noise never does: the noise is not judged as that tracer's."""
+    from mcrt.grade.false_alarms import Case, render_case
+    from mcrt.grade.stages.noise import MAX_TIES, tied_share
+    from mcrt.image_files import srgb_eotf, srgb_oetf
+
+    img = render_case(load_scene(), Case("path/independent", 256, 64, 64, 75))
+    web = srgb_eotf(np.round(srgb_oetf(np.clip(img, 0, 1)) * 5) / 5)
+    labels = context64.labels[context64.assignment.camera]
+    noisy = context64.model_var_unsampled[context64.assignment.camera] @ np.ones(3) > 0
+    assert tied_share(img, noisy, labels) <= MAX_TIES < tied_share(web, noisy, labels)
+    res = grade_image("web", context64, [web], spp=256)
+    assert not res.details["noise"]["unsampled"] and res.score < res.max_score, res.summary
+
+
 def test_the_shape_of_noise_picks_the_model_it_follows(context64):
     """Gaussian noise (seed 74) with the variance of either model, at levels 1 and 30 (the level moves only the
     intercept), plus a smooth bias (cancelled by the second differences): each is read as its own model's."""

@@ -70,6 +70,11 @@ UNSAMPLED_SHAPE = 0.7
 UNSAMPLED_BODY = 0.2
 #: Fewest second differences :func:`unsampled_shape` fits.
 MIN_DIFFERENCES = 64
+#: The largest share of the image's second differences that are exactly 0 (:func:`tied_share`) for its excess to be
+#: read as the noise of a tracer without light sampling: a tracer's noise leaves neighbouring pixels unequal, even
+#: through an 8-bit file, while a coarse rounding (a web palette) ties many of them, and its errors, larger where the
+#: light is, have that tracer's shape (tests/test_grade.py).
+MAX_TIES = 0.1
 
 
 def measure(g: Grading, hand: Hand, clip_mask: np.ndarray) -> Level:
@@ -99,7 +104,9 @@ def measure(g: Grading, hand: Hand, clip_mask: np.ndarray) -> Level:
         shape = unsampled_shape(resid, model_ps / (nominal * per) + ref_noise + q,
                                 model_un / (nominal * per) + ref_noise + q, clip_mask, ctx.labels[hand.cam])
         excess = min(nominal * per * ratio, body)
-        if excess > g.th.max_noise_ratio and shape > UNSAMPLED_SHAPE:
+        noisy = clip_mask & (model_un @ LUMINANCE**2 > 0)  # the light's own pixels hold no noise to tie
+        if excess > g.th.max_noise_ratio and shape > UNSAMPLED_SHAPE and tied_share(img, noisy, ctx.labels[hand.cam]) \
+                <= MAX_TIES:
             body_un = body_ratio(resid, model_un / (nominal * per) + ref_noise + q, clip_mask, ctx.labels[hand.cam])
         if body_un is not None and body_un >= UNSAMPLED_BODY:
             un_ratio = noise_ratio(resid, hand.R, clip_mask, model_un.astype(np.float64), ref_noise + q,
@@ -159,6 +166,18 @@ def unsampled_shape(resid: np.ndarray, var_sampled: np.ndarray, var_unsampled: n
     x = np.column_stack([np.ones_like(y), np.concatenate(xs), np.concatenate(xu)])
     coef, *_ = np.linalg.lstsq(x, y, rcond=None)
     return float(coef[2] - coef[1])
+
+
+def tied_share(img: np.ndarray, mask: np.ndarray, labels: np.ndarray) -> float:
+    """The share of the image's second differences within one surface (luminance) that are exactly 0: neighbours of
+    equal value, which a tracer's noise leaves unequal and a coarse rounding (a palette, a banded encoding) makes."""
+    e = np.where(mask, np.nan_to_num(img) @ LUMINANCE, 0.0)
+    zero = total = 0
+    for ee, kk, ll in ((e, mask, labels), (e.T, mask.T, labels.T)):
+        m = kk[:, :-2] & kk[:, 1:-1] & kk[:, 2:] & (ll[:, :-2] == ll[:, 1:-1]) & (ll[:, 1:-1] == ll[:, 2:])
+        d = (ee[:, :-2] - 2 * ee[:, 1:-1] + ee[:, 2:])[m]
+        zero, total = zero + int(np.count_nonzero(d == 0)), total + d.size
+    return zero / total if total else 1.0
 
 
 def same_pair(a: np.ndarray, b: np.ndarray, R: np.ndarray, var: np.ndarray, mask: np.ndarray,
