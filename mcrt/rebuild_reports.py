@@ -237,6 +237,17 @@ REPORTS: tuple[Report, ...] = (
            "blind to the grader (post-processing, writing the file, materials, geometry, camera and light models, the "
            "integrator, samples and passes): named right, confidently wrong, partial, false alarms, with a held-out "
            "half fixed before any grading"),
+    Report("grading_accuracy/unconfirmed",
+           "grade-accuracy --class unconfirmed --out reports/grading_accuracy/unconfirmed",
+           "grading on a thirty-third class of mistakes in students' tracers (what debugging, refactoring and version "
+           "control leave in them), written blind to the grader (post-processing, writing the file, materials, "
+           "geometry, camera and light models, the integrator, samples and passes): named right, confidently wrong, "
+           "partial, false alarms, with a held-out half fixed before any grading"),
+    Report("grading_accuracy/unlisted", "grade-accuracy --class unlisted --out reports/grading_accuracy/unlisted",
+           "grading on a thirty-fourth class of mistakes in students' tracers (intersection code, acceleration "
+           "structures and floating-point robustness), written blind to the grader (post-processing, writing the "
+           "file, materials, geometry, camera and light models, the integrator, samples and passes): named right, "
+           "confidently wrong, partial, false alarms, with a held-out half fixed before any grading"),
     Report("grading/false_alarms", "grade-false-alarms --out reports/grading/false_alarms",
            "grading's false alarms on correct renders: estimators, samplers, spp 16-1024, 64x64 to 800x800, PNG curves"),
 )
