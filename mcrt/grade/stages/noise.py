@@ -170,11 +170,14 @@ def unsampled_shape(resid: np.ndarray, var_sampled: np.ndarray, var_unsampled: n
 
 def tied_share(img: np.ndarray, mask: np.ndarray, labels: np.ndarray) -> float:
     """The share of the image's second differences within one surface (luminance) that are exactly 0: neighbours of
-    equal value, which a tracer's noise leaves unequal and a coarse rounding (a palette, a banded encoding) makes."""
+    equal value, which a tracer's noise leaves unequal and a coarse rounding (a palette, a banded encoding) makes.
+    Runs of black pixels are left out: at a few samples a tracer without light sampling leaves pixels whose paths all
+    missed the light at 0."""
     e = np.where(mask, np.nan_to_num(img) @ LUMINANCE, 0.0)
     zero = total = 0
     for ee, kk, ll in ((e, mask, labels), (e.T, mask.T, labels.T)):
         m = kk[:, :-2] & kk[:, 1:-1] & kk[:, 2:] & (ll[:, :-2] == ll[:, 1:-1]) & (ll[:, 1:-1] == ll[:, 2:])
+        m &= (ee[:, :-2] != 0) | (ee[:, 1:-1] != 0) | (ee[:, 2:] != 0)  # black runs: paths that found no light
         d = (ee[:, :-2] - 2 * ee[:, 1:-1] + ee[:, 2:])[m]
         zero, total = zero + int(np.count_nonzero(d == 0)), total + d.size
     return zero / total if total else 1.0
