@@ -521,12 +521,12 @@ _UNEXAMINED = _twin_blind("unexamined", "thirty-second", "b587739") + (
     "this report's first grading (held out, 3 of 12 named right, 1 of 12 confidently wrong, 11 of 12 detected; all "
     "28, 12 named right, 1 confidently wrong, 25 detected; 0 of 8 correct hand-ins lost points).") + _TWIN6_AFTER
 
-#: What changed after the seventh pair of twin classes' one grading (not from either class: from an earlier class's
-#: report rebuilt beside them).
+#: What changed after the seventh pair of twin classes' one grading (not from either class).
 _TWIN7_AFTER = (
-    " Changed after that grading (commit 21d0b86): an image whose neighbouring pixels tie (a coarse palette) is not "
-    "read as a tracer without light sampling, whatever the shape of its errors (an earlier class's web-palette PNG, "
-    "rebuilt beside these, had been); the cases whose grading it could change were graded again on it.")
+    " Changed after that grading (commits 21d0b86 and a726d71), from an earlier class's report rebuilt beside these, "
+    "not from either class: an image whose neighbouring pixels tie (a coarse palette; runs of black pixels aside) is "
+    "not read as a tracer without light sampling, whatever the shape of its errors (that class's web-palette PNG had "
+    "been). This class was not graded again on it.")
 
 _UNCONFIRMED = _twin_blind("unconfirmed", "thirty-third", "2363b37") + (
     "this report's first grading (held out, 7 of 12 named right, 0 of 12 confidently wrong, 11 of 12 detected; all "
