@@ -24,7 +24,7 @@ from mcrt.grade.accuracy.run import named_causes
 from mcrt.grade.adequacy import Scene2D, remainder_test
 from mcrt.grade.assignment import assignment_from_dict
 from mcrt.grade.expected import prepare_context
-from mcrt.grade.filtertest import noise_correlation
+from mcrt.grade.filtertest import noise_correlation, surface_runs
 from mcrt.grade.grader import grade_image
 from mcrt.grade.objects import object_tests
 from mcrt.grade.stages.noise import NOISE_BODY
@@ -259,6 +259,21 @@ def test_the_filter_test_ignores_a_bias_and_sees_a_filter():
     _, S2, _, _ = _synthetic(5)
     t, p, c, _ = noise_correlation(e, 1.0 / v, mask, sc.labels, pair=(S - S2)[..., 0])
     assert p > 0.01, (t, p, c)
+
+
+def test_runs_of_pixels_stay_within_one_surface_and_the_mask():
+    """Runs of three along rows then columns: none crosses a border between surfaces or a masked pixel, and each
+    holds its pixels in order (the noise tests' second differences are built from them)."""
+    labels = np.array([[0, 0, 0, 1, 1],
+                       [0, 0, 0, 1, 1],
+                       [0, 0, 0, 1, 1]])
+    keep = np.ones(labels.shape, bool)
+    keep[2, 0] = False
+    x = np.arange(15.0).reshape(3, 5)
+    runs = surface_runs(x, keep, labels, 3)
+    assert runs.tolist() == [[0, 1, 2], [5, 6, 7], [1, 6, 11], [2, 7, 12], [3, 8, 13], [4, 9, 14]]
+    assert surface_runs(x, keep, labels, 3, "rows").tolist() == [[0, 1, 2], [5, 6, 7]]
+    assert surface_runs(np.stack([x, -x], axis=-1), keep, labels, 4).shape == (0, 4, 2)
 
 
 # --------------------------------------------------------------------------

@@ -67,21 +67,27 @@ def lag_one(z: np.ndarray, mask: np.ndarray) -> tuple[float, float]:
 AXES = ("", "rows", "columns")
 
 
+def surface_runs(x: np.ndarray, keep: np.ndarray, labels: np.ndarray, n: int, axis: str = "") -> np.ndarray:
+    """Every run of ``n`` consecutive pixels of ``keep`` within one surface (no run crosses an object's border),
+    along rows then columns (``axis`` '': both; 'rows' or 'columns': one): x's values, shaped (runs, n, ...)."""
+    out = []
+    both = ((x, keep, labels), (x.swapaxes(0, 1), keep.T, labels.T))
+    for xx, kk, ll in both if not axis else both[AXES.index(axis) - 1: AXES.index(axis)]:
+        w = kk.shape[1] - n + 1
+        m = kk[:, :w].copy()
+        for i in range(1, n):
+            m &= kk[:, i:i + w] & (ll[:, i:i + w] == ll[:, :w])
+        out.append(np.stack([xx[:, i:i + w][m] for i in range(n)], axis=1))
+    return np.concatenate(out)
+
+
 def second_differences(e: np.ndarray, v: np.ndarray, keep: np.ndarray, labels: np.ndarray, axis: str = ""):
     """Consecutive normalised second differences (x1, x2) along rows and columns (``axis`` '': both; 'rows' or
     'columns': one) within one surface, and the correlation c that independent pixels of variances v give them."""
-    out1, out2, out_c = [], [], []
-    both = ((e, v, keep, labels), (e.T, v.T, keep.T, labels.T))
-    for ee, vv, kk, ll in both if not axis else both[AXES.index(axis) - 1: AXES.index(axis)]:
-        e0, e1, e2, e3 = ee[:, :-3], ee[:, 1:-2], ee[:, 2:-1], ee[:, 3:]
-        v0, v1, v2, v3 = vv[:, :-3], vv[:, 1:-2], vv[:, 2:-1], vv[:, 3:]
-        m = kk[:, :-3] & kk[:, 1:-2] & kk[:, 2:-1] & kk[:, 3:]
-        m &= (ll[:, :-3] == ll[:, 1:-2]) & (ll[:, 1:-2] == ll[:, 2:-1]) & (ll[:, 2:-1] == ll[:, 3:])
-        s1, s2 = np.sqrt(np.maximum(v0 + 4 * v1 + v2, 1e-300)), np.sqrt(np.maximum(v1 + 4 * v2 + v3, 1e-300))
-        out1.append(((e0 - 2 * e1 + e2) / s1)[m])
-        out2.append(((e1 - 2 * e2 + e3) / s2)[m])
-        out_c.append((-2 * (v1 + v2) / (s1 * s2))[m])
-    return np.concatenate(out1), np.concatenate(out2), np.concatenate(out_c)
+    runs = surface_runs(np.stack([e, v], axis=-1), keep, labels, 4, axis)
+    (e0, e1, e2, e3), (v0, v1, v2, v3) = runs[..., 0].T, runs[..., 1].T
+    s1, s2 = np.sqrt(np.maximum(v0 + 4 * v1 + v2, 1e-300)), np.sqrt(np.maximum(v1 + 4 * v2 + v3, 1e-300))
+    return (e0 - 2 * e1 + e2) / s1, (e1 - 2 * e2 + e3) / s2, -2 * (v1 + v2) / (s1 * s2)
 
 
 def _stat(x1: np.ndarray, x2: np.ndarray, c: np.ndarray) -> tuple[float, float]:

@@ -32,7 +32,7 @@ import numpy as np
 from scipy import stats as _sps
 
 from mcrt.grade.feedback import spp_text
-from mcrt.grade.filtertest import second_differences
+from mcrt.grade.filtertest import second_differences, surface_runs
 from mcrt.grade.score import LUMINANCE, noise_ratio
 from mcrt.grade.stages.state import Grading, Hand, Level
 from mcrt.grade.structure import beside_emitters
@@ -151,19 +151,14 @@ def unsampled_shape(resid: np.ndarray, var_sampled: np.ndarray, var_unsampled: n
     lum = LUMINANCE**2
     vs, vu = var_sampled @ lum, var_unsampled @ lum
     keep = mask & (vs > 0) & (vu > 0)
-    e = np.where(keep, resid @ LUMINANCE, 0.0)
-    ys, xs, xu = [], [], []
-    for ee, a, b, kk, ll in ((e, vs, vu, keep, labels), (e.T, vs.T, vu.T, keep.T, labels.T)):
-        m = kk[:, :-2] & kk[:, 1:-1] & kk[:, 2:] & (ll[:, :-2] == ll[:, 1:-1]) & (ll[:, 1:-1] == ll[:, 2:])
-        d = (ee[:, :-2] - 2 * ee[:, 1:-1] + ee[:, 2:])[m]
-        nz = d != 0
-        ys.append(np.log(d[nz] ** 2))
-        xs.append(np.log((a[:, :-2] + 4 * a[:, 1:-1] + a[:, 2:])[m][nz]))
-        xu.append(np.log((b[:, :-2] + 4 * b[:, 1:-1] + b[:, 2:])[m][nz]))
-    y = np.concatenate(ys)
+    runs = surface_runs(np.stack([np.where(keep, resid @ LUMINANCE, 0.0), vs, vu], axis=-1), keep, labels, 3)
+    (e0, e1, e2), (s0, s1, s2), (u0, u1, u2) = runs[..., 0].T, runs[..., 1].T, runs[..., 2].T
+    d = e0 - 2 * e1 + e2
+    nz = d != 0
+    y = np.log(d[nz] ** 2)
     if y.size < MIN_DIFFERENCES:
         return float("nan")
-    x = np.column_stack([np.ones_like(y), np.concatenate(xs), np.concatenate(xu)])
+    x = np.column_stack([np.ones_like(y), np.log((s0 + 4 * s1 + s2)[nz]), np.log((u0 + 4 * u1 + u2)[nz])])
     coef, *_ = np.linalg.lstsq(x, y, rcond=None)
     return float(coef[2] - coef[1])
 
@@ -173,14 +168,10 @@ def tied_share(img: np.ndarray, mask: np.ndarray, labels: np.ndarray) -> float:
     equal value, which a tracer's noise leaves unequal and a coarse rounding (a palette, a banded encoding) makes.
     Runs of black pixels are left out: at a few samples a tracer without light sampling leaves pixels whose paths all
     missed the light at 0."""
-    e = np.where(mask, np.nan_to_num(img) @ LUMINANCE, 0.0)
-    zero = total = 0
-    for ee, kk, ll in ((e, mask, labels), (e.T, mask.T, labels.T)):
-        m = kk[:, :-2] & kk[:, 1:-1] & kk[:, 2:] & (ll[:, :-2] == ll[:, 1:-1]) & (ll[:, 1:-1] == ll[:, 2:])
-        m &= (ee[:, :-2] != 0) | (ee[:, 1:-1] != 0) | (ee[:, 2:] != 0)  # black runs: paths that found no light
-        d = (ee[:, :-2] - 2 * ee[:, 1:-1] + ee[:, 2:])[m]
-        zero, total = zero + int(np.count_nonzero(d == 0)), total + d.size
-    return zero / total if total else 1.0
+    runs = surface_runs(np.where(mask, np.nan_to_num(img) @ LUMINANCE, 0.0), mask, labels, 3)
+    e0, e1, e2 = runs[(runs != 0).any(axis=1)].T  # black runs left out: paths that found no light
+    d = e0 - 2 * e1 + e2
+    return float(np.count_nonzero(d == 0)) / d.size if d.size else 1.0
 
 
 def same_pair(a: np.ndarray, b: np.ndarray, R: np.ndarray, var: np.ndarray, mask: np.ndarray,
