@@ -1075,6 +1075,20 @@ def test_rays_left_in_camera_space_are_named(ctx):
     assert "camera_rotation" in named_causes(res)[0]
 
 
+def test_a_far_clip_plane_is_named_with_its_distance(ctx):
+    """A Mitsuba render (seed 113, 1024 spp) whose camera's far clip plane is at 8.5 (Mitsuba's sensor clips the
+    camera's rays along the view axis): what lies beyond is black, and the claim is everything beyond about that
+    depth missing, along the view axis, not faces of the room or a surface missing."""
+    img = _render_spec(Spec("far_clip", None, spp=1024, sensor={"far_clip": 8.5}), load_scene(), width=RES,
+                       height=RES, max_depth=8, seed=113).mean
+    res = grade_image("far_clip", ctx, [img], spp=1024)
+    ex = res.details["explanation"]
+    assert ex["verdict"] == "claimed" and ex["family"] == "far_clip", ex["sentence"]
+    value = ex["candidates"][0]["value"]
+    assert value["measure"] == "along the view axis" and value["distance"] == pytest.approx(8.5, abs=0.3), value
+    assert "object_missing" in named_causes(res)[0] and res.score < res.max_score
+
+
 def test_a_colour_space_conversion_where_none_was_due_is_named(ctx):
     """A Mitsuba render (seed 116, 1024 spp) taken for Display P3 and converted to linear sRGB (the matrices computed
     here from the primaries' published chromaticities and D65, not taken from mcrt's table), negatives clipped:

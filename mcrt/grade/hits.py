@@ -18,6 +18,8 @@ class FirstHits:
     normal: np.ndarray  # (H, W, 3) mean unit normal at the hits (facing the ray), 0 for rays that meet nothing
     distance: np.ndarray  # (H, W) mean distance from the eye to the hits (rays that meet nothing left out)
     cosines: np.ndarray  # (H, W, labels) sum of |n . d| over the rays meeting each surface (0 for 'nothing')
+    ray_distance: np.ndarray  # (H, W, sub * sub) each ray's distance to its hit (inf for nothing)
+    ray_depth: np.ndarray  # (H, W, sub * sub) the same along the view axis (a far clip plane's measure)
 
 
 def nearest(scene: Scene, o: np.ndarray, d: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -76,6 +78,8 @@ def first_hits(scene: Scene, camera: str, width: int, height: int, sub: int = 4)
     counts = np.zeros((height, width, n_labels), np.int32)
     normals, dist, hits = np.zeros((height * width, 3)), np.zeros(height * width), np.zeros(height * width)
     cosines = np.zeros((height, width, n_labels))
+    ray_t, ray_z = np.zeros((height * width, sub * sub)), np.zeros((height * width, sub * sub))
+    forward = cam.frame()[2]
     for su in range(sub):
         for sv in range(sub):
             u = np.full(ii.shape, (su + 0.5) / sub)
@@ -88,5 +92,7 @@ def first_hits(scene: Scene, camera: str, width: int, height: int, sub: int = 4)
             normals += np.where(hit[:, None], n, 0.0)
             dist += np.where(hit, best_t, 0.0)
             hits += hit
+            ray_t[:, su * sub + sv], ray_z[:, su * sub + sv] = best_t, best_t * (d @ forward)
     return FirstHits(counts, (normals / (sub * sub)).reshape(height, width, 3),
-                     (dist / np.maximum(hits, 1)).reshape(height, width), cosines)
+                     (dist / np.maximum(hits, 1)).reshape(height, width), cosines,
+                     ray_t.reshape(height, width, -1), ray_z.reshape(height, width, -1))

@@ -114,6 +114,9 @@ CAUSE_OF: dict[str, tuple[str, ...]] = {
     "direct_albedo": ("albedo",),
     # The first hit's light samples averaged over the batch (added after unremarked was graded, with it in view).
     "direct_mean": ("light_pdf",),
+    # Everything beyond a distance from the eye missing (mcrt.grade.explain.clip; added after every class was graded,
+    # with unasked's far clip plane in view): what lies there missing, by the camera's model.
+    "far_clip": ("object_missing", "camera_model"),
     # A surface black (mcrt.grade.explain.surface_black): a surface of the closed room missing, of albedo 0, or with
     # its normals facing away under one-sided shading looks the same, and the words name every cause; an object
     # black is not missing (what lies behind it would show).
@@ -322,6 +325,10 @@ def _explanation_causes(expl: dict) -> list[str]:
                             ("mirror_normal", "it reflects about its normals", "object_shape"),
                             # a depth cut, worded also as the light past it lost to roulette (since the same grading)
                             ("depth", "Russian roulette from there", "roulette"),
+                            # the bounce's weight times its pdf, worded also as paths ended at their first diffuse
+                            # surface, which leaves the same image (since every class was graded, with unattested's
+                            # integer throughput in view)
+                            ("bounce", "paths that end at the first diffuse surface", "depth"),
                             # roulette's divisor, where the words name it (added after unheard was graded)
                             ("path_weight", "Russian roulette", "roulette"),
                             # ... and a clamp or robust mean, where the words name one (added after unnoticed was

@@ -118,7 +118,8 @@ def _prepare(a, scene, render) -> dict:
     return {"cover": hits.counts / hits.counts.sum(axis=-1, keepdims=True), "albedo": rho,
             "mirror": [k for k, m in enumerate(mats) if m is not None and not isinstance(m, (Lambertian, str))],
             "light": [k for k, m in enumerate(mats) if m is None], "normal": hits.normal, "distance": hits.distance,
-            "view_cosine": _view_cosine(hits, mats)}
+            "view_cosine": _view_cosine(hits, mats),
+            "ray_distance": hits.ray_distance.astype(np.float32), "ray_depth": hits.ray_depth.astype(np.float32)}
 
 
 def _view_cosine(hits, mats) -> np.ndarray:

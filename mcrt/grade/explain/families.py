@@ -9,6 +9,7 @@ from mcrt.grade.explain.bounce import bounce
 from mcrt.grade.explain.buffers import wrong_buffer
 from mcrt.grade.explain.camera import camera, plane_width
 from mcrt.grade.explain.catalogue import catalogue
+from mcrt.grade.explain.clip import clip
 from mcrt.grade.explain.colour import colour
 from mcrt.grade.explain.direct_albedo import direct_albedo
 from mcrt.grade.explain.direct_mean import direct_mean
@@ -43,13 +44,14 @@ from mcrt.grade.explain.walls import walls_one_colour
 #: the wrong surfaces, every diffuse reflectance off by one factor, squared or its complement, light counted twice, a
 #: path's weight off from a bounce on, the diffuse bounce drawn or weighted wrongly, the mirror's reflection computed
 #: wrongly, a light sample's weight, the light facing the wrong way, surfaces emitting, each pixel's samples combined
-#: by a median or trimmed mean, black pixels, another of the film's buffers written, an auxiliary buffer written, Lambert's cosine taken to the eye too, the first hit's light
+#: by a median or trimmed mean, black pixels, another of the film's buffers written, an auxiliary buffer written,
+#: everything beyond a distance from the eye missing, Lambert's cosine taken to the eye too, the first hit's light
 #: sample with its albedo left out or twice, or averaged over the batch, the light sample's geometry term written
 #: wrongly).
 FAMILIES = (scale, colour, curves, albedo, albedos, walls_one_colour, surface_black, rendered, camera, plane_width,
             catalogue, tone_curve, sample_clamp, falloff, resampling, layout, bloom, material, object_size, swap,
             reflectance_scale, reflectance_remapped, light_twice, path_weight, bounce, mirror, light_sampling,
-            light_facing, emission, pixel_statistic, bad_pixels, wrong_buffer, aov, view_cosine,
+            light_facing, emission, pixel_statistic, bad_pixels, wrong_buffer, aov, clip, view_cosine,
             direct_albedo, direct_mean, light_geometry)
 
 #: The families that are mistakes of the camera (what the misregistration test of mcrt.grade.structure also sees).
@@ -62,7 +64,7 @@ MAJOR_FAMILIES = CAMERA_FAMILIES | {"object_missing", "object_moved", "light_pos
                                     "reflectance_complement", "reflectance_normalised", "reflectance_rounded",
                                     "reflectance_energy",
                                     "reflectance_gamma_encoded", "reflectance_gamma_decoded", "reflectance_zero",
-                                    "albedo_swap", "material_swap", "object_emits", "view_cosine"}
+                                    "albedo_swap", "material_swap", "object_emits", "view_cosine", "far_clip"}
 
 
 def prepare(a, scene, render) -> Basis:
