@@ -697,6 +697,23 @@ def test_a_bounce_times_its_pdf_is_named(ctx):
     assert "indirect_scale" in named_causes(res)[0] and res.score < res.max_score
 
 
+def test_paths_ended_at_their_first_diffuse_surface_are_named_beside_the_bounce_times_its_pdf(ctx):
+    """A throughput kept in an integer array (0 after a diffuse bounce, 1 through the mirror): unattested's maker
+    (held out there, in view since; 512 spp, seed 10 here), Mitsuba's samples of depth 2 from the first diffuse
+    surface. The bounce times its pdf leaves the same image (its light after a bounce is a few per cent), so its
+    words name both: where it is claimed the path's depth is among the causes, and here, where a depth cut ties,
+    nothing is claimed. The image loses points."""
+    from mcrt.grade.accuracy import unattested
+
+    S = unattested._ended_at_first_diffuse(np.zeros((RES, RES, 3)), spp=512, seed=10)
+    res = grade_image("int_throughput", ctx, [S], spp=512)
+    ex = res.details["explanation"]
+    assert "paths that end at the first diffuse surface they meet" in ex["sentence"], ex["sentence"]
+    assert ex["verdict"] in ("claimed", "ambiguous") and res.score < res.max_score, ex["sentence"]
+    if ex["verdict"] == "claimed":
+        assert "depth" in named_causes(res)[0], ex["sentence"]
+
+
 def test_a_bounce_weighted_by_the_albedos_mean_is_named(ctx):
     """The bounce at the first surface a camera ray meets weighted by the mean of the albedo's channels for the
     albedo: unremarked's maker (tuned half, 512 spp, seed 11; Mitsuba's light sample and path after the bounce).

@@ -52,7 +52,9 @@ WORDS = {
     "no_albedo": "the surface's albedo left out of the path's throughput at the bounce (beta *= albedo missing), "
                  "the light sample there right",
     "times_pdf": "the diffuse bounce's throughput multiplied by the pdf, beta *= f cos pdf for f cos / pdf (albedo "
-                 "cos^2 / pi^2 a bounce): the light that bounces nearly gone",
+                 "cos^2 / pi^2 a bounce): the light that bounces nearly gone, the same image as paths that end at "
+                 "the first diffuse surface they meet, after its light sample (a throughput that becomes 0 there: "
+                 "kept in an integer array, or reset at the bounce)",
     "albedo_mean": "the diffuse bounce weighted by the mean of the albedo's channels (a scalar, as kept for "
                    "Russian roulette) for the albedo: the light that bounces grey, the surface's own colour lost from "
                    "it",
