@@ -772,6 +772,25 @@ def test_a_render_reduced_by_nearest_pixels_is_named_with_its_resolution(ctx):
     assert res.score < res.max_score
 
 
+def test_a_window_of_the_render_enlarged_is_named_with_its_part_of_the_view(ctx):
+    """A Mitsuba render (seed 120, 1024 spp) saved as 8-bit sRGB, enlarged 1.25 times by Pillow's BILINEAR and
+    cropped off-centre back to 32 x 32 (columns 3 to 35, rows 5 to 37): claimed as a window of the render enlarged,
+    its scale and corner within a few hundredths of a pixel, and resampling among the causes."""
+    from PIL import Image
+
+    from mcrt.image_files import srgb_eotf, srgb_oetf
+
+    codes = np.round(np.clip(srgb_oetf(np.clip(_mitsuba(load_scene(), 120), 0, 1)), 0, 1) * 255).astype(np.uint8)
+    big = np.asarray(Image.fromarray(codes).resize((40, 40), Image.BILINEAR).crop((3, 5, 35, 37)))
+    res = grade_image("window", ctx, [srgb_eotf(big / 255.0)], spp=1024)
+    ex = res.details["explanation"]
+    assert ex["verdict"] == "claimed" and ex["family"] == "resampling", ex["sentence"]
+    value = ex["candidates"][0]["value"]
+    assert value["method"] == "window" and value["scale"] == pytest.approx(0.8, abs=0.01), value
+    assert value["corner"] == pytest.approx([3 * 0.8, 5 * 0.8], abs=0.1), value
+    assert "resampling" in named_causes(res)[0] and res.score < res.max_score
+
+
 def test_a_sphere_of_half_its_radius_is_named_by_its_size(ctx):
     """A Mitsuba render (seed 57, 1024 spp) of the scene with the sphere's radius halved (its radius taken for a
     diameter): the sphere's size, about half, is said in those words, and the sphere is not claimed missing. At

@@ -28,7 +28,14 @@ not blurred) does not fit, and a box filter of 2 pixels (each pixel the
 mean of itself and its neighbour on one side), which is the same image. A
 frame of another aspect ratio (:data:`ASPECTS`) rendered with the image's
 view across its longer side and centred between black bars is R inside the
-band, black outside.
+band, black outside. A window of the render enlarged to fill the image (a
+canvas sized by a device pixel ratio and read back at the image's size, a
+viewer's zoom saved, a crop resized) shows the part of the view from
+:math:`(x_0, y_0)` of width and height s: pixel i samples the render at
+:math:`x_0 + (i + 1/2)\,s - 1/2` by bilinear interpolation (of the display
+values for a display file, as a browser's canvas smooths them); s on
+:data:`WINDOW_SCALES` and the corner on a grid of the render's pixels, then
+refined, three parameters.
 """
 
 from __future__ import annotations
@@ -39,6 +46,7 @@ import numpy as np
 
 from mcrt.grade.candidates import Candidate, Inputs
 from mcrt.grade.explain.fit import Fit
+from mcrt.grade.feedback import fmt_pct, num as _num
 
 
 #: Resolution factors of the resampling family.
@@ -100,10 +108,21 @@ def resampling(fit: Fit, inputs: Inputs) -> list[Candidate]:
                              change=dup - fit.R))
     out += _boxed(fit)
     out.append(_shifted(fit))
+    out.append(_window(fit))
     if inputs.basis is not None and getattr(inputs.basis, "fine", None) is not None:
         out.append(_nearest_from_larger(fit, inputs))
     return out
 
+
+#: The share of the view's width (and height) a window enlarged to the whole image may keep: a device pixel ratio of
+#: 1.25 keeps 0.8, a zoom of 2 keeps 0.5.
+WINDOW_SCALES = np.arange(0.5, 0.976, 0.025)
+#: The corners tried on each axis at each scale before refining: this many, evenly from the first pixel to the last
+#: place the window fits.
+WINDOW_CORNERS = 5
+#: How many of the grid's best the simplex method refines, and its evaluations from each.
+WINDOW_STARTS = 3
+WINDOW_EVALS = 200
 
 #: Width-to-height ratios of a frame rendered inside the image with black bars (video's 16:9, cinema's 1.85 and 2.39,
 #: a 16:10 screen, television's 4:3), and their inverses (bars at the sides).
@@ -225,6 +244,68 @@ def _off_by_one(R: np.ndarray, d: int) -> np.ndarray:
     hh, ww = min(h, h + d), min(w, w + d)
     out[:hh, :ww] = small[:hh, :ww]
     return out
+
+
+def _bilinear_rows(n: int, scale: float, start: float) -> np.ndarray:
+    """(n, n) weights of bilinear interpolation: output pixel i samples the input at start + (i + 1/2) scale - 1/2
+    (pixel centres at k, the edge pixels repeated beyond the ends)."""
+    x = np.clip(start + (np.arange(n) + 0.5) * scale - 0.5, 0.0, n - 1.0)
+    lo = np.minimum(np.floor(x).astype(int), n - 2)
+    f = x - lo
+    A = np.zeros((n, n))
+    A[np.arange(n), lo] = 1.0 - f
+    A[np.arange(n), lo + 1] += f
+    return A
+
+
+def _window(fit: Fit) -> Candidate:
+    """A window of the render enlarged to the whole image (module docstring): the scale and the corner fitted."""
+    from scipy.optimize import minimize
+
+    from mcrt.image_files import srgb_eotf, srgb_oetf
+
+    h, w = fit.R.shape[:2]
+    display = float(np.nanmax(np.where(fit.ok, fit.S, 0.0))) <= 1.0  # a display file: its codes interpolated
+    src = srgb_oetf(np.clip(fit.R, 0.0, 1.0)) if display else fit.R
+
+    def image(p):
+        scale, x0, y0 = p
+        rows = np.tensordot(_bilinear_rows(h, scale, y0), src, axes=(1, 0))  # (h, w, c): the rows resampled
+        M = np.einsum("ikc,lk->ilc", rows, _bilinear_rows(w, scale, x0), optimize=True)
+        return srgb_eotf(np.clip(M, 0.0, 1.0)) if display else M
+
+    def err(p):
+        return fit.model(image(p))
+
+    grid = [(sc, x0, y0) for sc in WINDOW_SCALES for x0 in np.linspace(0.0, (1 - sc) * w, WINDOW_CORNERS)
+            for y0 in np.linspace(0.0, (1 - sc) * h, WINDOW_CORNERS)]
+    # Refined from the best few by the simplex method, over the scale and the window's centre (which a change of
+    # scale leaves in place: the corner's and the scale's errors trade off along a narrow valley).
+    def corner(q):
+        return q[0], q[1] - q[0] * w / 2, q[2] - q[0] * h / 2
+
+    tried = sorted((err(p), p) for p in grid)
+    best_err, best = tried[0]
+    for _, (sc, x0, y0) in tried[:WINDOW_STARTS]:
+        q0 = np.array([sc, x0 + sc * w / 2, y0 + sc * h / 2])
+        # At a scale of 1 the window is the render shifted, which the pixel offsets' families say as a shift.
+        r = minimize(lambda q: err(corner(q)) if WINDOW_SCALES[0] <= q[0] <= WINDOW_SCALES[-1] else np.inf, q0,
+                     method="Nelder-Mead",
+                     options={"initial_simplex": q0 + np.vstack([np.zeros(3), np.diag([0.02, 1.0, 1.0])]),
+                              "xatol": 1e-3, "fatol": 1e-3, "maxfev": WINDOW_EVALS})
+        if r.fun < best_err:
+            best_err, best = r.fun, corner(r.x)
+    scale, x0, y0 = best
+    M = image(best)
+    span = lambda lo, n: f"{fmt_pct(max(lo, 0.0) / n)} to {fmt_pct(min(lo + scale * n, n) / n)}"  # noqa: E731
+    part = f"the view's part from {span(x0, w)} across and {span(y0, h)} down"
+    how = "its display values" if display else "its values"
+    return Candidate("resampling", "window enlarged", f"the image a window of the render enlarged to fill it: {part}, "
+                     f"{_num(round(1 / scale, 2))} times larger, by bilinear interpolation of {how} (a "
+                     f"canvas sized by a device pixel ratio of {_num(round(1 / scale, 2))} and read back at the "
+                     "image's size, a viewer's zoom saved, or a crop resized)", fit.model(M), 3,
+                     value={"scale": round(float(scale), 3), "corner": [round(float(x0), 2), round(float(y0), 2)],
+                            "method": "window"}, change=M - fit.R)
 
 
 def _bicubic(low: np.ndarray, w: int, h: int) -> np.ndarray:
