@@ -19,8 +19,9 @@ rays meeting surface k, :math:`n` their mean normal (facing the ray) and
 
 Pixels whose rays meet several surfaces are mixtures, as a film's are. The
 same first hits give :mod:`~mcrt.grade.explain.view_cosine` its cosine to the
-eye and :mod:`~mcrt.grade.explain.direct_albedo` each pixel's albedo (both
-read this family's prepared dict).
+eye, :mod:`~mcrt.grade.explain.direct_albedo` each pixel's albedo and
+:mod:`~mcrt.grade.explain.clip` each ray's distance (all read this family's
+prepared dict).
 """
 
 from __future__ import annotations

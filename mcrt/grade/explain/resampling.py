@@ -35,7 +35,8 @@ viewer's zoom saved, a crop resized) shows the part of the view from
 :math:`x_0 + (i + 1/2)\,s - 1/2` by bilinear interpolation (of the display
 values for a display file, as a browser's canvas smooths them); s on
 :data:`WINDOW_SCALES` and the corner on a grid of the render's pixels, then
-refined, three parameters.
+refined, three parameters. A centred window is left to the camera family:
+it is the view of a narrower field of view, blurred a little.
 """
 
 from __future__ import annotations
@@ -46,7 +47,7 @@ import numpy as np
 
 from mcrt.grade.candidates import Candidate, Inputs
 from mcrt.grade.explain.fit import Fit
-from mcrt.grade.feedback import fmt_pct, num as _num
+from mcrt.grade.feedback import num as _num
 
 
 #: Resolution factors of the resampling family.
@@ -108,7 +109,7 @@ def resampling(fit: Fit, inputs: Inputs) -> list[Candidate]:
                              change=dup - fit.R))
     out += _boxed(fit)
     out.append(_shifted(fit))
-    out.append(_window(fit))
+    out += _window(fit)
     if inputs.basis is not None and getattr(inputs.basis, "fine", None) is not None:
         out.append(_nearest_from_larger(fit, inputs))
     return out
@@ -123,6 +124,9 @@ WINDOW_CORNERS = 5
 #: How many of the grid's best the simplex method refines, and its evaluations from each.
 WINDOW_STARTS = 3
 WINDOW_EVALS = 200
+#: How far (in pixels, on each axis) a window's centre must lie from the image's for it to be read as a window: a
+#: centred one is a narrower field of view (:func:`_window`).
+CENTRED = 0.5
 
 #: Width-to-height ratios of a frame rendered inside the image with black bars (video's 16:9, cinema's 1.85 and 2.39,
 #: a 16:10 screen, television's 4:3), and their inverses (bars at the sides).
@@ -258,8 +262,11 @@ def _bilinear_rows(n: int, scale: float, start: float) -> np.ndarray:
     return A
 
 
-def _window(fit: Fit) -> Candidate:
-    """A window of the render enlarged to the whole image (module docstring): the scale and the corner fitted."""
+def _window(fit: Fit) -> list[Candidate]:
+    """A window of the render enlarged to the whole image (module docstring): the scale and the corner fitted; none
+    where the window is centred (within :data:`CENTRED` of a pixel on each axis), which is the same view as a narrower
+    field of view, up to the interpolation's blur: the camera family's reading, whose words name a larger render
+    cropped, and a camera model that bends the view's edges fits it as well."""
     from scipy.optimize import minimize
 
     from mcrt.image_files import srgb_eotf, srgb_oetf
@@ -296,16 +303,18 @@ def _window(fit: Fit) -> Candidate:
         if r.fun < best_err:
             best_err, best = r.fun, corner(r.x)
     scale, x0, y0 = best
+    if abs(x0 - (1 - scale) * w / 2) < CENTRED and abs(y0 - (1 - scale) * h / 2) < CENTRED:
+        return []
     M = image(best)
-    span = lambda lo, n: f"{fmt_pct(max(lo, 0.0) / n)} to {fmt_pct(min(lo + scale * n, n) / n)}"  # noqa: E731
+    span = lambda lo, n: f"{100 * max(lo, 0.0) / n:.0f} % to {100 * min(lo + scale * n, n) / n:.0f} %"  # noqa: E731
     part = f"the view's part from {span(x0, w)} across and {span(y0, h)} down"
     how = "its display values" if display else "its values"
-    return Candidate("resampling", "window enlarged", f"the image a window of the render enlarged to fill it: {part}, "
-                     f"{_num(round(1 / scale, 2))} times larger, by bilinear interpolation of {how} (a "
-                     f"canvas sized by a device pixel ratio of {_num(round(1 / scale, 2))} and read back at the "
-                     "image's size, a viewer's zoom saved, or a crop resized)", fit.model(M), 3,
-                     value={"scale": round(float(scale), 3), "corner": [round(float(x0), 2), round(float(y0), 2)],
-                            "method": "window"}, change=M - fit.R)
+    return [Candidate("resampling", "window enlarged", f"the image a window of the render enlarged to fill it: {part}, "
+                      f"{_num(round(1 / scale, 2))} times larger, by bilinear interpolation of {how} (a "
+                      f"canvas sized by a device pixel ratio of {_num(round(1 / scale, 2))} and read back at the "
+                      "image's size, a viewer's zoom saved, or a crop resized)", fit.model(M), 3,
+                      value={"scale": round(float(scale), 3), "corner": [round(float(x0), 2), round(float(y0), 2)],
+                             "method": "window"}, change=M - fit.R)]
 
 
 def _bicubic(low: np.ndarray, w: int, h: int) -> np.ndarray:
