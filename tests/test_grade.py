@@ -586,9 +586,11 @@ import subprocess  # noqa: E402
 
 from PIL import Image  # noqa: E402
 from scipy import ndimage  # noqa: E402
+from skimage.restoration import denoise_tv_chambolle  # noqa: E402
 from test_formats import has_imagemagick  # noqa: E402
 
 from mcrt.grade.accuracy import unsaid  # noqa: E402
+from mcrt.grade.accuracy.run import named_causes  # noqa: E402
 from mcrt.grade.submissions import discover  # noqa: E402
 from mcrt.grade.grader import grade_submission  # noqa: E402
 
@@ -642,6 +644,7 @@ def structured(scene, context64, workdir):
         "mi_fov_3pct": (_mitsuba(scene, 256, 404, sensor={"fov": fov * 1.03}), 256),
         "mi_half_pixel": (_mitsuba(scene, 256, 405, sensor={"principal_point_offset_x": 0.5 / 64}), 256),
         "mi_blurred": (ndimage.gaussian_filter(correct, (0.8, 0.8, 0)), 256),
+        "mi_tv_denoised": (denoise_tv_chambolle(correct, weight=0.08, channel_axis=-1), 256),
         "mi_wall_colour": (_mitsuba(_recoloured(scene, "DE", (0.75, 0.2, 0.15)), 256, 406), 256),
         "mi_no_tetrahedron": (_mitsuba(scene, 256, 407, drop=("tetrahedron",)), 256),
         "mi_cracks": (np.where(np.isin(np.arange(64), [40, 41])[:, None, None] & np.isin(np.arange(64), [20, 21])[None, :, None],
@@ -670,7 +673,8 @@ def test_camera_mistakes_are_major(structured, context64):
         assert lost > 0 and "camera does not match" in out, (sid, out)
         lost_u, out_u = _lost(r, "unbiased")
         assert lost_u >= th.major_loss * 55 - 1e-6, (sid, out_u)
-        assert "filtered" not in _lost(r, "noise")[1], sid  # the camera's structure is not also called a filter
+        # the camera's structure is not also called a filter, nor its noise taken out
+        assert not {"filtered", "denoised"} & set(_lost(r, "noise")[1].split()), sid
     assert "field of view" in _lost(structured["mi_fov_3pct"], "camera")[1]
     assert "shifted" in _lost(structured["mi_half_pixel"], "camera")[1]
 
@@ -684,6 +688,18 @@ def test_blurred_image_is_called_filtered(structured, context64):
     assert _lost(r, "unbiased")[0] >= context64.assignment.thresholds.filter_loss * 55 - 1e-6
 
 
+def test_an_edge_preserving_denoiser_is_called_denoised(structured, context64):
+    """scikit-image's total-variation denoiser (Chambolle, weight 0.08) on a correct render: it keeps edges, so no
+    single blur explains the image and the filter test alone would be withheld (a bias on surfaces); the noise it
+    took out of the surfaces names it, the noise criterion fails, and the bias criterion loses at least
+    filter_loss."""
+    r = structured["mi_tv_denoised"]
+    lost, out = _lost(r, "noise")
+    assert lost == 5 and "denoised or smoothed by a filter that keeps edges" in out, out
+    assert _lost(r, "unbiased")[0] >= context64.assignment.thresholds.filter_loss * 55 - 1e-6
+    assert "blur" in named_causes(r)[0]
+
+
 def test_wrong_wall_and_missing_object_are_major(structured, context64):
     """A wall of the wrong colour and the tetrahedron left out (Mitsuba renders of the edited scene) lose at least
     major_loss of the bias points, whatever their share of the image; the surface is named."""
@@ -691,7 +707,7 @@ def test_wrong_wall_and_missing_object_are_major(structured, context64):
     for sid, what in (("mi_wall_colour", "wall DE"), ("mi_no_tetrahedron", "tetrahedron")):
         lost, out = _lost(structured[sid], "unbiased")
         assert lost >= th.major_loss * 55 - 1e-6 and what in out, (sid, out)
-        assert "filtered" not in _lost(structured[sid], "noise")[1], sid
+        assert not {"filtered", "denoised"} & set(_lost(structured[sid], "noise")[1].split()), sid
 
 
 def test_a_few_wrong_pixels_are_minor(structured, context64):

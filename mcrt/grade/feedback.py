@@ -223,6 +223,16 @@ def filter_text(st, blur: bool, spp_eff: float, spp: int | None) -> str:
             + "; a Monte-Carlo render's pixels are independent: hand in the unfiltered render")
 
 
+def denoised_text(st, times: float, spp: int) -> str:
+    """The finding of noise taken out of the surfaces (mcrt.grade.stages.noise.removed) where neighbouring pixels are
+    alike, though no single blur explains the image: a filter that keeps edges."""
+    how = "its edges are softened" if st.blur > 0 else "neighbouring pixels are alike"
+    return (f"the image was denoised or smoothed by a filter that keeps edges (bilateral, total variation, a guided "
+            f"filter, a denoiser): the noise within its surfaces is about {times:.0f}x less than {spp} spp leaves, and "
+            f"{how}, while no single blur explains it; such a filter also shifts the shading near edges and shadows. "
+            "A Monte-Carlo render's pixels are independent: hand in the unfiltered render")
+
+
 def places_text(pixels: float, ordered: float) -> str:
     """The finding of a correct render's values in other places (mcrt.grade.stages.bias.values_elsewhere)."""
     return (f"the image holds a correct render's values in the wrong places: sorted, its values match the reference's "

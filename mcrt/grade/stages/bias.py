@@ -18,6 +18,7 @@ from mcrt.grade import feedback as fb
 from mcrt.grade.objects import MIN_PIXELS, baseline_shares, object_tests, structure_family
 from mcrt.grade.regions import short_text
 from mcrt.grade.score import LUMINANCE, metrics
+from mcrt.grade.stages.noise import removed
 from mcrt.grade.stages.state import Grading, Hand, Level
 from mcrt.grade.structure import detect as detect_structure
 from mcrt.grade.structure import families as structure_families
@@ -111,8 +112,12 @@ def findings(g: Grading, hand: Hand, lvl: Level, t: Tested) -> dict[str, str]:
     # as what it is, not also as a filter.
     secondary = "registration" in out or bool(
         bt.penalised_any and wrong_surfaces(bt, g.th, g.ctx.labels[hand.cam], g.ctx.label_names))
-    if not secondary and (blur or ex.get("correlation", np.zeros(1, bool)).any()):
+    smoothed = blur or ex.get("correlation", np.zeros(1, bool)).any()
+    if not secondary and smoothed:
         out["filter"] = fb.filter_text(st, blur, lvl.spp_eff, hand.spp)
+    elif smoothed and (times := removed(lvl, hand, g.ctx.labels[hand.cam])) is not None:
+        # A filter that keeps edges also leaves a bias on surfaces; the noise it took out of them tells it apart.
+        out["denoised"] = fb.denoised_text(st, times, lvl.spp_nominal)
     if "pixels" in ex and ex["pixels"].any():
         out["pixels"] = fb.pixels_text(ex["pixels"].reshape(bt.shape + (3,)).any(axis=2))
     if flagged(bt):
@@ -229,6 +234,7 @@ def verdict(g: Grading, hand: Hand, lvl: Level, t: Tested, found: dict[str, str]
         # Likewise the residual of any structured mistake is correlated between neighbours:
         # where another cause explains it, the image is not also called filtered.
         found.pop("filter", None)
+        found.pop("denoised", None)
     unexplained = named is None and g.explanation is not None and g.explanation.adequacy is not None
     if unexplained:
         _findings_rule(g, hand, lvl, t, found)
@@ -236,7 +242,7 @@ def verdict(g: Grading, hand: Hand, lvl: Level, t: Tested, found: dict[str, str]
 
     major = named.name if named is not None and named.family in _families("MAJOR_FAMILIES") else None
     loss, why = unbiased_loss(bt, th, g.ctx.labels[hand.cam], g.ctx.label_names, registration="registration" in found,
-                              filtered="filter" in found, major=major, patches=t.patches)
+                              filtered="filter" in found or "denoised" in found, major=major, patches=t.patches)
     lines += [found[k] + "." for k in found]
     lines.append(f"Bias beyond noise: {fb.fmt_pct(bt.excess_rms)} RMS; {fb.fmt_pct(loss)} of these points lost ({why}).")
     g.rubric.failed("unbiased", " ".join(lines), loss=loss)
