@@ -526,7 +526,8 @@ _TWIN7_AFTER = (
     " Changed after that grading (commits 21d0b86 and a726d71), from an earlier class's report rebuilt beside these, "
     "not from either class: an image whose neighbouring pixels tie (a coarse palette; runs of black pixels aside) is "
     "not read as a tracer without light sampling, whatever the shape of its errors (that class's web-palette PNG had "
-    "been). This class was not graded again on it.")
+    "been). The class was graded again on it, and on later rules, when every class was rebuilt (the commit is in "
+    "the report's meta).")
 
 _UNCONFIRMED = _twin_blind("unconfirmed", "thirty-third", "2363b37") + (
     "this report's first grading (held out, 7 of 12 named right, 0 of 12 confidently wrong, 11 of 12 detected; all "
