@@ -234,6 +234,7 @@ def verdict(g: Grading, hand: Hand, lvl: Level, t: Tested, found: dict[str, str]
         # Likewise the residual of any structured mistake is correlated between neighbours:
         # where another cause explains it, the image is not also called filtered.
         found.pop("filter", None)
+    if named is not None:  # a claimed cause says what took the noise out, if anything did (a blur is no denoiser)
         found.pop("denoised", None)
     unexplained = named is None and g.explanation is not None and g.explanation.adequacy is not None
     if unexplained:

@@ -75,6 +75,9 @@ UNSAMPLED_BODY = 0.2
 #: the declared spp's, not a bias the cause left: tests/test_feedback.py holds a wrong albedo at 16 spp (claimed
 #: beside it) and at 256 (not).
 BESIDE_BODY = 1.0
+#: The most a claimed cause may change a pixel's value, relative, for the noise there to be judged as the
+#: reference's (:func:`_beside_claim`): a pixel's noise grows with its value, by about as much.
+UNCHANGED = 0.1
 #: The body of a correct render's noise at its spp (:func:`body_ratio`, in ``details["noise"]["body"]``) at a few
 #: hundred spp, about: heavy tails put the median of squared second differences far below their mean, the more so
 #: at fewer samples (at thousands the tails thin and it grows, which only makes :func:`removed` the stricter there).
@@ -408,9 +411,10 @@ def _beside_claim(g: Grading, hand: Hand, lvl: Level) -> float | None:
     """The noise beside a claimed cause: where the explanation stage claims a cause (what it leaves passes the bias
     test), the spp that what it leaves is like, if that is more than the rubric's ratio below the declared spp and the
     body of its noise (:func:`body_ratio`, each surface's model scaled up to its brightness: :func:`brightness_scaled`)
-    exceeds :data:`BESIDE_BODY` where the cause changes the image by less than the declared spp's noise; None
-    otherwise. There the scene is the reference's, and so is its noise (a cause that changes the whole view, a light
-    moved into the room, changes where the noise is too). The body as well as the spread: the remainder passed a
+    exceeds :data:`BESIDE_BODY` where the cause changes the image by at most :data:`UNCHANGED` of its value, and that
+    is most of the image; None otherwise. There the scene is the reference's, and so is its noise, where the cause is
+    local (a cause that changes the whole view, a light moved into the room, changes the noise where the mean
+    hardly moves too). The body as well as the spread: the remainder passed a
     test whose noise model may have followed the bias (:data:`NOISE_BODY`), and a median of second differences
     within surfaces holds no smooth bias."""
     e = g.explanation
@@ -421,7 +425,9 @@ def _beside_claim(g: Grading, hand: Hand, lvl: Level) -> float | None:
     var = brightness_scaled(lvl.model_ps / (hand.spp * lvl.per) + lvl.ref_noise + lvl.q, lvl.img, hand.R,
                             lvl.clip_mask, labels, up=True)
     change = (lvl.resid - rem) @ LUMINANCE
-    kept = lvl.clip_mask & (change**2 <= var @ LUMINANCE**2)
+    kept = lvl.clip_mask & (np.abs(change) <= UNCHANGED * np.abs(hand.R @ LUMINANCE))
+    if 2 * np.count_nonzero(kept) < np.count_nonzero(lvl.clip_mask):
+        return None
     if not body_ratio(rem, var, kept, labels, min_n=MIN_DIFFERENCES) > BESIDE_BODY:  # NaN: too few pixels unchanged
         return None
     spp_eff = _spp(noise_ratio(rem, hand.R, lvl.clip_mask, lvl.model_ps, lvl.ref_noise + lvl.q, hand.base_tile,
