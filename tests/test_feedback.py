@@ -1124,6 +1124,50 @@ def test_a_far_clip_plane_is_named_with_its_distance(ctx):
     assert "object_missing" in named_causes(res)[0] and res.score < res.max_score
 
 
+def _ray_clipped(t_max: float, max_depth: int = 8) -> dict:
+    """A Mitsuba integrator dict: Mitsuba's path integrator whose camera rays that meet nothing nearer than ``t_max``
+    (Mitsuba's own intersection, along each ray) return black, registered here as a Python integrator."""
+    import drjit as dr
+    import mitsuba as mi
+
+    from mcrt.mitsuba_scene import _use
+
+    _use("llvm")
+
+    class RayClipped(mi.SamplingIntegrator):
+        def __init__(self, props):
+            super().__init__(props)
+            self.t_max = props.get("t_max", 1e30)
+            self.inner = mi.load_dict({"type": "path", "max_depth": props.get("max_depth", 8)})
+
+        def to_string(self):
+            return f"RayClipped[t_max={self.t_max}]"
+
+        def sample(self, scene, sampler, ray, medium=None, active=True):
+            si = scene.ray_intersect(mi.Ray3f(ray), active)
+            L, valid, aovs = self.inner.sample(scene, sampler, ray, medium, active)
+            return dr.select(si.is_valid() & (si.t <= self.t_max), L, 0.0), valid, aovs
+
+    mi.register_integrator("ray_clipped", lambda props: RayClipped(props))
+    return {"type": "ray_clipped", "t_max": t_max, "max_depth": max_depth}
+
+
+def test_a_largest_ray_distance_is_named_along_each_ray(ctx):
+    """Mitsuba's path integrator with every camera ray that meets nothing nearer than 9 black (Mitsuba's own
+    intersection distance, along each ray; seed 131, 1024 spp): claimed as everything beyond about 9 missing along
+    each ray, not along the view axis."""
+    from mcrt.mitsuba_scene import render_with_variance, scene_dict
+
+    d = scene_dict(load_scene(), "near", RES, RES, 8)
+    img = render_with_variance(d, integrator=_ray_clipped(9.0), spp=1024, seed=131, spp_per_pass=256).mean
+    res = grade_image("ray_clipped", ctx, [np.asarray(img, np.float64)], spp=1024)
+    ex = res.details["explanation"]
+    assert ex["verdict"] == "claimed" and ex["family"] == "far_clip", ex["sentence"]
+    value = ex["candidates"][0]["value"]
+    assert value["measure"] == "along each ray" and value["distance"] == pytest.approx(9.0, abs=0.3), value
+    assert "object_missing" in named_causes(res)[0] and res.score < res.max_score
+
+
 def test_a_colour_space_conversion_where_none_was_due_is_named(ctx):
     """A Mitsuba render (seed 116, 1024 spp) taken for Display P3 and converted to linear sRGB (the matrices computed
     here from the primaries' published chromaticities and D65, not taken from mcrt's table), negatives clipped:
