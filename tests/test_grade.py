@@ -849,7 +849,8 @@ def test_a_tracer_without_light_sampling_is_told_from_fewer_samples_by_the_shape
 def test_a_coarse_palette_is_no_tracer_without_light_sampling(context64):
     """A correct Mitsuba render (256 spp, seed 75) saved through a web palette (sRGB codes rounded to multiples of 51):
     its errors are larger where the light is, which a tracer without light sampling's noise is too, but they tie
-    neighbouring pixels, which noise never does: the noise is not judged as that tracer's."""
+    neighbouring pixels, which noise never does: the noise is not judged as that tracer's, nor as fewer samples
+    beside whatever the bias is claimed as."""
     from mcrt.grade.false_alarms import Case, render_case
     from mcrt.grade.stages.noise import MAX_TIES, tied_share
     from mcrt.image_files import srgb_eotf, srgb_oetf
@@ -861,6 +862,8 @@ def test_a_coarse_palette_is_no_tracer_without_light_sampling(context64):
     assert tied_share(img, noisy, labels) <= MAX_TIES < tied_share(web, noisy, labels)
     res = grade_image("web", context64, [web], spp=256)
     assert not res.details["noise"]["unsampled"] and res.score < res.max_score, res.summary
+    noise = next(t for t in res.tests if t.name == "noise")
+    assert "noisier" not in noise.output and "spp_claim" not in named_causes(res)[0], noise.output
 
 
 def test_the_shape_of_noise_picks_the_model_it_follows(context64):

@@ -92,7 +92,8 @@ MIN_DIFFERENCES = 64
 #: The largest share of the image's second differences that are exactly 0 (:func:`tied_share`) for its excess to be
 #: read as the noise of a tracer without light sampling: a tracer's noise leaves neighbouring pixels unequal, even
 #: through an 8-bit file, while a coarse rounding (a web palette) ties many of them, and its errors, larger where the
-#: light is, have that tracer's shape (tests/test_grade.py).
+#: light is, have that tracer's shape (tests/test_grade.py). Nor is it read as fewer samples beside a claimed cause
+#: (:func:`_beside_claim`).
 MAX_TIES = 0.1
 
 
@@ -412,7 +413,8 @@ def _beside_claim(g: Grading, hand: Hand, lvl: Level) -> float | None:
     test), the spp that what it leaves is like, if that is more than the rubric's ratio below the declared spp and the
     body of its noise (:func:`body_ratio`, each surface's model scaled up to its brightness: :func:`brightness_scaled`)
     exceeds :data:`BESIDE_BODY` where the cause changes the image by at most :data:`UNCHANGED` of its value, and that
-    is most of the image; None otherwise. There the scene is the reference's, and so is its noise, where the cause is
+    is most of the image, and neighbouring pixels do not tie (:data:`MAX_TIES`: a coarse palette's rounding is
+    noise-like too); None otherwise. There the scene is the reference's, and so is its noise, where the cause is
     local (a cause that changes the whole view, a light moved into the room, changes the noise where the mean
     hardly moves too). The body as well as the spread: the remainder passed a
     test whose noise model may have followed the bias (:data:`NOISE_BODY`), and a median of second differences
@@ -421,6 +423,8 @@ def _beside_claim(g: Grading, hand: Hand, lvl: Level) -> float | None:
     if e is None or e.named is None:
         return None
     labels = g.ctx.labels[hand.cam]
+    if tied_share(lvl.img, lvl.clip_mask, labels) > MAX_TIES:  # a coarse rounding's errors, not fewer samples
+        return None
     rem = np.where(lvl.clip_mask[..., None], e.remainder, 0.0)
     var = brightness_scaled(lvl.model_ps / (hand.spp * lvl.per) + lvl.ref_noise + lvl.q, lvl.img, hand.R,
                             lvl.clip_mask, labels, up=True)
