@@ -93,7 +93,7 @@ MIN_DIFFERENCES = 64
 #: read as the noise of a tracer without light sampling: a tracer's noise leaves neighbouring pixels unequal, even
 #: through an 8-bit file, while a coarse rounding (a web palette) ties many of them, and its errors, larger where the
 #: light is, have that tracer's shape (tests/test_grade.py). Nor is it read as fewer samples beside a claimed cause
-#: (:func:`_beside_claim`).
+#: (:func:`_beside_claim`), nor its want of noise as a denoiser's (:func:`removed`).
 MAX_TIES = 0.1
 
 
@@ -465,7 +465,10 @@ def removed(lvl: Level, hand: Hand, labels: np.ndarray) -> float | None:
     (:data:`CORRECT_BODY`): a filter that keeps edges (bilateral, total variation, a denoiser) takes the noise out
     of the surfaces, which no mistake of the scene or the estimator does. The spread guards the other reading: a
     render of more samples than declared holds less noise, and its spread says so, while a filter's bias keeps the
-    spread up."""
+    spread up. Not where neighbouring pixels tie (:data:`MAX_TIES`): values clipped to one or rounded coarsely hold no
+    noise either, and no filter made them so."""
+    if tied_share(lvl.img, lvl.clip_mask, labels) > MAX_TIES:  # flattened by a clip or a rounding, not a filter
+        return None
     spp = max(float(lvl.spp_nominal), lvl.spp_eff if np.isfinite(lvl.spp_eff) else 0.0)
     var = brightness_scaled(lvl.model_ps / (spp * lvl.per) + lvl.ref_noise + lvl.q, lvl.img, hand.R, lvl.clip_mask,
                             labels, up=False)
