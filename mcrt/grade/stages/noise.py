@@ -412,7 +412,7 @@ def _beside_claim(g: Grading, hand: Hand, lvl: Level) -> float | None:
     """The noise beside a claimed cause: where the explanation stage claims a cause (what it leaves passes the bias
     test), the spp that what it leaves is like, if that is more than the rubric's ratio below the declared spp and the
     body of its noise (:func:`body_ratio`, each surface's model scaled up to its brightness: :func:`brightness_scaled`)
-    exceeds :data:`BESIDE_BODY` where the cause changes the image by at most :data:`UNCHANGED` of its value, and that
+    exceeds :data:`BESIDE_BODY` where the cause changes each channel by at most :data:`UNCHANGED` of its value, and that
     is most of the image, and neighbouring pixels do not tie (:data:`MAX_TIES`: a coarse palette's rounding is
     noise-like too); None otherwise. There the scene is the reference's, and so is its noise, where the cause is
     local (a cause that changes the whole view, a light moved into the room, changes the noise where the mean
@@ -428,8 +428,7 @@ def _beside_claim(g: Grading, hand: Hand, lvl: Level) -> float | None:
     rem = np.where(lvl.clip_mask[..., None], e.remainder, 0.0)
     var = brightness_scaled(lvl.model_ps / (hand.spp * lvl.per) + lvl.ref_noise + lvl.q, lvl.img, hand.R,
                             lvl.clip_mask, labels, up=True)
-    change = (lvl.resid - rem) @ LUMINANCE
-    kept = lvl.clip_mask & (np.abs(change) <= UNCHANGED * np.abs(hand.R @ LUMINANCE))
+    kept = lvl.clip_mask & (np.abs(lvl.resid - rem) <= UNCHANGED * np.abs(hand.R)).all(axis=2)  # each channel
     if 2 * np.count_nonzero(kept) < np.count_nonzero(lvl.clip_mask):
         return None
     if not body_ratio(rem, var, kept, labels, min_n=MIN_DIFFERENCES) > BESIDE_BODY:  # NaN: too few pixels unchanged
