@@ -22,12 +22,15 @@ from mcrt.grade.accuracy.cases import Spec, _render_spec, light, wall_albedo
 from mcrt.grade.accuracy.outside import POSTS
 from mcrt.grade.accuracy.run import named_causes
 from mcrt.grade.adequacy import Scene2D, remainder_test
+from mcrt.grade.candidates import Candidate
 from mcrt.grade.assignment import assignment_from_dict
 from mcrt.grade.expected import prepare_context
+from mcrt.grade.explain.families import keeps_noise
 from mcrt.grade.filtertest import noise_correlation, surface_runs
 from mcrt.grade.grader import grade_image
 from mcrt.grade.objects import object_tests
-from mcrt.grade.stages.noise import NOISE_BODY
+from mcrt.grade.score import LUMINANCE
+from mcrt.grade.stages.noise import BESIDE_BODY, NOISE_BODY, body_ratio, least_body
 from mcrt.scene import Lambertian, Sphere, load_scene
 from mcrt.stats.onesample import Noise, multiscale_test
 
@@ -410,6 +413,37 @@ def test_noise_of_fewer_samples_is_named_beside_a_claimed_cause(ctx):
     assert next(t for t in full.tests if t.name == "noise").status == "passed", full.summary
     assert "spp_claim" not in named_causes(full)[0], full.summary
 
+
+
+def test_noise_beside_a_cause_is_judged_on_every_surface():
+    """The least body of the noise over surfaces (seed 31; three surfaces of 16 x 32 pixels, a model variance of 1):
+    Gaussian noise of twice the model's deviation on every surface is above :data:`BESIDE_BODY` on each, as fewer
+    samples leave it; the same noise on two surfaces and half the model's deviation on the third is not, though the
+    two hold most of the differences: a mistake's own noise sits where it acts. Of two readings the smaller counts, and one surface is too few to judge."""
+    rng = np.random.default_rng(31)
+    labels = np.repeat(np.arange(3), 16)[:, None] * np.ones((1, 32), int)
+    mask = np.ones(labels.shape, bool)
+    var = np.full(labels.shape + (3,), 1.0 / float(np.sum(LUMINANCE**2)))  # a luminance variance of 1
+    gauss = rng.standard_normal(labels.shape)[..., None] * np.ones(3)
+    everywhere, two = 2.0 * gauss, np.where((labels == 0)[..., None], 0.5, 2.0) * gauss
+    assert least_body((everywhere, 3.0 * everywhere), var, mask, labels) > BESIDE_BODY
+    assert least_body((everywhere, 3.0 * everywhere), var, mask, labels) == pytest.approx(
+        least_body((everywhere,), var, mask, labels))
+    assert least_body((two,), var, mask, labels) < BESIDE_BODY < body_ratio(two, var, mask, labels)
+    assert np.isnan(least_body((everywhere,), var, labels == 0, labels))
+
+
+def test_noise_is_judged_beside_causes_that_leave_each_samples_noise_alone():
+    """A wall's colour, the camera's view and the catalogue's bugs of the jitter or the output leave each sample's
+    noise where they leave the mean; the light's sampling, an object's size and the catalogue's bugs of the estimator
+    do not, and beside them the noise is not judged."""
+    def cand(family, name="x"):
+        return Candidate(family, name, "", 0.0, catalogue=family == "catalogue")
+
+    assert all(keeps_noise(c) for c in (cand("albedo"), cand("fov"), cand("catalogue", "no_jitter"),
+                                         cand("catalogue", "gamma_output")))
+    assert not any(keeps_noise(c) for c in (cand("light_sampling"), cand("object_size"),
+                                             cand("catalogue", "nee_no_area"), cand("catalogue", "rr_no_divide")))
 
 def test_a_light_a_little_lower_is_not_read_as_fewer_samples(ctx):
     """The light 0.09 lower (Mitsuba, seed 14, 256 spp): its outline's pixels differ by many noise deviations, which

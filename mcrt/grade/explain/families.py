@@ -26,7 +26,7 @@ from mcrt.grade.explain.objects import material, object_size
 from mcrt.grade.explain.path_weight import path_weight
 from mcrt.grade.explain.pixel_statistic import pixel_statistic
 from mcrt.grade.explain.pixels import bad_pixels
-from mcrt.grade.explain.reflectance import reflectance_remapped, reflectance_scale
+from mcrt.grade.explain.reflectance import REMAPS, reflectance_remapped, reflectance_scale
 from mcrt.grade.explain.resampling import resampling
 from mcrt.grade.explain.sample_clamp import sample_clamp
 from mcrt.grade.explain.scene import albedo, albedos, rendered, scale
@@ -35,6 +35,7 @@ from mcrt.grade.explain.swap import swap
 from mcrt.grade.explain.tonecurve import tone_curve
 from mcrt.grade.explain.view_cosine import view_cosine
 from mcrt.grade.explain.walls import walls_one_colour
+from mcrt.mutants import CATALOGUE
 
 #: Every family the engine fits, in this order (ties keep it). The scene file's parameters (and the colours mixed by a
 #: matrix, several surfaces' colours at once, every wall one colour, a surface of the room black, the camera and its
@@ -65,6 +66,22 @@ MAJOR_FAMILIES = CAMERA_FAMILIES | {"object_missing", "object_moved", "light_pos
                                     "reflectance_energy",
                                     "reflectance_gamma_encoded", "reflectance_gamma_decoded", "reflectance_zero",
                                     "albedo_swap", "material_swap", "object_emits", "view_cosine", "far_clip"}
+
+
+#: The families whose change leaves each sample's noise as the reference's wherever it leaves the mean: a scale, curve
+#: or matrix on the values, the scene's colours, the camera's view. Beside a claim of any other (the geometry, the
+#: light, how samples are drawn, weighted or combined) the noise is not judged (:func:`keeps_noise`): such a mistake
+#: makes noise of its own where the mean hardly moves (the caustics of a larger mirror, light samples drawn off the
+#: light), which is no sign of fewer samples.
+NOISE_KEPT = CAMERA_FAMILIES | {"scale", "light_radiance", "channels", "colour_lost", "colour_matrix", "encoding", "tone_curve",
+                                "falloff", "albedo", "albedo_swap", "surface_black", "object_black",
+                                "reflectance_scale"} | {family for family, _, _ in REMAPS}
+
+
+def keeps_noise(c) -> bool:
+    """Whether the candidate ``c``'s change leaves each sample's noise alone where it leaves the mean
+    (:data:`NOISE_KEPT`); of the catalogue, a bug of the camera's jitter, the output or the scene, not the estimator."""
+    return not CATALOGUE[c.name].mutations if c.catalogue else c.family in NOISE_KEPT
 
 
 def prepare(a, scene, render) -> Basis:

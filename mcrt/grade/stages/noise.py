@@ -87,7 +87,7 @@ CORRECT_BODY = 0.2
 #: twice, filters that keep edges go beyond five times; the bound lies between, and tests/test_grade.py holds a
 #: total-variation denoiser beyond it and mistakes of the scene and camera within it.
 REMOVED = 3.0
-#: Fewest second differences :func:`unsampled_shape` fits, and :func:`_beside_claim` judges.
+#: Fewest second differences :func:`unsampled_shape` fits, and :func:`least_body` judges on a surface.
 MIN_DIFFERENCES = 64
 #: The largest share of the image's second differences that are exactly 0 (:func:`tied_share`) for its excess to be
 #: read as the noise of a tracer without light sampling: a tracer's noise leaves neighbouring pixels unequal, even
@@ -410,17 +410,21 @@ def verdict(g: Grading, hand: Hand, lvl: Level, bt, found: dict[str, str], flagg
 
 def _beside_claim(g: Grading, hand: Hand, lvl: Level) -> float | None:
     """The noise beside a claimed cause: where the explanation stage claims a cause (what it leaves passes the bias
-    test), the spp that what it leaves is like, if that is more than the rubric's ratio below the declared spp and the
-    body of its noise (:func:`body_ratio`, each surface's model scaled up to its brightness: :func:`brightness_scaled`)
-    exceeds :data:`BESIDE_BODY` where the cause changes each channel by at most :data:`UNCHANGED` of its value, and that
-    is most of the image, and neighbouring pixels do not tie (:data:`MAX_TIES`: a coarse palette's rounding is
-    noise-like too); None otherwise. There the scene is the reference's, and so is its noise, where the cause is
-    local (a cause that changes the whole view, a light moved into the room, changes the noise where the mean
-    hardly moves too). The body as well as the spread: the remainder passed a
-    test whose noise model may have followed the bias (:data:`NOISE_BODY`), and a median of second differences
-    within surfaces holds no smooth bias."""
+    test) of a family that leaves each sample's noise alone (:func:`~mcrt.grade.explain.families.keeps_noise`), the spp
+    that what it leaves is like, if that is more than the rubric's ratio below the declared spp and the noise exceeds
+    :data:`BESIDE_BODY` on every surface (:func:`least_body`) where the cause changes each channel by at most
+    :data:`UNCHANGED` of its value, and that is most of the image, and neighbouring pixels do not tie
+    (:data:`MAX_TIES`: a coarse palette's rounding is noise-like too); None otherwise. There the scene is the
+    reference's, and so is its noise, where the cause is local (a cause that changes the whole view, a light moved
+    into the room, changes the noise where the mean hardly moves too). Every surface: fewer samples multiply every
+    pixel's variance by one factor, while noise a mistake makes itself (samples binned by rounding, whose count
+    varies) sits where it acts. The body as well as the spread: the remainder passed a test whose noise model may
+    have followed the bias (:data:`NOISE_BODY`), and a median of second differences within surfaces holds no smooth
+    bias."""
+    from mcrt.grade.explain.families import keeps_noise
+
     e = g.explanation
-    if e is None or e.named is None:
+    if e is None or e.named is None or not keeps_noise(e.named):
         return None
     labels = g.ctx.labels[hand.cam]
     if tied_share(lvl.img, lvl.clip_mask, labels) > MAX_TIES:  # a coarse rounding's errors, not fewer samples
@@ -431,11 +435,23 @@ def _beside_claim(g: Grading, hand: Hand, lvl: Level) -> float | None:
     kept = lvl.clip_mask & (np.abs(lvl.resid - rem) <= UNCHANGED * np.abs(hand.R)).all(axis=2)  # each channel
     if 2 * np.count_nonzero(kept) < np.count_nonzero(lvl.clip_mask):
         return None
-    if not body_ratio(rem, var, kept, labels, min_n=MIN_DIFFERENCES) > BESIDE_BODY:  # NaN: too few pixels unchanged
+    noisy = kept & (lvl.model_ps @ LUMINANCE**2 > 0)  # the light's own pixels hold no noise to judge
+    if not least_body((lvl.resid, rem), var, noisy, labels) > BESIDE_BODY:  # NaN: too few surfaces to judge
         return None
     spp_eff = _spp(noise_ratio(rem, hand.R, lvl.clip_mask, lvl.model_ps, lvl.ref_noise + lvl.q, hand.base_tile,
                                lvl.pair), lvl.per)
     return spp_eff if hand.spp > g.th.max_noise_ratio * spp_eff else None
+
+
+def least_body(readings, var: np.ndarray, mask: np.ndarray, labels: np.ndarray) -> float:
+    """The least body of the noise (:func:`body_ratio`) over the surfaces with :data:`MIN_DIFFERENCES` second
+    differences within ``mask``, each the smaller over ``readings`` (the residual against the reference holds what the
+    cause changes there, the remainder after its predicted change the noise of the renders that predicted it: each
+    can only add); NaN where fewer than two surfaces have that many."""
+    bodies = [min(body_ratio(r, var, mask & (labels == k), labels, min_n=MIN_DIFFERENCES) for r in readings)
+              for k in np.unique(labels[mask])]
+    bodies = [b for b in bodies if np.isfinite(b)]
+    return min(bodies) if len(bodies) >= 2 else float("nan")
 
 
 def brightness_scaled(var: np.ndarray, img: np.ndarray, R: np.ndarray, mask: np.ndarray, labels: np.ndarray, *,
