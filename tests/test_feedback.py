@@ -419,7 +419,8 @@ def test_noise_beside_a_cause_is_judged_on_every_surface():
     """The least body of the noise over surfaces (seed 31; three surfaces of 16 x 32 pixels, a model variance of 1):
     Gaussian noise of twice the model's deviation on every surface is above :data:`BESIDE_BODY` on each, as fewer
     samples leave it; the same noise on two surfaces and half the model's deviation on the third is not, though the
-    two hold most of the differences: a mistake's own noise sits where it acts. Of two readings the smaller counts, and one surface is too few to judge."""
+    two hold most of the differences: a mistake's own noise sits where it acts. Of two readings the smaller counts,
+    and one surface is too few to judge."""
     rng = np.random.default_rng(31)
     labels = np.repeat(np.arange(3), 16)[:, None] * np.ones((1, 32), int)
     mask = np.ones(labels.shape, bool)

@@ -73,8 +73,8 @@ MAJOR_FAMILIES = CAMERA_FAMILIES | {"object_missing", "object_moved", "light_pos
 #: light, how samples are drawn, weighted or combined) the noise is not judged (:func:`keeps_noise`): such a mistake
 #: makes noise of its own where the mean hardly moves (the caustics of a larger mirror, light samples drawn off the
 #: light), which is no sign of fewer samples.
-NOISE_KEPT = CAMERA_FAMILIES | {"scale", "light_radiance", "channels", "colour_lost", "colour_matrix", "encoding", "tone_curve",
-                                "falloff", "albedo", "albedo_swap", "surface_black", "object_black",
+NOISE_KEPT = CAMERA_FAMILIES | {"scale", "light_radiance", "channels", "colour_lost", "colour_matrix", "encoding",
+                                "tone_curve", "falloff", "albedo", "albedo_swap", "surface_black", "object_black",
                                 "reflectance_scale"} | {family for family, _, _ in REMAPS}
 
 
