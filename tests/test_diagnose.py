@@ -3,8 +3,8 @@
 The wrong images are **Mitsuba** renders of edited scenes (a wall
 recoloured, the light moved, an object the scene does not have), never
 mcrt's own variations; the catalogued bug comes from mcrt's mutant. The
-context is a 32x32 course assignment prepared once per session in a
-temporary cache. Seeds are fixed (every render below names its seed), so each
+context is a 32x32 course assignment prepared once per session in the
+run's cache (tests/conftest.py). Seeds are fixed (every render below names its seed), so each
 test is deterministic; the thresholds checked are the production ones
 (:data:`mcrt.grade.explain.NAMED` and its chi-square gain).
 """
@@ -35,9 +35,9 @@ ASSIGNMENT = {
 
 
 @pytest.fixture(scope="module")
-def ctx(tmp_path_factory):
+def ctx(tmp_path_factory, grade_cache):
     a = assignment_from_dict(ASSIGNMENT, str(tmp_path_factory.mktemp("explain") / "explain32.toml"))
-    return prepare_context(a, tmp_path_factory.mktemp("cache"))
+    return prepare_context(a, grade_cache)
 
 
 def _mitsuba(scene, seed: int, spp: int = 1024):

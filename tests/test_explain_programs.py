@@ -4,7 +4,7 @@ orientation.
 
 Every hand-in is a **Mitsuba** render (an edited scene, or a render post-processed with NumPy as a student's program
 would), never the grader's own model image nor a case of mcrt.grade.accuracy.programs. The context is the 32x32
-course assignment of test_diagnose, prepared once per module in a temporary cache; every render names its seed, and
+course assignment of test_diagnose, prepared once per module in the run's cache; every render names its seed, and
 the levels are the production ones. Each family must claim its cause on its mistake and claim nothing on a correct
 render and on another mistake.
 """
@@ -30,9 +30,9 @@ NEW = ("colour_lost", "channels", "direct_twice", "light_facing", "bad_pixels", 
 
 
 @pytest.fixture(scope="module")
-def ctx(tmp_path_factory):
+def ctx(tmp_path_factory, grade_cache):
     a = assignment_from_dict(ASSIGNMENT, str(tmp_path_factory.mktemp("programs") / "explain32.toml"))
-    return prepare_context(a, tmp_path_factory.mktemp("cache"))
+    return prepare_context(a, grade_cache)
 
 
 def _mitsuba(seed: int, scene=None, **spec) -> np.ndarray:
@@ -163,10 +163,10 @@ def test_direct_light_added_twice_is_named(ctx):
 
 
 @pytest.fixture(scope="module")
-def low_light(tmp_path_factory):
+def low_light(tmp_path_factory, grade_cache):
     """The canonical scene with its light 1.5 below the ceiling (the canonical light, 0.01 below it, facing up
     lights only the ceiling right above it: the image is nearly black, as any family times 0 is), and the
-    32x32 assignment on it, prepared in a temporary cache."""
+    32x32 assignment on it, prepared in the run's cache."""
     from mcrt.scene import CANONICAL
 
     d = tmp_path_factory.mktemp("low_light")
@@ -175,7 +175,7 @@ def low_light(tmp_path_factory):
     (d / "low.toml").write_text(text, encoding="utf-8")
     a = assignment_from_dict({**ASSIGNMENT, "scene": {**ASSIGNMENT["scene"], "file": str(d / "low.toml")}},
                              str(d / "low32.toml"))
-    return a.load_scene(), prepare_context(a, d / "cache")
+    return a.load_scene(), prepare_context(a, grade_cache)
 
 
 def test_a_light_facing_the_ceiling_is_named(low_light):

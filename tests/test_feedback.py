@@ -4,7 +4,7 @@ The hand-ins are **Mitsuba** renders of edited scenes, or Mitsuba renders
 post-processed as a student's program would (NumPy, SciPy), never the
 grader's own model images; the unit tests of the statistics draw their noise
 from fixed seeds. The context is a 32x32 course assignment prepared once per
-module in a temporary cache (test_diagnose's assignment); every render names its seed, and the levels are
+module in the run's cache (tests/conftest.py; test_diagnose's assignment); every render names its seed, and the levels are
 the production ones.
 """
 
@@ -36,10 +36,10 @@ from mcrt.stats.onesample import Noise, multiscale_test
 
 
 @pytest.fixture(scope="module")
-def ctx(tmp_path_factory):
+def ctx(tmp_path_factory, grade_cache):
     """The 32x32 assignment of test_diagnose (the same scene, tiles and sample counts)."""
     a = assignment_from_dict(ASSIGNMENT, str(tmp_path_factory.mktemp("feedback") / "explain32.toml"))
-    return prepare_context(a, tmp_path_factory.mktemp("cache"))
+    return prepare_context(a, grade_cache)
 
 
 def _mitsuba(scene, seed: int, spp: int = 1024, res: int = RES):

@@ -7,13 +7,13 @@ never with mcrt's own writers. The 800 x 800 render is made once per session
 with ``mcrt render --preset course2023`` (at 32 spp, above the assignment's
 min_spp of 16) and graded through ``mcrt check`` with the packaged
 assignment; its references and catalogue are cached for the session (or in
-``$MCRT_CACHE`` when set).
+``$MCRT_CACHE`` when set). Those checks prepare the assignment from nothing, which takes minutes: they are
+``long`` (run with ``MCRT_SLOW=1``, as ``.ci/run`` does; tests/conftest.py).
 """
 
 from __future__ import annotations
 
 import json
-import os
 import shutil
 import subprocess
 import tomllib
@@ -234,12 +234,6 @@ def test_check_unusable_input(tmp_path, capsys):
 
 
 @pytest.fixture(scope="session")
-def cache800(tmp_path_factory):
-    env = os.environ.get("MCRT_CACHE")
-    return Path(env) / "grade" if env else tmp_path_factory.mktemp("cache800")
-
-
-@pytest.fixture(scope="session")
 def render800(tmp_path_factory):
     """A correct 800 x 800 render from ``mcrt render --preset course2023`` (32 spp), linear RGB."""
     from mcrt.cli import main
@@ -261,8 +255,9 @@ def _srgb8(rgb):
 
 
 @pytest.mark.slow
+@pytest.mark.long
 @pytest.mark.parametrize("kind", ["ppm", "png"])
-def test_check_gives_a_correct_800_render_full_marks(tmp_path, render800, cache800, kind, capsys):
+def test_check_gives_a_correct_800_render_full_marks(tmp_path, render800, grade_cache, kind, capsys):
     from mcrt.grade.cli import main
 
     b = _srgb8(render800)
@@ -271,7 +266,7 @@ def test_check_gives_a_correct_800_render_full_marks(tmp_path, render800, cache8
         write_p6(path, b, 255)  # what a student's tracer writes
     else:
         Image.fromarray(b, "RGB").save(path)  # gamma-encoded (sRGB) 8-bit PNG
-    rc = main(["check", str(path), "--cache", str(cache800), "--out", str(tmp_path / "fb"), "-q"])
+    rc = main(["check", str(path), "--cache", str(grade_cache), "--out", str(tmp_path / "fb"), "-q"])
     out = capsys.readouterr().out
     assert rc == 0, out
     assert out.startswith(f"my_render.{kind}: 100 / 100 points") and "800x800 as asked" in out
@@ -280,12 +275,13 @@ def test_check_gives_a_correct_800_render_full_marks(tmp_path, render800, cache8
 
 
 @pytest.mark.slow
-def test_check_reports_a_wrong_800_render(tmp_path, render800, cache800, capsys):
+@pytest.mark.long
+def test_check_reports_a_wrong_800_render(tmp_path, render800, grade_cache, capsys):
     """Exit 1 and the reason: the same render upside down (flipped back and graded: only those points lost)."""
     from mcrt.grade.cli import main
 
     path = tmp_path / "flipped.ppm"
     write_p6(path, _srgb8(render800)[::-1], 255)
-    rc = main(["check", str(path), "--cache", str(cache800), "-q"])
+    rc = main(["check", str(path), "--cache", str(grade_cache), "-q"])
     out = capsys.readouterr().out
     assert rc == 1 and "upside down" in out and "95 / 100" in out

@@ -596,9 +596,9 @@ from mcrt.grade.grader import grade_submission  # noqa: E402
 
 
 @pytest.fixture(scope="session")
-def context64(workdir):
+def context64(grade_cache):
     a = load_assignment(Path(__file__).parents[1] / "reference" / "assignments" / "course2023.toml")
-    return prepare_context(a, workdir / "cache64", mutants=())
+    return prepare_context(a, grade_cache, mutants=())
 
 
 def _mitsuba(scene, spp, seed, *, sampler="independent", sensor=None, drop=()):

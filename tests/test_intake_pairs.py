@@ -4,7 +4,7 @@ before the sRGB curve, float values rounded to decimals, a PNG of sRGB's exponen
 round, and a pair of renders made with one seed.
 
 The hand-ins are Mitsuba renders (fixed seeds) written the way a student's program writes them; they are graded by
-the production grader with the 32x32 assignment of test_diagnose, prepared once per module in a temporary cache.
+the production grader with the 32x32 assignment of test_diagnose, prepared once per module in the run's cache.
 """
 
 from __future__ import annotations
@@ -26,9 +26,9 @@ from mcrt.scene import load_scene
 
 
 @pytest.fixture(scope="module")
-def ctx(tmp_path_factory):
+def ctx(tmp_path_factory, grade_cache):
     a = assignment_from_dict(ASSIGNMENT, str(tmp_path_factory.mktemp("intake") / "explain32.toml"))
-    return prepare_context(a, tmp_path_factory.mktemp("cache"))
+    return prepare_context(a, grade_cache)
 
 
 @pytest.fixture(scope="module")

@@ -47,8 +47,8 @@ def workdir(tmp_path_factory):
 
 
 @pytest.fixture(scope="module")
-def context(workdir):
-    return prepare_context(assignment_from_dict(ASSIGNMENT, "robust32.toml", base=workdir), workdir / "cache")
+def context(workdir, grade_cache):
+    return prepare_context(assignment_from_dict(ASSIGNMENT, "robust32.toml", base=workdir), grade_cache)
 
 
 @pytest.fixture(scope="module")
