@@ -595,6 +595,8 @@ from mcrt.grade.submissions import discover  # noqa: E402
 from mcrt.grade.grader import grade_submission  # noqa: E402
 
 
+# The course's own assignment at 64 x 64, prepared from nothing (minutes): the tests that grade with it are long
+# (MCRT_SLOW=1, as .ci/run sets; tests/conftest.py).
 @pytest.fixture(scope="session")
 def context64(grade_cache):
     a = load_assignment(Path(__file__).parents[1] / "reference" / "assignments" / "course2023.toml")
@@ -655,6 +657,7 @@ def structured(scene, context64, workdir):
     return _grade_files(workdir / "structured", files, context64)
 
 
+@pytest.mark.long
 def test_correct_mitsuba_renders_with_other_samplers_get_full_marks(structured):
     """Mitsuba's path integrator with independent, stratified and low-discrepancy samplers: no false alarm
     (each test at the assignment's family-wise level of 0.01; seeds 401-403)."""
@@ -663,6 +666,7 @@ def test_correct_mitsuba_renders_with_other_samplers_get_full_marks(structured):
         assert r.score == r.max_score, (sid, [(t.name, t.output) for t in r.tests if t.score < t.max_score])
 
 
+@pytest.mark.long
 def test_camera_mistakes_are_major(structured, context64):
     """A field of view 3 % wide and a half-pixel offset of the pixel centres (Mitsuba renders of the edited
     sensor): the camera criterion fails, named as such, and the bias criterion loses at least major_loss."""
@@ -679,6 +683,7 @@ def test_camera_mistakes_are_major(structured, context64):
     assert "shifted" in _lost(structured["mi_half_pixel"], "camera")[1]
 
 
+@pytest.mark.long
 def test_blurred_image_is_called_filtered(structured, context64):
     """scipy.ndimage's Gaussian blur (sigma 0.8 px) of a correct render: the noise criterion names the filter
     and the bias criterion loses at least filter_loss, though no tile mean moves."""
@@ -688,6 +693,7 @@ def test_blurred_image_is_called_filtered(structured, context64):
     assert _lost(r, "unbiased")[0] >= context64.assignment.thresholds.filter_loss * 55 - 1e-6
 
 
+@pytest.mark.long
 def test_an_edge_preserving_denoiser_is_called_denoised(structured, context64):
     """scikit-image's total-variation denoiser (Chambolle, weight 0.08) on a correct render: it keeps edges, so no
     single blur explains the image and the filter test alone would be withheld (a bias on surfaces); the noise it
@@ -700,6 +706,7 @@ def test_an_edge_preserving_denoiser_is_called_denoised(structured, context64):
     assert "blur" in named_causes(r)[0]
 
 
+@pytest.mark.long
 def test_wrong_wall_and_missing_object_are_major(structured, context64):
     """A wall of the wrong colour and the tetrahedron left out (Mitsuba renders of the edited scene) lose at least
     major_loss of the bias points, whatever their share of the image; the surface is named."""
@@ -710,6 +717,7 @@ def test_wrong_wall_and_missing_object_are_major(structured, context64):
         assert not {"filtered", "denoised"} & set(_lost(structured[sid], "noise")[1].split()), sid
 
 
+@pytest.mark.long
 def test_a_few_wrong_pixels_are_minor(structured, context64):
     """Four black pixels (a crack) in a correct render: found by the pixel test, and only minor_loss is lost."""
     th = context64.assignment.thresholds
@@ -717,6 +725,7 @@ def test_a_few_wrong_pixels_are_minor(structured, context64):
     assert lost == pytest.approx(th.minor_loss * 55) and "darker than any correct render" in out, out
 
 
+@pytest.mark.long
 def test_a_shadow_missing_is_found_as_a_patch(structured, context64):
     """The sphere left out of the shadow rays' test (Mitsuba: the direct light the sphere blocks added back at the
     surfaces the camera sees; seed 408, 256 spp): a few dozen pixels of the floor and wall DE, about twice as bright,
@@ -741,6 +750,7 @@ def _png_writer(img, curve):
     return write
 
 
+@pytest.mark.long
 def test_png_encodings_are_decoded_not_called_bugs(scene, context64, workdir):
     """Correct 100-spp mcrt renders as 8-bit PNGs (Pillow) with the sRGB curve, gamma 2.2 and a square root get full
     marks (quantisation and clipping in the noise model); one with linear values loses only the linear points; a PPM
@@ -765,6 +775,7 @@ def test_png_encodings_are_decoded_not_called_bugs(scene, context64, workdir):
     assert res["png_gamma22"].details["encoding"]["detected"] in ("gamma2.2", "srgb")
 
 
+@pytest.mark.long
 def test_images_too_small_to_test_get_no_bias_points(scene, context64, workdir):
     """1x1 and 4x4 hand-ins (the box-filtered mean of a correct render): nothing can be tested, so the bias
     criteria (exposure, noise, unbiased) score 0, said so."""
@@ -796,6 +807,7 @@ def test_weighted_holm_is_holm_with_equal_weights_and_splits_the_level():
     assert rejected.tolist() == expect.tolist() == [True, True, False, True]
 
 
+@pytest.mark.long
 def test_fewer_samples_than_declared_lose_the_noise_points_and_less_efficient_estimators_do_not(context64):
     """mcrt at 16 spp declared as 64 (seed 63) measures about 3.5x mcrt's noise variance at 64 spp: beyond
     noise.max_ratio (3: a margin over correct renderers' ratios, the false-alarm report's "Noise against the
@@ -818,6 +830,7 @@ def test_fewer_samples_than_declared_lose_the_noise_points_and_less_efficient_es
     assert "without light sampling" not in noise.output  # fewer samples keep mcrt's shape of noise
 
 
+@pytest.mark.long
 def test_a_tracer_without_light_sampling_is_told_from_fewer_samples_by_the_shape_of_its_noise(context64):
     """Mitsuba's prb_basic (no emitter sampling: an estimator the grader's models did not render) at 256 spp declared
     256, seed 71: tens of times mcrt's noise variance at 256 spp, shaped like mcrt's without light sampling, so full
@@ -846,6 +859,7 @@ def test_a_tracer_without_light_sampling_is_told_from_fewer_samples_by_the_shape
     assert dark.details["noise"]["unsampled"] and dark.score < dark.max_score - 5, dark.summary
 
 
+@pytest.mark.long
 def test_a_coarse_palette_is_no_tracer_without_light_sampling(context64):
     """A correct Mitsuba render (256 spp, seed 75) saved through a web palette (sRGB codes rounded to multiples of 51):
     its errors are larger where the light is, which a tracer without light sampling's noise is too, but they tie
@@ -866,6 +880,7 @@ def test_a_coarse_palette_is_no_tracer_without_light_sampling(context64):
     assert "noisier" not in noise.output and "spp_claim" not in named_causes(res)[0], noise.output
 
 
+@pytest.mark.long
 def test_the_shape_of_noise_picks_the_model_it_follows(context64):
     """Gaussian noise (seed 74) with the variance of either model, at levels 1 and 30 (the level moves only the
     intercept), plus a smooth bias (cancelled by the second differences): each is read as its own model's."""
