@@ -43,11 +43,11 @@ SEED = 29  # the students' images: arbitrary, but the same every run
 
 
 @pytest.fixture(scope="module")
-def context(tmp_path_factory):
-    """The assignment, prepared once here, so that the commands below find the references in the cache."""
+def context(tmp_path_factory, grade_cache):
+    """The assignment, prepared once here, so that the commands below find the references in the run's cache."""
     d = tmp_path_factory.mktemp("resume")
     (d / "resume32.toml").write_text(ASSIGNMENT)
-    return prepare_context(load_assignment(d / "resume32.toml"), d / "cache")
+    return prepare_context(load_assignment(d / "resume32.toml"), grade_cache)
 
 
 @pytest.fixture(scope="module")
@@ -73,9 +73,9 @@ def klass(workdir, context):
     return d
 
 
-def grade_cmd(workdir: Path, klass: Path, out: Path, *extra: str) -> list[str]:
+def grade_cmd(workdir: Path, klass: Path, out: Path, *extra: str, cache: Path) -> list[str]:
     return [sys.executable, "-m", "mcrt.grade.cli", "grade", str(klass), "-a", str(workdir / "resume32.toml"), "-o", str(out),
-            "--cache", str(workdir / "cache"), *extra]
+            "--cache", str(cache), *extra]
 
 
 def read_run(out: Path) -> dict:
@@ -121,9 +121,10 @@ def assert_consistent(out: Path) -> list[dict]:
     return rows
 
 
-def test_a_killed_batch_stops_its_workers_says_it_is_incomplete_and_resumes(workdir, klass, context):
+def test_a_killed_batch_stops_its_workers_says_it_is_incomplete_and_resumes(workdir, klass, context, grade_cache):
     out = workdir / "killed"
-    proc = subprocess.Popen(grade_cmd(workdir, klass, out, "-j", "2"), stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    proc = subprocess.Popen(grade_cmd(workdir, klass, out, "-j", "2", cache=grade_cache), stdout=subprocess.DEVNULL,
+                            stderr=subprocess.PIPE)
     workers: set[int] = set()
     try:
         deadline = time.monotonic() + 600
@@ -154,7 +155,7 @@ def test_a_killed_batch_stops_its_workers_says_it_is_incomplete_and_resumes(work
     assert 1 <= len(rows) < N_STUDENTS
 
     # A second run grades only the students the first did not finish.
-    r = subprocess.run(grade_cmd(workdir, klass, out, "-j", "2"), capture_output=True, text=True, timeout=900)
+    r = subprocess.run(grade_cmd(workdir, klass, out, "-j", "2", cache=grade_cache), capture_output=True, text=True, timeout=900)
     assert r.returncode == 0, r.stderr[-3000:]
     run = read_run(out)
     assert run["complete"] is True and not run["pending"] and run["finished"]
@@ -262,7 +263,7 @@ def test_a_results_json_not_as_recorded_is_graded_again(small, context, tmp_path
     assert_consistent(out)
 
 
-def test_two_runs_into_one_folder_are_refused(workdir, klass, context):
+def test_two_runs_into_one_folder_are_refused(workdir, klass, context, grade_cache):
     import fcntl
 
     out = workdir / "locked"
@@ -270,7 +271,7 @@ def test_two_runs_into_one_folder_are_refused(workdir, klass, context):
     fd = os.open(out / ".lock", os.O_RDWR | os.O_CREAT)
     try:
         fcntl.flock(fd, fcntl.LOCK_EX)
-        r = subprocess.run(grade_cmd(workdir, klass, out, "-q"), capture_output=True, text=True, timeout=600)
+        r = subprocess.run(grade_cmd(workdir, klass, out, "-q", cache=grade_cache), capture_output=True, text=True, timeout=600)
     finally:
         os.close(fd)
     assert r.returncode == 2

@@ -121,8 +121,8 @@ def assignment(workdir):
 
 
 @pytest.fixture(scope="session")
-def context(assignment, workdir):
-    return prepare_context(assignment, workdir / "cache")
+def context(assignment, grade_cache):
+    return prepare_context(assignment, grade_cache)
 
 
 @pytest.fixture(scope="session")
@@ -387,17 +387,17 @@ def test_parallel_workers_and_timeouts_always_write_results(klass, assignment, c
         assert "longer than 0.001 s" in data["output"]
 
 
-def test_command_line(klass, assignment, workdir):
+def test_command_line(klass, assignment, workdir, grade_cache):
     d, _ = klass
     sub = workdir / "one"
     sub.mkdir()
     (sub / "alice.exr").write_bytes((d / "ok16_exr.exr").read_bytes())
     args = ["grade", str(sub), "--assignment", assignment.path, "--out", str(workdir / "cli"), "--cache",
-            str(workdir / "cache"), "--jobs", "0", "--quiet"]
+            str(grade_cache), "--jobs", "0", "--quiet"]
     assert main(args) == 0
     assert json.loads((workdir / "cli" / "alice" / "results.json").read_text())["score"] == 100
     # One student's folder, as Gradescope hands it over.
-    assert main(["grade", str(sub), "-a", assignment.path, "-o", str(workdir / "gs"), "--cache", str(workdir / "cache"),
+    assert main(["grade", str(sub), "-a", assignment.path, "-o", str(workdir / "gs"), "--cache", str(grade_cache),
                  "-j", "0", "-q", "--single", "--student", "submission"]) == 0
     assert (workdir / "gs" / "submission" / "results.json").exists()
     bad = workdir / "bad.toml"
@@ -567,11 +567,11 @@ def test_code_mode_failures_are_graded_with_their_cause(code_graded):
         assert (out / sid / "results.json").exists()
 
 
-def test_code_mode_command_line(code_class, assignment, workdir):
+def test_code_mode_command_line(code_class, assignment, workdir, grade_cache):
     d, _ = code_class
     out = workdir / "code_cli"
     assert main(["grade", str(d / "good.py"), "--mode", "code", "-a", assignment.path, "-o", str(out),
-                 "--cache", str(workdir / "cache"), "-q"]) == 0
+                 "--cache", str(grade_cache), "-q"]) == 0
     assert json.loads((out / "good" / "results.json").read_text())["score"] == 50
 
 
