@@ -1,8 +1,9 @@
 """Shared fixtures and the ``long`` marker.
 
-``grade_cache``: one cache of the grading contexts' renders for the whole run. A context's renders are keyed by what
-they depend on (assignment, resolution, spp, seed), so the modules that prepare the same assignment share them and
-each prepares from nothing only once; ``$MCRT_CACHE/grade`` when that is set, as the 800 x 800 checks use.
+``grade_cache``: one cache of the grading contexts' renders for the whole run (``$MCRT_CACHE/grade`` when that is
+set). Each render is keyed by the scene's content hash, its settings, the mutant and mcrt's source hash
+(mcrt.grade.expected), as in the production cache, so the modules that prepare the same assignment prepare it from
+nothing only once, and different assignments never read each other's renders.
 
 ``long``: an end-to-end check of minutes (an 800 x 800 hand-in graded from an empty cache, a Debian root built). It
 runs when ``MCRT_SLOW=1`` (``.ci/run`` sets it) and is skipped otherwise, so that ``./dev test`` stays short.

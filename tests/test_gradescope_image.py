@@ -25,8 +25,9 @@ mount namespace, where the sandbox's own bubblewrap can run), with /proc, /dev,
 /sys and resolv.conf, and pip given the host's CA bundle (PIP_CERT).
 
 It downloads about 300 MB and takes minutes, so it runs only when asked
-(``long``: ``MCRT_SLOW=1``, which ``.ci/run`` sets; tests/conftest.py). Under CI, a missing mmdebstrap, bwrap or
-cgroup fails rather than skips. It prints the image's size and the phases' times.
+(``long``: ``MCRT_SLOW=1``, which ``.ci/run`` sets; tests/conftest.py). Under CI,
+a missing mmdebstrap, bwrap or cgroup fails rather than skips. It prints the
+image's size and the phases' times.
 """
 
 from __future__ import annotations
