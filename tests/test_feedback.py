@@ -1669,15 +1669,44 @@ def _binomial_over_nine(img):
     return sum(k[i] * k[j] * p[i:i + h, j:j + w] for i in range(3) for j in range(3)) / 9.0
 
 
+def _box_zero_padded(img):
+    """torch's avg_pool2d(x, 3, stride=1, padding=1) with count_include_pad left True: zeros padded, every sum / 9."""
+    p = np.pad(img, ((1, 1), (1, 1), (0, 0)))
+    h, w = img.shape[:2]
+    return sum(p[i:i + h, j:j + w] for i in range(3) for j in range(3)) / 9.0
+
+
+def _box_inner_pixels(img):
+    """A loop over the pixels the kernel fits, writing into a zeroed image (Java's ConvolveOp, EDGE_ZERO_FILL)."""
+    out = np.zeros_like(img)
+    h, w = img.shape[:2]
+    for y in range(1, h - 1):
+        for x in range(1, w - 1):
+            out[y, x] = img[y - 1:y + 2, x - 1:x + 2].reshape(9, 3).mean(axis=0)
+    return out
+
+
+def _box_full_cropped(img):
+    """MATLAB's conv2(img(:, :, c), ones(3) / 9), its default shape 'full', cropped as out(1:H, 1:W)."""
+    from scipy.signal import convolve2d
+
+    h, w = img.shape[:2]
+    return np.stack([convolve2d(img[..., c], np.ones((3, 3)) / 9.0)[:h, :w] for c in range(3)], -1)
+
+
 @pytest.mark.parametrize("post, words", [
     (lambda x: _binomial_over_nine(x), "whose weights sum to 1.78, not 1 (its weights divided by 9 where their sum 16"),
     (lambda x: np.stack([np.median(np.stack([np.pad(x[..., c], 1, mode="edge")[i:i + RES, j:j + RES]
                                              for i in range(3) for j in range(3)]), axis=0) for c in range(3)], -1),
-     "a median filter")])
+     "a median filter"),
+    (_box_zero_padded, "box (mean) filter, zeros taken in past its border"),
+    (_box_inner_pixels, "box (mean) filter, only where the kernel fits inside the image, its edge pixels left at 0"),
+    (_box_full_cropped, "box (mean) filter, its 'full' convolution")])
 def test_a_three_by_three_filter_is_named(ctx, post, words):
     """A Mitsuba render (seed 93) through a 3 x 3 filter written by hand: a binomial kernel divided by 9 (a box's
-    count) where its sum 16 belongs, or the median of each pixel's neighbourhood: the filter is claimed, with the
-    weights' sum where it is not 1."""
+    count) where its sum 16 belongs; the median of each pixel's neighbourhood; a box filter whose border takes in
+    zeros, is left black, or is a 'full' convolution cropped at its corner: the filter is claimed, with the weights'
+    sum where it is not 1 and the border where it is not the edge repeated."""
     res = grade_image("three", ctx, [post(_mitsuba(load_scene(), 93))], spp=1024)
     ex = res.details["explanation"]
     assert ex["verdict"] == "claimed" and ex["family"] == "blur" and words in ex["sentence"], ex["sentence"]

@@ -196,10 +196,40 @@ KERNELS = {"box": (np.ones((3, 3)), "a 3 x 3 box (mean) filter"),
            "binomial": (np.outer([1.0, 2.0, 1.0], [1.0, 2.0, 1.0]), "a 3 x 3 binomial filter (weights 1 2 1 by 1 2 1)")}
 
 
-#: How a hand-written filter treats the image's border: the edge pixels repeated, or the opposite edge wrapped round
-#: (a filter written as the mean of np.roll's shifted copies), in words.
-BORDERS = {"nearest": "", "wrap": ", its border wrapped round to the opposite edge (the mean of shifted copies, as "
-           "np.roll makes them)"}
+#: How a hand-written filter treats the image's border, in words: the edge pixels repeated; the opposite edge wrapped
+#: round (the mean of np.roll's shifted copies); zeros taken in past it (a zero-padded convolution); the filter only
+#: where it fits, the edge left black (a loop over the inner pixels writing into a zeroed image); a 'full' convolution
+#: cropped at its top-left corner (the filtered image moved a pixel down and right, zeros taken in there).
+BORDERS = {"nearest": "",
+           "wrap": ", its border wrapped round to the opposite edge (the mean of shifted copies, as np.roll makes them)",
+           "zeros": ", zeros taken in past its border (a zero-padded convolution, as torch's avg_pool2d with padding "
+                    "and count_include_pad left True, or scipy.signal.convolve2d with mode 'same', makes it): the edge "
+                    "rows and columns darkened",
+           "frame": ", only where the kernel fits inside the image, its edge pixels left at 0 (a loop over the inner "
+                    "pixels writing into a zeroed image, or Java's ConvolveOp with its default EDGE_ZERO_FILL): a "
+                    "black frame a pixel wide",
+           "full": ", its 'full' convolution (two pixels larger, zeros outside) cropped at the top-left corner (as "
+                   "MATLAB's conv2 with its default shape, then out(1:H, 1:W)): the image moved a pixel down and "
+                   "right, the top row and left column taking in zeros"}
+
+
+def bordered(R: np.ndarray, k: np.ndarray, border: str) -> np.ndarray:
+    """R (H, W, 3) filtered by the 3 x 3 kernel k, normalised, its border treated as :data:`BORDERS` names."""
+    from scipy.ndimage import convolve
+
+    k = (k / k.sum())[..., None]
+    if border in ("nearest", "wrap"):
+        return convolve(R, k, mode=border)
+    if border == "zeros":
+        return convolve(R, k, mode="constant", cval=0.0)
+    if border == "frame":
+        F = convolve(R, k, mode="nearest")
+        F[0], F[-1], F[:, 0], F[:, -1] = 0.0, 0.0, 0.0, 0.0
+        return F
+    # 'full' cropped: out[i, j] = sum over a, b of k[a, b] R[i - a, j - b], zeros where i - a or j - b < 0.
+    H, W = R.shape[:2]
+    P = np.pad(R, ((2, 0), (2, 0), (0, 0)))
+    return sum(k[a, b] * P[2 - a:2 - a + H, 2 - b:2 - b + W] for a in range(3) for b in range(3))
 
 
 #: A 3 x 3 filter's fitted gain within this of 1 is a filter that keeps the image's level (the noise moves the fit
@@ -215,7 +245,7 @@ def _three_by_three(fit: Fit) -> list[Candidate]:
     their count where their sum belongs: the sum over it). That one has two parameters, the gain and the kernel chosen: where noise
     hides the filter (a dark image), it is a constant factor with a choice more, which Occam's rule does not name
     beside the factor."""
-    from scipy.ndimage import convolve, maximum_filter, median_filter, minimum_filter
+    from scipy.ndimage import maximum_filter, median_filter, minimum_filter
 
     out = []
     for name, f, what in (("median", median_filter, "a median filter (each pixel the median of its 3 x 3 "
@@ -237,13 +267,13 @@ def _three_by_three(fit: Fit) -> list[Candidate]:
     best = None
     for name, (k, what) in KERNELS.items():
         for mode in BORDERS:
-            F = convolve(fit.R, (k / k.sum())[..., None], mode=mode)
+            F = bordered(fit.R, k, mode)
             wts = fit.w * F
             g = float(np.sum(wts * fit.S) / max(float(np.sum(wts * F)), 1e-300))  # the gain by weighted least squares
             e = fit.model(g * F)
             if best is None or e < best[0]:
-                best = (e, name, what + BORDERS[mode], g, g * F, float(k.sum()))
-    e, name, what, g, M, total = best
+                best = (e, name, what, g, g * F, float(k.sum()), mode)
+    e, name, what, g, M, total, border = best
     count = next((c for c in (9.0, 16.0, 8.0, 4.0) if abs(total / c - g) < 0.02 * g), None)
     why = (f" (its weights divided by {count:g} where their sum {total:g} belongs)" if count and count != total
            else "")
@@ -251,8 +281,8 @@ def _three_by_three(fit: Fit) -> list[Candidate]:
     gain = f"{g:.3f}" if abs(g - 1) < 0.1 else _num(g)
     sums = "" if abs(g - 1) < GAIN_KEPT else f" whose weights sum to {gain}, not 1{why}"
     return out + [Candidate("blur", f"{name} filter times {gain}", f"the image filtered after rendering by {what}"
-                            f"{sums}", e, 2,
-                            value={"filter": name, "size": 3, "gain": g}, change=M - fit.R,
+                            f"{sums}{BORDERS[border]}", e, 2,
+                            value={"filter": name, "size": 3, "gain": g, "border": border}, change=M - fit.R,
                             # A filter with a gain is a scale with a filter: where noise hides the filter it is no
                             # other cause beside the scale (a dark image left ambiguous between the two otherwise).
                             generalises=("scale",))]
