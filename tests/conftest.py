@@ -5,8 +5,9 @@ set). Each render is keyed by the scene's content hash, its settings, the mutant
 (mcrt.grade.expected), as in the production cache, so the modules that prepare the same assignment prepare it from
 nothing only once, and different assignments never read each other's renders.
 
-``long``: an end-to-end check of minutes (an 800 x 800 hand-in graded from an empty cache, a Debian root built). It
-runs when ``MCRT_SLOW=1`` (``.ci/run`` sets it) and is skipped otherwise, so that ``./dev test`` stays short.
+``long``: an end-to-end check of minutes (an 800 x 800 hand-in graded from an empty cache, a Gradescope zip built and
+run in a simulated /autograder, a Debian root built). It runs when ``MCRT_SLOW=1`` (``.ci/run`` sets it) and is
+skipped otherwise, so that ``./dev test`` stays short.
 """
 
 from __future__ import annotations

@@ -19,6 +19,9 @@ installed package.
 The same wheel, unpacked and imported with ``python -S`` (so the editable
 install of the checkout is not on the path), grades a small class with two
 worker processes from a folder outside the checkout.
+
+The tests that build a zip or a wheel are ``long`` (minutes together: each
+builds a wheel and a venv): they run with ``MCRT_SLOW=1``, as in CI.
 """
 
 from __future__ import annotations
@@ -173,6 +176,7 @@ def image_autograder(tmp):
     return _build(tmp, "image")
 
 
+@pytest.mark.long
 def test_the_zip_holds_a_wheel_and_executable_scripts(image_autograder):
     zpath, root = image_autograder
     with zipfile.ZipFile(zpath) as z:
@@ -185,6 +189,7 @@ def test_the_zip_holds_a_wheel_and_executable_scripts(image_autograder):
     assert (root / "venv" / "bin" / "mcrt").exists() and (root / "cache").is_dir()
 
 
+@pytest.mark.long
 def test_gradescope_grades_correct_biased_and_unreadable_submissions(image_autograder, renders, tmp):
     _, root = image_autograder
     write_exr(tmp / "good.exr", renders["good"])
@@ -211,6 +216,7 @@ def test_gradescope_grades_correct_biased_and_unreadable_submissions(image_autog
     assert readable["status"] == "failed" and "render.exr" in readable["output"] and "**What to do:**" in readable["output"]
 
 
+@pytest.mark.long
 def test_a_broken_autograder_says_so_truthfully(image_autograder, renders, tmp):
     _, root = image_autograder
     a = root / "source" / "assignment.toml"
@@ -230,6 +236,7 @@ def code_autograder(tmp):
     return _build(tmp, "code")
 
 
+@pytest.mark.long
 def test_gradescope_grades_a_python_module(code_autograder, renders):
     import base64
 
@@ -249,6 +256,7 @@ def test_gradescope_grades_a_python_module(code_autograder, renders):
 # --------------------------------------------------------------------------
 
 
+@pytest.mark.long
 def test_the_installed_wheel_grades_a_class_outside_the_checkout(image_autograder, renders, tmp):
     zpath, _ = image_autograder
     target = tmp / "site"
@@ -346,6 +354,7 @@ def wheel_venv(tmp):
     return venv, Path(site_dir)
 
 
+@pytest.mark.long
 def test_gradescope_zip_from_a_wheel_install_in_another_folder(wheel_venv, tmp):
     venv, site_dir = wheel_venv
     work = tmp / "instructor"
@@ -382,6 +391,7 @@ def test_gradescope_zip_from_a_wheel_install_in_another_folder(wheel_venv, tmp):
     assert r.returncode == 0 and r.stdout.count(site2) == 2, r.stdout + r.stderr
 
 
+@pytest.mark.long
 def test_gradescope_zip_refuses_a_changed_installation(wheel_venv, tmp):
     venv, site_dir = wheel_venv
     target = site_dir / "mcrt" / "grade" / "score.py"
