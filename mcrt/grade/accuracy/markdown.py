@@ -456,6 +456,16 @@ _UNREMARKED = _twin_blind("unremarked", "twenty-fourth", "5aa291d") + (
     "this report's first grading (held out, 4 of 12 named right, 3 of 12 confidently wrong, 11 of 12 detected; all "
     "28, 9 named right, 4 confidently wrong, 27 detected; 0 of 8 correct hand-ins lost points).") + _TWIN2_AFTER
 
+def _borders_seen(case: str) -> str:
+    """What changed later with a held-out 3 x 3 filter of three classes in view (the twenty-sixth's, the
+    twenty-ninth's and the thirtieth's), said in each of them."""
+    return (f" Changed later, with this class's held-out `{case}` in view beside two of other classes (commit "
+            "2a41527): a 3 x 3 filter's border taking in zeros, left black, or a 'full' convolution cropped at its "
+            "corner, where only the edge repeated and the opposite edge wrapped round had been tried (the three had "
+            "been read as a filter with something else at the border, a tone map, or a zoom); every class was graded "
+            "again on it. Its held-out row is of rules that saw that case.")
+
+
 #: What changed after the third pair of twin classes' one grading, with both in view.
 _TWIN3_AFTER = (
     " Changes made after that grading, with both classes in view (commits 5f5dcef and 57891fc): an object's geometry "
@@ -471,7 +481,7 @@ _UNREMEMBERED = _twin_blind("unremembered", "twenty-fifth", "9a0fc85") + (
 _UNNOTICED = _twin_blind("unnoticed", "twenty-sixth", "9a0fc85") + (
     "this report's first grading (held out, 3 of 12 named right, 1 of 12 confidently wrong, 11 of 12 detected; all "
     "28, 7 named right, 1 confidently wrong, 26 detected; 1 of 8 correct hand-ins lost points, a held-out PPM of a "
-    "correct render, 94.5).") + _TWIN3_AFTER
+    "correct render, 94.5).") + _TWIN3_AFTER + _borders_seen("pp_conv2_full_cropped")
 
 #: What changed after the fourth pair of twin classes' one grading, with both in view.
 _TWIN4_AFTER = (
@@ -500,11 +510,13 @@ _TWIN5_AFTER = (
 
 _UNATTESTED = _twin_blind("unattested", "twenty-ninth", "892ae57") + (
     "this report's first grading (held out, 4 of 12 named right, 1 of 12 confidently wrong, 12 of 12 detected; all "
-    "28, 8 named right, 6 confidently wrong, 28 detected; 0 of 8 correct hand-ins lost points).") + _TWIN5_AFTER
+    "28, 8 named right, 6 confidently wrong, 28 detected; 0 of 8 correct hand-ins lost points).") + _TWIN5_AFTER + \
+    _borders_seen("pp_torch_avg_pool_pad_counted")
 
 _UNCONSIDERED = _twin_blind("unconsidered", "thirtieth", "892ae57") + (
     "this report's first grading (held out, 2 of 12 named right, 2 of 12 confidently wrong, 12 of 12 detected; all "
-    "28, 6 named right, 4 confidently wrong, 27 detected; 0 of 8 correct hand-ins lost points).") + _TWIN5_AFTER
+    "28, 6 named right, 4 confidently wrong, 27 detected; 0 of 8 correct hand-ins lost points).") + _TWIN5_AFTER + \
+    _borders_seen("pp_java_convolveop_zero_edges")
 
 #: What changed after the sixth pair of twin classes' one grading, with both in view.
 _TWIN6_AFTER = (
