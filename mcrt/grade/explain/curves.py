@@ -236,13 +236,26 @@ def bordered(R: np.ndarray, k: np.ndarray, border: str) -> np.ndarray:
 #: by a few tenths of a per cent; weights divided by another count are off by 10 % or more).
 GAIN_KEPT = 0.01
 
+#: Counts a hand-written 3 x 3 filter may divide its weights' sum by where another belongs (a box's 9, a binomial's
+#: 16, the 8 neighbours, the 4 edge neighbours), and how far from 1 its gain may be fitted freely (a filter that
+#: slightly changes the level). A gain neither near 1 nor a count's ratio (0.05, 6.45) is a scale, which the scale's
+#: own family names: with it, a filter's border (a black frame, zeros) would mimic any darkening.
+COUNTS = (9.0, 16.0, 8.0, 4.0)
+FREE_GAIN = 0.1
+
+
+def _ratio(g: float, total: float) -> float | None:
+    """The count whose ratio ``total / count`` the gain g is (within 2 %), None if none is."""
+    return next((c for c in COUNTS if abs(total / c - g) < 0.02 * g), None)
+
 
 def _three_by_three(fit: Fit) -> list[Candidate]:
     """3 x 3 filters after rendering: a median, a maximum and a minimum filter (each pixel the median, largest or
     smallest of its 3 x 3 neighbourhood, channel by channel: a despeckle, a dilation, an erosion), none with a free
     parameter (of R: a filter of the noisy image differs by more where the noise is large, which the remainder
     shows); and the best of :data:`KERNELS` and :data:`BORDERS` with its weights' sum fitted (1: a correct filter;
-    their count where their sum belongs: the sum over it). That one has two parameters, the gain and the kernel chosen: where noise
+    their count where their sum belongs: the sum over it; within :data:`FREE_GAIN` of 1 or such a ratio, else 1).
+    That one has two parameters, the gain and the kernel chosen: where noise
     hides the filter (a dark image), it is a constant factor with a choice more, which Occam's rule does not name
     beside the factor."""
     from scipy.ndimage import maximum_filter, median_filter, minimum_filter
@@ -270,11 +283,13 @@ def _three_by_three(fit: Fit) -> list[Candidate]:
             F = bordered(fit.R, k, mode)
             wts = fit.w * F
             g = float(np.sum(wts * fit.S) / max(float(np.sum(wts * F)), 1e-300))  # the gain by weighted least squares
+            if abs(g - 1) > FREE_GAIN and _ratio(g, float(k.sum())) is None:
+                g = 1.0  # no weights' sum a program writes: the filter as written
             e = fit.model(g * F)
             if best is None or e < best[0]:
                 best = (e, name, what, g, g * F, float(k.sum()), mode)
     e, name, what, g, M, total, border = best
-    count = next((c for c in (9.0, 16.0, 8.0, 4.0) if abs(total / c - g) < 0.02 * g), None)
+    count = _ratio(g, total)
     why = (f" (its weights divided by {count:g} where their sum {total:g} belongs)" if count and count != total
            else "")
     # Near 1, three decimals ("1.012"), none within GAIN_KEPT of 1: a filter that keeps the image's level.
