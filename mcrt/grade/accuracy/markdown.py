@@ -456,6 +456,7 @@ _UNREMARKED = _twin_blind("unremarked", "twenty-fourth", "5aa291d") + (
     "this report's first grading (held out, 4 of 12 named right, 3 of 12 confidently wrong, 11 of 12 detected; all "
     "28, 9 named right, 4 confidently wrong, 27 detected; 0 of 8 correct hand-ins lost points).") + _TWIN2_AFTER
 
+
 def _borders_seen(case: str) -> str:
     """What changed later with a held-out 3 x 3 filter of three classes in view (the twenty-sixth's, the
     twenty-ninth's and the thirtieth's), said in each of them."""

@@ -238,8 +238,8 @@ GAIN_KEPT = 0.01
 
 #: Counts a hand-written 3 x 3 filter may divide its weights' sum by where another belongs (a box's 9, a binomial's
 #: 16, the 8 neighbours, the 4 edge neighbours), and how far from 1 its gain may be fitted freely (a filter that
-#: slightly changes the level). A gain neither near 1 nor a count's ratio (0.05, 6.45) is a scale, which the scale's
-#: own family names: with it, a filter's border (a black frame, zeros) would mimic any darkening.
+#: slightly changes the level). A gain neither near 1 nor a count's ratio is a scale, which the scale's own family
+#: names: with it, a filter's border (a black frame, zeros) would mimic any darkening.
 COUNTS = (9.0, 16.0, 8.0, 4.0)
 FREE_GAIN = 0.1
 
