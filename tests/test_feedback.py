@@ -21,8 +21,10 @@ from test_diagnose import ASSIGNMENT, RES
 from mcrt.grade.accuracy.cases import Spec, _render_spec, light, wall_albedo
 from mcrt.grade.accuracy.outside import POSTS
 from mcrt.grade.accuracy.run import named_causes
+from mcrt.grade.accuracy.unseen import _render, _window
 from mcrt.grade.adequacy import Scene2D, remainder_test
 from mcrt.grade.candidates import Candidate
+from mcrt.grade.copytest import repeats
 from mcrt.grade.assignment import assignment_from_dict
 from mcrt.grade.expected import prepare_context
 from mcrt.grade.explain.families import keeps_noise
@@ -1753,3 +1755,43 @@ def test_the_camera_finding_stands_where_a_camera_reading_ties_with_the_closest(
     assert kept(0.32 - TIE / 4)
     assert not kept(0.32 - 2 * TIE)
     assert not kept(0.03 - TIE / 4, best=0.03)
+
+
+def test_the_repeat_test_sees_noise_copied_between_pixels_apart():
+    """Noise of independent pixels does not repeat, nor does a bias bound to one surface (a ramp and a step, 50 noise
+    deviations); noise that every row shares in part (one random stream for every row) repeats down the columns
+    (seeds 6 and 7, level ALPHA)."""
+    R, S, noise, sc = _synthetic(6)
+    v = noise.model[..., 0]
+    mask = np.ones((RES, RES), bool)
+    e = (S - R)[..., 0]
+    assert not repeats(e, v, mask, sc.labels).repeats
+    yy, xx = np.mgrid[0:RES, 0:RES]
+    bias = np.where(sc.labels == 3, 0.5 + 0.02 * xx, 0.0) * np.sqrt(v[0, 0]) * 50 / 0.6
+    r = repeats(e + bias, v, mask, sc.labels)
+    assert not r.repeats, r
+    rng = np.random.default_rng(7)
+    shared = (rng.standard_normal((1, RES)) + rng.standard_normal((RES, RES))) * np.sqrt(v / 2)
+    r = repeats(shared, v, mask, sc.labels)
+    assert r.repeats and r.axis == "rows" and r.p < 1e-6, r
+
+
+def _columns(seed_of, spp: int = 16) -> np.ndarray:
+    """A Mitsuba render at RES x RES made one column at a time (a film one pixel wide, its window the column's), the
+    column's seed ``seed_of(i)``."""
+    return np.concatenate([_render(1, RES, spp, seed_of(i), sensor=_window(1, RES, i + 0.5 - RES / 2, 0.0))
+                           for i in range(RES)], axis=1)
+
+
+def test_columns_rendered_with_one_seed_lose_the_noise_points(ctx):
+    """Every column of a Mitsuba render drawn with one seed (workers forked with one generator state): its noise
+    repeats along the rows, and the noise criterion says so; the same columns with a seed each pass (seeds 11 and
+    1100 + column)."""
+    res = grade_image("columns_one_seed", ctx, [_columns(lambda i: 11)], spp=16)
+    assert res.score < res.max_score and _output(res, "noise").startswith("the noise repeats: pixels"), \
+        _output(res, "noise")
+    assert "columns apart in one row" in _output(res, "noise")
+    assert named_causes(res)[0] == ["same_seed"]
+    res = grade_image("columns_seed_each", ctx, [_columns(lambda i: 1100 + i)], spp=16)
+    assert res.score == res.max_score, res.summary
+    assert not res.details["noise"]["repeats"]["repeats"]

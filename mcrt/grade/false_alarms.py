@@ -194,6 +194,7 @@ def run_study(out: Path, *, seeds: int, cache: str | None, progress: bool = True
                          "var_ratio": c.spp / eff if eff else None, "unsampled_shape": nz.get("unsampled_shape"),
                          "unsampled_body": nz.get("unsampled_body"),
                          "unsampled": bool(nz.get("unsampled")),
+                         "p_repeats": (nz.get("repeats") or {}).get("p"),
                          "encoding": (r.details.get("encoding") or {}).get("detected")})
             bar.update(k + 1)
     th = next(iter(contexts.values())).assignment.thresholds
@@ -212,7 +213,9 @@ DETECTORS = {"registration": "registration", "blur": "blur", "correlation": "cor
              "objects": "objects: zero difference (per object and channel)",
              "objects_relevant": "objects: difference beyond min_effect (the test that is scored)",
              "object_structure": "object structure (per object)",
-             "patches": "patches of pixels off together (brighter, darker)"}
+             "patches": "patches of pixels off together (brighter, darker)",
+             "repeats": "noise repeating between pixels apart (mcrt/grade/copytest.py; Bonferroni over the offsets, "
+                        "the noise criterion fails at 0.001; where the image is not biased)"}
 #: A hand-in with this many times fewer samples than it declares: the noise criterion's power is reported for it.
 FEWER = 4
 

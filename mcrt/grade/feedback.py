@@ -223,6 +223,19 @@ def filter_text(st, blur: bool, spp_eff: float, spp: int | None) -> str:
             + "; a Monte-Carlo render's pixels are independent: hand in the unfiltered render")
 
 
+def repeats_text(r) -> str:
+    """The finding of noise that repeats between pixels apart (mcrt.grade.copytest): where, how strongly, the usual
+    causes."""
+    where, how = (("rows apart in one column", "one seed or generator state for every row, or a generator copied "
+                   "into each thread or worker that renders rows") if r.axis == "rows" else
+                  ("columns apart in one row", "one seed for every column, or seeds from a clock that had not ticked "
+                   "between the pixels of a row"))
+    return (f"the noise repeats: pixels {r.k} {where} have alike noise (correlation {r.correlation:.2f} over "
+            f"{r.pairs} pairs, p = {r.p:.2g}), so they drew the same random numbers ({how}); a Monte-Carlo "
+            "render's pixels are independent: give each pixel, thread or pass its own seed, or draw every number "
+            "from one stream")
+
+
 def denoised_text(st, times: float, spp: int) -> str:
     """The finding of noise taken out of the surfaces (mcrt.grade.stages.noise.removed) where neighbouring pixels are
     alike, though no single blur explains the image: a filter that keeps edges."""

@@ -419,6 +419,10 @@ def named_causes(res) -> tuple[list[str], str]:
     elif noise is not None and noise.status == "failed" and "stored out of order" in noise.output:
         causes.append("row_stride")  # lines at the wrong places, in the writer's loop (added after unsaid)
         said.append(noise.output.split(";")[0])
+    elif noise is not None and noise.status == "failed" and noise.output.startswith("the noise repeats"):
+        # Pixels apart with alike noise (mcrt.grade.copytest; added with every class's same_seed cases in view).
+        causes.append("same_seed")
+        said.append(noise.output.split(";")[0])
     elif noise is not None and noise.status == "failed" and "share random numbers" in noise.output:
         causes += ["same_seed", "blur"]  # noise correlated along one direction: shared random numbers, or a filter
         said.append(noise.output.split(";")[0])

@@ -3,7 +3,9 @@
 The level is measured before the bias test (its noise model needs it) and
 judged after it (a biased image's noise says nothing about its sample
 count, unless a cause claimed for the bias leaves noise alone: then that
-noise is judged); noise correlated between neighbours (a filter) fails it. The
+noise is judged); noise correlated between neighbours (a filter) fails it, and so does noise
+that repeats between pixels apart (the same random numbers:
+:func:`shared_numbers`, where the image is not biased). The
 tile spreads of one render hold its bias as well as its noise (a light
 moved by 0.7 measures as hundreds of times the expected noise): beyond
 the limit, the noise model follows a measured excess up to
@@ -32,6 +34,7 @@ import numpy as np
 
 from scipy import stats as _sps
 
+from mcrt.grade import feedback as fb
 from mcrt.grade.feedback import spp_text
 from mcrt.grade.filtertest import second_differences, surface_runs
 from mcrt.grade.score import LUMINANCE, noise_ratio
@@ -386,6 +389,12 @@ def verdict(g: Grading, hand: Hand, lvl: Level, bt, found: dict[str, str], flagg
         if lines is not None:
             g.rubric.set("noise", status, lines_text(*lines))
             return
+    if not biased and not firm:
+        # Noise that repeats between pixels apart (the same random numbers): the mean is right, the level may be too.
+        found_rep = shared_numbers(g, hand, lvl)
+        if found_rep is not None:
+            g.rubric.set("noise", "failed", found_rep + (f"; also, {text}" if status == "failed" else ""))
+            return
     beside = _beside_claim(g, hand, lvl) if status == "failed" and not firm and flagged and hand.spp else None
     if beside is not None:
         text = beside_text(beside, hand.spp, g.th.max_noise_ratio)
@@ -406,6 +415,17 @@ def verdict(g: Grading, hand: Hand, lvl: Level, bt, found: dict[str, str], flagg
                 text = few_pixels_text(lvl.var_ratio, lvl.spp_nominal)
             text += more
     g.rubric.set("noise", status, text)
+
+
+def shared_numbers(g: Grading, hand: Hand, lvl: Level) -> str | None:
+    """The finding of noise that repeats between pixels apart (:func:`mcrt.grade.copytest.repeats` on the luminance
+    residual, its variance the noise model's), or None; its statistics go to ``details["noise"]["repeats"]``."""
+    from mcrt.grade.copytest import repeats
+
+    var = (lvl.noise.model + lvl.noise.reference) @ LUMINANCE**2
+    r = repeats(lvl.resid @ LUMINANCE, var, lvl.clip_mask, g.ctx.labels[hand.cam])
+    g.details.setdefault("noise", {})["repeats"] = r.to_dict()
+    return fb.repeats_text(r) if r.repeats else None
 
 
 def _beside_claim(g: Grading, hand: Hand, lvl: Level) -> float | None:
