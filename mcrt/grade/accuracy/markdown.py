@@ -609,8 +609,10 @@ INTROS = {"outside": _OUTSIDE, "programs": _PROGRAMS, "fresh": _FRESH, "blind": 
 
 def _regraded(r: dict) -> str:
     """The line that says which cases were graded again after the run, on which commit and why."""
-    return (f"After this run, the cases {', '.join(f'`{n}`' for n in r['cases'])} were graded again on commit "
-            f"{r['commit']} ({r['why']}); their rows and the rates are of that commit's rules.")
+    many = len(r["cases"]) > 1
+    return (f"After this run, the case{'s' if many else ''} {', '.join(f'`{n}`' for n in r['cases'])} "
+            f"{'were' if many else 'was'} graded again on commit {r['commit']} ({r['why']}); "
+            f"{'their rows' if many else 'its row'} and the rates are of that commit's rules.")
 
 
 def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta: dict, gradescope: list[dict],
