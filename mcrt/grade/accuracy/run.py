@@ -354,6 +354,29 @@ def _explanation_causes(expl: dict) -> list[str]:
     return causes
 
 
+def _noise_causes(output: str) -> list[str]:
+    """The causes a failed noise criterion's words name (none where they name no cause)."""
+    if "the light's outline" in output:
+        # The words name the light's geometry and a filter of its bright pixels (added after untold was graded), and
+        # the camera's view (added after unlooked was graded, with it in view: a field of view 0.8 % off moves the
+        # light's outline by a quarter of a pixel, the first edge to show it).
+        return ["light_position", "light_size", "light_shape", "blur", "camera_fov", "camera_eye", "camera_rotation"]
+    if "stored out of order" in output:
+        return ["row_stride"]  # lines at the wrong places, in the writer's loop (added after unsaid)
+    if output.startswith("the noise repeats"):
+        # Pixels apart with alike noise (mcrt.grade.copytest; added with every class's same_seed cases in view).
+        return ["same_seed"]
+    if "share random numbers" in output:
+        return ["same_seed", "blur"]  # noise correlated along one direction: shared random numbers, or a filter
+    if any(w in output for w in ("blur", "denois", "filter")):
+        # The words name a resampling beside the filter (since unbidden).
+        return ["blur"] + (["resampling"] if "resampled" in output else [])
+    if "noisier" in output:
+        # The words name passes that repeat one seed (added after untold).
+        return ["spp_claim"] + (["same_seed"] if "new random numbers" in output else [])
+    return []
+
+
 def named_causes(res) -> tuple[list[str], str]:
     """The causes a graded result's feedback names, and the words that name them (see the module docstring)."""
     causes: list[str] = []
@@ -410,31 +433,8 @@ def named_causes(res) -> tuple[list[str], str]:
         causes.append("same_seed")  # two renders with one seed (stages.noise.same_pair)
         said.append(noise.output.split(";")[0])
         noise = None if "; also, " not in noise.output else noise
-    if noise is not None and noise.status == "failed" and "the light's outline" in noise.output:
-        # The words name the light's geometry and a filter of its bright pixels (added after untold was graded), and
-        # the camera's view (added after unlooked was graded, with it in view: a field of view 0.8 % off moves the
-        # light's outline by a quarter of a pixel, the first edge to show it).
-        causes += ["light_position", "light_size", "light_shape", "blur", "camera_fov", "camera_eye", "camera_rotation"]
-        said.append(noise.output.split(";")[0])
-    elif noise is not None and noise.status == "failed" and "stored out of order" in noise.output:
-        causes.append("row_stride")  # lines at the wrong places, in the writer's loop (added after unsaid)
-        said.append(noise.output.split(";")[0])
-    elif noise is not None and noise.status == "failed" and noise.output.startswith("the noise repeats"):
-        # Pixels apart with alike noise (mcrt.grade.copytest; added with every class's same_seed cases in view).
-        causes.append("same_seed")
-        said.append(noise.output.split(";")[0])
-    elif noise is not None and noise.status == "failed" and "share random numbers" in noise.output:
-        causes += ["same_seed", "blur"]  # noise correlated along one direction: shared random numbers, or a filter
-        said.append(noise.output.split(";")[0])
-    elif noise is not None and noise.status == "failed" and any(w in noise.output for w in ("blur", "denois", "filter")):
-        causes.append("blur")
-        if "resampled" in noise.output:  # the words name a resampling beside the filter (since unbidden)
-            causes.append("resampling")
-        said.append(noise.output.split(";")[0])
-    elif noise is not None and noise.status == "failed" and "noisier" in noise.output:
-        causes.append("spp_claim")
-        if "new random numbers" in noise.output:  # the words name passes that repeat one seed (added after untold)
-            causes.append("same_seed")
+    if noise is not None and noise.status == "failed" and (found := _noise_causes(noise.output)):
+        causes += found
         said.append(noise.output.split(";")[0])
     return list(dict.fromkeys(causes)), " | ".join(said)
 
