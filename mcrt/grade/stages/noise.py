@@ -34,8 +34,7 @@ import numpy as np
 
 from scipy import stats as _sps
 
-from mcrt.grade import feedback as fb
-from mcrt.grade.feedback import spp_text
+from mcrt.grade.feedback import repeats_text, spp_text
 from mcrt.grade.filtertest import second_differences, surface_runs
 from mcrt.grade.score import LUMINANCE, noise_ratio
 from mcrt.grade.stages.state import Grading, Hand, Level
@@ -425,7 +424,7 @@ def shared_numbers(g: Grading, hand: Hand, lvl: Level) -> str | None:
     var = (lvl.noise.model + lvl.noise.reference) @ LUMINANCE**2
     r = repeats(lvl.resid @ LUMINANCE, var, lvl.clip_mask, g.ctx.labels[hand.cam])
     g.details.setdefault("noise", {})["repeats"] = r.to_dict()
-    return fb.repeats_text(r) if r.repeats else None
+    return repeats_text(r) if r.repeats else None
 
 
 def _beside_claim(g: Grading, hand: Hand, lvl: Level) -> float | None:
