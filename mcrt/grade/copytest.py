@@ -28,7 +28,8 @@ two differences in different rows (columns) share no pixel. For an offset
 
 which has mean 0 for independent pixels; neighbouring differences share a
 pixel, which widens its spread by a factor measured on :data:`SIMS`
-white-noise images through the same steps (fixed seed). The largest standardised :math:`T` over the offsets is one-sided,
+white-noise images through the same steps (fixed seed). The largest
+standardised :math:`T` over the offsets is one-sided,
 Bonferroni-corrected over them, at the level :data:`ALPHA`, and the noise
 is said to repeat only where the differences' correlation there is
 :data:`MIN_CORRELATION` or more: thousands of pairs make a correlation of a
@@ -109,8 +110,8 @@ def differences(g: np.ndarray, keep: np.ndarray, labels: np.ndarray) -> dict[str
 
 
 def _sums(u: np.ndarray, ok: np.ndarray, axis: str) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """(num, den, ss, pairs) at each offset k = 1 .. MAX_OFFSET (0 at k = 0) along the axis the copies would run (rows apart for
-    'rows', whose differences lie along the rows; columns apart for 'columns')."""
+    """(num, den, ss, pairs) at each offset k = 1 .. MAX_OFFSET (0 at k = 0) along the axis the copies would run
+    (rows apart for 'rows', whose differences lie along the rows; columns apart for 'columns')."""
     if axis == "columns":
         u, ok = u.T, ok.T
     n = min(u.shape[0], MAX_OFFSET + 1)
@@ -126,7 +127,7 @@ def _tests(sums) -> list[tuple[int, float, float, int]]:
     """(k, T, correlation, pairs) for each offset with MIN_PAIRS pairs."""
     num, den, ss, pairs = sums
     return [(k, num[k] / np.sqrt(den[k]), num[k] / max(ss[k], 1e-300), int(pairs[k]))
-            for k in range(MIN_OFFSET, min(MAX_OFFSET + 1, len(num))) if pairs[k] >= MIN_PAIRS and den[k] > 0]
+            for k in range(MIN_OFFSET, len(num)) if pairs[k] >= MIN_PAIRS and den[k] > 0]
 
 
 def repeats(e: np.ndarray, var: np.ndarray, mask: np.ndarray, labels: np.ndarray) -> Repeats:
