@@ -77,10 +77,11 @@ class Candidate:
     # A description of how the image differs rather than a mistake a program makes (any monotone curve through the
     # values, which a material or the light can mimic): it may leave noise, but it is said, never claimed.
     describes: bool = False
-    # A fit with a parameter per object (several surfaces' colours at once), flexible enough to take up a share of
-    # any difference that sits on objects (a vignette, the light moved, a tone curve): claimed only where its
-    # remainder is noise and no other candidate's is, and it never leads a partial reading nor stands as the closest
-    # cause (mcrt.grade.adequacy.claim_rule).
+    # A fit flexible enough to take up a share of any difference: a parameter per object (several surfaces' colours
+    # at once) takes up what sits on objects (a vignette, the light moved, a tone curve); a choice among many
+    # rearrangements of the values (mcrt.grade.explain.stride) that of any image darker than the render. Claimed only
+    # where its remainder is noise and no other candidate's is, and it never leads a partial reading nor stands as
+    # the closest cause (mcrt.grade.adequacy.claim_rule).
     flexible: bool = False
     # A property of a surface no pixel sees directly (a wall behind the camera): its fit rests on the light that
     # surface reflects onto what is seen, which other mistakes change alike (a biased estimator, a path cut short).

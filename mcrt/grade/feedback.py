@@ -69,8 +69,8 @@ def summary(tests, score: float, max_score: float, *, blocked: str | None, headl
 _TRIED = ("No single mistake we tried (the catalogued bugs, the scene's colours, light, objects and camera, "
           "the path depth, encodings, tone curves, clamped samples, colour channels, light counted twice, a light "
           "sample's weight, fall-offs, bloom, "
-          "resampling, materials, object sizes, a BRDF's normalisation, the film's other buffers, missing pixels "
-          "and blur)")
+          "resampling, materials, object sizes, a BRDF's normalisation, the film's other buffers, memory layouts, "
+          "missing pixels and blur)")
 
 
 #: A monotone curve whose outputs over the reference's values (its 10th, 50th and 99th percentiles, the light among

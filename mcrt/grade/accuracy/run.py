@@ -76,6 +76,9 @@ CAUSE_OF: dict[str, tuple[str, ...]] = {
     "lines_order": ("row_stride",), "layout": ("channels",),
     # Added before the twenty-first class was graded: a tiled render's tiles showing the whole view or the first tile.
     "tiles": ("row_stride",),
+    # The film read back with another memory layout (a pitch, a pixel's size, a row's length: mcrt.grade.explain.stride;
+    # added after every class was graded, with their stride cases, held-out ones among them, in view).
+    "stride": ("row_stride",),
     # Added after the twenty-first and twenty-second classes were graded, with them in view: the light sample's
     # geometry term written wrongly, on the light's side (its cosine, its pdf) or its fall-off (another light model);
     # at the surface, Lambert's cosine twice or a half-Lambert (the material's shading).

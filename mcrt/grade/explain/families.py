@@ -30,6 +30,7 @@ from mcrt.grade.explain.reflectance import REMAPS, reflectance_remapped, reflect
 from mcrt.grade.explain.resampling import resampling
 from mcrt.grade.explain.sample_clamp import sample_clamp
 from mcrt.grade.explain.scene import albedo, albedos, rendered, scale
+from mcrt.grade.explain.stride import stride
 from mcrt.grade.explain.surface_black import surface_black
 from mcrt.grade.explain.swap import swap
 from mcrt.grade.explain.tonecurve import tone_curve
@@ -39,19 +40,18 @@ from mcrt.mutants import CATALOGUE
 
 #: Every family the engine fits, in this order (ties keep it). The scene file's parameters (and the colours mixed by a
 #: matrix, several surfaces' colours at once, every wall one colour, a surface of the room black, the camera and its
-#: image plane's width taken wrongly) and the catalogue;
-#: then what a student's program gets wrong beyond the scene file (a tone curve, each sample clamped, a fall-off,
-#: resampling, bloom, an object's material or size, values stored at the wrong places, colours or materials given to
-#: the wrong surfaces, every diffuse reflectance off by one factor, squared or its complement, light counted twice, a
-#: path's weight off from a bounce on, the diffuse bounce drawn or weighted wrongly, the mirror's reflection computed
-#: wrongly, a light sample's weight, the light facing the wrong way, surfaces emitting, each pixel's samples combined
-#: by a median or trimmed mean, black pixels, another of the film's buffers written, an auxiliary buffer written,
-#: everything beyond a distance from the eye missing, Lambert's cosine taken to the eye too, the first hit's light
-#: sample with its albedo left out or twice, or averaged over the batch, the light sample's geometry term written
-#: wrongly).
+#: image plane's width taken wrongly) and the catalogue; then what a student's program gets wrong beyond the scene file
+#: (a tone curve, each sample clamped, a fall-off, resampling, bloom, an object's material or size, values stored at the
+#: wrong places or read back with another memory layout, colours or materials given to the wrong surfaces, every diffuse
+#: reflectance off by one factor, squared or its complement, light counted twice, a path's weight off from a bounce on,
+#: the diffuse bounce drawn or weighted wrongly, the mirror's reflection computed wrongly, a light sample's weight, the
+#: light facing the wrong way, surfaces emitting, each pixel's samples combined by a median or trimmed mean, black
+#: pixels, another of the film's buffers written, an auxiliary buffer written, everything beyond a distance from the eye
+#: missing, Lambert's cosine taken to the eye too, the first hit's light sample with its albedo left out or twice, or
+#: averaged over the batch, the light sample's geometry term written wrongly).
 FAMILIES = (scale, colour, curves, albedo, albedos, walls_one_colour, surface_black, rendered, camera, plane_width,
-            catalogue, tone_curve, sample_clamp, falloff, resampling, layout, bloom, material, object_size, swap,
-            reflectance_scale, reflectance_remapped, light_twice, path_weight, bounce, mirror, light_sampling,
+            catalogue, tone_curve, sample_clamp, falloff, resampling, layout, stride, bloom, material, object_size,
+            swap, reflectance_scale, reflectance_remapped, light_twice, path_weight, bounce, mirror, light_sampling,
             light_facing, emission, pixel_statistic, bad_pixels, wrong_buffer, aov, clip, view_cosine,
             direct_albedo, direct_mean, light_geometry)
 

@@ -309,19 +309,38 @@ def judge_encoding(g: Grading, hand: Hand, flagged: bool) -> None:
     choice is no evidence of an encoding (an image with its rows sheared fits
     one curve a little better than another). The finding is then not judged,
     as the exposure criterion claims a factor only where it leaves an image
-    that passes: the bias test's points go for the difference.
+    that passes: the bias test's points go for the difference. Where the
+    explanation claims the render's values at other places (:data:`MOVED`),
+    it claims it of the image decoded as declared (the explanation reads the
+    file as its format and manifest say), leaving only noise: the file was
+    encoded as declared, and the curve fitted better only because the tiles
+    it compares hold other pixels' values.
     """
     from mcrt.grade.candidates import CLAIMED
 
-    if "linear" not in hand.corrected or not flagged or (g.explanation is not None and g.explanation.verdict == CLAIMED):
+    if "linear" not in hand.corrected or not flagged:
+        return
+    e = g.explanation
+    moved = e is not None and e.verdict == CLAIMED and e.named.family in MOVED
+    if e is not None and e.verdict == CLAIMED and not moved:
         return
     detected = (g.details.get("encoding") or {}).get("detected", "")
     what = ck.PNG_CURVES.get(detected, (None, f"the {detected} curve"))[1]
-    g.rubric.passed("linear", f"not judged: the values fit {what} best, but decoded with it the "
-                    "image still differs from the reference in a way no cause we tried explains, so the file's "
-                    "encoding cannot be told apart from the rest of the difference")
-    g.details["encoding"]["judged"] = False
+    if moved:
+        g.rubric.passed("linear", f"encoded as declared: the values fit {what} better, but decoded as declared the "
+                        "image is the render's values at other places (the bias test's explanation), and noise")
+        g.details["encoding"]["detected"] = g.details["encoding"]["declared"]
+    else:
+        g.rubric.passed("linear", f"not judged: the values fit {what} best, but decoded with it the "
+                        "image still differs from the reference in a way no cause we tried explains, so the file's "
+                        "encoding cannot be told apart from the rest of the difference")
+        g.details["encoding"]["judged"] = False
     g.encoding = "linear"
+
+
+#: The explanation's families that put the render's values at other places unchanged (a memory layout, lines or tiles
+#: out of order or repeated): a curve fitted to such an image is no evidence of its encoding.
+MOVED = frozenset({"stride", "layout", "lines_order", "tiles", "lines_aliased"})
 
 
 def _png_unclipped(R, model_ps, spp: int) -> np.ndarray:
