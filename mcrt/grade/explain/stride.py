@@ -116,13 +116,7 @@ def stride(fit: Fit, inputs: Inputs) -> list[Candidate]:
     # A file that holds no value above 1 clipped them before they were moved (the light's pixels at 1).
     R = np.minimum(fit.R, 1.0) if float(np.max(fit.S)) <= 1.0 else fit.R
     out = []
-    best = None
-    for kw, words in layouts(w):
-        M = gathered(R, **kw)
-        err = fit.model(M)
-        if best is None or err < best[0]:
-            best = (err, kw, words, M)
-    err, kw, words, M = best
+    err, (kw, words), M = _best(fit, (((kw, words), gathered(R, **kw)) for kw, words in layouts(w)))
     out.append(Candidate("stride", "samples read with another layout", words, err, 1,
                          value=dict(kw), change=M - fit.R, flexible=True))
     M = column_major(R)
@@ -131,8 +125,7 @@ def stride(fit: Fit, inputs: Inputs) -> list[Candidate]:
                          "written as it lies in memory, its dimensions never permuted) where the format wants "
                          "interleaved rows", fit.model(M), 0, value="column-major", change=M - fit.R,
                          flexible=True))
-    scatters = [(fit.model(M), n, M) for n in (w - 1, w + 1) for M in (scattered(R, row_length=n),)]
-    err, n, M = min(scatters, key=lambda t: t[0])
+    err, n, M = _best(fit, ((n, scattered(R, row_length=n)) for n in (w - 1, w + 1)))
     out.append(Candidate("stride", "pixels written with another row length",
                          f"pixel (x, y) written at y * {n} + x, the row's length taken as {n} where it is {w}: each "
                          f"row shifted {'left' if n < w else 'right'} by one pixel more than the row above, "
@@ -140,6 +133,11 @@ def stride(fit: Fit, inputs: Inputs) -> list[Candidate]:
                             "the pixels that run past the film's end dropped"),
                          err, 1, value={"row_length": n, "width": w}, change=M - fit.R, flexible=True))
     return out
+
+
+def _best(fit: Fit, models):
+    """(chi^2, label, model image) of the (label, model image) pairs' best fit."""
+    return min(((fit.model(M), label, M) for label, M in models), key=lambda t: t[0])
 
 
 stride.name = "stride"
