@@ -43,6 +43,11 @@ Order of work, and what each step does to the image:
 
 Steps 4, 5 and 9 correct the image for the later steps only when
 ``grading.grade_corrected`` is true; otherwise the later criteria score 0.
+Where step 5 decoded a file with another curve than its format declares
+and step 8 then explains it as the render's values at other places (a
+memory layout, rows out of order), the curve fitted better only because
+the values are elsewhere: the hand-in is graded again decoded as declared,
+and that reading stands where it finds the values moved too.
 The points are added up by :mod:`mcrt.grade.scoring`, the summary is worded
 by :mod:`mcrt.grade.feedback`, and :mod:`mcrt.grade.outputs` writes them out.
 """
@@ -69,15 +74,20 @@ __all__ = ["STATUS_ERROR", "STATUS_GRADED", "STATUS_TIMEOUT", "StudentResult", "
 def grade_submission(sub: Submission, ctx: Context) -> StudentResult:
     """Grade one hand-in (see the module docstring)."""
     t0 = time.perf_counter()
-    g = Grading(ctx, sub.student)
-    try:
-        hand, declared_camera = intake.read(g, sub)
-        if hand is not None:
-            _grade(g, hand, declared_camera)
-    except MemoryError:
-        g.rubric.block("the grader ran out of memory on this image")
-        g.notes.append("grading stopped: out of memory")
-    res = g.result()
+
+    def reading(as_declared: bool) -> Grading:
+        g = Grading(ctx, sub.student)
+        g.as_declared = as_declared
+        try:
+            hand, declared_camera = intake.read(g, sub)
+            if hand is not None:
+                _grade(g, hand, declared_camera)
+        except MemoryError:
+            g.rubric.block("the grader ran out of memory on this image")
+            g.notes.append("grading stopped: out of memory")
+        return g
+
+    res = _as_declared_if_moved(reading).result()
     res.elapsed = time.perf_counter() - t0
     return res
 
@@ -86,14 +96,31 @@ def grade_image(student: str, ctx: Context, images: list[np.ndarray], *, spp: in
                 notes: list[str] | None = None) -> StudentResult:
     """Grade renders already in memory ((H, W, 3) linear float arrays, one or two)."""
     t0 = time.perf_counter()
-    g = Grading(ctx, student)
-    g.notes += list(notes or [])
-    hand = intake.in_memory(g, images, spp, fmt)
-    if hand is not None:
-        _grade(g, hand, None)
-    res = g.result()
+
+    def reading(as_declared: bool) -> Grading:
+        g = Grading(ctx, student)
+        g.as_declared = as_declared
+        g.notes += list(notes or [])
+        hand = intake.in_memory(g, images, spp, fmt)
+        if hand is not None:
+            _grade(g, hand, None)
+        return g
+
+    res = _as_declared_if_moved(reading).result()
     res.elapsed = time.perf_counter() - t0
     return res
+
+
+def _as_declared_if_moved(reading) -> Grading:
+    """``reading(False)``, or ``reading(True)`` (the file decoded as declared) where the first decoded it with another
+    curve and then found the render's values moved, and the second finds them moved too
+    (:func:`.stages.calibration.read_as_declared`)."""
+    g = reading(False)
+    if calibration.read_as_declared(g):
+        again = reading(True)
+        if calibration.moved_claim(again):
+            return again
+    return g
 
 
 def error_result(student: str, a: Assignment, status: str, message: str, detail: str = "", *,

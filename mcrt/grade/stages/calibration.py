@@ -256,11 +256,14 @@ def _png_curve(g: Grading, hand: Hand):
     cands = {c: [ck.box_down(dec(x), plan.down) for x in codes] for c, (dec, _) in ck.PNG_CURVES.items()}
     enc = ck.detect_png_curve({c: v[0] for c, v in cands.items()}, hand.R, hand.mask & hand.png_safe, hand.base_tile,
                               declared)
-    curve = enc.curve
+    curve = declared if g.as_declared else enc.curve
     g.details["encoding"] = {"detected": curve, "declared": declared, "curve_chi2": {k: round(v, 2) for k, v in enc.chi2.items()}}
     qvar = [ck.box_down(ck.curve_quantisation_variance(x, curve, fmt), plan.down) / plan.down**2 for x in codes]
     what = ck.PNG_CURVES[curve][1]
-    if curve == declared:
+    if curve != enc.curve:
+        g.details["encoding"]["fitted"] = enc.curve
+        rub.passed("linear", _as_declared_text(ck.PNG_CURVES[enc.curve][1]))
+    elif curve == declared:
         rub.passed("linear", "sRGB-encoded image, decoded to linear" if curve == "srgb" else "linear image, as declared")
     elif curve == "linear":
         rub.failed("linear", "the PNG holds linear values but PNGs are read as sRGB-encoded: declare `linear = true` in "
@@ -288,9 +291,13 @@ def _hdr_encoding(g: Grading, hand: Hand) -> None:
     """A gamma or sRGB curve on data that should be linear radiance (:func:`mcrt.grade.checks.detect_encoding`)."""
     rub, fmt = g.rubric, hand.loaded.fmt
     enc = ck.detect_encoding(hand.imgs[0], hand.R, hand.mask, fmt, hand.base_tile)
-    g.details["encoding"] = {"detected": enc.kind, "spreads": {k: round(v, 4) for k, v in enc.spreads.items()}}
-    g.encoding = enc.kind
-    if enc.kind != "linear":
+    kind = "linear" if g.as_declared else enc.kind
+    g.details["encoding"] = {"detected": kind, "spreads": {k: round(v, 4) for k, v in enc.spreads.items()}}
+    g.encoding = kind
+    if kind != enc.kind:
+        g.details["encoding"]["fitted"] = enc.kind
+        rub.passed("linear", _as_declared_text(f"the {enc.kind} curve"))
+    elif enc.kind != "linear":
         rub.failed("linear", enc.message)
         dec = ck.ENCODINGS[enc.kind][0]
         hand.imgs = [dec(i) for i in hand.imgs]
@@ -311,25 +318,23 @@ def judge_encoding(g: Grading, hand: Hand, flagged: bool) -> None:
     as the exposure criterion claims a factor only where it leaves an image
     that passes: the bias test's points go for the difference. Where the
     explanation claims the render's values at other places (:data:`MOVED`),
-    it claims it of the image decoded as declared (the explanation reads the
-    file as its format and manifest say), leaving only noise: the file was
-    encoded as declared, and the curve fitted better only because the tiles
-    it compares hold other pixels' values.
+    the curve fitted better only because the tiles it compares hold other
+    pixels' values: the file counts as encoded as declared, and the grader
+    reads it again so decoded (:func:`read_as_declared`).
     """
     from mcrt.grade.candidates import CLAIMED
 
     if "linear" not in hand.corrected or not flagged:
         return
     e = g.explanation
-    moved = e is not None and e.verdict == CLAIMED and e.named.family in MOVED
+    moved = moved_claim(g)
     if e is not None and e.verdict == CLAIMED and not moved:
         return
     detected = (g.details.get("encoding") or {}).get("detected", "")
     what = ck.PNG_CURVES.get(detected, (None, f"the {detected} curve"))[1]
-    if moved:
-        g.rubric.passed("linear", f"encoded as declared: the values fit {what} better, but decoded as declared the "
-                        "image is the render's values at other places (the bias test's explanation), and noise")
-        g.details["encoding"]["detected"] = g.details["encoding"]["declared"]
+    if moved:  # the grader reads the file again as declared (read_as_declared); this stands where that claims nothing
+        g.rubric.passed("linear", _as_declared_text(what))
+        g.details["encoding"].update(detected=g.details["encoding"].get("declared", "linear"), fitted=detected)
     else:
         g.rubric.passed("linear", f"not judged: the values fit {what} best, but decoded with it the "
                         "image still differs from the reference in a way no cause we tried explains, so the file's "
@@ -341,6 +346,29 @@ def judge_encoding(g: Grading, hand: Hand, flagged: bool) -> None:
 #: The explanation's families that put the render's values at other places unchanged (a memory layout, lines or tiles
 #: out of order or repeated): a curve fitted to such an image is no evidence of its encoding.
 MOVED = frozenset({"stride", "layout", "lines_order", "tiles", "lines_aliased"})
+
+
+def _as_declared_text(what: str) -> str:
+    """The ``linear`` finding of a file read as declared where ``what`` (a curve's words) fits its values better."""
+    return (f"encoded as declared: the values fit {what} better, but decoded as declared the image is the render's "
+            "values at other places (the bias test's explanation), and noise")
+
+
+def moved_claim(g: Grading) -> bool:
+    """The explanation claims the render's values at other places (:data:`MOVED`)."""
+    from mcrt.grade.candidates import CLAIMED
+
+    e = g.explanation
+    return e is not None and e.verdict == CLAIMED and e.named.family in MOVED
+
+
+def read_as_declared(g: Grading) -> bool:
+    """Whether to grade the hand-in again with the file decoded as declared: a first reading decoded it with another
+    curve and its explanation then claimed moved values (:func:`judge_encoding`). That reading's noise, bias and
+    exposure findings describe the file through the wrong curve (an image several times too bright, where decoded
+    as declared it holds the render's own values), so the grader keeps the second reading where it claims moved
+    values too."""
+    return not g.as_declared and "fitted" in (g.details.get("encoding") or {}) and moved_claim(g)
 
 
 def _png_unclipped(R, model_ps, spp: int) -> np.ndarray:

@@ -30,6 +30,9 @@ class Grading:
         self.encoding = "linear"
         self.corrected: list[str] = []
         self.explanation = None  # mcrt.grade.candidates.Explanation, when the image was explained
+        # Decode the file as its format and manifest declare, whatever curve fits best: the grader's second reading
+        # of a hand-in whose first was explained by values moved (calibration.read_as_declared).
+        self.as_declared = False
 
     def result(self) -> StudentResult:
         return self.rubric.result(self.student, headline=self.headline, notes=self.notes, diagnosis=self.diagnosis,
