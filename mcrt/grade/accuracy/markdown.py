@@ -607,12 +607,16 @@ INTROS = {"outside": _OUTSIDE, "programs": _PROGRAMS, "fresh": _FRESH, "blind": 
           "unconfirmed": _UNCONFIRMED, "unlisted": _UNLISTED}
 
 
-def _regraded(r: dict) -> str:
-    """The line that says which cases were graded again after the run, on which commit and why."""
-    many = len(r["cases"]) > 1
-    return (f"After this run, the case{'s' if many else ''} {', '.join(f'`{n}`' for n in r['cases'])} "
-            f"{'were' if many else 'was'} graded again on commit {r['commit']} ({r['why']}); "
-            f"{'their rows' if many else 'its row'} and the rates are of that commit's rules.")
+def _regraded(r: dict | list[dict]) -> list[str]:
+    """The lines that say which cases were graded again after the run, on which commit and why: one a record (a list
+    of records, later ones on later commits; a case is in the last record that graded it)."""
+    out = []
+    for rec in r if isinstance(r, list) else [r]:
+        many = len(rec["cases"]) > 1
+        out.append(f"After this run, the case{'s' if many else ''} {', '.join(f'`{n}`' for n in rec['cases'])} "
+                   f"{'were' if many else 'was'} graded again on commit {rec['commit']} ({rec['why']}); "
+                   f"{'their rows' if many else 'its row'} and the rates are of that commit's rules.")
+    return out
 
 
 def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta: dict, gradescope: list[dict],
@@ -633,7 +637,7 @@ def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta
     L = [f"# {title}", "",
          f"Written by `{command}` ({meta.get('date', '')}, {meta.get('seconds', 0):.0f} s). "
          f"Assignment: `{meta.get('assignment')}`; reference: {meta.get('reference')}.", "",
-         *([_regraded(meta["regraded"]), ""] if meta.get("regraded") else []),
+         *(line for rec in _regraded(meta["regraded"]) for line in (rec, "")) if meta.get("regraded") else (),
          INTROS.get(klass, _SCENE), "",
          "## Rates", "",
          "| | mistakes | detected (lost points) | named right | confidently wrong | partial or none | also wrong | "
