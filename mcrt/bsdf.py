@@ -99,6 +99,9 @@ def mistaken_bounce(Vector3f, n, u1, u2, weight, how: str):
     * 'albedo_mean': cosine-distributed, weighted by the mean of rho's
       channels (a scalar kept for Russian roulette) for rho: the light that
       bounces grey-weighted, the surface's colour lost from it.
+    * 'zero': cosine-distributed, weighted 0: the path carries nothing on
+      from the vertex (its light sample counted, as a throughput reset to 0
+      there does).
 
     A direction below the surface goes on mirrored into the room with weight
     0: it carries nothing, as a ray through the wall would, and stays inside
@@ -123,7 +126,8 @@ def mistaken_bounce(Vector3f, n, u1, u2, weight, how: str):
         cos = dr.dot(d, n)
         w = (weight * cos if how == "cosine_squared" else type(weight)(1.0) if how == "no_albedo"
              else weight * dr.square(cos / math.pi) if how == "times_pdf"
-             else type(weight)((weight.x + weight.y + weight.z) / 3.0) if how == "albedo_mean" else weight)
+             else type(weight)((weight.x + weight.y + weight.z) / 3.0) if how == "albedo_mean"
+             else weight * 0.0 if how == "zero" else weight)
         if how.startswith("half_azimuth"):
             b = _second_tangent(Vector3f, n, how)
             d = dr.fma(-2.0 * fmin(dr.dot(d, b), 0.0), b, d)  # the other half mirrored onto this one

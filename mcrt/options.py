@@ -28,9 +28,10 @@ UNBOUNDED = 2**32 - 1
 LAMBERTIAN_SAMPLERS = ("cosine", "uniform_as_cosine", "ball_plus_normal")
 
 #: How a diffuse bounce is drawn and weighted (mcrt.bsdf.mistaken_bounce): correctly ('cosine'), or by one of the
-#: mistakes students' tracers make that the grader's explanation renders (mcrt.grade.explain.bounce).
+#: mistakes students' tracers make that the grader's explanation renders (mcrt.grade.explain.bounce); 'zero', the
+#: bounce carrying nothing on, is what that explanation scales the others' light against.
 BOUNCES = ("cosine", "uniform_sphere", "cosine_squared", "local_frame", "half_azimuth_duff", "half_azimuth_axis",
-           "half_azimuth_cross", "disk_radius_u", "no_albedo", "times_pdf", "albedo_mean")
+           "half_azimuth_cross", "disk_radius_u", "no_albedo", "times_pdf", "albedo_mean", "zero")
 #: Where a bounce (or mirror) mistake applies: at every vertex, or at the first vertex of a camera path only.
 BOUNCE_AT = ("every", "first")
 #: How a mirror reflects (mcrt.bsdf.mistaken_mirror): correctly ('reflect'), or by one of the mistakes students'

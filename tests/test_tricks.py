@@ -219,6 +219,28 @@ def test_a_mirror_for_camera_rays_only_is_black_to_every_other_ray(scene):
         assert np.nanmax(np.abs(_tile_z(est(scene, 27), physics))) > z_max
 
 
+def test_a_first_bounce_carrying_nothing_is_the_render_cut_after_the_first_light_sample(scene):
+    """The bounce at the first hit weighted 0 (trick bounce 'zero', bounce_at 'first'): by the physics, wherever the
+    camera sees a diffuse surface, the light seen directly and that surface's light sample, nothing more: the render
+    cut at depth 2 (Mitsuba's convention). Pixels away from the sphere (:func:`_sphere_seen`), z-tests on 8 x 8 tiles,
+    Bonferroni at 0.01, seeds 28 and 29 (512 spp, 32 x 32); the same test rejects the full render (seed 30)."""
+    from dataclasses import replace
+
+    s = _settings(scene, 512, res=32)
+    away = ~_sphere_seen(scene, 32)
+
+    def est(settings, seed, **tricks):
+        r = render(scene, settings, seed=seed, progress=False, **tricks)
+        m, v = np.asarray(r.mean, np.float64), np.asarray(r.variance, np.float64) / 512
+        return np.where(away, m, 0.0), np.where(away, v, 0.0)
+
+    physics = est(replace(s, max_depth=2), 29)
+    z_max = norm.isf(ALPHA / 2 / (16 * 3))
+    with np.errstate(invalid="ignore"):
+        assert np.nanmax(np.abs(_tile_z(est(s, 28, bounce="zero", bounce_at="first"), physics))) < z_max
+        assert np.nanmax(np.abs(_tile_z(est(s, 30), physics))) > z_max
+
+
 @pytest.mark.parametrize("options, message", [
     ({"roulette_survival": 0.0}, "roulette_survival must be in"),
     ({"roulette_start": 0}, "roulette_start must be"),

@@ -17,6 +17,19 @@ that samples one bounce by hand), at the basis's spp and seed, so that the
 render minus the basis's shares its random numbers: the model image is
 :math:`R + (B_m - B_0)`. No free parameter: each mistake is a program's, and
 the three half-circle azimuths are the three tangent frames students build.
+
+A program that draws its directions one way and weighs them for another
+gets a mistake's shape times a constant: cosine-distributed directions
+weighted with the uniform hemisphere's pdf are twice the cosine applied
+twice, uniform ones weighted with the whole sphere's pdf twice the right
+bounce. At the first hit, where the light
+that bounces on is linear in the bounce's weight, mcrt renders it once
+more with the bounce carrying nothing (``zero``, :math:`Z = B_z - B_0`, so
+the light that bounces on is :math:`-Z`), and mistake m's shape scaled by k
+is the change :math:`k C_m - (k - 1) Z`, with :math:`C_m = B_m - B_0`
+(:data:`SCALED`: the pairs programs produce, one parameter for the choice).
+At every hit the light of a path of j bounces goes as :math:`k^j`; that is
+the constant factors of :mod:`.path_weight`, or a render of its own.
 """
 
 from __future__ import annotations
@@ -64,20 +77,52 @@ AT_WORDS = {"every": "at every diffuse surface a path meets",
             "first": "at the first surface a camera ray meets only (a branch for the first bounce)"}
 
 
+#: (mistake's shape, factor k, words) of a bounce drawn one way and weighted for another at the first hit (the module
+#: docstring); "cosine" is the right shape, its light only scaled.
+SCALED = (
+    ("cosine", 2.0, "the diffuse bounce weighted twice what it should be, its directions right (uniform directions "
+                    "on the hemisphere weighted with the whole sphere's pdf 1/(4 pi): 4 albedo cos for 2 albedo cos)"),
+    ("cosine", 0.5, "the diffuse bounce weighted half what it should be, its directions right (a pdf taken twice "
+                    "what it is: uniform directions weighted with the pdf 1/pi, albedo cos where 2 albedo cos "
+                    "belongs)"),
+    ("cosine", np.pi, "the diffuse bounce weighted pi times what it should be, its directions right (the Lambertian's "
+                      "1/pi left out of f cos / pdf: albedo pi for albedo)"),
+    ("cosine", 1.0 / np.pi, "the diffuse bounce weighted 1/pi of what it should be, its directions right (the cosine "
+                            "pdf's 1/pi left out: albedo / pi for albedo)"),
+    ("cosine_squared", 2.0, "the diffuse bounce drawn cosine-weighted and weighted with the uniform hemisphere's pdf "
+                            "1/(2 pi) (f cos / pdf = 2 albedo cos for albedo): the light that bounces a third too "
+                            "bright on average, most of it from near the normal"),
+)
+
+
 def _prepare(a, scene, render) -> list[tuple[tuple[str, str], np.ndarray]]:
-    """((mistake, where), its render minus the basis's) for every mistake and place (the module docstring)."""
+    """((mistake, where), its render minus the basis's) for every mistake and place, and the bounce carrying nothing
+    at the first hit (the module docstring)."""
     return rendered_changes(a, scene, render, [((how, at), {"bounce": how, "bounce_at": at})
-                                               for how in BOUNCES if how != "cosine" for at in BOUNCE_AT])
+                                               for how in BOUNCES if how not in ("cosine", "zero") for at in BOUNCE_AT]
+                            + [(("zero", "first"), {"bounce": "zero", "bounce_at": "first"})])
 
 
 def bounce(fit: Fit, inputs: Inputs) -> list[Candidate]:
-    """The mistaken bounce whose render fits best (the module docstring)."""
-    best = best_change(fit, inputs.basis.extra.get(bounce.name))
+    """The mistaken bounce whose render fits best, and the best mistake's shape scaled at the first hit (the module
+    docstring)."""
+    changes = dict(inputs.basis.extra.get(bounce.name) or ())
+    best = best_change(fit, [(k, c) for k, c in changes.items() if k[0] != "zero"])
     if best is None:
         return []
     err, (how, at), change = best
-    return [Candidate("bounce", "diffuse bounce drawn wrongly", f"{WORDS[how]}, {AT_WORDS[at]}", err, 0,
-                      value={"bounce": how, "at": at}, change=change, gain=True)]
+    out = [Candidate("bounce", "diffuse bounce drawn wrongly", f"{WORDS[how]}, {AT_WORDS[at]}", err, 0,
+                     value={"bounce": how, "at": at}, change=change, gain=True)]
+    z = changes.get(("zero", "first"))
+    if z is not None:
+        z = z.astype(np.float64)
+        scaled = [((how, k, words), k * changes[(how, "first")].astype(np.float64) - (k - 1.0) * z if how != "cosine"
+                   else (1.0 - k) * z) for how, k, words in SCALED]
+        err, (how, k, words), change = best_change(fit, scaled)
+        out.append(Candidate("bounce", "diffuse bounce weighted for another", f"{words}, {AT_WORDS['first']}", err, 1,
+                             value={"bounce": how, "factor": round(float(k), 6), "at": "first"}, change=change,
+                             gain=True))
+    return out
 
 
 bounce.name, bounce.prepare = "bounce", _prepare
