@@ -233,6 +233,24 @@ def test_report_words_this_class_and_leaves_out_an_empty_half(tmp_path):
         assert row in text and empty not in text
 
 
+def test_report_says_each_regrade_record(tmp_path):
+    """Cases graded again after the run, on one commit or on two (a later record beside an earlier one), are each
+    said with their commit (outcomes made up: nothing graded)."""
+    from mcrt.grade.accuracy.markdown import write_report
+    from mcrt.grade.accuracy.run import Outcome
+
+    s = _by_name("roulette_half_from_3")
+    o = Outcome(s.name, s.truth, s.cause, s.major, False, 16, s.file, 1.0, 2.0, [], False, False, False, "", 0.1)
+    one = {"cases": [s.name], "commit": "abc1234", "why": "a family added"}
+    two = [{"cases": ["x", "y"], "commit": "abc1234", "why": "a family added"},
+           {"cases": [s.name], "commit": "def5678", "why": "read again"}]
+    text = write_report(tmp_path, [o], command="test", meta={"regraded": one}, gradescope=[], klass="fresh").read_text()
+    assert f"the case `{s.name}` was graded again on commit abc1234 (a family added)" in text
+    text = write_report(tmp_path, [o], command="test", meta={"regraded": two}, gradescope=[], klass="fresh").read_text()
+    assert "the cases `x`, `y` were graded again on commit abc1234 (a family added)" in text
+    assert f"the case `{s.name}` was graded again on commit def5678 (read again)" in text
+
+
 def test_the_same_mistake_in_other_words_is_named_right_only_where_fixed_in_advance():
     from mcrt.grade.accuracy.run import is_named
 

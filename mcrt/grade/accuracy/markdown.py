@@ -637,7 +637,7 @@ def write_report(out: str | Path, outcomes: list[Outcome], *, command: str, meta
     L = [f"# {title}", "",
          f"Written by `{command}` ({meta.get('date', '')}, {meta.get('seconds', 0):.0f} s). "
          f"Assignment: `{meta.get('assignment')}`; reference: {meta.get('reference')}.", "",
-         *(line for rec in _regraded(meta["regraded"]) for line in (rec, "")) if meta.get("regraded") else (),
+         *((line for rec in _regraded(meta["regraded"]) for line in (rec, "")) if meta.get("regraded") else ()),
          INTROS.get(klass, _SCENE), "",
          "## Rates", "",
          "| | mistakes | detected (lost points) | named right | confidently wrong | partial or none | also wrong | "
