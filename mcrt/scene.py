@@ -117,6 +117,10 @@ class Room:
     walls: tuple[Wall, ...]  # in counter-clockwise order
     floor_emission: Vec3 = (0.0, 0.0, 0.0)
     ceiling_emission: Vec3 = (0.0, 0.0, 0.0)
+    # Room surfaces (named as Scene.surfaces names them: 'floor', 'ceiling', 'wall_AB', ...) made mirrors of these
+    # reflectances in place of their albedos: the grader's renders of a surface given another material. No scene
+    # file sets it.
+    mirrors: tuple[tuple[str, Vec3], ...] = ()
 
     def polygon(self) -> np.ndarray:
         """Corner positions (n, 2), counter-clockwise, in wall order."""
@@ -277,6 +281,11 @@ class Scene:
         ceil = np.array([[[*a, z1], [*c, z1], [*b, z1]] for a, b, c in _fan(poly, self._hole() if hole_ceiling else None)])
         out.append(Surface("floor", floor, Lambertian(room.floor_albedo, emission=room.floor_emission)))  # normal +z
         out.append(Surface("ceiling", ceil, Lambertian(room.ceiling_albedo, emission=room.ceiling_emission)))  # normal -z
+        mirrors = dict(room.mirrors)
+        unknown = set(mirrors) - {s.name for s in out}
+        if unknown:
+            raise SceneError(f"{self.path}: room: no surface named {sorted(unknown)[0]!r} to make a mirror")
+        out = [replace(s, material=Mirror(reflectance=mirrors[s.name])) if s.name in mirrors else s for s in out]
         for o in self.objects:
             if isinstance(o, Tetrahedron):
                 out.append(Surface(o.name, o.triangles(), o.material))
@@ -361,6 +370,7 @@ class Scene:
                 ],
                 **({"floor_emission": r.floor_emission} if any(r.floor_emission) else {}),
                 **({"ceiling_emission": r.ceiling_emission} if any(r.ceiling_emission) else {}),
+                **({"mirrors": [list(m) for m in r.mirrors]} if r.mirrors else {}),
             },
             "objects": [obj(o) for o in self.objects],
             "light": {k: getattr(self.light, k) for k in ("center", "size", "normal", "radiance")},

@@ -245,3 +245,36 @@ def test_matches_mi_render_on_average(scene):
     se = np.sqrt(r.variance.astype(np.float64).sum(axis=(0, 1)) / r.spp) / n_pix  # std error of the image mean
     diff = r.mean.astype(np.float64).mean(axis=(0, 1)) - ref.mean(axis=(0, 1))
     assert np.all(np.abs(diff) < 5 * np.sqrt(2) * se), (diff, se)
+
+
+def test_a_room_surface_made_a_mirror_renders_as_mitsubas_conductor(scene):
+    """The floor a mirror of reflectance 0.7 (Room.mirrors, what the grader renders a surface's other material with)
+    in mcrt, against Mitsuba's scene with the floor's mesh given a smooth conductor of that reflectance in its
+    dictionary (not through Room.mirrors): the images' tile means (8 x 8, 32 x 32, 1024 spp, seeds 61 and 62) agree
+    by z-tests at 0.01 with Bonferroni; the floor left diffuse (mcrt, seed 63) is rejected by the same test."""
+    from dataclasses import replace
+
+    from mcrt.mitsuba_scene import _mesh, render_with_variance
+    from scipy.stats import norm
+
+    spp, tile = 1024, 8
+    mirrored = replace(scene, room=replace(scene.room, mirrors=(("floor", (0.7, 0.7, 0.7)),)))
+    d = scene_dict(scene, "near", W, H, 8, spp=spp)
+    floor = next(s for s in scene.surfaces() if s.name == "floor")
+    d["floor"] = _mesh(floor, {"type": "conductor", "material": "none",
+                               "specular_reflectance": {"type": "rgb", "value": 0.7}})
+    theirs = render_with_variance(d, spp=spp, seed=62)
+
+    def tiles(r):
+        m, v = np.asarray(r.mean, np.float64), np.asarray(r.variance, np.float64) / r.spp
+        blocks = lambda x: x.reshape(H // tile, tile, W // tile, tile, 3).sum(axis=(1, 3)) / tile**2  # noqa: E731
+        return blocks(m), blocks(v) / tile**2
+
+    def z(r):
+        (a, va), (b, vb) = tiles(r), tiles(theirs)
+        return np.abs(a - b) / np.sqrt(va + vb)
+
+    settings = scene.settings(camera="near", width=W, height=H, spp=spp, max_depth=8)
+    z_max = norm.isf(0.01 / 2 / ((W // tile) * (H // tile) * 3))
+    assert z(render(mirrored, settings, seed=61, progress=False)).max() < z_max
+    assert z(render(scene, settings, seed=63, progress=False)).max() > z_max

@@ -203,3 +203,21 @@ def _to_toml(d, prefix="") -> str:
         else:
             out += f"\n[{name}]\n" + _to_toml(v, name)
     return out
+
+
+def test_a_room_surface_made_a_mirror_keeps_its_triangles_and_changes_the_hash(scene):
+    """Room.mirrors makes the named surfaces mirrors (the rest, and every surface's triangles, as they were), is part
+    of the content hash, and refuses a name no surface has."""
+    from dataclasses import replace
+
+    from mcrt.scene import Lambertian, Mirror
+
+    edited = replace(scene, room=replace(scene.room, mirrors=(("floor", (0.7, 0.7, 0.7)),)))
+    before, after = {s.name: s for s in scene.surfaces()}, {s.name: s for s in edited.surfaces()}
+    assert after["floor"].material == Mirror(reflectance=(0.7, 0.7, 0.7))
+    assert isinstance(before["floor"].material, Lambertian)
+    assert all(np.array_equal(before[n].triangles, after[n].triangles) for n in before)
+    assert all(before[n].material == after[n].material for n in before if n != "floor")
+    assert edited.content_hash() != scene.content_hash()
+    with pytest.raises(SceneError, match="no surface named 'wall_XY'"):
+        replace(scene, room=replace(scene.room, mirrors=(("wall_XY", (1.0, 1.0, 1.0)),))).surfaces()

@@ -1,12 +1,17 @@
 r"""An object's material and size, as a student's program gets them wrong.
 
 * **material**: each object rendered with the other material (the mirror
-  sphere diffuse, the diffuse tetrahedron a mirror), at albedo or
-  reflectance 0, 1/2 and 1; the model image is the Lagrange interpolation
-  through them per channel (channel c of the image depends on channel c of
-  the material only), the value scanned on :data:`GRID` per channel. At 0
-  in every channel the object is black whatever its material, and is
-  worded as black with every cause of that (:mod:`.surface_black`).
+  sphere diffuse, the diffuse tetrahedron a mirror), and each of the
+  room's surfaces a mirror (a floor polished to a mirror, a wall given the
+  sphere's material), at albedo or reflectance 0, 1/2 and 1; the model
+  image is the Lagrange interpolation through them per channel (channel c
+  of the image depends on channel c of the material only), the value
+  scanned on :data:`GRID` per channel. At 0 in every channel the surface
+  is black whatever its material: an object is worded as black with every
+  cause of that (:mod:`.surface_black`); a room surface's mirror darker
+  than :data:`ROOM_MIRROR` is left to the albedo family. A surface no pixel sees directly is
+  fitted by what it reflects onto the rest, as its albedo is
+  (:attr:`~mcrt.grade.candidates.Candidate.out_of_view`).
 * **object_size**: each object scaled about its centre (a sphere's radius,
   a tetrahedron about its centroid) by the factors :data:`SIZES` (halved
   and doubled among them: a sphere's diameter given where its radius is
@@ -29,7 +34,7 @@ import numpy as np
 from mcrt.grade.candidates import Candidate, Inputs
 from mcrt.grade.explain.basis import basis_renderer
 from mcrt.grade.explain.fit import Fit
-from mcrt.grade.explain.scene import lagrange
+from mcrt.grade.explain.scene import _seen, lagrange
 from mcrt.grade.explain.surface_black import black_family, black_words, is_black
 from mcrt.grade.feedback import fmt_values
 from mcrt.grade.feedback import num as _num
@@ -39,6 +44,10 @@ from mcrt.scene import Lambertian, Mirror, Scene
 MATERIAL_NODES = (0.0, 0.5, 1.0)
 #: Values scanned per channel for an object's albedo or reflectance.
 GRID = np.linspace(0.0, 1.0, 41)
+#: Least reflectance (in its brightest channel) a room surface's mirror is claimed with: a program makes a surface
+#: a mirror to make it shine; a darker mirror looks like a dark surface, which the albedo family reads (a ceiling
+#: lit less for any reason fitted a mirror of 0.03 about as well as an albedo).
+ROOM_MIRROR = 0.5
 #: Scale factors of an object's size rendered (1 is the scene's own).
 SIZES = (0.5, 0.8, 0.9, 0.95, 1.05, 1.1, 1.2, 2.0)
 
@@ -54,8 +63,14 @@ def _scaled(o, f: float) -> dict:
     return {"vertices": tuple(tuple(float(x) for x in c + f * (np.asarray(v) - c)) for v in o.vertices)}
 
 
+def _room_surfaces(scene: Scene) -> dict[str, str]:
+    """The room's surfaces, the albedo basis's label ('wall AB', 'the floor') -> Scene.surfaces's name."""
+    return {**{f"wall {''.join(w.corners)}": f"wall_{''.join(w.corners)}" for w in scene.room.walls},
+            "the floor": "floor", "the ceiling": "ceiling"}
+
+
 def _prepare_material(a, scene: Scene, render) -> dict:
-    """{object: (the other material's kind, nodes, images (nodes, H, W, 3))}."""
+    """{object's name or a room surface's label: (the other material's kind, nodes, images (nodes, H, W, 3))}."""
     img = basis_renderer(a, render)
     out = {}
     for o in scene.objects:
@@ -63,6 +78,9 @@ def _prepare_material(a, scene: Scene, render) -> dict:
         imgs = [img(_with_object(scene, o.name, material=Mirror(reflectance=(v, v, v)) if kind == "mirror"
                                  else Lambertian(albedo=(v, v, v)))) for v in MATERIAL_NODES]
         out[o.name] = (kind, np.asarray(MATERIAL_NODES), np.stack(imgs))
+    for label, name in _room_surfaces(scene).items():
+        imgs = [img(replace(scene, room=replace(scene.room, mirrors=((name, (v, v, v)),)))) for v in MATERIAL_NODES]
+        out[label] = ("mirror", np.asarray(MATERIAL_NODES), np.stack(imgs))
     return out
 
 
@@ -78,6 +96,7 @@ def material(fit: Fit, inputs: Inputs) -> list[Candidate]:
     if not r:
         return []
     base = inputs.basis.base.astype(np.float64)
+    seen = _seen(inputs)
     out = []
     for name, (kind, nodes, imgs) in r.items():
         L = lagrange(GRID, nodes)  # (grid, nodes)
@@ -94,13 +113,20 @@ def material(fit: Fit, inputs: Inputs) -> list[Candidate]:
             change[..., c] = curves[k]
         word = "a mirror of reflectance" if kind == "mirror" else "a diffuse (Lambertian) surface of albedo"
         was = "a diffuse surface" if kind == "mirror" else "a mirror"
-        fam, text = "material", f"the {name} rendered as {word} {fmt_values(fitted)} where the scene makes it {was}"
-        label = next((k for k in (f"the {name}", f"the mirror {name}") if k in inputs.basis.values), None)
+        room = name in inputs.basis.values  # a room surface, keyed by its label
+        hidden = room and seen is not None and name not in seen
+        fam, text = "material", (f"{name if room else f'the {name}'}{' (not in view)' if hidden else ''} rendered as "
+                                 f"{word} {fmt_values(fitted)} where the scene makes it {was}")
+        label = name if room else next((k for k in (f"the {name}", f"the mirror {name}") if k in inputs.basis.values),
+                                       None)
+        if room and max(fitted) < ROOM_MIRROR:  # a dark surface to the eye: the albedo family's reading
+            continue
         if is_black(fitted) and label is not None:  # black whatever the material: the surface black, every cause named
             own = inputs.basis.values[label]
-            fam, text = black_family(label), black_words(label, own[1], own[0])
+            fam, text, hidden = black_family(label), black_words(label, own[1], own[0]), False
         out.append(Candidate(fam, f"{name} as {kind}", text, fit.delta(change), 3,
-                             value={"object": name, "material": kind, "value": fitted}, change=change))
+                             value={"object": name, "material": kind, "value": fitted}, change=change,
+                             out_of_view=hidden))
     return out
 
 
