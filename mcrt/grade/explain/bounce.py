@@ -78,17 +78,13 @@ AT_WORDS = {"every": "at every diffuse surface a path meets",
 
 
 #: (mistake's shape, factor k, words) of a bounce drawn one way and weighted for another at the first hit (the module
-#: docstring); "cosine" is the right shape, its light only scaled.
+#: docstring); "cosine" is the right shape, its light only scaled. The other constants of :mod:`.path_weight` (1/2,
+#: pi, 1/pi) are not among them: at the first hit alone they fit a halved weight at every hit as well as its own
+#: render does (a uniform sphere's bounce at every hit was claimed as 1/pi at the first), and their programs are
+#: that family's.
 SCALED = (
     ("cosine", 2.0, "the diffuse bounce weighted twice what it should be, its directions right (uniform directions "
                     "on the hemisphere weighted with the whole sphere's pdf 1/(4 pi): 4 albedo cos for 2 albedo cos)"),
-    ("cosine", 0.5, "the diffuse bounce weighted half what it should be, its directions right (a pdf taken twice "
-                    "what it is: uniform directions weighted with the pdf 1/pi, albedo cos where 2 albedo cos "
-                    "belongs)"),
-    ("cosine", np.pi, "the diffuse bounce weighted pi times what it should be, its directions right (the Lambertian's "
-                      "1/pi left out of f cos / pdf: albedo pi for albedo)"),
-    ("cosine", 1.0 / np.pi, "the diffuse bounce weighted 1/pi of what it should be, its directions right (the cosine "
-                            "pdf's 1/pi left out: albedo / pi for albedo)"),
     ("cosine_squared", 2.0, "the diffuse bounce drawn cosine-weighted and weighted with the uniform hemisphere's pdf "
                             "1/(2 pi) (f cos / pdf = 2 albedo cos for albedo): the light that bounces a third too "
                             "bright on average, most of it from near the normal"),
