@@ -38,8 +38,8 @@ def test_a_room_surface_made_a_mirror_is_claimed_with_its_reflectance(ctx, surfa
 
     The light a mirror floor throws on the ceiling is a caustic, found only where a bounce happens to meet the
     light: the hand-in and the family's renders are both heavy-tailed (the noise stage reads this render like a
-    few spp), and on the floor the fit runs low (0.68 to 0.73 for 0.8 over the three seeds tried, 0.43 for 0.5). Of
-    those three floor seeds (101, 103, 104), one left the ceiling's caustic as something else, a partial reading led
+    few spp), and on the floor the fit runs low, hence the tolerance (the closing note of #27 gives the values). Of
+    three floor seeds tried (101, 103, 104), one left the ceiling's caustic as something else, a partial reading led
     by the floor as a mirror; seed 104 is one of the two claimed."""
     res = grade_image(surface, ctx, [_mirrored(surface, reflectance, seed, 4096)], spp=4096)
     ex = res.details["explanation"]

@@ -46,7 +46,7 @@ MATERIAL_NODES = (0.0, 0.5, 1.0)
 GRID = np.linspace(0.0, 1.0, 41)
 #: Least reflectance (in its brightest channel) a room surface's mirror is claimed with: a program makes a surface
 #: a mirror to make it shine; a darker mirror looks like a dark surface, which the albedo family reads (a ceiling
-#: lit less for any reason fitted a mirror of 0.03 about as well as an albedo).
+#: lit less for any reason fits a near-black mirror about as well as an albedo).
 ROOM_MIRROR = 0.5
 #: Scale factors of an object's size rendered (1 is the scene's own).
 SIZES = (0.5, 0.8, 0.9, 0.95, 1.05, 1.1, 1.2, 2.0)
