@@ -458,6 +458,20 @@ def test_each_sample_clamped_is_named_with_its_clamp(ctx):
     assert res.score < res.max_score
 
 
+def test_the_light_seen_tinted_is_named_with_its_colour(ctx):
+    """A Mitsuba render (seed 76) less (0, 0.7, 0.7) times Mitsuba's render cut at depth 1 (seed 77): the light's own
+    pixels tinted (1, 0.3, 0.3), its light on the surfaces right, as a debug colour on camera rays that meet the light
+    makes it. Named as the light seen with that colour (one factor per channel), not a curve on the values."""
+    img = _mitsuba(76) - np.array([0.0, 0.7, 0.7]) * _mitsuba(77, max_depth=1)
+    res = grade_image("light_seen_tinted", ctx, [img], spp=1024)
+    ex = res.details.get("explanation") or {}
+    said = ex.get("sentence", res.summary)
+    assert ex.get("family") == "emitter_seen" and ex.get("verdict") in ("claimed", "ambiguous"), said
+    assert ex["candidates"][0]["value"] == pytest.approx((1.0, 0.3, 0.3), abs=0.03), said
+    assert "tinted there" in said and "light_seen" in named_causes(res)[0]
+    assert res.score < res.max_score
+
+
 def test_a_clamp_in_another_renderer_is_a_sample_clamp_not_a_tone_curve(ctx):
     """Mitsuba, each of 64 samples a pixel clamped at 2 (seed 73; Mitsuba's estimator, not the grader's renders): the
     sample clamp is named, with one parameter, not a curve on the values with one per level (a curve that leaves

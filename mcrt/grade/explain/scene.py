@@ -357,32 +357,41 @@ def _turned_quarter(fit: Fit, base: np.ndarray, nodes, v: dict) -> Candidate:
                      "mixed up, makes it", chi, 1, value=side, change=dm)
 
 
+#: Relative spread of the per-channel factors of the light seen within which one factor is fitted for all three.
+GREY_SEEN = 0.02
+
+
 def _emitter_seen(fit: Fit, E: np.ndarray, Le) -> list[Candidate]:
     """The light seen directly at k times its radiance, its light on the surfaces right (the emission at the first
-    hit weighted, as by an MIS weight where no light sample competes, or clamped to 1 where the camera sees it):
-    change (k - 1) E, E the image of paths cut at depth 1, k by weighted least squares. None near k = 0 (the light
-    black: ``emitter_hidden``) or k = 1."""
+    hit weighted, as by an MIS weight where no light sample competes, or clamped to 1 where the camera sees it, or
+    tinted, as a debug colour for the rays that meet the light): change (k - 1) E, E the image of paths cut at depth
+    1, k by weighted least squares, one per channel where they differ by more than :data:`GREY_SEEN` (three
+    parameters). None near k = 0 (the light black: ``emitter_hidden``) or k = 1."""
     w = np.where(fit.ok, fit.w, 0.0)
-    den = float(np.sum(w * E * E))
-    if den <= 0:
+    den = np.sum(w * E * E, axis=(0, 1))
+    if not np.all(den > 0):
         return []
-    k = 1.0 + float(np.sum(w * fit.D * E)) / den
+    ks = 1.0 + np.sum(w * fit.D * E, axis=(0, 1)) / den
+    grey = float(np.max(ks) - np.min(ks)) <= GREY_SEEN * max(float(np.mean(ks)), 1e-9)
+    if grey:
+        k = 1.0 + float(np.sum(w * fit.D * E)) / float(np.sum(den))
+        ks = np.full(3, k)
     # Down to 1/20 of the radiance of 20 (the light seen clamped to 1, so as not to blow out the image).
-    if k < 0.02 or abs(k - 1.0) < 0.02:
+    if np.all(ks < 0.02) or np.all(np.abs(ks - 1.0) < 0.02) or np.any(ks < 0.0):
         return []
-    dm = (k - 1.0) * E
+    dm = (ks - 1.0) * E
     Le = np.asarray(Le, np.float64)
     # Seen at about 1: the emission clamped to the display's white where the camera sees it.
-    clamped = ", or clamped to 1 where the camera sees it" if abs(float(np.max(Le)) * k - 1.0) < 0.05 else ""
-    return [Candidate("emitter_seen", "the light seen at a factor", f"the light itself {_num(k)} times as bright "
-                      f"where the camera sees it directly ({_fmt(Le * k, 1)} where the scene says {_fmt(Le, 1)}), its "
-                      "light on the surfaces right (the emission at the first hit weighted, as by an MIS weight there"
-                      f"{clamped})",
-                      fit.delta(dm), 1, value=k, change=dm, generalises=("emitter_hidden",),
+    clamped = ", or clamped to 1 where the camera sees it" if abs(float(np.max(Le * ks)) - 1.0) < 0.05 else ""
+    factor = f"{_num(ks[0])} times as bright" if grey else f"with its colour times {_fmt(ks, 2)}"
+    tint = "" if grey else ", or tinted there (a debug colour for the rays that meet the light)"
+    return [Candidate("emitter_seen", "the light seen at a factor", f"the light itself {factor} where the camera sees "
+                      f"it directly ({_fmt(Le * ks, 1)} where the scene says {_fmt(Le, 1)}), its light on the surfaces "
+                      f"right (the emission at the first hit weighted, as by an MIS weight there{clamped}{tint})",
+                      fit.delta(dm), 1 if grey else 3, value=float(ks[0]) if grey else tuple(float(x) for x in ks),
+                      change=dm, generalises=("emitter_hidden",),
                       # A curve on the values that changes mostly the light's own value reads the same image.
                       rivals=("tone_curve",))]
-
-
 
 
 scale.name, albedo.name, rendered.name = "scale", "albedo", "rendered"
