@@ -573,6 +573,81 @@ def test_a_curve_no_program_applies_is_described_not_claimed(ctx):
     assert res.score < res.max_score
 
 
+def test_a_curve_that_changes_the_light_with_the_room_is_sent_to_the_steps_after_rendering(ctx):
+    """A Mitsuba render (seed 49) through a highlight roll-off of a program's own, values above 0.05 compressed as
+    0.05 + e / (1 + e / 2) (no common tone map): the light's 20 becomes about 1.9 and the room's brighter values less
+    than they were. Described as a curve, and its broader reading, the values changed after rendering, names the
+    post-processing causes; points are lost. The same render with only the light's own pixels and its reflections
+    (values over 5) tinted, as a debug colour on hitting the emitter does, changes the light without the room: the
+    light seen tinted is named, and the rule on its own (mcrt.grade.broader.after_rendering) gives a curve that
+    tints them no such reading (the light's reflections in the mirror count with the light, not the room)."""
+    from mcrt.grade.broader import after_rendering
+
+    img = _mitsuba(load_scene(), 49)
+    e = np.maximum(img - 0.05, 0.0)
+    res = grade_image("rolled_off", ctx, [np.minimum(img, 0.05) + e / (1.0 + e / 2.0)], spp=1024)
+    ex = res.details["explanation"]
+    assert ex["verdict"] == "described" and ex["broader"] == "value_curve", ex["sentence"]
+    assert "tone_map" in named_causes(res)[0] and "after they were rendered" in ex["sentence"]
+    assert res.score < res.max_score
+    tinted = np.where(img.max(axis=-1, keepdims=True) > 5.0, img * np.array([1.0, 0.5, 0.5]), img)
+    res = grade_image("light_tinted", ctx, [tinted], spp=1024)
+    assert (res.details["explanation"] or {}).get("broader") != "value_curve", res.details["explanation"]["sentence"]
+    assert "light_seen" in named_causes(res)[0]
+    assert res.score < res.max_score
+    curve = Candidate("tone_curve", "monotone curve", "a curve", 0.0, 2, change=tinted - img, describes=True,
+                      value={"maps": [[0.03, 0.03], [20.0, 10.0]]})
+    mask, var = np.ones(img.shape[:2], bool), np.full(img.shape, 1e-5)
+    assert after_rendering(curve, tinted, img, mask, var, ctx.labels["near"], ctx.label_names) is None
+
+
+def test_a_filter_of_another_kernel_is_named_a_filter_where_the_noise_shows_one(ctx):
+    """A Mitsuba render (seed 53, 256 spp) through scipy's adaptive Wiener filter over 5 x 5 pixels, a kernel no
+    family renders: partly like a binomial filter, with the noise showing a filter, so the broader reading names a
+    filter after rendering and the cause blur; points are lost. The rule on its own (mcrt.grade.broader.reading):
+    the same lead on an image whose noise shows no filter says nothing broader."""
+    from scipy.signal import wiener
+
+    from mcrt.grade.broader import reading
+
+    img = _mitsuba(load_scene(), 53, spp=256)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        filtered = np.stack([wiener(img[..., c], 5) for c in range(3)], axis=-1)
+    res = grade_image("wiener5", ctx, [np.maximum(filtered, 0.0)], spp=256)
+    ex = res.details["explanation"]
+    assert ex["verdict"] == "partial" and ex["candidates"][0]["family"] == "blur", ex["sentence"]
+    assert ex["broader"] == "filtered", ex["sentence"]
+    assert named_causes(res)[0] == ["blur"] and "a filter applied after rendering" in ex["sentence"]
+    assert res.score < res.max_score
+    lead = Candidate("blur", "blur", "the image blurred", 0.0, 1, change=filtered - img)
+    labels, names = ctx.labels["near"], ctx.label_names
+    mask, var = np.ones(img.shape[:2], bool), np.full(img.shape, 1e-4)
+    assert reading(lead, filtered - img, img, mask, var, labels, names, [0], filtered=True)[0] == "filtered"
+    assert reading(lead, filtered - img, img, mask, var, labels, names, [0], filtered=False) is None
+
+
+def test_a_view_no_camera_change_captures_is_named_the_view_where_the_edges_are_displaced(ctx):
+    """A Mitsuba render (seed 57) of the scene with the near camera's forward pointed at the sphere's centre (a
+    look-at given the wrong target): partly like a window of the render enlarged, with the registration test finding
+    the edges displaced, so the broader reading names the view (the camera causes); points are lost. The rule on its
+    own (mcrt.grade.broader.reading): the same lead with the edges in place says nothing broader."""
+    from mcrt.grade.accuracy.novel import _look_at_sphere
+    from mcrt.grade.broader import reading
+
+    img = _mitsuba(_look_at_sphere(load_scene()), 57)
+    res = grade_image("look_at_sphere", ctx, [img], spp=1024)
+    ex = res.details["explanation"]
+    assert ex["verdict"] == "partial" and ex["broader"] == "view", ex["sentence"]
+    assert "camera_rotation" in named_causes(res)[0] and "they point to the view" in ex["sentence"]
+    assert res.score < res.max_score
+    R = _mitsuba(load_scene(), 58)
+    lead = Candidate("resampling", "window enlarged", "a window enlarged", 0.0, 4, change=img - R)
+    labels, names = ctx.labels["near"], ctx.label_names
+    mask, var = np.ones(img.shape[:2], bool), np.full(img.shape, 1e-4)
+    assert reading(lead, img - R, R, mask, var, labels, names, [0], misregistered=True)[0] == "view"
+    assert reading(lead, img - R, R, mask, var, labels, names, [0], misregistered=False) is None
+
+
 def test_the_encoding_is_claimed_only_where_the_decoded_image_is_explained(ctx, tmp_path):
     """8-bit PNGs holding linear values, undeclared, of a Mitsuba render (seed 50): written as they are, the encoding
     criterion fails and names the encoding (decoded, the image passes); written with a row stride one short (each

@@ -139,6 +139,8 @@ class Scene2D:
     names: tuple[str, ...]  # label names (the last is 'nothing')
     shares: np.ndarray | None = None  # (K, tails) each object's share in each of the noise's tails in a correct render
     filtered: bool = False  # the blur or correlated-noise detector found a filter over the image
+    misregistered: bool = False  # the registration test found the image's edges displaced against the reference's
+    refitted: bool = False  # the image was decoded with a curve fitted to it, not its declared one
 
 
 def remainder_test(S: np.ndarray, R: np.ndarray, delta: np.ndarray | float, mask: np.ndarray, noise: Noise,
@@ -457,13 +459,17 @@ def claim_rule(S: np.ndarray, R: np.ndarray, mask: np.ndarray, noise: Noise, sc:
             if c is not None and c.describes:  # only a description leaves noise: how the image differs, no cause
                 _claim(e, c, tried[id(c)], [], np.where(mask[..., None], S - R - c.change, 0.0))
                 e.verdict = e.adequacy.verdict = cd.DESCRIBED
+                if not sc.refitted:  # a curve left after a fitted decoding is no evidence of a step after rendering
+                    e.broader = broader.after_rendering(c, S, R, mask, noise.model + noise.reference, sc.labels,
+                                                        sc.names)
                 return
             if c is not None:
                 _claim_simplest(e, c, adequate, tried[id(c)], fit, np.where(mask[..., None], S - R - c.change, 0.0))
                 return
         if _partial(e, tried, test, S - R, mask):
             e.broader = broader.reading(e.best, e.remainder, R, mask, noise.model + noise.reference, sc.labels, sc.names,
-                                        e.adequacy.objects, holes=holes)
+                                        e.adequacy.objects, holes=holes, filtered=sc.filtered,
+                                        misregistered=sc.misregistered)
             return
         e.verdict = cd.NONE if e.verdict == cd.CLAIMED else e.verdict
         ad = remainder_test(S, R, 0.0, mask, noise, sc, explained=0.0)

@@ -49,6 +49,20 @@ change is none the families render:
   render uniform rectangles; a triangle of the light, a parallelogram, a
   sampler crowding its points or a clamped range are others, which the
   words name together (the sample point's code and its pdf), claiming none;
+* **a filter after rendering** (:data:`FILTERS`): a filter's fit (a blur, a
+  binomial or box kernel, a rank filter) leading on an image whose noise
+  itself shows a filter (the structure check's correlation between
+  neighbouring pixels or its reduced variance: ``Scene2D.filtered``), which
+  no render mistake makes: the filter's kernel or its edges are another
+  than the families try (a Wiener or edge-preserving filter, a kernel of
+  other weights), and the words name a filter without claiming which;
+* **the view** (:func:`view_lead`): a change of the camera (its field of
+  view, eye, turn, projection or aspect) or a window of the render enlarged
+  leading on an image whose edges the registration test found displaced
+  against the reference's (``Scene2D.misregistered``): the view is not the
+  scene's camera's, in a way none of the changes tried captures (a
+  look-at's basis, a projection of its own, a viewport of another size),
+  which the words name together with a crop or resize after rendering;
 * **one object's own pixels** (:func:`surface_object`): a lead that acts
   on one of :data:`OBJECTS` (at least :data:`ON_OBJECT` of its change, by
   the noise's weights, on its pixels) with a remainder on that object's
@@ -62,6 +76,18 @@ change is none the families render:
 
 None changes the verdict (PARTIAL) or the points; only the words and
 the causes they name (``Explanation.broader``).
+
+A description has one broader reading of its own (:func:`after_rendering`):
+a monotone curve on the values (DESCRIBED: any curve, none of the common
+ones) that changes **the light seen directly and the room**, and the light
+by another factor than the room. The light's own pixels show its radiance
+as the scene gives it, which no mistake in a path's weights, depth or
+surfaces changes; a mistake in the light's radiance changes it with the
+room by one factor (a scale, the exposure's reading). A curve that changes
+both otherwise was applied to the values after they were rendered (to each
+pixel, or to each sample before the mean): the words send the student to
+the steps between the render and the file, none of which the common curves
+match.
 """
 
 from __future__ import annotations
@@ -83,6 +109,12 @@ BOUNCE = (("bounce", None), ("catalogue", "ball_plus_normal"), ("catalogue", "un
 #: points other than the light's own (not its weight alone: a factor on the light's samples is also a BRDF's or
 #: an emitter's constant).
 LIGHT_REGION = ("light sampled on a quarter", "light sampled elsewhere", "light sampled over a rectangle")
+#: The families whose fit filters the finished image (mcrt.grade.explain.curves): with the noise showing a filter, a
+#: partial reading led by one points to a filter of another kernel.
+FILTERS = ("blur",)
+#: The families whose fit changes the view (mcrt.grade.explain.camera): with the edges displaced, a partial reading
+#: led by one, or by a window of the render enlarged (:func:`view_lead`), points to the view.
+VIEW = ("fov", "eye", "rotation", "aspect", "camera_model")
 #: Least share of a lead's change (its square, weighted by the noise) on one object for it to act on that object.
 ON_OBJECT = 0.5
 #: The objects (scene names) whose geometry a program builds itself: the room's surfaces have families of their own.
@@ -91,6 +123,11 @@ OBJECTS = ("tetrahedron", "sphere")
 MIN_LOSS = 0.005
 #: ... and its least size in standard errors of that darkening (its weighted least-squares fit's).
 LOSS_Z = 4.0
+#: Least size, in standard errors, of the light's change and of the curve's gain on the room for a curve to have
+#: changed both (:func:`after_rendering`) ...
+CURVE_Z = 5.0
+#: ... and the least relative change of the light's value, and of its factor against the room's.
+LIGHT_EFFECT = 0.05
 #: Share of the black pixels that must lie on the room's walls, floor and ceiling.
 ON_ROOM = 0.9
 #: Black pixels (nearly) all above this quantile of the reference's luminance are its brightest values: codes that
@@ -101,11 +138,13 @@ _LUM = np.asarray(LUMINANCE_WEIGHTS)
 
 
 def reading(lead, remainder: np.ndarray, R: np.ndarray, mask: np.ndarray, var: np.ndarray, labels: np.ndarray,
-            names, objects, *, holes: np.ndarray | None = None) -> tuple[str, str] | None:
+            names, objects, *, holes: np.ndarray | None = None, filtered: bool = False,
+            misregistered: bool = False) -> tuple[str, str] | None:
     """(family, words) of the broader cause of partial reading ``lead`` (its remainder ``remainder``, (H, W, 3);
     ``var`` the noise's variance per pixel; ``labels`` and ``names`` the surfaces; ``objects`` the labels the
     remainder was found on; ``holes`` the hand-in's black pixels where the light reaches,
-    :func:`mcrt.grade.explain.pixels.black_holes`), or None."""
+    :func:`mcrt.grade.explain.pixels.black_holes`; ``filtered`` whether the image's noise shows a filter,
+    ``misregistered`` whether its edges are displaced), or None."""
     obj = geometry_object(lead)
     # The object's own pixels cannot tell its shape from its material (a mirror's reflections, a surface's shading):
     # only a remainder on what lies around it (its outline's other side, its shadow) points to its geometry.
@@ -129,6 +168,17 @@ def reading(lead, remainder: np.ndarray, R: np.ndarray, mask: np.ndarray, var: n
                 "pdf than theirs, in a way none of the mistakes we render captures exactly, the light itself seen "
                 "right (check how a sample point is drawn on the light: its corner, its sides, its random numbers' "
                 "range, and the pdf it is divided by)")
+    if filtered and lead is not None and lead.family in FILTERS:
+        return ("filtered", "together with the noise, which is correlated between neighbouring pixels or reduced as a "
+                "filter reduces it, they point to a filter applied after rendering with another kernel than those we "
+                "try (a blur, a denoiser, a rank filter such as a median or maximum, or an edge-preserving one: check "
+                "each step between the render and the file that mixes neighbouring pixels)")
+    if misregistered and view_lead(lead):
+        return ("view", "together with the edges, which the registration test finds displaced against the "
+                "reference's, they point to the view: the camera's rays do not start or point where the scene's "
+                "camera's do, in a way none of the changes we try captures (check the eye, the look-at basis and its "
+                "up vector, the field of view and how a pixel's coordinates become a direction), or the image was "
+                "cropped or resized from a render of another size (a viewport or canvas size left at a default)")
     obj = surface_object(lead, R, var, mask, labels, names, objects)
     if obj == "sphere":
         return ("object_surface", "together they point to what the mirror sphere shows, with nothing around it "
@@ -159,6 +209,12 @@ def surface_object(lead, R, var, mask, labels, names, objects) -> str | None:
     e = np.where(mask[..., None], lead.change**2 / np.maximum(v, 1e-30), 0.0).sum(axis=-1)
     total = float(e.sum())
     return obj if total > 0 and float(e[on].sum()) >= ON_OBJECT * total else None
+
+
+def view_lead(lead) -> bool:
+    """Whether ``lead`` changes the view: a camera family's (:data:`VIEW`) or a window of the render enlarged."""
+    return lead is not None and (lead.family in VIEW
+                                 or (lead.family == "resampling" and lead.name == "window enlarged"))
 
 
 def _is_bounce(lead) -> bool:
@@ -206,3 +262,45 @@ def room_faces(lead, remainder, R, mask, var, labels, names, *, holes=None) -> f
         return None
     loss = -float(np.sum(ref * r / v)) / info
     return loss if loss >= MIN_LOSS and loss * np.sqrt(info) >= LOSS_Z else None
+
+
+def after_rendering(lead, S: np.ndarray, R: np.ndarray, mask: np.ndarray, var: np.ndarray, labels: np.ndarray,
+                    names) -> tuple[str, str] | None:
+    """("value_curve", words) where description ``lead`` (a curve on the values) changes the light seen directly
+    and the room, the light by another factor than the room (module docstring); else None. ``var`` is the noise's
+    variance per pixel, (H, W, 3)."""
+    from mcrt.grade.feedback import flat_level, fmt_values
+
+    # One value everywhere is no view of the scene: a camera that sees one surface, or every pixel given one value.
+    if lead is None or lead.change is None or not lead.describes or flat_level(lead.value) is not None:
+        return None
+    k = next((k for k, n in enumerate(names) if n == "the light"), None)
+    if k is None:
+        return None
+    light = mask & (labels == k)
+    room = mask & (labels != k) & (R @ _LUM < 1.0)  # the light's reflections (in the mirror) are the light's too
+    if light.sum() < 4 or room.sum() < 4:
+        return None
+    d = S - R
+    # The light: its pixels' summed difference against their noise, and its factor.
+    sl, rl = float(S[light].sum()), float(R[light].sum())
+    z_light = abs(sl - rl) / max(float(np.sqrt(var[light].sum())), 1e-30)
+    f_light = sl / rl if rl > 0 else np.inf
+    # The room: the curve's gain there (its change's chi^2 against the hand-in's difference), and the factor a
+    # scale alone would fit, weighted by the noise (no pixel beyond a relative error of FLOOR).
+    v = var[room] + (FLOOR * R[room]) ** 2
+    dr, ch, rr = d[room], lead.change[room], R[room]
+    gain = float(np.sum((dr * dr - (dr - ch) ** 2) / v))
+    z_room = gain / np.sqrt(2.0 * dr.size)
+    f_room = float(np.sum(S[room] * rr / v)) / max(float(np.sum(rr * rr / v)), 1e-300)
+    if not (z_light >= CURVE_Z and abs(f_light - 1.0) >= LIGHT_EFFECT and z_room >= CURVE_Z and f_room > 0
+            and abs(np.log(f_light / f_room)) >= np.log1p(LIGHT_EFFECT)):
+        return None
+    was, now = fmt_values(R[light].mean(axis=0), 1), fmt_values(S[light].mean(axis=0), 1)
+    return ("value_curve", f"the light seen directly changed with the rest: its pixels, {was} in the reference on "
+            f"average, are {now} here, on the same curve and not by the room's factor (a mistake in a path's "
+            "weights, its depth or a surface leaves the light's own value alone; a wrong radiance scales it with the "
+            "room), so the values were changed after they were rendered (each pixel, or each sample before the mean), "
+            "on their way to the file (check every step between the render and the file: a tone map, a colour grade, "
+            "an encoding, the conversion into the file's codes or bits)")
+

@@ -126,19 +126,7 @@ def explanation_words(e: Explanation) -> tuple[str, str]:
                     f"cause is claimed{where_b}; check each of them.")
         return sentence, f"It could be {each}: the image cannot tell which."
     if e.verdict == DESCRIBED:  # only a description leaves noise (Candidate.describes): how it differs, no cause
-        where_b = f", changing the image {best.where}" if best.where else ""
-        level = flat_level(best.value)
-        if level is not None:  # the curve maps the darkest wall and the light alike: no view of the scene is left
-            sentence = (f"The image is nearly one value everywhere (about {num(level)}), where the scene's light and its "
-                        f"darkest walls alike should show{where_b}: no view of the scene is left, so no cause is "
-                        "claimed; look at what each pixel's ray meets first (the camera's field of view and directions, "
-                        "a surface covering the view) and at how the values are written (every pixel given one value)")
-            return sentence + ".", "The image is nearly one value everywhere: no view of the scene is left."
-        sentence = (f"The difference depends on each pixel's value alone, as {best.text} would make it (what is left "
-                    f"is consistent with noise){where_b}; no common tone map, clamp or encoding matches that curve, "
-                    "so no cause is claimed: if your program changes the values before saving, check that step; if "
-                    "not, look at what scales light by brightness (a BRDF's or the light's factors).")
-        return sentence, "The difference follows each pixel's value, as a curve on the values would; no common curve matches."
+        return _described_words(e)
     if e.verdict == PARTIAL:
         rest = f"something else is wrong {e.remainder_where}" if e.remainder_where else "something else is wrong too"
         # The share is of the difference's chi^2 beyond noise: a remainder on one object can be a sliver of it.
@@ -163,6 +151,31 @@ def explanation_words(e: Explanation) -> tuple[str, str]:
     sentence += (f". The image differs {where}" if where else "") + "."
     headline = "No single mistake we tried explains the difference" + (f"; it differs {where}" if where else "") + "."
     return sentence, headline
+
+
+def _described_words(e: Explanation) -> tuple[str, str]:
+    """The sentence and headline of a DESCRIBED explanation: a curve on the values, said, its broader reading
+    (mcrt.grade.broader.after_rendering) where it has one."""
+    best = e.best
+    where_b = f", changing the image {best.where}" if best.where else ""
+    level = flat_level(best.value)
+    if level is not None:  # the curve maps the darkest wall and the light alike: no view of the scene is left
+        sentence = (f"The image is nearly one value everywhere (about {num(level)}), where the scene's light and its "
+                    f"darkest walls alike should show{where_b}: no view of the scene is left, so no cause is "
+                    "claimed; look at what each pixel's ray meets first (the camera's field of view and directions, "
+                    "a surface covering the view) and at how the values are written (every pixel given one value)")
+        return sentence + ".", "The image is nearly one value everywhere: no view of the scene is left."
+    if e.broader:  # the light seen directly changed with the room, otherwise than by a scale (mcrt.grade.broader)
+        sentence = (f"The difference depends on each pixel's value alone, as {best.text} would make it (what is "
+                    f"left is consistent with noise){where_b}; no common tone map, clamp or encoding matches that "
+                    f"curve, but {e.broader[1]}.")
+        return sentence, ("The values went through a curve after rendering, on their way to the file; no common "
+                          "curve matches.")
+    sentence = (f"The difference depends on each pixel's value alone, as {best.text} would make it (what is left "
+                f"is consistent with noise){where_b}; no common tone map, clamp or encoding matches that curve, "
+                "so no cause is claimed: if your program changes the values before saving, check that step; if "
+                "not, look at what scales light by brightness (a BRDF's or the light's factors).")
+    return sentence, "The difference follows each pixel's value, as a curve on the values would; no common curve matches."
 
 
 def bias_family_text(bt, th) -> str:

