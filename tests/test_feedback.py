@@ -648,6 +648,53 @@ def test_a_view_no_camera_change_captures_is_named_the_view_where_the_edges_are_
     assert reading(lead, img - R, R, mask, var, labels, names, [0], misregistered=False) is None
 
 
+def test_the_bounced_light_alone_changed_is_sent_to_the_steps_after_the_first_surface(ctx):
+    """Mitsuba's direct light (paths cut after the light sample at the first surface, depth 2; seed 59) plus the
+    bounced light of the scene with a floor of albedo 0.15 (Mitsuba at depth 8 less depth 2, seed 60): every surface's
+    direct light right, the light that bounced darker, most near the floor, as a bounce weighted wrongly after a
+    path's first surface makes it. The broader reading names the bounced light (the causes after a path's first
+    surface), and points are lost. The parts swapped (the darker floor's direct light, the bounced light right) change
+    the direct light, shadows and all: no such reading."""
+    from mcrt.grade.accuracy.cases import floor_albedo
+
+    dark = floor_albedo((0.15, 0.15, 0.15))(load_scene())
+
+    def at(scene, seed, depth):
+        return _render_spec(Spec("t", None, spp=1024), scene, width=RES, height=RES, max_depth=depth, seed=seed).mean
+
+    img = at(load_scene(), 59, 2) + at(dark, 60, 8) - at(dark, 60, 2)
+    res = grade_image("bounced_darker", ctx, [img], spp=1024)
+    ex = res.details["explanation"]
+    assert ex["broader"] == "bounced_light", ex["sentence"]
+    assert set(named_causes(res)[0]) >= {"indirect_scale", "roulette", "depth"}
+    assert "the light that bounced off other surfaces differs" in ex["sentence"]
+    assert res.score < res.max_score
+    swapped = at(dark, 61, 2) + at(load_scene(), 62, 8) - at(load_scene(), 62, 2)
+    res = grade_image("direct_darker", ctx, [swapped], spp=1024)
+    assert (res.details["explanation"] or {}).get("broader") != "bounced_light", res.details["explanation"]["sentence"]
+    assert res.score < res.max_score
+
+
+@pytest.mark.parametrize("klass, case", [("unbidden", "bounce_ray_tmax_kept"),
+                                         ("unrecorded", "roulette_rand_int_division")])
+def test_a_bounce_mistake_no_family_renders_is_sent_to_the_bounced_light(ctx, klass, case):
+    """Two blind classes' tuning cases (Mitsuba's path after a wrong first bounce, written blind to the grader; seeds
+    fixed by name) at 32 x 32: a bounce ray that keeps the camera ray's tmax, and Russian roulette's survival drawn by
+    integer division. No family fits; the bounced light's reading names the steps after a path's first surface, the
+    right cause among them and the others it names beside it not counted wrong; points are lost."""
+    import importlib
+
+    from mcrt.grade.accuracy.cases import build_class
+    from mcrt.grade.accuracy.run import grade_cases
+
+    (c,) = build_class(width=RES, height=RES, max_depth=8, names=(case,),
+                       specs=importlib.import_module(f"mcrt.grade.accuracy.{klass}").SPECS)
+    assert not c.held_out
+    (o,) = grade_cases([c], ctx)
+    assert o.right and not o.also_wrong and o.lost, (o.named, o.said)
+    assert "the light that bounced off other surfaces differs" in o.said, o.said
+
+
 def test_the_encoding_is_claimed_only_where_the_decoded_image_is_explained(ctx, tmp_path):
     """8-bit PNGs holding linear values, undeclared, of a Mitsuba render (seed 50): written as they are, the encoding
     criterion fails and names the encoding (decoded, the image passes); written with a row stride one short (each

@@ -77,6 +77,32 @@ change is none the families render:
 None changes the verdict (PARTIAL) or the points; only the words and
 the causes they name (``Explanation.broader``).
 
+Where no lead fits that way, or no candidate leads at all (nothing we tried
+explains most of the difference), one more reading is tried
+(:func:`bounced_light`): **the bounced light alone changed**. An image is
+the light each surface receives straight from the lamp (the paths cut after
+their light sample at the first surface: the basis render of depth 2, with
+its shadows and the light seen) plus the light that bounced off other
+surfaces first. A mistake after a path's first surface (the bounce's
+direction, its frame, pdf or weight, Russian roulette, where the path ends)
+changes only the second, smoothly over each surface, as the bounced light
+is an integral over the hemisphere. So the difference is fitted three ways,
+each a polynomial factor of degree :data:`SMOOTH_ORDER` in the pixel's place,
+one per surface and channel (:func:`smooth_fit`): on the bounced light, on
+the direct light, and on the whole image. The reading holds where the
+first leaves only noise (the remainder test), the second does not, and the
+first fits better than both others by
+:data:`mcrt.grade.adequacy.CONFIRM_Z` (:func:`mcrt.grade.adequacy.closeness`
+without the BIC's credit: the three have as many parameters): the
+shadows' edges, which only the direct light has, tell the two apart. And
+the direct light must be right: a constant factor on each surface's direct
+light, fitted beside the bounced light's, differs from 1 on none (its
+z-scores, Bonferroni's bound at the bias test's level), the light's own
+pixels, which are direct light alone, among them. The
+mirror's pixels are left out: they show the room's bounced light sharp,
+which no smooth factor on the sphere describes. The words send the student
+to the steps after a path's first surface, naming none.
+
 A description has one broader reading of its own (:func:`after_rendering`):
 a monotone curve on the values (DESCRIBED: any curve, none of the common
 ones) that changes **the light seen directly and the room**, and the light
@@ -93,6 +119,7 @@ match.
 from __future__ import annotations
 
 import numpy as np
+from scipy.stats import norm
 
 from mcrt.grade.candidates import FLOOR
 from mcrt.stats import LUMINANCE_WEIGHTS
@@ -128,6 +155,9 @@ LOSS_Z = 4.0
 CURVE_Z = 5.0
 #: ... and the least relative change of the light's value, and of its factor against the room's.
 LIGHT_EFFECT = 0.05
+#: Degree of the polynomial in the pixel's place, per surface and channel, that a smooth factor on a part of the
+#: image is (:func:`smooth_fit`).
+SMOOTH_ORDER = 2
 #: Share of the black pixels that must lie on the room's walls, floor and ceiling.
 ON_ROOM = 0.9
 #: Black pixels (nearly) all above this quantile of the reference's luminance are its brightest values: codes that
@@ -304,3 +334,73 @@ def after_rendering(lead, S: np.ndarray, R: np.ndarray, mask: np.ndarray, var: n
             "on their way to the file (check every step between the render and the file: a tone map, a colour grade, "
             "an encoding, the conversion into the file's codes or bits)")
 
+
+def bounced_light(fit, R: np.ndarray, direct: np.ndarray | None, mask: np.ndarray, labels: np.ndarray, test, *,
+                  alpha: float) -> tuple[str, str] | None:
+    """(family, words) of the bounced light alone changed (module docstring), or None. ``fit`` is the explanation's
+    (its difference ``D``, weights and terms), ``direct`` the image of paths cut after their light sample at the
+    first surface (depth 2, :mod:`mcrt.grade.explain.basis`), ``test(change)`` the remainder test's verdict on a
+    change (:func:`mcrt.grade.adequacy.remainder_test`, on ``mask``: the mirror's pixels are left out, as what it
+    shows is the room's bounced light seen sharp, which no smooth factor on the sphere describes); ``alpha`` the bias
+    test's level."""
+    from mcrt.grade.adequacy import CONFIRM_Z, closeness
+    from mcrt.grade.candidates import Candidate
+
+    if direct is None:
+        return None
+    R, direct = np.asarray(R, np.float64), np.asarray(direct, np.float64)
+    w = np.where(fit.ok & mask[..., None], fit.w, 0.0)
+    fits = {part: smooth_fit(fit.D, X, w, labels, mask) for part, X in
+            (("bounced", R - direct), ("direct", direct), ("whole", R))}
+    c = {part: Candidate("bounced_light", part, part, fit.delta(ch), p, change=ch) for part, (ch, p, _) in fits.items()}
+    # The direct light right: a constant factor on each surface's direct light, fitted beside the bounced light's,
+    # differs from 1 nowhere (Bonferroni's bound, Holm's first step, at the bias test's level), the light's own pixels
+    # (direct light alone) among them.
+    z = smooth_fit(fit.D, R - direct, w, labels, mask, also=direct)[2]
+    if z.size and float(np.min(2.0 * norm.sf(np.abs(z)))) <= alpha / z.size:
+        return None
+    if not (test(c["bounced"].change) == "adequate" and test(c["direct"].change) != "adequate"
+            and closeness(fit, c["bounced"], c["direct"], bic=False) >= CONFIRM_Z
+            and closeness(fit, c["bounced"], c["whole"], bic=False) >= CONFIRM_Z):
+        return None
+    return ("bounced_light", "the difference as a whole lies in one part of the light: what each surface receives "
+            "straight from the lamp is right (its shadows and shading fit the reference), while the light that bounced "
+            "off other surfaces differs (a smooth factor on each surface's bounced light leaves only noise, and fits far "
+            "better than one on its direct light or on the whole image): check each step after a path's first "
+            "surface, the bounce's direction, the frame built about the normal and the hemisphere it samples, its pdf "
+            "and weight, Russian roulette, and where the path ends")
+
+
+#: A broader reading's words for a headline, where it stands beside no lead (nothing we tried explains most).
+SHORT = {"bounced_light": "the direct light is right and the light that bounced off other surfaces differs"}
+
+
+def smooth_fit(D: np.ndarray, X: np.ndarray, w: np.ndarray, labels: np.ndarray, mask: np.ndarray,
+               order: int = SMOOTH_ORDER, *, also: np.ndarray | None = None):
+    """The change X (F - 1) that fits the difference ``D`` best by weighted least squares (``w`` its weights, 0
+    outside ``mask``), F a polynomial of degree ``order`` in the pixel's place, one per surface (``labels``) and
+    channel, plus a constant factor g on ``also`` per surface and channel where given; the number of its
+    coefficients, and each g's z-score (its value over its standard error). X and ``also`` are (H, W, 3): the parts
+    of the image the factors act on."""
+    h, wd = labels.shape
+    v, u = np.mgrid[0:h, 0:wd]
+    u, v = 2.0 * u / max(wd - 1, 1) - 1.0, 2.0 * v / max(h - 1, 1) - 1.0
+    phi = np.stack([u**i * v**j for i in range(order + 1) for j in range(order + 1 - i)], axis=-1)
+    out, params, z = np.zeros_like(np.asarray(D, np.float64)), 0, []
+    for k in np.unique(labels[mask]):
+        on = mask & (labels == k)
+        for c in range(3):
+            A = X[on, c][:, None] * phi[on]
+            if also is not None:
+                A = np.concatenate([A, also[on, c][:, None]], axis=1)
+            Aw = A * np.sqrt(w[on, c])[:, None]
+            keep = np.abs(Aw).sum(axis=0) > 0
+            if not keep.any():
+                continue
+            coef, *_ = np.linalg.lstsq(Aw[:, keep], D[on, c] * np.sqrt(w[on, c]), rcond=None)
+            out[on, c] = A[:, keep] @ coef
+            params += int(keep.sum())
+            if also is not None and keep[-1]:
+                se = float(np.sqrt(np.linalg.pinv(Aw[:, keep].T @ Aw[:, keep])[-1, -1]))
+                z.append(float(coef[-1]) / se if se > 0 else 0.0)
+    return out, params, np.asarray(z)

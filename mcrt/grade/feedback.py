@@ -145,6 +145,11 @@ def explanation_words(e: Explanation) -> tuple[str, str]:
         near = next((c for c in e.candidates if not (c.describes or c.flexible)), None)
         sentence = (f"{_TRIED} explains most of the difference"
                     + (f": the closest, {near.text}, explains {100 * max(near.explained, 0):.0f} %" if near else ""))
+    if e.remainder_where and e.broader:  # no mistake tried fits, but the part of the light that differs is known
+        from mcrt.grade.broader import SHORT
+
+        return (sentence + f"; but {e.broader[1]}. The difference sits {e.remainder_where}.",
+                f"No single mistake we tried explains the difference, but {SHORT[e.broader[0]]}.")
     if e.remainder_where:  # the adequacy rule placed the difference on objects
         return (sentence + f". The difference sits {e.remainder_where}.",
                 f"No single mistake we tried explains the difference; it sits {e.remainder_where}.")
