@@ -499,7 +499,8 @@ def _bounced(S, R, mask, noise: Noise, sc: Scene2D, fit, inputs, holes, extra_va
         return remainder_test(S, R, change, off, noise, sc, extra_var=var, holes=holes).verdict
 
     direct = dict(inputs.basis.nodes.get("depth", [])).get(2)
-    return broader.bounced_light(fit, R, direct, off, sc.labels, verdict, alpha=sc.alpha)
+    return broader.bounced_light(fit, R, direct, off, sc.labels, verdict,
+                                 lambda a, b: closeness(fit, a, b, bic=False) >= CONFIRM_Z, alpha=sc.alpha)
 
 
 def _claim_simplest(e, c, adequate: list, ad: Adequacy, fit, remainder: np.ndarray) -> None:

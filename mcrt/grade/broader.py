@@ -335,15 +335,15 @@ def after_rendering(lead, S: np.ndarray, R: np.ndarray, mask: np.ndarray, var: n
             "an encoding, the conversion into the file's codes or bits)")
 
 
-def bounced_light(fit, R: np.ndarray, direct: np.ndarray | None, mask: np.ndarray, labels: np.ndarray, test, *,
-                  alpha: float) -> tuple[str, str] | None:
+def bounced_light(fit, R: np.ndarray, direct: np.ndarray | None, mask: np.ndarray, labels: np.ndarray, test, better,
+                  *, alpha: float) -> tuple[str, str] | None:
     """(family, words) of the bounced light alone changed (module docstring), or None. ``fit`` is the explanation's
     (its difference ``D``, weights and terms), ``direct`` the image of paths cut after their light sample at the
     first surface (depth 2, :mod:`mcrt.grade.explain.basis`), ``test(change)`` the remainder test's verdict on a
     change (:func:`mcrt.grade.adequacy.remainder_test`, on ``mask``: the mirror's pixels are left out, as what it
-    shows is the room's bounced light seen sharp, which no smooth factor on the sphere describes); ``alpha`` the bias
-    test's level."""
-    from mcrt.grade.adequacy import CONFIRM_Z, closeness
+    shows is the room's bounced light seen sharp, which no smooth factor on the sphere describes); ``better(a, b)``
+    whether candidate a fits better than b by :data:`mcrt.grade.adequacy.CONFIRM_Z`
+    (:func:`mcrt.grade.adequacy.closeness` without the BIC's credit); ``alpha`` the bias test's level."""
     from mcrt.grade.candidates import Candidate
 
     if direct is None:
@@ -360,8 +360,7 @@ def bounced_light(fit, R: np.ndarray, direct: np.ndarray | None, mask: np.ndarra
     if z.size and float(np.min(2.0 * norm.sf(np.abs(z)))) <= alpha / z.size:
         return None
     if not (test(c["bounced"].change) == "adequate" and test(c["direct"].change) != "adequate"
-            and closeness(fit, c["bounced"], c["direct"], bic=False) >= CONFIRM_Z
-            and closeness(fit, c["bounced"], c["whole"], bic=False) >= CONFIRM_Z):
+            and better(c["bounced"], c["direct"]) and better(c["bounced"], c["whole"])):
         return None
     return ("bounced_light", "the difference as a whole lies in one part of the light: what each surface receives "
             "straight from the lamp is right (its shadows and shading fit the reference), while the light that bounced "
@@ -369,10 +368,6 @@ def bounced_light(fit, R: np.ndarray, direct: np.ndarray | None, mask: np.ndarra
             "better than one on its direct light or on the whole image): check each step after a path's first "
             "surface, the bounce's direction, the frame built about the normal and the hemisphere it samples, its pdf "
             "and weight, Russian roulette, and where the path ends")
-
-
-#: A broader reading's words for a headline, where it stands beside no lead (nothing we tried explains most).
-SHORT = {"bounced_light": "the direct light is right and the light that bounced off other surfaces differs"}
 
 
 def smooth_fit(D: np.ndarray, X: np.ndarray, w: np.ndarray, labels: np.ndarray, mask: np.ndarray,

@@ -146,16 +146,19 @@ def explanation_words(e: Explanation) -> tuple[str, str]:
         sentence = (f"{_TRIED} explains most of the difference"
                     + (f": the closest, {near.text}, explains {100 * max(near.explained, 0):.0f} %" if near else ""))
     if e.remainder_where and e.broader:  # no mistake tried fits, but the part of the light that differs is known
-        from mcrt.grade.broader import SHORT
-
         return (sentence + f"; but {e.broader[1]}. The difference sits {e.remainder_where}.",
-                f"No single mistake we tried explains the difference, but {SHORT[e.broader[0]]}.")
+                f"No single mistake we tried explains the difference, but {BROADER_HEADLINES[e.broader[0]]}.")
     if e.remainder_where:  # the adequacy rule placed the difference on objects
         return (sentence + f". The difference sits {e.remainder_where}.",
                 f"No single mistake we tried explains the difference; it sits {e.remainder_where}.")
     sentence += (f". The image differs {where}" if where else "") + "."
     headline = "No single mistake we tried explains the difference" + (f"; it differs {where}" if where else "") + "."
     return sentence, headline
+
+
+#: A broader reading's words for a headline where it stands beside no lead (nothing we tried explains most): those
+#: of mcrt.grade.broader.bounced_light.
+BROADER_HEADLINES = {"bounced_light": "the direct light is right and the light that bounced off other surfaces differs"}
 
 
 def _described_words(e: Explanation) -> tuple[str, str]:
