@@ -601,14 +601,21 @@ def test_a_curve_that_changes_the_light_with_the_room_is_sent_to_the_steps_after
     assert after_rendering(curve, tinted, img, mask, var, ctx.labels["near"], ctx.label_names) is None
 
 
+def _reading_of(ctx, lead, R, **flag):
+    """The broader reading (mcrt.grade.broader.reading) of ``lead``, its change its remainder, on the whole image of
+    R at a flat noise variance of 1e-4, with ``flag`` (filtered or misregistered) given."""
+    from mcrt.grade.broader import reading
+
+    mask, var = np.ones(R.shape[:2], bool), np.full(R.shape, 1e-4)
+    return reading(lead, lead.change, R, mask, var, ctx.labels["near"], ctx.label_names, [0], **flag)
+
+
 def test_a_filter_of_another_kernel_is_named_a_filter_where_the_noise_shows_one(ctx):
     """A Mitsuba render (seed 53, 256 spp) through scipy's adaptive Wiener filter over 5 x 5 pixels, a kernel no
     family renders: partly like a binomial filter, with the noise showing a filter, so the broader reading names a
     filter after rendering and the cause blur; points are lost. The rule on its own (mcrt.grade.broader.reading):
     the same lead on an image whose noise shows no filter says nothing broader."""
     from scipy.signal import wiener
-
-    from mcrt.grade.broader import reading
 
     img = _mitsuba(load_scene(), 53, spp=256)
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -620,10 +627,8 @@ def test_a_filter_of_another_kernel_is_named_a_filter_where_the_noise_shows_one(
     assert named_causes(res)[0] == ["blur"] and "a filter applied after rendering" in ex["sentence"]
     assert res.score < res.max_score
     lead = Candidate("blur", "blur", "the image blurred", 0.0, 1, change=filtered - img)
-    labels, names = ctx.labels["near"], ctx.label_names
-    mask, var = np.ones(img.shape[:2], bool), np.full(img.shape, 1e-4)
-    assert reading(lead, filtered - img, img, mask, var, labels, names, [0], filtered=True)[0] == "filtered"
-    assert reading(lead, filtered - img, img, mask, var, labels, names, [0], filtered=False) is None
+    assert _reading_of(ctx, lead, img, filtered=True)[0] == "filtered"
+    assert _reading_of(ctx, lead, img, filtered=False) is None
 
 
 def test_a_view_no_camera_change_captures_is_named_the_view_where_the_edges_are_displaced(ctx):
@@ -632,7 +637,6 @@ def test_a_view_no_camera_change_captures_is_named_the_view_where_the_edges_are_
     the edges displaced, so the broader reading names the view (the camera causes); points are lost. The rule on its
     own (mcrt.grade.broader.reading): the same lead with the edges in place says nothing broader."""
     from mcrt.grade.accuracy.novel import _look_at_sphere
-    from mcrt.grade.broader import reading
 
     img = _mitsuba(_look_at_sphere(load_scene()), 57)
     res = grade_image("look_at_sphere", ctx, [img], spp=1024)
@@ -642,10 +646,8 @@ def test_a_view_no_camera_change_captures_is_named_the_view_where_the_edges_are_
     assert res.score < res.max_score
     R = _mitsuba(load_scene(), 58)
     lead = Candidate("resampling", "window enlarged", "a window enlarged", 0.0, 4, change=img - R)
-    labels, names = ctx.labels["near"], ctx.label_names
-    mask, var = np.ones(img.shape[:2], bool), np.full(img.shape, 1e-4)
-    assert reading(lead, img - R, R, mask, var, labels, names, [0], misregistered=True)[0] == "view"
-    assert reading(lead, img - R, R, mask, var, labels, names, [0], misregistered=False) is None
+    assert _reading_of(ctx, lead, R, misregistered=True)[0] == "view"
+    assert _reading_of(ctx, lead, R, misregistered=False) is None
 
 
 def test_the_bounced_light_alone_changed_is_sent_to_the_steps_after_the_first_surface(ctx):
