@@ -677,6 +677,30 @@ def test_the_bounced_light_alone_changed_is_sent_to_the_steps_after_the_first_su
     assert res.score < res.max_score
 
 
+def test_the_first_surfaces_direct_light_alone_changed_is_sent_to_its_light_sample(ctx):
+    """Mitsuba's render (seed 63, depth 8) with the light the first surface receives straight from the lamp (depth 2
+    less depth 1, the same paths) 1.5 times what it is, the light seen and the bounced light right: as a step of its
+    own there that loops over 3 light samples (an inclusive bound) and divides by 2 makes it, a factor no family tries.
+    The broader reading names the first surface's light sample (light_pdf among the causes it names), and points are
+    lost. (At 1.25 times, at this resolution, a smooth factor on the rest of the light fits as well: no reading.) The
+    bounced light 1.25 times what it is instead (the light sample right) is not read so."""
+
+    def at(seed, depth):
+        return _render_spec(Spec("t", None, spp=1024), load_scene(), width=RES, height=RES, max_depth=depth,
+                            seed=seed).mean
+
+    full, direct, seen = at(63, 8), at(63, 2), at(63, 1)
+    res = grade_image("direct_brighter", ctx, [full + 0.5 * (direct - seen)], spp=1024)
+    ex = res.details["explanation"]
+    assert ex["broader"] == "direct_light", ex["sentence"]
+    assert "light_pdf" in named_causes(res)[0] and "receives straight from the lamp differs" in ex["sentence"]
+    assert res.score < res.max_score
+    full, direct = at(64, 8), at(64, 2)
+    res = grade_image("bounced_brighter", ctx, [full + 0.25 * (full - direct)], spp=1024)
+    assert (res.details["explanation"] or {}).get("broader") != "direct_light", res.details["explanation"]["sentence"]
+    assert res.score < res.max_score
+
+
 @pytest.mark.parametrize("klass, case", [("unbidden", "bounce_ray_tmax_kept"),
                                          ("unrecorded", "roulette_rand_int_division")])
 def test_a_bounce_mistake_no_family_renders_is_sent_to_the_bounced_light(ctx, klass, case):

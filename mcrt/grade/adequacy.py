@@ -28,8 +28,10 @@ relevance threshold ``min_effect``), with the per-object tests of
 
 Beside a partial reading that points to nothing broader, and beside none,
 the difference as a whole is tried as the bounced light alone changed,
-the direct light right (:func:`mcrt.grade.broader.bounced_light`), which
-the words say where it holds.
+the direct light right (:func:`mcrt.grade.broader.bounced_light`), then as
+the first surface's direct light alone changed, the light seen and the
+bounced light right (:func:`mcrt.grade.broader.direct_light`), which the
+words say where one holds.
 
 **Black where the light reaches is never noise.** A sample of a surface the
 light reaches directly is never 0, so a hand-in's pixels 0 in every channel
@@ -475,32 +477,37 @@ def claim_rule(S: np.ndarray, R: np.ndarray, mask: np.ndarray, noise: Noise, sc:
             e.broader = (broader.reading(e.best, e.remainder, R, mask, noise.model + noise.reference, sc.labels,
                                          sc.names, e.adequacy.objects, holes=holes, filtered=sc.filtered,
                                          misregistered=sc.misregistered)
-                         or _bounced(S, R, mask, noise, sc, fit, inputs, holes, extra_var))
+                         or _one_part(S, R, mask, noise, sc, fit, inputs, holes, extra_var))
             return
         e.verdict = cd.NONE if e.verdict == cd.CLAIMED else e.verdict
         ad = remainder_test(S, R, 0.0, mask, noise, sc, explained=0.0)
         ad.verdict = "none" if ad.rejected else "adequate"
         e.remainder_where, e.adequacy = ad.where, ad
         if ad.rejected:
-            e.broader = _bounced(S, R, mask, noise, sc, fit, inputs, holes, extra_var)
+            e.broader = _one_part(S, R, mask, noise, sc, fit, inputs, holes, extra_var)
 
     return rule
 
 
-def _bounced(S, R, mask, noise: Noise, sc: Scene2D, fit, inputs, holes, extra_var):
-    """The bounced light alone changed (:func:`mcrt.grade.broader.bounced_light`), tested on the pixels off the mirror
-    with the remainder test of :func:`claim_rule` (``extra_var(c)`` a change's own noise, None: none)."""
+def _one_part(S, R, mask, noise: Noise, sc: Scene2D, fit, inputs, holes, extra_var):
+    """The bounced light alone changed, or the first surface's direct light alone
+    (:func:`mcrt.grade.broader.bounced_light`, :func:`mcrt.grade.broader.direct_light`), tested on the pixels off the
+    mirror with the remainder test of :func:`claim_rule` (``extra_var(c)`` a change's own noise, None: none)."""
     from mcrt.grade.candidates import Candidate
 
     off = mask & ~np.isin(sc.labels, [k for k, n in enumerate(sc.names) if "sphere" in n])
 
     def verdict(change):
-        var = extra_var(Candidate("bounced_light", "", "", 0.0, change=change)) if extra_var is not None else None
+        var = extra_var(Candidate("one_part", "", "", 0.0, change=change)) if extra_var is not None else None
         return remainder_test(S, R, change, off, noise, sc, extra_var=var, holes=holes).verdict
 
-    direct = dict(inputs.basis.nodes.get("depth", [])).get(2)
-    return broader.bounced_light(fit, R, direct, off, sc.labels, verdict,
-                                 lambda a, b: closeness(fit, a, b, bic=False) >= CONFIRM_Z, alpha=sc.alpha)
+    depths = dict(inputs.basis.nodes.get("depth", []))
+    for reading in (broader.bounced_light, broader.direct_light):
+        got = reading(fit, R, depths, off, sc.labels, verdict, lambda a, b: closeness(fit, a, b, bic=False) >= CONFIRM_Z,
+                      alpha=sc.alpha)
+        if got is not None:
+            return got
+    return None
 
 
 def _claim_simplest(e, c, adequate: list, ad: Adequacy, fit, remainder: np.ndarray) -> None:

@@ -103,6 +103,23 @@ mirror's pixels are left out: they show the room's bounced light sharp,
 which no smooth factor on the sphere describes. The words send the student
 to the steps after a path's first surface, naming none.
 
+Where that does not hold, its mirror image is tried (:func:`direct_light`):
+**the first surface's direct light alone changed**. A program that
+computes the light a camera ray's first surface receives straight from the
+lamp in a step of its own (its own light sample, pdf, cosines, fall-off or
+shadow ray), and the rest of the path otherwise, changes only that part:
+the basis render of depth 2 less that of depth 1 (the light seen
+directly). The same three fits, on that part, on the rest (the light seen
+and the bounced light) and on the whole image, with the same conditions
+(:func:`_part_changed`): the part's fit leaves only noise, the rest's does
+not, the part's fits better than both by
+:data:`mcrt.grade.adequacy.CONFIRM_Z`, and the rest needs no factor of its
+own on any surface, the light's own pixels among them. An albedo wrong
+everywhere scales a surface's direct and bounced light alike and is not
+read so; a light sample wrong at every vertex changes the bounced light too
+and is not read so either. The words send the student to the light sample
+at the first surface, naming none of its steps.
+
 A description has one broader reading of its own (:func:`after_rendering`):
 a monotone curve on the values (DESCRIBED: any curve, none of the common
 ones) that changes **the light seen directly and the room**, and the light
@@ -335,32 +352,17 @@ def after_rendering(lead, S: np.ndarray, R: np.ndarray, mask: np.ndarray, var: n
             "an encoding, the conversion into the file's codes or bits)")
 
 
-def bounced_light(fit, R: np.ndarray, direct: np.ndarray | None, mask: np.ndarray, labels: np.ndarray, test, better,
+def bounced_light(fit, R: np.ndarray, depths: dict, mask: np.ndarray, labels: np.ndarray, test, better,
                   *, alpha: float) -> tuple[str, str] | None:
     """(family, words) of the bounced light alone changed (module docstring), or None. ``fit`` is the explanation's
-    (its difference ``D``, weights and terms), ``direct`` the image of paths cut after their light sample at the
-    first surface (depth 2, :mod:`mcrt.grade.explain.basis`), ``test(change)`` the remainder test's verdict on a
-    change (:func:`mcrt.grade.adequacy.remainder_test`, on ``mask``: the mirror's pixels are left out, as what it
-    shows is the room's bounced light seen sharp, which no smooth factor on the sphere describes); ``better(a, b)``
+    (its difference ``D``, weights and terms), ``depths`` the basis renders by path depth (2: the paths cut after
+    their light sample at the first surface, :mod:`mcrt.grade.explain.basis`), ``test(change)`` the remainder test's
+    verdict on a change (:func:`mcrt.grade.adequacy.remainder_test`, on ``mask``: the mirror's pixels are left out, as
+    what it shows is the room's light seen sharp, which no smooth factor on the sphere describes); ``better(a, b)``
     whether candidate a fits better than b by :data:`mcrt.grade.adequacy.CONFIRM_Z`
     (:func:`mcrt.grade.adequacy.closeness` without the BIC's credit); ``alpha`` the bias test's level."""
-    from mcrt.grade.candidates import Candidate
-
-    if direct is None:
-        return None
-    R, direct = np.asarray(R, np.float64), np.asarray(direct, np.float64)
-    w = np.where(fit.ok & mask[..., None], fit.w, 0.0)
-    # The direct light right: a constant factor on each surface's direct light, fitted beside the bounced light's,
-    # differs from 1 nowhere (Bonferroni's bound, Holm's first step, at the bias test's level), the light's own pixels
-    # (direct light alone) among them. Tested first: it is the cheapest to fail.
-    z = smooth_fit(fit.D, R - direct, w, labels, mask, also=direct)[2]
-    if z.size and float(np.min(2.0 * norm.sf(np.abs(z)))) <= alpha / z.size:
-        return None
-    fits = {part: smooth_fit(fit.D, X, w, labels, mask) for part, X in
-            (("bounced", R - direct), ("direct", direct), ("whole", R))}
-    c = {part: Candidate("bounced_light", part, part, fit.delta(ch), p, change=ch) for part, (ch, p, _) in fits.items()}
-    if not (test(c["bounced"].change) == "adequate" and test(c["direct"].change) != "adequate"
-            and better(c["bounced"], c["direct"]) and better(c["bounced"], c["whole"])):
+    direct = depths.get(2)
+    if direct is None or not _part_changed(fit, R, R - direct, direct, mask, labels, test, better, alpha=alpha):
         return None
     return ("bounced_light", "the difference as a whole lies in one part of the light: what each surface receives "
             "straight from the lamp is right (its shadows and shading fit the reference), while the light that bounced "
@@ -368,6 +370,44 @@ def bounced_light(fit, R: np.ndarray, direct: np.ndarray | None, mask: np.ndarra
             "better than one on its direct light or on the whole image): check each step after a path's first "
             "surface, the bounce's direction, the frame built about the normal and the hemisphere it samples, its pdf "
             "and weight, Russian roulette, and where the path ends")
+
+
+def direct_light(fit, R: np.ndarray, depths: dict, mask: np.ndarray, labels: np.ndarray, test, better,
+                 *, alpha: float) -> tuple[str, str] | None:
+    """(family, words) of the first surface's direct light alone changed (module docstring), or None; the arguments
+    are :func:`bounced_light`'s (``depths`` with 1, the light seen directly, and 2)."""
+    seen, direct = depths.get(1), depths.get(2)
+    if seen is None or direct is None or not _part_changed(fit, R, direct - seen, R - direct + seen, mask, labels,
+                                                           test, better, alpha=alpha):
+        return None
+    return ("direct_light", "the difference as a whole lies in one part of the light: the light seen directly and the "
+            "light that bounced off other surfaces are right, while the light the first surface a camera ray meets "
+            "receives straight from the lamp differs, smoothly over each surface (a smooth factor on each surface's "
+            "direct light leaves only noise, and fits far better than one on its bounced light or on the whole "
+            "image): check the light sample there, the point drawn on the light and the pdf it is divided by, the "
+            "distance and its fall-off, the cosines at both ends (the surface's normal, the light's), the shadow ray "
+            "and what counts as blocked, and how the samples of a point are summed or averaged")
+
+
+def _part_changed(fit, R: np.ndarray, part: np.ndarray, rest: np.ndarray, mask: np.ndarray, labels: np.ndarray, test,
+                  better, *, alpha: float) -> bool:
+    """Whether the difference is ``part`` of the image (H, W, 3) changed by a smooth factor per surface and channel,
+    ``rest`` (the image less ``part``) right (the arguments are :func:`bounced_light`'s): the rest needs no factor of
+    its own (a constant one per surface and channel, fitted beside the part's, differs from 1 nowhere: Bonferroni's
+    bound, Holm's first step, at the bias test's level), the part's fit leaves only noise, the rest's does not, and
+    the part's fits better than the rest's and the whole image's."""
+    from mcrt.grade.candidates import Candidate
+
+    R, part, rest = (np.asarray(x, np.float64) for x in (R, part, rest))
+    w = np.where(fit.ok & mask[..., None], fit.w, 0.0)
+    # Tested first: it is the cheapest to fail.
+    z = smooth_fit(fit.D, part, w, labels, mask, also=rest)[2]
+    if z.size and float(np.min(2.0 * norm.sf(np.abs(z)))) <= alpha / z.size:
+        return False
+    fits = {name: smooth_fit(fit.D, X, w, labels, mask) for name, X in (("part", part), ("rest", rest), ("whole", R))}
+    c = {name: Candidate("part", name, name, fit.delta(ch), p, change=ch) for name, (ch, p, _) in fits.items()}
+    return (test(c["part"].change) == "adequate" and test(c["rest"].change) != "adequate"
+            and better(c["part"], c["rest"]) and better(c["part"], c["whole"]))
 
 
 def smooth_fit(D: np.ndarray, X: np.ndarray, w: np.ndarray, labels: np.ndarray, mask: np.ndarray,
