@@ -701,13 +701,9 @@ def test_the_first_surfaces_direct_light_alone_changed_is_sent_to_its_light_samp
     assert res.score < res.max_score
 
 
-@pytest.mark.parametrize("klass, case", [("unbidden", "bounce_ray_tmax_kept"),
-                                         ("unrecorded", "roulette_rand_int_division")])
-def test_a_bounce_mistake_no_family_renders_is_sent_to_the_bounced_light(ctx, klass, case):
-    """Two blind classes' tuning cases (Mitsuba's path after a wrong first bounce, written blind to the grader; seeds
-    fixed by name) at 32 x 32: a bounce ray that keeps the camera ray's tmax, and Russian roulette's survival drawn by
-    integer division. No family fits; the bounced light's reading names the steps after a path's first surface, the
-    right cause among them and the others it names beside it not counted wrong; points are lost."""
+def _tuning_case_graded(ctx, klass: str, case: str):
+    """The outcome (mcrt.grade.accuracy.run.Outcome) of a class's tuning case built at 32 x 32 and graded; asserted
+    named right, with no wrong cause beside it, and losing points."""
     import importlib
 
     from mcrt.grade.accuracy.cases import build_class
@@ -718,6 +714,37 @@ def test_a_bounce_mistake_no_family_renders_is_sent_to_the_bounced_light(ctx, kl
     assert not c.held_out
     (o,) = grade_cases([c], ctx)
     assert o.right and not o.also_wrong and o.lost, (o.named, o.said)
+    return o
+
+
+@pytest.mark.parametrize("klass, case", [("unguessed", "mirror_weight_over_cosine"),
+                                         ("unmet", "mirror_lit_in_light_sampling")])
+def test_a_difference_on_the_mirror_alone_is_sent_to_the_sphere(ctx, klass, case):
+    """Two blind classes' tuning cases (Mitsuba's path with the mirror's code changed, written blind to the grader;
+    seeds fixed by name) at 32 x 32: the mirror's sample divided by its cosine, and the mirror given a light sample as
+    if diffuse. No family fits, and the difference lies on the sphere's pixels alone: the broader reading names the
+    sphere's causes together, the right one among them and the others not counted wrong; points are lost. The rule
+    on its own (mcrt.grade.broader.sphere_alone): not where another surface's pixels leave noise too, nor on an image
+    whose noise shows a filter, nor beside a lead that changes the image as a whole."""
+    from mcrt.grade.broader import sphere_alone
+
+    o = _tuning_case_graded(ctx, klass, case)
+    assert "on the mirror sphere's own pixels alone" in o.said, o.said
+    blur = Candidate("blur", "blur", "the image blurred", 0.0, 1)
+    assert sphere_alone(None, ["the mirror sphere"], filtered=False, misregistered=False)[0] == "sphere_alone"
+    assert sphere_alone(None, ["the mirror sphere", "wall EF (green)"], filtered=False, misregistered=False) is None
+    assert sphere_alone(None, ["the mirror sphere"], filtered=True, misregistered=False) is None
+    assert sphere_alone(blur, ["the mirror sphere"], filtered=False, misregistered=False) is None
+
+
+@pytest.mark.parametrize("klass, case", [("unbidden", "bounce_ray_tmax_kept"),
+                                         ("unrecorded", "roulette_rand_int_division")])
+def test_a_bounce_mistake_no_family_renders_is_sent_to_the_bounced_light(ctx, klass, case):
+    """Two blind classes' tuning cases (Mitsuba's path after a wrong first bounce, written blind to the grader; seeds
+    fixed by name) at 32 x 32: a bounce ray that keeps the camera ray's tmax, and Russian roulette's survival drawn by
+    integer division. No family fits; the bounced light's reading names the steps after a path's first surface, the
+    right cause among them and the others it names beside it not counted wrong; points are lost."""
+    o = _tuning_case_graded(ctx, klass, case)
     assert "the light that bounced off other surfaces differs" in o.said, o.said
 
 

@@ -477,22 +477,24 @@ def claim_rule(S: np.ndarray, R: np.ndarray, mask: np.ndarray, noise: Noise, sc:
             e.broader = (broader.reading(e.best, e.remainder, R, mask, noise.model + noise.reference, sc.labels,
                                          sc.names, e.adequacy.objects, holes=holes, filtered=sc.filtered,
                                          misregistered=sc.misregistered)
-                         or _one_part(S, R, mask, noise, sc, fit, inputs, holes, extra_var))
+                         or _difference_reading(S, R, mask, noise, sc, fit, inputs, holes, extra_var, e.best))
             return
         e.verdict = cd.NONE if e.verdict == cd.CLAIMED else e.verdict
         ad = remainder_test(S, R, 0.0, mask, noise, sc, explained=0.0)
         ad.verdict = "none" if ad.rejected else "adequate"
         e.remainder_where, e.adequacy = ad.where, ad
         if ad.rejected:
-            e.broader = _one_part(S, R, mask, noise, sc, fit, inputs, holes, extra_var)
+            e.broader = _difference_reading(S, R, mask, noise, sc, fit, inputs, holes, extra_var)
 
     return rule
 
 
-def _one_part(S, R, mask, noise: Noise, sc: Scene2D, fit, inputs, holes, extra_var):
+def _difference_reading(S, R, mask, noise: Noise, sc: Scene2D, fit, inputs, holes, extra_var, lead=None):
     """The bounced light alone changed, or the first surface's direct light alone
     (:func:`mcrt.grade.broader.bounced_light`, :func:`mcrt.grade.broader.direct_light`), tested on the pixels off the
-    mirror with the remainder test of :func:`claim_rule` (``extra_var(c)`` a change's own noise, None: none)."""
+    mirror with the remainder test of :func:`claim_rule` (``extra_var(c)`` a change's own noise, None: none); else the
+    difference on the mirror sphere's pixels alone (:func:`mcrt.grade.broader.sphere_alone`; ``lead`` a partial
+    reading's lead, None beside none)."""
     from mcrt.grade.candidates import Candidate
 
     off = mask & ~np.isin(sc.labels, [k for k, n in enumerate(sc.names) if "sphere" in n])
@@ -507,7 +509,9 @@ def _one_part(S, R, mask, noise: Noise, sc: Scene2D, fit, inputs, holes, extra_v
                       alpha=sc.alpha)
         if got is not None:
             return got
-    return None
+    confined = [n for k, n in enumerate(sc.names) if (mask & (sc.labels == k)).any()
+                and remainder_test(S, R, 0.0, mask & (sc.labels != k), noise, sc, holes=holes).verdict == "adequate"]
+    return broader.sphere_alone(lead, confined, filtered=sc.filtered, misregistered=sc.misregistered)
 
 
 def _claim_simplest(e, c, adequate: list, ad: Adequacy, fit, remainder: np.ndarray) -> None:

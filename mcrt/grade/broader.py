@@ -120,6 +120,16 @@ read so; a light sample wrong at every vertex changes the bounced light too
 and is not read so either. The words send the student to the light sample
 at the first surface, naming none of its steps.
 
+Where neither holds, one last reading asks where the difference lies
+(:func:`sphere_alone`): **on the mirror sphere's own pixels alone**, the
+rest of the image consistent with noise once they are left out (and no
+other surface's pixels so), with no filter, displaced edge or lead that
+changes the image as a whole (:data:`IMAGE_WIDE`: such a change is
+largest where the detail is finest, the mirror's). Nothing the sphere
+shadows or lights changed, so what differs is the sphere itself or what it
+shows: the words name its reflection, its normal, its shape, size and
+place together, claiming none.
+
 A description has one broader reading of its own (:func:`after_rendering`):
 a monotone curve on the values (DESCRIBED: any curve, none of the common
 ones) that changes **the light seen directly and the room**, and the light
@@ -141,6 +151,10 @@ from scipy.stats import norm
 from mcrt.grade.candidates import FLOOR
 from mcrt.stats import LUMINANCE_WEIGHTS
 
+#: The families of a lead that changes the image as a whole, not the scene (a filter, a resampling, a sharpening,
+#: the view, the pixels' places): such a change is largest where the image's detail is finest, which is the mirror's,
+#: so a difference on the mirror alone beside it is no evidence of the sphere (:func:`sphere_alone`).
+IMAGE_WIDE = ("blur", "resampling", "sharpen", "pixel_offset", "fov", "eye", "rotation", "aspect", "camera_model")
 #: An object's geometry wrong, in words: what it means, and where to look.
 GEOMETRY_WORDS = ("its shape, size or place is not the scene's in a way one scale or one shift does not capture (check "
                   "its vertices or centre and radius, its transform and its ray intersection test)")
@@ -387,6 +401,23 @@ def direct_light(fit, R: np.ndarray, depths: dict, mask: np.ndarray, labels: np.
             "image): check the light sample there, the point drawn on the light and the pdf it is divided by, the "
             "distance and its fall-off, the cosines at both ends (the surface's normal, the light's), the shadow ray "
             "and what counts as blocked, and how the samples of a point are summed or averaged")
+
+
+def sphere_alone(lead, confined: list[str], *, filtered: bool, misregistered: bool) -> tuple[str, str] | None:
+    """(family, words) of the difference on the mirror sphere's own pixels alone (module docstring), or None.
+    ``confined`` names the surfaces off whose pixels the difference is consistent with noise (each alone: the
+    remainder test on the image less that surface's pixels); ``lead`` is a partial reading's lead (None beside none);
+    ``filtered`` and ``misregistered`` what the structure check found (a filter's noise, displaced edges)."""
+    if len(confined) != 1 or "sphere" not in confined[0] or filtered or misregistered:
+        return None
+    if lead is not None and lead.family in IMAGE_WIDE:
+        return None
+    return ("sphere_alone", "the difference lies on the mirror sphere's own pixels alone: off them, what is left is "
+            "consistent with noise (its shadow, the room around it and what lights it are right), so what differs is "
+            "the sphere itself or what it shows: the direction it reflects and its weight (the reflection's code, a "
+            "cosine or a colour in it), the normal at its hit point, or its shape, size or place (a sphere a little "
+            "smaller, flattened, faceted or sunk shows the room otherwise): check the mirror's reflect and its weight, "
+            "the sphere's normal, and how the sphere is built and intersected")
 
 
 def _part_changed(fit, R: np.ndarray, part: np.ndarray, rest: np.ndarray, mask: np.ndarray, labels: np.ndarray, test,

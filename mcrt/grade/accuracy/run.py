@@ -170,6 +170,11 @@ CAUSE_OF: dict[str, tuple[str, ...]] = {
     # distance, cosines (the surface's normal among them) and shadow ray, or its fall-off (another light model), which
     # the words name together.
     "direct_light": ("light_pdf", "light_model", "normals"),
+    # The difference on the mirror sphere's pixels alone (broader.sphere_alone; added after every class was graded, its
+    # rule tried on the tuned halves' partial and unexplained readings only): the sphere itself or what it shows, its
+    # reflection's direction and weight, its normal, its shape, size and place, which the words name together.
+    "sphere_alone": ("material", "specular_weight", "normals", "object_shape", "mesh_face", "object_size",
+                     "object_moved"),
 }
 
 
@@ -208,7 +213,7 @@ for _c in CAUSE_OF["object_geometry"]:
 #: Broader readings whose words name several causes together, as a list to check rather than a claim of each (the
 #: steps between the render and the file, the view, the steps after a path's first surface): where the feedback
 #: gives one, its causes are accepted beside each other (:func:`grade_cases`), and only there.
-_TOGETHER = ("value_curve", "view", "bounced_light", "direct_light")
+_TOGETHER = ("value_curve", "view", "bounced_light", "direct_light", "sphere_alone")
 
 #: Causes of the fresh class (mcrt.grade.accuracy.fresh) that another cause word names as the same mistake, fixed
 #: before the class was graded: the feedback sends the student to the line that is wrong. Truncated 8-bit codes
