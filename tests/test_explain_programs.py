@@ -1113,7 +1113,8 @@ def test_a_bounce_drawn_otherwise_is_said_where_a_bounce_mistake_explains_most(c
     """Two mistakes on a Mitsuba render (seed 74): the bounce's disk radius u for sqrt(u) at every diffuse hit (mcrt's
     render of it, the explanation basis's) and the floor 5 % brighter. The bounce mistake explains most of the
     difference and leaves the floor: the reading stays partial and says the diffuse bounce, which names the light
-    that bounces; the points are those of the partial reading."""
+    that bounces and, beside the bounce, Russian roulette's weight (which changes the bounced light alike); the points
+    are those of the partial reading."""
     labels, names = ctx.labels["near"], ctx.label_names
     R = _mitsuba(74)
     bounce = dict(ctx.explain.extra["bounce"])[("disk_radius_u", "every")]
@@ -1122,6 +1123,7 @@ def test_a_bounce_drawn_otherwise_is_said_where_a_bounce_mistake_explains_most(c
     ex = res.details["explanation"]
     assert ex["verdict"] == "partial" and ex["broader"] == "diffuse_bounce", ex["sentence"]
     assert "point to the diffuse bounce" in ex["sentence"] and "indirect_scale" in named_causes(res)[0]
+    assert "roulette" in named_causes(res)[0] and "Russian roulette's survival probability" in ex["sentence"]
     assert res.score < res.max_score
 
 

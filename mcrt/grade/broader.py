@@ -38,8 +38,10 @@ change is none the families render:
   the room's surfaces that way, and the light seen directly is the one
   thing a bounce cannot change. The mistakes the families render are a few
   of the many ways to draw a direction (a disk's radius, a frame's axes, a
-  random vector's range); the words send the student to the sampling of
-  the bounce and its weight, without claiming which;
+  random vector's range), and a path's weight after the bounce (Russian
+  roulette's survival divided wrongly) changes the bounced light alike; the
+  words send the student to the sampling of the bounce, its weight and
+  roulette's, without claiming which;
 * **where the light's samples come from** (:data:`LIGHT_REGION`: the light
   sampled on a quarter of itself, about another centre, over another
   square or rectangle of its plane, :mod:`mcrt.grade.explain.light_sampling`)
@@ -220,8 +222,9 @@ def reading(lead, remainder: np.ndarray, R: np.ndarray, mask: np.ndarray, var: n
     if _is_bounce(lead) and not any(names[k] == "the light" for k in objects):
         return ("diffuse_bounce", "together they point to the diffuse bounce: the directions a path goes on in "
                 "from a diffuse surface are not cosine-distributed, or not weighted by f cos / pdf for the pdf they "
-                "were drawn from, in a way none of the mistakes we render captures exactly (check how the "
-                "direction is drawn, the frame that turns it about the normal, and its weight)")
+                "were drawn from, or the weight a path carries on after it is off, in a way none of the mistakes we "
+                "render captures exactly (check how the direction is drawn, the frame that turns it about the normal, "
+                "its weight, and Russian roulette's survival probability and the division by it)")
     if lead is not None and lead.family == "light_sampling" and lead.name in LIGHT_REGION and \
             not any(names[k] == "the light" for k in objects):
         return ("light_region", "together they point to where the light's samples are drawn: the light on surfaces "

@@ -138,8 +138,9 @@ CAUSE_OF: dict[str, tuple[str, ...]] = {
     # those; black pixels with the room darker, faces missing from the room.
     "object_geometry": ("object_shape", "object_moved", "object_size", "mesh_face"), "room_faces": ("mesh_face",),
     # The diffuse bounce, a partial reading's broader cause (added after unnoticed was graded, with every class's
-    # partial readings in view): the light that bounces wrong by a factor that depends on the direction.
-    "diffuse_bounce": ("indirect_scale",),
+    # partial readings in view): the light that bounces wrong by a factor that depends on the direction; its words
+    # name Russian roulette's weight beside the bounce's since roulette_kotlin_int_range_coin (tuned) was graded.
+    "diffuse_bounce": ("indirect_scale", "roulette"),
     # One object's own pixels, a partial reading's broader cause (added after unnoticed was graded, with every class's
     # partial readings in view): its material, its normals, its shape or its faces, which the words name together.
     "object_surface": ("material", "normals", "object_shape", "mesh_face"),
@@ -211,9 +212,10 @@ for _c in ("pixel_offset", "camera_rotation", "row_stride"):
 for _c in CAUSE_OF["object_geometry"]:
     _ACCEPTED[_c] = _ACCEPTED.get(_c, (_c,)) + CAUSE_OF["object_geometry"]
 #: Broader readings whose words name several causes together, as a list to check rather than a claim of each (the
-#: steps between the render and the file, the view, the steps after a path's first surface): where the feedback
+#: steps between the render and the file, the view, the bounce and the path's weight after it, the steps after a
+#: path's first surface, the first surface's light sample, the mirror sphere and what it shows): where the feedback
 #: gives one, its causes are accepted beside each other (:func:`grade_cases`), and only there.
-_TOGETHER = ("value_curve", "view", "bounced_light", "direct_light", "sphere_alone")
+_TOGETHER = ("value_curve", "view", "diffuse_bounce", "bounced_light", "direct_light", "sphere_alone")
 
 #: Causes of the fresh class (mcrt.grade.accuracy.fresh) that another cause word names as the same mistake, fixed
 #: before the class was graded: the feedback sends the student to the line that is wrong. Truncated 8-bit codes
