@@ -1104,7 +1104,7 @@ def test_one_objects_own_pixels_are_said_as_how_it_looks(ctx):
     fam, words = reading(lead(tetra), rest, R, mask, var, labels, names, [tetra])
     assert fam == "object_surface" and "how the tetrahedron itself looks" in words and "its normals" in words
     fam, words = reading(lead(sphere), rest, R, mask, var, labels, names, [sphere])
-    assert fam == "object_surface" and "what the mirror sphere shows" in words
+    assert fam == "sphere_surface" and "what the mirror sphere shows" in words and "after the mirror bounce" in words
     assert reading(lead(tetra), rest, R, mask, var, labels, names, [tetra, floor]) is None
     assert reading(lead(floor), rest, R, mask, var, labels, names, [tetra]) is None
 

@@ -72,7 +72,9 @@ change is none the families render:
   other side), so what differs is how the object itself looks: for the
   mirror sphere, the directions it reflects (the reflection's code, the
   sphere's normal, or a shape that is not the sphere: facets, a squashed
-  or partial mesh) or what its reflected rays gather; for the tetrahedron,
+  or partial mesh) or what its reflected rays gather (the path after the
+  mirror bounce: its depth, its specular flag, the light it counts next:
+  :data:`SPHERE_WORDS`); for the tetrahedron,
   its shading (its material, normals, a second material mixed in) or its
   faces. The image cannot tell these apart, and the words say so.
 
@@ -157,6 +159,14 @@ from mcrt.stats import LUMINANCE_WEIGHTS
 #: the view, the pixels' places): such a change is largest where the image's detail is finest, which is the mirror's,
 #: so a difference on the mirror alone beside it is no evidence of the sphere (:func:`sphere_alone`).
 IMAGE_WIDE = ("blur", "resampling", "sharpen", "pixel_offset", "fov", "eye", "rotation", "aspect", "camera_model")
+#: What the mirror sphere's pixels alone can say, in words (:func:`reading`'s one object's own pixels, and
+#: :func:`sphere_alone`): the sphere itself, or the paths it reflects, which the image cannot tell apart.
+SPHERE_WORDS = ("the direction it reflects and its weight (the reflection's code, a cosine or a colour in it), the "
+                "normal at its hit point, its shape, size or place (a sphere a little smaller, flattened, faceted or "
+                "sunk shows the room otherwise), or how a path goes on after the mirror bounce (the depth it has left, "
+                "the flag that says its last bounce was specular, the light it counts at the next surface: twice or "
+                "not at all): check the mirror's reflect and its weight, the sphere's normal, how the sphere is built "
+                "and intersected, and the path's state after a mirror bounce")
 #: An object's geometry wrong, in words: what it means, and where to look.
 GEOMETRY_WORDS = ("its shape, size or place is not the scene's in a way one scale or one shift does not capture (check "
                   "its vertices or centre and radius, its transform and its ray intersection test)")
@@ -245,10 +255,8 @@ def reading(lead, remainder: np.ndarray, R: np.ndarray, mask: np.ndarray, var: n
                 "cropped or resized from a render of another size (a viewport or canvas size left at a default)")
     obj = surface_object(lead, R, var, mask, labels, names, objects)
     if obj == "sphere":
-        return ("object_surface", "together they point to what the mirror sphere shows, with nothing around it "
-                "changed: the directions it reflects (the reflection's code, the sphere's normal, or a surface that "
-                "is not the sphere's: facets, a squashed or partial mesh) or what its reflected rays gather (check "
-                "the mirror's reflect, the normal at its hit point, and how the sphere is built and intersected)")
+        return ("sphere_surface", f"together they point to what the mirror sphere shows, with nothing around it "
+                f"changed: {SPHERE_WORDS}")
     if obj is not None:
         return ("object_surface", f"together they point to how the {obj} itself looks, with nothing around it "
                 f"changed: its material or shading (its colour, its normals, a second material mixed in) or its "
@@ -417,10 +425,7 @@ def sphere_alone(lead, confined: list[str], *, filtered: bool, misregistered: bo
         return None
     return ("sphere_alone", "the difference lies on the mirror sphere's own pixels alone: off them, what is left is "
             "consistent with noise (its shadow, the room around it and what lights it are right), so what differs is "
-            "the sphere itself or what it shows: the direction it reflects and its weight (the reflection's code, a "
-            "cosine or a colour in it), the normal at its hit point, or its shape, size or place (a sphere a little "
-            "smaller, flattened, faceted or sunk shows the room otherwise): check the mirror's reflect and its weight, "
-            "the sphere's normal, and how the sphere is built and intersected")
+            f"the sphere itself or what it shows: {SPHERE_WORDS}")
 
 
 def _part_changed(fit, R: np.ndarray, part: np.ndarray, rest: np.ndarray, mask: np.ndarray, labels: np.ndarray, test,

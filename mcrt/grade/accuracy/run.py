@@ -32,6 +32,10 @@ from pathlib import Path
 
 from mcrt.grade.accuracy.cases import Case, write_submission
 
+#: The causes the mirror sphere's readings name together (mcrt.grade.broader.SPHERE_WORDS).
+_SPHERE = ("material", "specular_weight", "normals", "object_shape", "mesh_face", "object_size", "object_moved", "depth",
+           "direct_twice", "light_seen")
+
 #: What each explanation family (and catalogued bug) names, as a cause of :data:`mcrt.grade.accuracy.cases.CAUSES`.
 CAUSE_OF: dict[str, tuple[str, ...]] = {
     "scale": ("light_radiance",), "light_radiance": ("light_radiance",), "channels": ("albedo", "channels"),
@@ -142,7 +146,8 @@ CAUSE_OF: dict[str, tuple[str, ...]] = {
     # name Russian roulette's weight beside the bounce's since roulette_kotlin_int_range_coin (tuned) was graded.
     "diffuse_bounce": ("indirect_scale", "roulette"),
     # One object's own pixels, a partial reading's broader cause (added after unnoticed was graded, with every class's
-    # partial readings in view): its material, its normals, its shape or its faces, which the words name together.
+    # partial readings in view): its material, its normals, its shape or its faces, which the words name together
+    # (the tetrahedron's; the sphere's is sphere_surface, below, since this round).
     "object_surface": ("material", "normals", "object_shape", "mesh_face"),
     # Where the light's samples come from, a partial reading's broader cause (added after unattended was graded, with
     # every class's partial readings in view): the light sampled wrongly, the light seen right.
@@ -172,10 +177,12 @@ CAUSE_OF: dict[str, tuple[str, ...]] = {
     # the words name together.
     "direct_light": ("light_pdf", "light_model", "normals"),
     # The difference on the mirror sphere's pixels alone (broader.sphere_alone; added after every class was graded, its
-    # rule tried on the tuned halves' partial and unexplained readings only): the sphere itself or what it shows, its
-    # reflection's direction and weight, its normal, its shape, size and place, which the words name together.
-    "sphere_alone": ("material", "specular_weight", "normals", "object_shape", "mesh_face", "object_size",
-                     "object_moved"),
+    # rule tried on the tuned halves' partial and unexplained readings only), and a partial reading's lead with its
+    # remainder on the sphere alone (broader.reading; object_surface's causes for the sphere until this round): the
+    # sphere itself or what it shows, which the words name together (broader.SPHERE_WORDS). The path after a mirror
+    # bounce (its depth, its specular flag, the light it counts next) is among them since specular_flag_stuck (held
+    # out, graded with the sphere's reading) was sent to the sphere's own code; mirror_whitted (tuned) had shown it.
+    "sphere_alone": _SPHERE, "sphere_surface": _SPHERE,
 }
 
 
@@ -215,7 +222,7 @@ for _c in CAUSE_OF["object_geometry"]:
 #: steps between the render and the file, the view, the bounce and the path's weight after it, the steps after a
 #: path's first surface, the first surface's light sample, the mirror sphere and what it shows): where the feedback
 #: gives one, its causes are accepted beside each other (:func:`grade_cases`), and only there.
-_TOGETHER = ("value_curve", "view", "diffuse_bounce", "bounced_light", "direct_light", "sphere_alone")
+_TOGETHER = ("value_curve", "view", "diffuse_bounce", "bounced_light", "direct_light", "sphere_surface", "sphere_alone")
 
 #: Causes of the fresh class (mcrt.grade.accuracy.fresh) that another cause word names as the same mistake, fixed
 #: before the class was graded: the feedback sends the student to the line that is wrong. Truncated 8-bit codes
