@@ -132,7 +132,8 @@ changes the image as a whole (:data:`IMAGE_WIDE`: such a change is
 largest where the detail is finest, the mirror's). Nothing the sphere
 shadows or lights changed, so what differs is the sphere itself or what it
 shows: the words name its reflection, its normal, its shape, size and
-place together, claiming none.
+place, and the path after a mirror bounce (:data:`SPHERE_WORDS`) together,
+claiming none.
 
 A description has one broader reading of its own (:func:`after_rendering`):
 a monotone curve on the values (DESCRIBED: any curve, none of the common
