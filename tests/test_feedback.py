@@ -44,8 +44,8 @@ def ctx(tmp_path_factory, grade_cache):
     return prepare_context(a, grade_cache)
 
 
-def _mitsuba(scene, seed: int, spp: int = 1024, res: int = RES):
-    return _render_spec(Spec("t", None, spp=spp), scene, width=res, height=res, max_depth=8, seed=seed).mean
+def _mitsuba(scene, seed: int, spp: int = 1024, res: int = RES, depth: int = 8):
+    return _render_spec(Spec("t", None, spp=spp), scene, width=res, height=res, max_depth=depth, seed=seed).mean
 
 
 def _objects(s, name, **changes):
@@ -661,17 +661,14 @@ def test_the_bounced_light_alone_changed_is_sent_to_the_steps_after_the_first_su
 
     dark = floor_albedo((0.15, 0.15, 0.15))(load_scene())
 
-    def at(scene, seed, depth):
-        return _render_spec(Spec("t", None, spp=1024), scene, width=RES, height=RES, max_depth=depth, seed=seed).mean
-
-    img = at(load_scene(), 59, 2) + at(dark, 60, 8) - at(dark, 60, 2)
+    img = _mitsuba(load_scene(), 59, depth=2) + _mitsuba(dark, 60) - _mitsuba(dark, 60, depth=2)
     res = grade_image("bounced_darker", ctx, [img], spp=1024)
     ex = res.details["explanation"]
     assert ex["broader"] == "bounced_light", ex["sentence"]
     assert set(named_causes(res)[0]) >= {"indirect_scale", "roulette", "depth"}
     assert "the light that bounced off other surfaces differs" in ex["sentence"]
     assert res.score < res.max_score
-    swapped = at(dark, 61, 2) + at(load_scene(), 62, 8) - at(load_scene(), 62, 2)
+    swapped = _mitsuba(dark, 61, depth=2) + _mitsuba(load_scene(), 62) - _mitsuba(load_scene(), 62, depth=2)
     res = grade_image("direct_darker", ctx, [swapped], spp=1024)
     assert (res.details["explanation"] or {}).get("broader") != "bounced_light", res.details["explanation"]["sentence"]
     assert res.score < res.max_score
@@ -682,20 +679,14 @@ def test_the_first_surfaces_direct_light_alone_changed_is_sent_to_its_light_samp
     less depth 1, the same paths) 1.5 times what it is, the light seen and the bounced light right: as a step of its
     own there that loops over 3 light samples (an inclusive bound) and divides by 2 makes it, a factor no family tries.
     The broader reading names the first surface's light sample (light_pdf among the causes it names), and points are
-    lost. (At 1.25 times, at this resolution, a smooth factor on the rest of the light fits as well: no reading.) The
-    bounced light 1.25 times what it is instead (the light sample right) is not read so."""
-
-    def at(seed, depth):
-        return _render_spec(Spec("t", None, spp=1024), load_scene(), width=RES, height=RES, max_depth=depth,
-                            seed=seed).mean
-
-    full, direct, seen = at(63, 8), at(63, 2), at(63, 1)
+    lost. The bounced light 1.25 times what it is instead (the light sample right) is not read so."""
+    full, direct, seen = (_mitsuba(load_scene(), 63, depth=d) for d in (8, 2, 1))
     res = grade_image("direct_brighter", ctx, [full + 0.5 * (direct - seen)], spp=1024)
     ex = res.details["explanation"]
     assert ex["broader"] == "direct_light", ex["sentence"]
     assert "light_pdf" in named_causes(res)[0] and "receives straight from the lamp differs" in ex["sentence"]
     assert res.score < res.max_score
-    full, direct = at(64, 8), at(64, 2)
+    full, direct = _mitsuba(load_scene(), 64), _mitsuba(load_scene(), 64, depth=2)
     res = grade_image("bounced_brighter", ctx, [full + 0.25 * (full - direct)], spp=1024)
     assert (res.details["explanation"] or {}).get("broader") != "direct_light", res.details["explanation"]["sentence"]
     assert res.score < res.max_score
