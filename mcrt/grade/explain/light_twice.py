@@ -65,7 +65,9 @@ def light_twice(fit: Fit, inputs: Inputs) -> list[Candidate]:
         out.append(Candidate("direct_twice", name, what, fit.delta(change), 0, value={"counted": 2}, change=change))
     change = d1 - d2
     out.append(Candidate("direct_missing", "direct light missing", "the direct light missing (no light sample at the "
-                         "first surface the camera sees: it is lit only by light that has bounced)", fit.delta(change),
+                         "first surface the camera sees, or its shadow ray taken as blocked where it is not: a "
+                         "visibility test's result inverted, or true for every ray; it is lit only by light that has "
+                         "bounced)", fit.delta(change),
                          0, value={"counted": 0}, change=change))
     last = _depth(b, b.max_depth - 1)
     if last is not None and b.max_depth > 2:

@@ -277,7 +277,11 @@ def _node_candidate(key: str, val, chi2: float, v: dict, max_depth: int) -> Cand
         through = (f", or rays passing through it unchanged (a mirror's reflected direction computed but never used)"
                    if f"the mirror {name}" in v else "")
         every = " and ".join(f"the {o}" for o in v.get("objects", ()))
-        what = (f"the {name} missing from the image{through}" if name != "objects" else f"every object ({every}) "
+        # An object placed outside the room by its transform (a translation scaled, matrices multiplied in the other
+        # order) is missing from the image as well: the words send the student to both.
+        what = (f"the {name} missing from the image (never added to the scene, or placed out of sight by its "
+                f"transform: a translation scaled, the matrices multiplied in the other order){through}"
+                if name != "objects" else f"every object ({every}) "
                 "missing from the image: never added to the scene's list, or the "
                 "intersection loop returning the first shape a ray meets in the list (the room's before the objects) "
                 "rather than the nearest")
