@@ -218,6 +218,12 @@ for _c in ("pixel_offset", "camera_rotation", "row_stride"):
 # unremarked was graded).
 for _c in CAUSE_OF["object_geometry"]:
     _ACCEPTED[_c] = _ACCEPTED.get(_c, (_c,)) + CAUSE_OF["object_geometry"]
+# One statement, each of its causes the others in other words (since a2af3c2): an object missing from the image, placed
+# out of sight by its transform, or (the mirror) passing rays on unchanged; the first surface's light sample missing, or
+# its shadow ray blocked where it is not.
+for _c, _others in (("object_missing", ("object_moved",)), ("object_moved", ("object_missing", "material")),
+                    ("material", ("object_moved",)), ("light_pdf", ("direct_missing",))):
+    _ACCEPTED[_c] = _ACCEPTED.get(_c, (_c,)) + _others
 #: Broader readings whose words name several causes together, as a list to check rather than a claim of each (the
 #: steps between the render and the file, the view, the bounce and the path's weight after it, the steps after a
 #: path's first surface, the first surface's light sample, the mirror sphere and what it shows): where the feedback
