@@ -1722,6 +1722,43 @@ def test_a_mirror_missing_names_rays_passing_through_it(ctx):
     assert named_causes(res)[0] == ["object_missing", "material", "object_moved"]
 
 
+def test_a_camera_out_of_focus_is_named_beside_a_filter(ctx):
+    """A Mitsuba render (seed 90, 1024 spp) through a thin lens of aperture radius 0.1 focused on the image plane,
+    every ray out of focus about as much: claimed a 3 x 3 filter, in words that name the lens beside it."""
+    lens = {"type": "thinlens", "aperture_radius": 0.1, "focus_distance": 1.0}
+    S = _render_spec(Spec("t", None, spp=1024, sensor=lens), load_scene(), width=RES, height=RES, max_depth=8,
+                     seed=90).mean
+    res = grade_image("defocused", ctx, [S], spp=1024)
+    ex = res.details["explanation"]
+    assert ex["verdict"] == "claimed" and ex["family"] == "blur", ex["sentence"]
+    assert "blurred as much by the camera (a lens's aperture left open" in ex["sentence"], ex["sentence"]
+    assert "camera_model" in named_causes(res)[0]
+    assert res.score < res.max_score
+
+
+@pytest.mark.parametrize("turn", [0.01875, -0.01875])
+def test_a_camera_turned_by_a_fraction_of_a_pixel_is_one_shift(ctx, turn):
+    """The near camera turned towards its right (or left) by 0.3 pixel's angle at the centre in Mitsuba renders (seed
+    93, 1024 spp): the image shows the room moved left (right). The explanation claims a shift of that sign, the
+    camera criterion's the same, and its words name the camera turned or its eye moved beside the pixel centres."""
+    import re
+
+    s = load_scene()
+    c = s.cameras["near"]
+    f, u = np.asarray(c.forward, float), np.asarray(c.up, float)
+    f, u = f / np.linalg.norm(f), u / np.linalg.norm(u)
+    right = np.cross(f, u)
+    turned = replace(c, forward=tuple(float(x) for x in np.cos(turn) * f + np.sin(turn) * right))
+    res = grade_image("turned", ctx, [_mitsuba(replace(s, cameras={**s.cameras, "near": turned}), 93)], spp=1024)
+    ex = res.details["explanation"]
+    assert ex["verdict"] == "claimed" and ex["family"] == "pixel_offset", ex["sentence"]
+    said = float(re.search(r"the image shifted by \(([-+][0-9.]+),", ex["sentence"]).group(1))
+    camera = float(re.search(r"the image is shifted by \(([-+][0-9.]+),", _output(res, "camera")).group(1))
+    assert np.sign(said) == np.sign(camera) == -np.sign(turn) and abs(said) > 0.15, (said, camera)
+    assert "or its eye moved sideways, by that fraction of a pixel" in ex["sentence"], ex["sentence"]
+    assert "camera_eye" in named_causes(res)[0]
+
+
 def test_an_object_moved_out_of_the_room_names_its_transform(ctx):
     """The tetrahedron translated 20 units along x, through the wall and out of the room, in a Mitsuba render
     (seed 89, 1024 spp): claimed missing, in words that name its transform beside it never added."""

