@@ -1759,6 +1759,34 @@ def test_a_camera_turned_by_a_fraction_of_a_pixel_is_one_shift(ctx, turn):
     assert "camera_eye" in named_causes(res)[0]
 
 
+def _eye_sideways(dy: float):
+    s = load_scene()
+    c = s.cameras["near"]
+    return replace(s, cameras={**s.cameras, "near": replace(c, eye=(c.eye[0], c.eye[1] + dy, c.eye[2]))})
+
+
+def test_an_eye_moved_a_little_is_not_read_as_fewer_samples(ctx):
+    """The near camera's eye moved 0.06 sideways in a Mitsuba render of 256 spp (seed 91): every outline moves by a
+    tenth of a pixel, which the spread of one render reads as 3 times the noise of 256 spp. Away from the sharp edges
+    the noise is as at 256 spp, and the noise criterion says the excess is on the edges (the view, each pixel's
+    footprint), not fewer samples."""
+    res = grade_image("eye_sideways", ctx, [_mitsuba(_eye_sideways(0.06), 91, spp=256)], spp=256)
+    noise = next(t for t in res.tests if t.name == "noise")
+    assert noise.status == "failed" and "away from the image's sharp edges the noise is as at 256 spp" in noise.output
+    assert "noisier" not in noise.output and "render more samples" not in noise.output, noise.output
+    assert "camera_eye" in named_causes(res)[0] and "spp_claim" not in named_causes(res)[0]
+
+
+def test_a_shift_claimed_leaves_no_claim_of_fewer_samples(ctx):
+    """The eye moved 0.15 sideways at 1024 spp (seed 91): the shift is claimed; what its first-order fit leaves on
+    the outlines is not read as noise of fewer samples beside it."""
+    res = grade_image("eye_sideways", ctx, [_mitsuba(_eye_sideways(0.15), 91)], spp=1024)
+    ex = res.details["explanation"]
+    assert ex["verdict"] == "claimed" and ex["family"] == "pixel_offset", ex["sentence"]
+    assert "noisier" not in _output(res, "noise"), _output(res, "noise")
+    assert "spp_claim" not in named_causes(res)[0]
+
+
 def test_an_object_moved_out_of_the_room_names_its_transform(ctx):
     """The tetrahedron translated 20 units along x, through the wall and out of the room, in a Mitsuba render
     (seed 89, 1024 spp): claimed missing, in words that name its transform beside it never added."""

