@@ -333,13 +333,19 @@ def claim_text(var_ratio: float, spp: int, spp_eff: float, max_ratio: float, *, 
 
 def edge_text(var_ratio: float, spp: int, spp_eff: float, spp_away: float) -> str:
     """The noise criterion's failure where the excess lies on the light's outline alone: no claim of fewer samples."""
+    return _excess_on("light's edges", "light's outline, which differs", var_ratio, spp, spp_eff, spp_away) + (
+        "the light's position, size or shape a little off, the camera's view a little off (its field of view, place "
+        "or direction: the light's outline is the image's sharpest edge, the first to show it), or its bright "
+        "edge pixels changed after rendering (a firefly or outlier filter, a clamp)")
+
+
+def _excess_on(away: str, on: str, var_ratio: float, spp: int, spp_eff: float, spp_away: float) -> str:
+    """The words the noise criterion's failures open with where the excess lies on some pixels alone (``on``, with its
+    verb) and away from them (``away``) the noise is as the declared spp gives."""
     times = f"{var_ratio:.1f}" if var_ratio < 10 else f"{var_ratio:.0f}"
     return (f"about {times}x the spread {spp} spp should give (like about {spp_text(spp_eff)} spp), but away from the "
-            f"light's edges the noise is as at {spp} spp (like about {spp_text(spp_away)}): the excess is on the "
-            "light's outline, which differs from the reference by more than noise, not noise of fewer samples: the "
-            "light's position, size or shape a little off, the camera's view a little off (its field of view, place "
-            "or direction: the light's outline is the image's sharpest edge, the first to show it), or its bright "
-            "edge pixels changed after rendering (a firefly or outlier filter, a clamp)")
+            f"{away} the noise is as at {spp} spp (like about {spp_text(spp_away)}): the excess is on the {on} from the "
+            "reference by more than noise, not noise of fewer samples: ")
 
 
 #: A pixel is on a sharp edge where the reference's luminance changes across EDGE_SHIFT of a pixel by more than the
@@ -360,14 +366,11 @@ def sharp_edges(R: np.ndarray, var: np.ndarray, mask: np.ndarray) -> np.ndarray:
 
 def edges_text(var_ratio: float, spp: int, spp_eff: float, spp_smooth: float) -> str:
     """The noise criterion's failure where the excess lies on the image's sharp edges: no claim of fewer samples."""
-    times = f"{var_ratio:.1f}" if var_ratio < 10 else f"{var_ratio:.0f}"
-    return (f"about {times}x the spread {spp} spp should give (like about {spp_text(spp_eff)} spp), but away from the "
-            f"image's sharp edges the noise is as at {spp} spp (like about {spp_text(spp_smooth)}): the excess is on "
-            "the edges (the light's and the objects' outlines, the room's corners), which differ from the reference by "
-            "more than noise, not noise of fewer samples: the camera's view a fraction of a pixel off (its field of "
-            "view, place or direction), each pixel's samples spread otherwise over it (too few sub-pixel positions, "
-            "offsets not uniform over its square, a pixel filter other than a box), or the image resampled or filtered "
-            "after rendering")
+    return _excess_on("image's sharp edges", "edges (the light's and the objects' outlines, the room's corners), which "
+                      "differ", var_ratio, spp, spp_eff, spp_smooth) + (
+        "the camera's view a fraction of a pixel off (its field of view, place or direction), each pixel's samples "
+        "spread otherwise over it (too few sub-pixel positions, offsets not uniform over its square, a pixel filter "
+        "other than a box), or the image resampled or filtered after rendering")
 
 
 def misplaced_lines(img: np.ndarray, R: np.ndarray, var: np.ndarray, mask: np.ndarray) -> tuple[str, int, int] | None:
