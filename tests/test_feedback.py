@@ -1787,6 +1787,16 @@ def test_a_shift_claimed_leaves_no_claim_of_fewer_samples(ctx):
     assert "spp_claim" not in named_causes(res)[0]
 
 
+@pytest.mark.parametrize("factor, seed, spp", [(2.0, 94, 256), (1.25, 95, 64)])
+def test_a_constant_factor_is_a_scale_not_a_contrast_about_black(ctx, factor, seed, spp):
+    """A Mitsuba render times 2 (a sum over two passes divided by one's count) or 1.25: claimed as the whole image
+    scaled, not as a contrast control whose pivot is a hair above black (the same image, one parameter more)."""
+    res = grade_image("scaled", ctx, [factor * _mitsuba(load_scene(), seed, spp=spp)], spp=spp)
+    ex = res.details["explanation"]
+    assert ex["verdict"] == "claimed" and ex["family"] == "scale", ex["sentence"]
+    assert "contrast" not in ex["sentence"], ex["sentence"]
+
+
 def test_an_object_moved_out_of_the_room_names_its_transform(ctx):
     """The tetrahedron translated 20 units along x, through the wall and out of the room, in a Mitsuba render
     (seed 89, 1024 spp): claimed missing, in words that name its transform beside it never added."""

@@ -39,8 +39,9 @@ from mcrt.grade.feedback import num as _num
 BINS = 64
 #: Exposures scanned before a named tone map (a student's exposure slider; 1 is none).
 EXPOSURES = (0.25, 0.35, 0.5, 0.7, 1.0, 1.4, 2.0, 2.8, 4.0)
-#: White points scanned for Reinhard's extended curve (the value that maps to 1).
-WHITES = (1.0, 2.0, 4.0, 8.0, 11.2, 16.0, 20.0, 32.0)
+#: White points scanned for Reinhard's extended curve (the value that maps to 1). Not 1: x (1 + x) / (1 + x) is x,
+#: no tone map at all, and after an exposure it would name the image's scale a tone map.
+WHITES = (2.0, 4.0, 8.0, 11.2, 16.0, 20.0, 32.0)
 #: The curves also applied to the luminance alone (the image's colours kept).
 ON_LUMINANCE = ("reinhard", "reinhard_ext", "aces", "hable")
 
@@ -172,7 +173,9 @@ def _contrast(fit: Fit, R: np.ndarray) -> list[Candidate]:
     """A contrast control: every value v saved as c (v - p) + p, clipped at 0 (an image editor's or a tutorial's
     contrast slider, about the pivot p), two parameters fitted from no change; none where c is within 2 % of 1
     (the offset and the scale say that), nor outside what a slider sets (c between 1/2 and 2, p in [0, 1]): a
-    near-constant image (c of 0.05) fits an image whose pixels are scrambled, and is no contrast anyone chose."""
+    near-constant image (c of 0.05) fits an image whose pixels are scrambled, and is no contrast anyone chose; nor
+    where the pivot lies below a tenth of the median value (below nearly every value: the scale, with a black level
+    too small to name)."""
     from scipy.optimize import minimize
 
     def model(ab):
@@ -182,6 +185,8 @@ def _contrast(fit: Fit, R: np.ndarray) -> list[Candidate]:
                                        options={"xatol": 1e-4, "fatol": 1e-3}).x)
     pivot = b / (1.0 - a) if a != 1.0 else 0.0
     if abs(a - 1.0) < 0.02 or not (0.5 <= a <= 2.0 and 0.0 <= pivot <= 1.0):
+        return []
+    if fit.ok.any() and pivot < 0.1 * float(np.median(R[fit.ok])):
         return []
     change = model((a, b)) - fit.R
     return [Candidate("tone_curve", "contrast", f"the values through a contrast control before saving: each value v "
