@@ -285,10 +285,12 @@ def _declared(g: Grading, lvl: Level, spp: int) -> None:
             lvl.spp_model = max(1, min(spp, int(lvl.spp_broad)))
         lvl.verdict = ("failed", claim_text(var_ratio, spp, spp_eff, th.max_noise_ratio, unsampled=bool(lvl.unsampled)),
                        False)
-        if np.isfinite(lvl.spp_away) and spp / lvl.spp_away <= th.max_noise_ratio:
+        if (np.isfinite(lvl.spp_away) and spp / lvl.spp_away <= th.max_noise_ratio
+                and lvl.spp_away >= EDGE_EXCESS * spp_eff):
             lvl.edge_excess = True
             lvl.verdict = ("failed", edge_text(var_ratio, spp, spp_eff, lvl.spp_away), False)
-        elif np.isfinite(lvl.spp_smooth) and spp / lvl.spp_smooth <= th.max_noise_ratio:
+        elif (np.isfinite(lvl.spp_smooth) and spp / lvl.spp_smooth <= th.max_noise_ratio
+              and lvl.spp_smooth >= EDGE_EXCESS * spp_eff):
             # Not edge_excess: the catalogue at pixel level may still tell which change of the edges it is (no jitter).
             lvl.verdict = ("failed", edges_text(var_ratio, spp, spp_eff, lvl.spp_smooth), False)
     else:
@@ -351,6 +353,10 @@ def _excess_on(away: str, on: str, var_ratio: float, spp: int, spp_eff: float, s
 #: A pixel is on a sharp edge where the reference's luminance changes across EDGE_SHIFT of a pixel by more than the
 #: noise deviation of the declared spp (:func:`sharp_edges`).
 EDGE_SHIFT = 0.25
+#: The excess is read as the edges' (the light's, or every sharp one) where the spread away from them is this many
+#: times less (in spp) than over the whole image: fewer samples raise both alike, and a render a little past the limit
+#: everywhere (3.3 times the declared spp's variance over the image, 2.8 away from the edges) is no edge changed.
+EDGE_EXCESS = 1.5
 
 
 def sharp_edges(R: np.ndarray, var: np.ndarray, mask: np.ndarray) -> np.ndarray:
