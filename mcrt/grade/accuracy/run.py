@@ -212,8 +212,10 @@ _ACCEPTED["camera_rotation"] += ("orientation",)
 _ACCEPTED["pixel_offset"] += ("row_stride",)
 _ACCEPTED.update({"orientation": ("orientation", "camera_rotation"),
                   "row_stride": ("row_stride", "orientation") + _CAMERA_CAUSES + ("resampling",)})
-# A shift's words name sub-pixel offsets not spread over the pixel beside the pixel centres (since unheard).
-for _c in ("pixel_offset", "camera_rotation", "row_stride"):
+# A shift's words name sub-pixel offsets not spread over the pixel beside the pixel centres (since unheard), and the
+# eye moved sideways beside the camera turned (since 9ab94aa): one statement.
+_ACCEPTED["camera_eye"] = _CAMERA_CAUSES + ("resampling",)
+for _c in ("pixel_offset", "camera_rotation", "row_stride", "camera_eye"):
     _ACCEPTED[_c] += ("pixel_footprint",)
 # An object's geometry names its shape, size and place in one statement: each is the others in other words (since
 # unremarked was graded).
@@ -224,7 +226,7 @@ for _c in CAUSE_OF["object_geometry"]:
 # its shadow ray blocked where it is not; a blur after rendering, by a lens out of focus, or a resampling.
 for _c, _others in (("object_missing", ("object_moved",)), ("object_moved", ("object_missing", "material")),
                     ("material", ("object_moved",)), ("light_pdf", ("direct_missing",)),
-                    ("blur", ("camera_model", "resampling")), ("camera_model", ("blur",))):
+                    ("blur", ("camera_model", "resampling")), ("camera_model", ("blur", "resampling"))):
     _ACCEPTED[_c] = _ACCEPTED.get(_c, (_c,)) + _others
 #: Broader readings whose words name several causes together, as a list to check rather than a claim of each (the
 #: steps between the render and the file, the view, the bounce and the path's weight after it, the steps after a
