@@ -1796,14 +1796,40 @@ def test_a_shift_claimed_leaves_no_claim_of_fewer_samples(ctx):
     assert "spp_claim" not in named_causes(res)[0]
 
 
-@pytest.mark.parametrize("factor, seed, spp", [(2.0, 94, 256), (1.25, 95, 64)])
+@pytest.mark.parametrize("factor, seed, spp", [(2.0, 94, 256), (1.25, 95, 64), (4.0, 94, 64)])
 def test_a_constant_factor_is_a_scale_not_a_contrast_about_black(ctx, factor, seed, spp):
-    """A Mitsuba render times 2 (a sum over two passes divided by one's count) or 1.25: claimed as the whole image
-    scaled, not as a contrast control whose pivot is a hair above black (the same image, one parameter more)."""
+    """A Mitsuba render times 2 (a sum over two passes divided by one's count), 1.25 or 4: claimed as the whole image
+    scaled, not as a contrast control whose pivot is a hair above black (the same image, one parameter more), and
+    with its noise scaled too (4 times the reference's noise is what a correct render times 4 has)."""
     res = grade_image("scaled", ctx, [factor * _mitsuba(load_scene(), seed, spp=spp)], spp=spp)
     ex = res.details["explanation"]
     assert ex["verdict"] == "claimed" and ex["family"] == "scale", ex["sentence"]
     assert "contrast" not in ex["sentence"], ex["sentence"]
+
+
+def test_a_light_twice_its_size_is_claimed(ctx):
+    """A Mitsuba render (seed 98, 1024 spp) whose light is 4 x 4 for the scene's 2 x 2 (a rectangle spanning
+    [-1, 1] scaled by the light's size): claimed as the light's size, which a light sample's weight (the light
+    reaching surfaces 4 times) explains only in part, the light itself being seen larger."""
+    s = load_scene()
+    res = grade_image("light_4x4", ctx, [_mitsuba(replace(s, light=replace(s.light, size=(4.0, 4.0))), 98)], spp=1024)
+    ex = res.details["explanation"]
+    assert ex["verdict"] == "claimed" and ex["family"] == "light_size", ex["sentence"]
+    assert "the light's size 4 x 4 where the scene says 2 x 2" in ex["sentence"], ex["sentence"]
+
+
+def test_a_light_seen_larger_is_not_a_light_samples_region(ctx):
+    """broader.light_seen_larger on Mitsuba renders (1024 spp): a light 3 x 3 for 2 x 2 (seed 99) makes the pixels
+    touching the light's far brighter, which no light sample's region does; another correct render (seed 100) leaves
+    them as the reference's."""
+    from mcrt.grade.broader import light_seen_larger
+
+    s = load_scene()
+    R = ctx.references[ctx.assignment.camera].mean.astype(np.float64)
+    labels, names = ctx.labels[ctx.assignment.camera], ctx.label_names
+    larger = _mitsuba(replace(s, light=replace(s.light, size=(3.0, 3.0))), 99)
+    assert light_seen_larger(larger - R, R, labels, names)
+    assert not light_seen_larger(_mitsuba(s, 100) - R, R, labels, names)
 
 
 def test_an_object_moved_out_of_the_room_names_its_transform(ctx):

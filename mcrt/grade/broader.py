@@ -45,7 +45,8 @@ change is none the families render:
 * **where the light's samples come from** (:data:`LIGHT_REGION`: the light
   sampled on a quarter of itself, about another centre, over another
   square or rectangle of its plane, :mod:`mcrt.grade.explain.light_sampling`)
-  leading, where nothing is left on the light's own pixels: the light on
+  leading, where nothing is left on the light's own pixels nor the light
+  seen larger (:func:`light_seen_larger`): the light on
   surfaces then comes from points other than the light's own, and the
   light seen directly, which no light sample makes, is right. The families
   render uniform rectangles; a triangle of the light, a parallelogram, a
@@ -207,6 +208,9 @@ ON_ROOM = 0.9
 #: Black pixels (nearly) all above this quantile of the reference's luminance are its brightest values: codes that
 #: overflow (a value past the top of the file's range written 0) blacken those, holes any.
 BRIGHTEST = 0.75
+#: The pixels touching the light's are this many times the reference's there where the light is seen larger
+#: (:func:`light_seen_larger`): a light sample's region leaves them as the reference's, up to noise.
+LARGER = 2.0
 
 _LUM = np.asarray(LUMINANCE_WEIGHTS)
 
@@ -237,7 +241,7 @@ def reading(lead, remainder: np.ndarray, R: np.ndarray, mask: np.ndarray, var: n
                 "render captures exactly (check how the direction is drawn, the frame that turns it about the normal, "
                 "its weight, and Russian roulette's survival probability and the division by it)")
     if lead is not None and lead.family == "light_sampling" and lead.name in LIGHT_REGION and \
-            not any(names[k] == "the light" for k in objects):
+            not any(names[k] == "the light" for k in objects) and not light_seen_larger(remainder, R, labels, names):
         return ("light_region", "together they point to where the light's samples are drawn: the light on surfaces "
                 "comes from points other than the light's own, or spread otherwise over it, or weighted by another "
                 "pdf than theirs, in a way none of the mistakes we render captures exactly, the light itself seen "
@@ -263,6 +267,23 @@ def reading(lead, remainder: np.ndarray, R: np.ndarray, mask: np.ndarray, var: n
                 f"changed: its material or shading (its colour, its normals, a second material mixed in) or its "
                 f"faces (check the {obj}'s material, its normals and the faces its mesh is built from)")
     return None
+
+
+def light_seen_larger(remainder: np.ndarray, R: np.ndarray, labels: np.ndarray, names) -> bool:
+    """Whether the light the camera sees is larger than the scene's: the pixels touching the light's own (the
+    ceiling's, which its outline crosses) are, in the median, more than LARGER times the reference there. Their
+    remainder is the light seen where the ceiling should be, which no light sample makes."""
+    from scipy import ndimage
+
+    if "the light" not in names:
+        return False
+    light = labels == names.index("the light")
+    ring = ndimage.binary_dilation(light) & ~light
+    ref = R[ring] @ _LUM
+    ok = ref > 0
+    if np.count_nonzero(ok) < 4:
+        return False
+    return float(np.median((remainder[ring] @ _LUM)[ok] / ref[ok])) > LARGER - 1.0
 
 
 def surface_object(lead, R, var, mask, labels, names, objects) -> str | None:

@@ -21,10 +21,11 @@ WIDE = 1.2
 SUB = FINE
 #: Albedo nodes rendered per surface (with the scene's own value).
 ALBEDO_NODES = (0.0, 0.5, 1.0)
-#: Offsets (scene units) of the light, the objects and the eye; light size factors (both sides).
+#: Offsets (scene units) of the light, the objects and the eye; light size factors (both sides: twice is a unit square
+#: scaled by the light's size, Mitsuba's rectangle spanning [-1, 1]).
 LIGHT_OFFSETS = (-2.0, -1.5, -1.0, -0.5, 0.5, 1.0, 1.5, 2.0)
 LIGHT_DROPS = (-0.5, -1.0, -2.5)
-LIGHT_SIZES = (0.5, 0.75, 1.25, 1.5)
+LIGHT_SIZES = (0.5, 0.75, 1.25, 1.5, 2.0)
 #: Factors of one side of the light alone (the other kept).
 LIGHT_SIDES = (0.5, 2.0)
 OBJECT_OFFSETS = (-1.5, -1.0, -0.5, 0.5, 1.0, 1.5)

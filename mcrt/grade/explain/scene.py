@@ -14,7 +14,8 @@ from mcrt.grade.feedback import num as _num
 
 
 def scale(fit: Fit, inputs: Inputs) -> list[Candidate]:
-    """An overall scale, and the light's radiance (a scale per channel); other colour mistakes are :mod:`.colour`'s."""
+    """An overall scale, and the light's radiance (a scale per channel); other colour mistakes are :mod:`.colour`'s.
+    Either scales the render's noise with its mean (a gain: the remainder test allows it)."""
     values = inputs.basis.values
     S, R, w = fit.S, fit.R, fit.w
     ok = fit.ok
@@ -29,12 +30,12 @@ def scale(fit: Fit, inputs: Inputs) -> list[Candidate]:
     out = [Candidate("scale", "overall scale", f"the whole image {factor} times the reference (an exposure or "
                      f"display scale, the light's radiance {_fmt(np.asarray(values.get('light_radiance', (1, 1, 1))) * k1, 1)}, "
                      "or each pixel's sum divided by another count than the samples added to it)",
-                     fit.model(k1 * R), 1, value=k1, change=(k1 - 1) * R)]
+                     fit.model(k1 * R), 1, value=k1, change=(k1 - 1) * R, gain=True)]
     Le = np.asarray(values.get("light_radiance", (1.0, 1.0, 1.0)))
     out.append(Candidate("light_radiance", "the light's radiance",
                          f"the light's radiance {_fmt(Le * kc, 1)} where the scene says {_fmt(Le, 1)} (every channel of "
                          f"the image scaled by {_fmt(kc)})", fit.model(kc * R), 3, value=tuple(Le * kc),
-                         change=(kc - 1) * R))
+                         change=(kc - 1) * R, gain=True))
     return out
 
 
