@@ -223,10 +223,12 @@ for _c in CAUSE_OF["object_geometry"]:
     _ACCEPTED[_c] = _ACCEPTED.get(_c, (_c,)) + CAUSE_OF["object_geometry"]
 # One statement, each of its causes the others in other words (since a2af3c2): an object missing from the image, placed
 # out of sight by its transform, or (the mirror) passing rays on unchanged; the first surface's light sample missing, or
-# its shadow ray blocked where it is not; a blur after rendering, by a lens out of focus, or a resampling.
+# its shadow ray blocked where it is not; a blur after rendering, by a lens out of focus, or a resampling; the whole
+# image scaled by the light's radiance or by a count other than the samples'.
 for _c, _others in (("object_missing", ("object_moved",)), ("object_moved", ("object_missing", "material")),
                     ("material", ("object_moved",)), ("light_pdf", ("direct_missing",)),
-                    ("blur", ("camera_model", "resampling")), ("camera_model", ("blur", "resampling"))):
+                    ("blur", ("camera_model", "resampling")), ("camera_model", ("blur", "resampling")),
+                    ("light_radiance", ("sample_count",)), ("sample_count", ("light_radiance",))):
     _ACCEPTED[_c] = _ACCEPTED.get(_c, (_c,)) + _others
 #: Broader readings whose words name several causes together, as a list to check rather than a claim of each (the
 #: steps between the render and the file, the view, the bounce and the path's weight after it, the steps after a
