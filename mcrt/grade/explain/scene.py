@@ -247,6 +247,23 @@ def rendered(fit: Fit, inputs: Inputs) -> list[Candidate]:
     return out
 
 
+def _missing_words(name: str, v: dict) -> str:
+    """What an object (or every object: ``name`` 'objects') missing from the image says, ``v`` the basis's values."""
+    if name == "objects":
+        every = " and ".join(f"the {o}" for o in v.get("objects", ()))
+        return (f"every object ({every}) missing from the image: never added to the scene's list, or the intersection "
+                "loop returning the first shape a ray meets in the list (the room's before the objects) rather than the "
+                "nearest")
+    # A mirror that passes rays on unchanged (its reflected direction computed, not used) is missing from the image
+    # as far as the image can tell: its shadow is soft and small beside it. An object placed outside the room by its
+    # transform (a translation scaled, matrices multiplied in the other order) is missing from the image as well:
+    # the words send the student to both.
+    through = (", or rays passing through it unchanged (a mirror's reflected direction computed but never used)"
+               if f"the mirror {name}" in v else "")
+    return (f"the {name} missing from the image (never added to the scene, or placed out of sight by its transform: a "
+            f"translation scaled, the matrices multiplied in the other order){through}")
+
+
 def _node_candidate(key: str, val, chi2: float, v: dict, max_depth: int) -> Candidate | None:
     """The candidate of one rendered variation (a basis node's key and value, its chi^2), in words; None for a key
     no family words."""
@@ -273,19 +290,7 @@ def _node_candidate(key: str, val, chi2: float, v: dict, max_depth: int) -> Cand
                          chi2, 1, value=s)
     elif fam == "missing":
         name = key.split(":")[1]
-        # A mirror that passes rays on unchanged (its reflected direction computed, not used) is missing from the
-        # image as far as the image can tell: its shadow is soft and small beside it.
-        through = (f", or rays passing through it unchanged (a mirror's reflected direction computed but never used)"
-                   if f"the mirror {name}" in v else "")
-        every = " and ".join(f"the {o}" for o in v.get("objects", ()))
-        # An object placed outside the room by its transform (a translation scaled, matrices multiplied in the other
-        # order) is missing from the image as well: the words send the student to both.
-        what = (f"the {name} missing from the image (never added to the scene, or placed out of sight by its "
-                f"transform: a translation scaled, the matrices multiplied in the other order){through}"
-                if name != "objects" else f"every object ({every}) "
-                "missing from the image: never added to the scene's list, or the "
-                "intersection loop returning the first shape a ray meets in the list (the room's before the objects) "
-                "rather than the nearest")
+        what = _missing_words(name, v)
         cand = Candidate("object_missing", f"{name} missing", what, chi2, 0, value=name)
     elif fam == "moved":
         name, ax = key.split(":")[1:]
