@@ -355,7 +355,7 @@ def _excess_on(away: str, on: str, var_ratio: float, spp: int, spp_eff: float, s
 EDGE_SHIFT = 0.25
 #: The excess is read as the edges' (the light's, or every sharp one) where the spread away from them is this many
 #: times less (in spp) than over the whole image: fewer samples raise both alike, and a render a little past the limit
-#: everywhere (3.3 times the declared spp's variance over the image, 2.8 away from the edges) is no edge changed.
+#: everywhere, which by chance measures a little less noisy away from the edges, is no edge changed.
 EDGE_EXCESS = 1.5
 
 
