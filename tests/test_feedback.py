@@ -1767,7 +1767,7 @@ def _eye_sideways(dy: float):
 
 def test_an_eye_moved_a_little_is_not_read_as_fewer_samples(ctx):
     """The near camera's eye moved 0.06 sideways in a Mitsuba render of 256 spp (seed 91): every outline moves by a
-    tenth of a pixel, which the spread of one render reads as 3 times the noise of 256 spp. Away from the sharp edges
+    fraction of a pixel, which the spread of one render reads as noise past the limit. Away from the sharp edges
     the noise is as at 256 spp, and the noise criterion says the excess is on the edges (the view, each pixel's
     footprint), not fewer samples."""
     res = grade_image("eye_sideways", ctx, [_mitsuba(_eye_sideways(0.06), 91, spp=256)], spp=256)
@@ -1778,9 +1778,9 @@ def test_an_eye_moved_a_little_is_not_read_as_fewer_samples(ctx):
 
 
 def test_fewer_samples_a_little_past_the_limit_are_still_fewer_samples(ctx):
-    """A Mitsuba render of 72 spp declared as 256 (seed 96; 3.6 times the variance, a little past the rubric's 3,
-    which one 32 x 32 render measures as 3.0): noisier everywhere, away from the light's and the other sharp edges
-    a little less so by chance, so the noise criterion asks for more samples rather than naming the edges."""
+    """A Mitsuba render of 72 spp declared as 256 (seed 96; 3.6 times the variance, a little past the rubric's 3):
+    noisier everywhere, away from the light's and the other sharp edges a little less so by chance, so the noise
+    criterion asks for more samples rather than naming the edges."""
     res = grade_image("claims_256", ctx, [_mitsuba(load_scene(), 96, spp=72)], spp=256)
     noise = _output(res, "noise")
     assert "noisier than 256 spp should be" in noise and "sharp edges" not in noise, noise
