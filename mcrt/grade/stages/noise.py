@@ -161,7 +161,7 @@ def measure(g: Grading, hand: Hand, clip_mask: np.ndarray) -> Level:
     lvl = Level(img=img, q=q, pair=pair, resid=resid, clip_mask=clip_mask, model_ps=model_ps, ref_noise=ref_noise,
                 per=per, spp_eff=spp_eff, var_ratio=0.0, spp_nominal=spp or a.min_spp, spp_model=0,
                 verdict=("passed", "", False), spp_broad=spp_broad, spp_away=spp_away, spp_smooth=spp_smooth,
-                unsampled=unsampled)
+                smooth=smooth, unsampled=unsampled)
     if spp:
         _declared(g, lvl, spp)
     else:
@@ -505,9 +505,7 @@ def _beside_claim(g: Grading, hand: Hand, lvl: Level) -> float | None:
     if not least_body((lvl.resid, rem), var, noisy, labels) > BESIDE_BODY:  # NaN: too few surfaces to judge
         return None
     # Away from the sharp edges: a first-order fit of a change of the view leaves its second order there.
-    smooth = (lvl.clip_mask & ~beside_emitters(lvl.model_ps @ LUMINANCE**2, lvl.clip_mask)
-              & ~sharp_edges(hand.R, lvl.model_ps / (hand.spp * lvl.per) + lvl.ref_noise + lvl.q, lvl.clip_mask))
-    spp_eff = _spp(noise_ratio(rem, hand.R, smooth, lvl.model_ps, lvl.ref_noise + lvl.q, hand.base_tile,
+    spp_eff = _spp(noise_ratio(rem, hand.R, lvl.smooth, lvl.model_ps, lvl.ref_noise + lvl.q, hand.base_tile,
                                lvl.pair), lvl.per)
     return spp_eff if hand.spp > g.th.max_noise_ratio * spp_eff else None
 

@@ -88,6 +88,7 @@ class Level:
     spp_broad: float = float("inf")  # spp_eff with the noisiest tiles left out (stages.noise.BIAS_TILES)
     spp_away: float = float("inf")  # spp_eff away from the light's edges (stages.noise.measure)
     spp_smooth: float = float("inf")  # spp_eff away from every sharp edge (stages.noise.sharp_edges)
+    smooth: np.ndarray | None = None  # (H, W) the pixels away from the light's and every sharp edge it is measured on
     edge_excess: bool = False  # the excess noise lies on the light's outline alone (stages.noise.edge_text)
     # The noise is shaped like a tracer's without light sampling (stages.noise.unsampled_shape): model_ps is that
     # tracer's, and this is how many times noisier it is than mcrt's at the same spp.
