@@ -1619,24 +1619,43 @@ def _albedos(s, f):
     ("gamma_encoded", 97, "reflectance_gamma_encoded", "albedo gamma-encoded", "albedo"),
     ("gamma_decoded", 98, "reflectance_gamma_decoded", "albedo gamma-decoded", "albedo"),
     ("energy", 120, "reflectance_energy", "divided by the sum of its channels where that sum exceeds 1", "albedo"),
+    ("rgb565", 131, "reflectance_rgb565", "packed as RGB565 by truncation", "albedo"),
+    ("schlick", 132, "reflectance_schlick_average", "Schlick's Fresnel averaged over the hemisphere", "albedo"),
 ])
 def test_colours_given_to_the_wrong_surfaces_are_named(ctx, case, seed, family, words, cause):
     """Mitsuba renders (1024 spp) of the scene with walls AB's and DE's colours exchanged, the sphere's and the
     tetrahedron's materials exchanged, every wall given the colour of the wall before it (edited here, not by the
     family's own scene builder), every albedo its complement, every albedo divided by its length, every albedo
-    through a gamma of 2.2 either way, and every albedo divided by its channels' sum where it exceeds 1: each is
-    claimed, in those words, as a major mistake."""
+    through a gamma of 2.2 either way, every albedo divided by its channels' sum where it exceeds 1, packed as RGB565
+    by truncation, and taken for a reflectance at normal incidence averaged with Schlick's Fresnel: each is claimed,
+    in those words, as a major mistake."""
     edit = {"walls_exchanged": _walls_exchanged, "materials_exchanged": _materials_exchanged,
             "walls_one_off": _walls_one_off, "absorption": lambda s: _albedos(s, lambda v: 1.0 - v),
             "normalised": lambda s: _albedos(s, lambda v: v / np.linalg.norm(v)),
             "gamma_encoded": lambda s: _albedos(s, lambda v: v ** (1 / 2.2)),
             "gamma_decoded": lambda s: _albedos(s, lambda v: v ** 2.2),
-            "energy": lambda s: _albedos(s, lambda v: v / max(float(np.sum(v)), 1.0))}[case]
+            "energy": lambda s: _albedos(s, lambda v: v / max(float(np.sum(v)), 1.0)),
+            "rgb565": lambda s: _albedos(s, lambda v: np.floor(v * [31, 63, 31]) / [31, 63, 31]),
+            "schlick": lambda s: _albedos(s, lambda v: v + (1 - v) / 21)}[case]
     res = grade_image(case, ctx, [_mitsuba(edit(load_scene()), seed)], spp=1024)
     ex = res.details["explanation"]
     assert ex["verdict"] == "claimed" and ex["family"] == family and words in ex["sentence"], ex["sentence"]
     assert named_causes(res)[0] == [cause]
     assert res.score <= 0.75 * res.max_score
+
+
+def test_every_colour_through_a_rule_no_family_renders_is_named_with_its_values(ctx):
+    """A Mitsuba render (seed 133, 1024 spp) with every albedo cut to one decimal (int(a * 10) / 10, which no
+    rendered remapping is: the rounded one takes 0.45 to 0.5): claimed as one rule on every colour, with the values
+    it moved (0.15, held by six walls, as 0.10), as a colour mistake."""
+    res = grade_image("albedos_cut", ctx, [_mitsuba(_albedos(load_scene(), lambda v: np.floor(v * 10) / 10), 133)],
+                      spp=1024)
+    ex = res.details["explanation"]
+    assert ex["verdict"] == "claimed" and ex["family"] == "albedo_curve", ex["sentence"]
+    value = ex["candidates"][0]["value"]
+    assert value["0.15"] == pytest.approx(0.10, abs=0.02) and value["0.6"] == pytest.approx(0.6, abs=0.02), value
+    assert "0.15 (6 surfaces) as 0.10" in ex["sentence"], ex["sentence"]
+    assert named_causes(res)[0] == ["albedo"] and res.score <= 0.75 * res.max_score
 
 
 def _pairs_swapped(img, axis):

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from mcrt.grade.explain.albedo_curve import albedo_curve
 from mcrt.grade.explain.aov import aov
 from mcrt.grade.explain.basis import Basis, prepare_basis
 from mcrt.grade.explain.bloom import bloom
@@ -43,16 +44,17 @@ from mcrt.mutants import CATALOGUE
 #: image plane's width taken wrongly) and the catalogue; then what a student's program gets wrong beyond the scene file
 #: (a tone curve, each sample clamped, a fall-off, resampling, bloom, an object's material or size, values stored at the
 #: wrong places or read back with another memory layout, colours or materials given to the wrong surfaces, every diffuse
-#: reflectance off by one factor, squared or its complement, light counted twice, a path's weight off from a bounce on,
-#: the diffuse bounce drawn or weighted wrongly, the mirror's reflection computed wrongly, a light sample's weight, the
-#: light facing the wrong way, surfaces emitting, each pixel's samples combined by a median or trimmed mean, black
-#: pixels, another of the film's buffers written, an auxiliary buffer written, everything beyond a distance from the eye
-#: missing, Lambert's cosine taken to the eye too, the first hit's light sample with its albedo left out or twice, or
-#: averaged over the batch, the light sample's geometry term written wrongly).
+#: reflectance off by one factor, squared or its complement, every colour through one rule, light counted twice, a
+#: path's weight off from a bounce on, the diffuse bounce drawn or weighted wrongly, the mirror's reflection computed
+#: wrongly, a light sample's weight, the light facing the wrong way, surfaces emitting, each pixel's samples combined by
+#: a median or trimmed mean, black pixels, another of the film's buffers written, an auxiliary buffer written,
+#: everything beyond a distance from the eye missing, Lambert's cosine taken to the eye too, the first hit's light
+#: sample with its albedo left out or twice, or averaged over the batch, the light sample's geometry term written
+#: wrongly).
 FAMILIES = (scale, colour, curves, albedo, albedos, walls_one_colour, surface_black, rendered, camera, plane_width,
             catalogue, tone_curve, sample_clamp, falloff, resampling, layout, stride, bloom, material, object_size,
-            swap, reflectance_scale, reflectance_remapped, light_twice, path_weight, bounce, mirror, light_sampling,
-            light_facing, emission, pixel_statistic, bad_pixels, wrong_buffer, aov, clip, view_cosine,
+            swap, reflectance_scale, reflectance_remapped, albedo_curve, light_twice, path_weight, bounce, mirror,
+            light_sampling, light_facing, emission, pixel_statistic, bad_pixels, wrong_buffer, aov, clip, view_cosine,
             direct_albedo, direct_mean, light_geometry)
 
 #: The families that are mistakes of the camera (what the misregistration test of mcrt.grade.structure also sees).
@@ -65,6 +67,8 @@ MAJOR_FAMILIES = CAMERA_FAMILIES | {"object_missing", "object_moved", "light_pos
                                     "reflectance_complement", "reflectance_normalised", "reflectance_rounded",
                                     "reflectance_energy",
                                     "reflectance_gamma_encoded", "reflectance_gamma_decoded", "reflectance_zero",
+                                    "reflectance_bytes_256", "reflectance_rgb565", "reflectance_sigmoid",
+                                    "reflectance_schlick_average", "reflectance_integer_division", "albedo_curve",
                                     "albedo_swap", "material_swap", "object_emits", "view_cosine", "far_clip"}
 
 
@@ -75,7 +79,7 @@ MAJOR_FAMILIES = CAMERA_FAMILIES | {"object_missing", "object_moved", "light_pos
 #: light), which is no sign of fewer samples.
 NOISE_KEPT = CAMERA_FAMILIES | {"scale", "light_radiance", "channels", "colour_lost", "colour_matrix", "encoding",
                                 "tone_curve", "falloff", "albedo", "albedo_swap", "surface_black", "object_black",
-                                "reflectance_scale"} | {family for family, _, _ in REMAPS}
+                                "reflectance_scale", "albedo_curve"} | {family for family, _, _ in REMAPS}
 
 
 def keeps_noise(c) -> bool:

@@ -28,8 +28,12 @@ it would a direction divides each albedo by its length; a parser that rounds
 what it reads keeps one decimal of each; a loader that takes the linear
 colours for display values puts each through a gamma of 2.2, one way or the
 other; colours given in 0-255 and divided again leave every surface nearly
-black. The third to eighth families are those renders, with no free
-parameter either.
+black. Colours kept in a program's own storage come back a little off
+(bytes read over 256, RGB565's 5-6-5 bits), and colours taken for what
+they are not come back far off (logits through a sigmoid; a reflectance at
+normal incidence averaged with Schlick's Fresnel; 8-bit codes divided in a
+rounding integer type, every channel 0 or 1). The third family on is those
+renders, with no free parameter either.
 """
 
 from __future__ import annotations
@@ -109,7 +113,27 @@ REMAPS = (("reflectance_squared", lambda x: x * x, "every diffuse surface's refl
            "of integers that truncates each sample): only the light is seen, directly and in the mirror"),
           ("reflectance_gamma_decoded", lambda x: np.power(x, 2.2), "every diffuse surface's albedo gamma-decoded, "
            "channel by channel (a ** 2.2): the scene's linear colours taken for sRGB values and linearised, every "
-           "surface darker, a dark channel most"))
+           "surface darker, a dark channel most"),
+          # Colours kept in a program's own storage and read back: bytes truncated from float32 (as C's cast does)
+          # and divided by 256 (a shift's habit), or a GPU buffer's 5-6-5 bits.
+          ("reflectance_bytes_256", lambda x: np.floor(x.astype(np.float32) * np.float32(255)) / 256.0,
+           "every diffuse surface's albedo stored as a byte, truncated ((uint8_t)(a * 255)), and read back over 256 "
+           "(c / 256 for c / 255): every colour a little darker, a dark channel most"),
+          ("reflectance_rgb565", lambda x: np.floor(x.astype(np.float32) * np.float32([31, 63, 31])) / [31, 63, 31],
+           "every diffuse surface's albedo packed as RGB565 by truncation ((int)(r * 31), (int)(g * 63), "
+           "(int)(b * 31)): every colour darker, a weak red or blue channel most"),
+          # Colours taken for what they are not: logits a differentiable renderer would store, or a reflectance at
+          # normal incidence (F0) averaged over the hemisphere with Schlick's Fresnel.
+          ("reflectance_sigmoid", lambda x: 1.0 / (1.0 + np.exp(-x)), "every diffuse surface's albedo through a "
+           "logistic sigmoid, 1 / (1 + exp(-a)) (colour parameters stored as logits, as a differentiable renderer "
+           "keeps them, though the scene gives them as they are): every colour washed out towards 0.5 to 0.73"),
+          ("reflectance_schlick_average", lambda x: x + (1.0 - x) / 21.0, "every diffuse surface's albedo taken "
+           "for a reflectance at normal incidence and replaced by Schlick's Fresnel averaged over the hemisphere, "
+           "a + (1 - a) / 21: every colour paler, a weak channel most"),
+          # 8-bit codes divided in integer arithmetic that rounds (MATLAB's uint8(a * 255) / 255): 0 or 1.
+          ("reflectance_integer_division", lambda x: (np.round(x * 255.0) / 255.0 >= 0.5).astype(np.float64),
+           "every diffuse surface's albedo 0 or 1, channel by channel (8-bit codes divided by 255 in an integer type "
+           "that rounds, as MATLAB's uint8 does: every channel from 0.5 up 1, the rest 0)"))
 
 
 def _prepare_remapped(a, scene: Scene, render) -> dict[str, np.ndarray]:
