@@ -36,7 +36,9 @@ from mcrt.grade.feedback import num as _num
 #: Sweeps of the coordinate descent over the values.
 SWEEPS = 4
 #: A value counts as moved in the words when it moves by more than this, and the family is a candidate only where
-#: one does: a rule that moves no colour by a few hundredths is no rule a program applies to its colours.
+#: a value two surfaces or more hold does: a rule that moves no colour by a few hundredths is no rule a program
+#: applies to its colours, and one that moves a colour only one surface holds is that surface's colour (the albedo
+#: family's reading, which a change of that object's shape also takes up in part).
 MOVED = 0.03
 
 
@@ -116,8 +118,8 @@ def albedo_curve(fit: Fit, inputs: Inputs) -> list[Candidate]:
                 for lab in (lab for lab, ch in held if ch == c):
                     coef[c][at[lab]:at[lab] + len(nodes[lab])] = lagrange(np.array([fitted[v]]), nodes[lab])[0]
     moved = {v: fitted[v] - v for v in members if abs(fitted[v] - v) > MOVED}
-    if not moved:
-        return []
+    if not any(len({lab for lab, _ in members[v]}) > 1 for v in moved):
+        return []  # no value two surfaces hold moved: one surface's colour, the albedo family's reading
     dm = np.stack([np.tensordot(coef[c], t[2], axes=(0, 0)) for c, t in enumerate(terms)], axis=-1)
     pairs = ", ".join(f"{_num(v)} ({_holders(members[v])}) as {fitted[v]:.2f}" for v in members if v in moved)
     ways = {np.sign(d) for d in moved.values()}
