@@ -489,24 +489,12 @@ def claim_rule(S: np.ndarray, R: np.ndarray, mask: np.ndarray, noise: Noise, sc:
     return rule
 
 
-def _seen_elsewhere(S, R, mask, noise: Noise, sc: Scene2D):
-    """An object's colour seen outside its outline (:func:`mcrt.grade.broader.object_seen_elsewhere`), where the
-    image's noise shows no filter; else None. Its edges may be displaced: the object's are."""
-    if sc.filtered:
-        return None
-    return broader.object_seen_elsewhere(S, R, noise.model + noise.reference, mask, sc.labels, sc.names)
-
-
 def _difference_reading(S, R, mask, noise: Noise, sc: Scene2D, fit, inputs, holes, extra_var, lead=None):
-    """An object's colour seen outside its outline (:func:`_seen_elsewhere`); else the bounced light alone changed,
-    or the first surface's direct light alone (:func:`mcrt.grade.broader.bounced_light`,
-    :func:`mcrt.grade.broader.direct_light`), tested on the pixels off the mirror with the remainder test of
-    :func:`claim_rule` (``extra_var(c)`` a change's own noise, None: none); else the difference on the mirror
-    sphere's pixels alone (:func:`mcrt.grade.broader.sphere_alone`; ``lead`` a partial reading's lead, None beside
-    none)."""
-    seen = _seen_elsewhere(S, R, mask, noise, sc)
-    if seen is not None:
-        return seen
+    """The bounced light alone changed, or the first surface's direct light alone
+    (:func:`mcrt.grade.broader.bounced_light`, :func:`mcrt.grade.broader.direct_light`), tested on the pixels off the
+    mirror with the remainder test of :func:`claim_rule` (``extra_var(c)`` a change's own noise, None: none); else the
+    difference on the mirror sphere's pixels alone (:func:`mcrt.grade.broader.sphere_alone`; ``lead`` a partial
+    reading's lead, None beside none)."""
     from mcrt.grade.candidates import Candidate
 
     off = mask & ~np.isin(sc.labels, [k for k, n in enumerate(sc.names) if "sphere" in n])

@@ -136,19 +136,6 @@ shows: the words name its reflection, its normal, its shape, size and
 place, and the path after a mirror bounce (:data:`SPHERE_WORDS`) together,
 claiming none.
 
-Where a partial reading's lead points to nothing broader, and where
-nothing explains most of the difference, the hand-in itself may first say
-where an object is
-(:func:`object_seen_elsewhere`): **a diffuse object's own colour seen
-outside its outline**, on pixels that show another colour in the reference,
-in one connected region (the tetrahedron's orange on wall CD where its apex
-was placed higher, or its faces grown). No change of a colour, a light or
-a path's weight paints the object's colour beside it in one piece; its
-shape, size or place does, and the words send the student to its vertices,
-transform and intersection, claiming none of them. It is not read where
-the light's outline moved too (the view moves every object) or the noise
-shows a filter (which spreads every colour).
-
 A description has one broader reading of its own (:func:`after_rendering`):
 a monotone curve on the values (DESCRIBED: any curve, none of the common
 ones) that changes **the light seen directly and the room**, and the light
@@ -225,23 +212,6 @@ BRIGHTEST = 0.75
 #: (:func:`light_seen_larger`): a light sample's region leaves them as the reference's, up to noise.
 LARGER = 2.0
 
-#: A pixel shows an object's colour where its chromaticity (r, g, b over their sum) is within this (L1) of the
-#: object's in the reference, and shows another where it is twice as far (:func:`object_seen_elsewhere`).
-CHROMA = 0.1
-#: ... and its chromaticity moved from the reference's there by this many standard errors of the noise.
-CHROMA_Z = 4.0
-#: Fewest pixels an object's colour must be seen on outside its outline for the reading ...
-SEEN = 5
-#: ... the least share of them in one connected region, pixels a pixel apart joined (an outline moved, grown or cut
-#: is one region; a surface's colour changed towards the object's shows it on pixels scattered by the noise) ...
-ONE_REGION = 0.8
-#: ... and the most of any surface they lie on whose colour has changed (a wall given the object's colour, or any
-#: other, is the wall's colour); nor is it read where more pixels than this are half as bright as the light in the
-#: hand-in and not in the reference or the other way (the light's outline moved with the view, which moves every
-#: object).
-ONE_SURFACE = 0.5
-OUTLINE_MOVED = 2
-
 _LUM = np.asarray(LUMINANCE_WEIGHTS)
 
 
@@ -296,62 +266,6 @@ def reading(lead, remainder: np.ndarray, R: np.ndarray, mask: np.ndarray, var: n
         return ("object_surface", f"together they point to how the {obj} itself looks, with nothing around it "
                 f"changed: its material or shading (its colour, its normals, a second material mixed in) or its "
                 f"faces (check the {obj}'s material, its normals and the faces its mesh is built from)")
-    return None
-
-
-def object_seen_elsewhere(S: np.ndarray, R: np.ndarray, var: np.ndarray, mask: np.ndarray, labels: np.ndarray,
-                          names) -> tuple[str, str] | None:
-    """('object_outline', words) where a diffuse object's own colour is seen outside its outline: its geometry
-    differs.
-
-    A pixel shows the object where the hand-in's chromaticity is within :data:`CHROMA` of the object's (the median
-    of its pixels in the reference ``R``), the reference there shows another colour (2 :data:`CHROMA` away) and the
-    hand-in's chromaticity has moved from the reference's by 2 :data:`CHROMA` and :data:`CHROMA_Z` standard errors
-    of the noise ``var``. Read where :data:`SEEN` pixels or more do, :data:`ONE_REGION` of them in one connected
-    region, on surfaces whose colour has so moved on at most :data:`ONE_SURFACE` of their pixels (a surface
-    recoloured is no outline), and the light's outline where the reference's is
-    (:data:`OUTLINE_MOVED`). An object of the colour of no room surface is needed, the tetrahedron's orange in the
-    course's scene; the mirror sphere has no colour of its own."""
-    from scipy import ndimage
-
-    if "the light" in names:
-        top = float(np.max((R @ _LUM)[labels == names.index("the light")], initial=0.0))
-        bright_s, bright_r = (S @ _LUM) > 0.5 * top, (R @ _LUM) > 0.5 * top
-        if top <= 0 or np.count_nonzero(mask & (bright_s != bright_r)) > OUTLINE_MOVED:
-            return None
-
-    total = S.sum(axis=-1)
-    chroma = S / np.maximum(total, 1e-12)[..., None]
-    chroma_r = R / np.maximum(R.sum(axis=-1), 1e-12)[..., None]
-    sd = np.sqrt(np.maximum(var, 0.0)).sum(axis=-1) / np.maximum(total, 1e-12)
-    lit = mask & (total > 0) & np.isfinite(total)
-    if "the light" in names:
-        lit &= labels != names.index("the light")
-    for obj in OBJECTS:
-        own = np.isin(labels, [k for k, n in enumerate(names) if obj in n])
-        if np.count_nonzero(own & lit) < SEEN:
-            continue
-        colour = np.median(chroma_r[own & lit], axis=0)
-        if np.median(np.abs(chroma_r[own & lit] - colour).sum(axis=-1)) > CHROMA:
-            continue  # no colour of its own: its pixels' colours spread as widely as a mirror's, showing the room
-        d = np.abs(chroma - chroma_r).sum(axis=-1)
-        moved = lit & (d > 2 * CHROMA) & (d > CHROMA_Z * sd)  # another colour than the reference's, beyond noise
-        seen = (moved & ~own & (np.abs(chroma - colour).sum(axis=-1) < CHROMA)
-                & (np.abs(chroma_r - colour).sum(axis=-1) > 2 * CHROMA))
-        n = int(np.count_nonzero(seen))
-        if n < SEEN:
-            continue
-        # Pixels a pixel apart are one region: the noise test leaves gaps in a thin spike or wedge.
-        regions, _ = ndimage.label(ndimage.binary_dilation(seen, structure=np.ones((3, 3))), structure=np.ones((3, 3)))
-        if np.bincount(regions[seen]).max() < ONE_REGION * n:
-            continue
-        where = [k for k in np.unique(labels[seen])]
-        if any(np.mean(moved[labels == k]) > ONE_SURFACE for k in where):
-            continue  # a surface's colour changed (towards the object's, or to any other)
-        on = sorted(where, key=lambda k: -np.count_nonzero(seen & (labels == k)))
-        return ("object_outline", f"the {obj}'s colour is seen on {n} pixels outside its outline (where the scene "
-                f"shows {' and '.join(names[k] for k in on[:3])}): they point to the {obj}'s geometry: "
-                f"{GEOMETRY_WORDS}")
     return None
 
 

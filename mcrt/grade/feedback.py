@@ -157,13 +157,12 @@ def explanation_words(e: Explanation) -> tuple[str, str]:
 
 
 #: A broader reading's words for a headline where it stands beside no lead (nothing we tried explains most): those
-#: of mcrt.grade.broader.bounced_light, direct_light, sphere_alone and object_seen_elsewhere.
+#: of mcrt.grade.broader.bounced_light, direct_light and sphere_alone.
 BROADER_HEADLINES = {"bounced_light": "the direct light is right and the light that bounced off other surfaces differs",
                      "direct_light": "the light seen directly and the bounced light are right, and the light the "
                                      "first surface a camera ray meets receives straight from the lamp differs",
                      "sphere_alone": "the difference lies on the mirror sphere's own pixels alone: the sphere itself "
-                                     "or what it shows differs",
-                     "object_outline": "an object's own colour is seen outside its outline: its geometry differs"}
+                                     "or what it shows differs"}
 
 
 def _described_words(e: Explanation) -> tuple[str, str]:

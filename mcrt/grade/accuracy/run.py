@@ -147,9 +147,6 @@ CAUSE_OF: dict[str, tuple[str, ...]] = {
     # object's geometry, worded as its shape, size or place (its vertices, transform or intersection), names each of
     # those; black pixels with the room darker, faces missing from the room.
     "object_geometry": ("object_shape", "object_moved", "object_size", "mesh_face"), "room_faces": ("mesh_face",),
-    # An object's colour seen outside its outline (added in the tuned halves' view, before the held-out ones were
-    # graded again): its geometry, in the words of object_geometry.
-    "object_outline": ("object_shape", "object_moved", "object_size", "mesh_face"),
     # The diffuse bounce, a partial reading's broader cause (added after unnoticed was graded, with every class's
     # partial readings in view): the light that bounces wrong by a factor that depends on the direction; its words
     # name Russian roulette's weight beside the bounce's since roulette_kotlin_int_range_coin (tuned) was graded.
