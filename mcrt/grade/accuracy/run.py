@@ -98,9 +98,9 @@ CAUSE_OF: dict[str, tuple[str, ...]] = {
     # Added after unheralded was graded, with it in view: every diffuse surface black, whose words name an integer film
     # (values under 1 truncated) beside the albedos.
     "reflectance_zero": ("albedo", "quantisation"),
-    # Every albedo through a program's storage or a misread meaning: bytes over 256, RGB565, logits, Schlick's average,
-    # integer division (added in the tuned halves' view, before the held-out ones were graded again).
-    "reflectance_bytes_256": ("albedo",), "reflectance_rgb565": ("albedo",),
+    # Every albedo through a program's storage or a misread meaning: RGB565, logits, Schlick's average, integer
+    # division (added in the tuned halves' view, before the held-out ones were graded again).
+    "reflectance_rgb565": ("albedo",),
     "reflectance_sigmoid": ("albedo",), "reflectance_schlick_average": ("albedo",),
     "reflectance_integer_division": ("albedo",), "albedo_curve": ("albedo",),
     # Each pixel's samples combined by a median or a trimmed mean (added after unheralded was graded, with it in view).

@@ -67,7 +67,7 @@ MAJOR_FAMILIES = CAMERA_FAMILIES | {"object_missing", "object_moved", "light_pos
                                     "reflectance_complement", "reflectance_normalised", "reflectance_rounded",
                                     "reflectance_energy",
                                     "reflectance_gamma_encoded", "reflectance_gamma_decoded", "reflectance_zero",
-                                    "reflectance_bytes_256", "reflectance_rgb565", "reflectance_sigmoid",
+                                    "reflectance_rgb565", "reflectance_sigmoid",
                                     "reflectance_schlick_average", "reflectance_integer_division", "albedo_curve",
                                     "albedo_swap", "material_swap", "object_emits", "view_cosine", "far_clip"}
 

@@ -29,7 +29,7 @@ what it reads keeps one decimal of each; a loader that takes the linear
 colours for display values puts each through a gamma of 2.2, one way or the
 other; colours given in 0-255 and divided again leave every surface nearly
 black. Colours kept in a program's own storage come back a little off
-(bytes read over 256, RGB565's 5-6-5 bits), and colours taken for what
+(RGB565's 5-6-5 bits), and colours taken for what
 they are not come back far off (logits through a sigmoid; a reflectance at
 normal incidence averaged with Schlick's Fresnel; 8-bit codes divided in a
 rounding integer type, every channel 0 or 1). The third family on is those
@@ -114,11 +114,8 @@ REMAPS = (("reflectance_squared", lambda x: x * x, "every diffuse surface's refl
           ("reflectance_gamma_decoded", lambda x: np.power(x, 2.2), "every diffuse surface's albedo gamma-decoded, "
            "channel by channel (a ** 2.2): the scene's linear colours taken for sRGB values and linearised, every "
            "surface darker, a dark channel most"),
-          # Colours kept in a program's own storage and read back: bytes truncated from float32 (as C's cast does)
-          # and divided by 256 (a shift's habit), or a GPU buffer's 5-6-5 bits.
-          ("reflectance_bytes_256", lambda x: np.floor(x.astype(np.float32) * np.float32(255)) / 256.0,
-           "every diffuse surface's albedo stored as a byte, truncated ((uint8_t)(a * 255)), and read back over 256 "
-           "(c / 256 for c / 255): every colour a little darker, a dark channel most"),
+          # Colours kept in a GPU buffer's 5-6-5 bits, truncated. (Bytes read back over 256 are not tried: their
+          # change, a percent or so darker, is any slight darkening's, which an adaptive sampler's bias was read as.)
           ("reflectance_rgb565", lambda x: np.floor(x.astype(np.float32) * np.float32([31, 63, 31])) / [31, 63, 31],
            "every diffuse surface's albedo packed as RGB565 by truncation ((int)(r * 31), (int)(g * 63), "
            "(int)(b * 31)): every colour darker, a weak red or blue channel most"),
