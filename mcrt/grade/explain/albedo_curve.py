@@ -19,9 +19,11 @@ moves together, which the chi^2 of the three channels weighs at once. The
 rule is fitted monotone (each value between its neighbours'): a program's
 rule keeps the order of what it maps, while a change of the light that
 moves light between surfaces would fit as values up here and down there.
-It is flexible
-(:attr:`~mcrt.grade.candidates.Candidate.flexible`): claimed only where its
-remainder is noise and no other candidate's is.
+Values moved both ways, none by
+:data:`~mcrt.grade.explain.scene.TYPED` or more, are what a mistake in how
+light bounces makes (:func:`.scene.albedos`' rule): no candidate. It is
+flexible (:attr:`~mcrt.grade.candidates.Candidate.flexible`): claimed only
+where its remainder is noise and no other candidate's is.
 """
 
 from __future__ import annotations
@@ -30,7 +32,7 @@ import numpy as np
 
 from mcrt.grade.candidates import Candidate, Inputs
 from mcrt.grade.explain.fit import Fit, refine
-from mcrt.grade.explain.scene import lagrange
+from mcrt.grade.explain.scene import TYPED, lagrange
 from mcrt.grade.feedback import num as _num
 
 #: Sweeps of the coordinate descent over the values.
@@ -120,6 +122,8 @@ def albedo_curve(fit: Fit, inputs: Inputs) -> list[Candidate]:
     moved = {v: fitted[v] - v for v in members if abs(fitted[v] - v) > MOVED}
     if not any(len({lab for lab, _ in members[v]}) > 1 for v in moved):
         return []  # no value two surfaces hold moved: one surface's colour, the albedo family's reading
+    if len({np.sign(d) for d in moved.values()}) > 1 and max(abs(d) for d in moved.values()) < TYPED:
+        return []  # a few hundredths up here and down there: light moved between surfaces (scene.albedos' rule)
     dm = np.stack([np.tensordot(coef[c], t[2], axes=(0, 0)) for c, t in enumerate(terms)], axis=-1)
     pairs = ", ".join(f"{_num(v)} ({_holders(members[v])}) as {fitted[v]:.2f}" for v in members if v in moved)
     ways = {np.sign(d) for d in moved.values()}
