@@ -32,7 +32,7 @@ import numpy as np
 
 from mcrt.grade.candidates import Candidate, Inputs
 from mcrt.grade.explain.fit import Fit, refine
-from mcrt.grade.explain.scene import TYPED, lagrange
+from mcrt.grade.explain.scene import TYPED, lagrange, surface_curve
 from mcrt.grade.feedback import num as _num
 
 #: Sweeps of the coordinate descent over the values.
@@ -59,12 +59,9 @@ def _channel_terms(fit: Fit, b, c: int, labels: list[str]):
     w = np.where(fit.ok[..., c], fit.w[..., c], 0.0)
     nodes, ys, at = {}, [], {}
     for lab in labels:
-        xs, imgs, scene_v = b.albedo[lab]
-        keep = np.concatenate([np.abs(xs - scene_v[c]) > 1e-3, [True]])
-        nodes[lab] = np.append(xs, scene_v[c])[keep]
+        nodes[lab], y = surface_curve(b, lab, c)
         at[lab] = sum(len(nodes[k]) for k in nodes) - len(nodes[lab])
-        ys.append((np.concatenate([imgs[:, :, :, c], b.base[None, :, :, c]]).astype(np.float64)[keep]
-                   - b.base[None, :, :, c]))
+        ys.append(y)
     Y = np.concatenate(ys)
     return nodes, at, Y, np.einsum("jhw,khw,hw->jk", Y, Y, w), np.einsum("jhw,hw->j", Y, fit.D[..., c] * w)
 

@@ -94,6 +94,15 @@ def albedo(fit: Fit, inputs: Inputs) -> list[Candidate]:
     return out
 
 
+def surface_curve(b, label: str, c: int) -> tuple[np.ndarray, np.ndarray]:
+    """The albedo basis's nodes of surface ``label`` in channel c with the scene's own value among them, and the
+    renders there less the basis (n, H, W): what the surface's albedo curve interpolates."""
+    nodes, imgs, scene_v = b.albedo[label]
+    keep = np.concatenate([np.abs(nodes - scene_v[c]) > 1e-3, [True]])
+    ys = np.concatenate([imgs[:, :, :, c], b.base[None, :, :, c]]).astype(np.float64)[keep] - b.base[None, :, :, c]
+    return np.append(nodes, scene_v[c])[keep], ys
+
+
 #: A surface's fitted colour counts as changed in :func:`albedos`' words when a channel moves by more than this.
 CHANGED = 0.03
 #: :func:`albedos` is a candidate only where some surface's colour moves by at least this in a channel: a colour
@@ -138,11 +147,7 @@ def albedos(fit: Fit, inputs: Inputs) -> list[Candidate]:
     for c in range(3):
         polys = {}
         for lab in labels:
-            nodes, imgs, scene_v = b.albedo[lab]
-            keep = np.concatenate([np.abs(nodes - scene_v[c]) > 1e-3, [True]])
-            xs = np.append(nodes, scene_v[c])[keep]
-            ys = (np.concatenate([imgs[:, :, :, c], b.base[None, :, :, c]]).astype(np.float64)[keep]
-                  - b.base[None, :, :, c])
+            xs, ys = surface_curve(b, lab, c)
             gram = np.einsum("jhw,khw,hw->jk", ys, ys, w[..., c])
             polys[lab] = (xs, ys, gram, lagrange(grid, xs))
         part = {lab: np.zeros(b.base.shape[:2]) for lab in labels}
